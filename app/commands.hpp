@@ -1,0 +1,9 @@
+#pragma once
+// Each regbench subcommand lives in its own app/cmd_*.cpp and registers itself here.
+#include <CLI/CLI.hpp>
+
+namespace regbench::app {
+
+void AddMethodsCommand(CLI::App& app);
+
+}  // namespace regbench::app

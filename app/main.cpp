@@ -1,0 +1,20 @@
+// regbench: benchmark and evaluation harness for rigid point-cloud registration.
+#include <exception>
+#include <iostream>
+
+#include "app/commands.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{"regbench: reproducible benchmarks for rigid point-cloud registration"};
+    app.require_subcommand(1);
+    regbench::app::AddMethodsCommand(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const std::exception& e) {
+        std::cerr << "regbench: error: " << e.what() << "\n";
+        return 1;
+    }
+    return 0;
+}

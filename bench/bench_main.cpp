@@ -1,0 +1,33 @@
+// regbench_bench main: records the machine context with every run.
+#include <omp.h>
+
+#include <fstream>
+#include <string>
+#include <thread>
+
+#include <benchmark/benchmark.h>
+
+namespace {
+std::string CpuModel() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+    }
+    return "unknown";
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::AddCustomContext("cpu_model", CpuModel());
+    benchmark::AddCustomContext("compiler", __VERSION__);
+    benchmark::AddCustomContext("git_sha", REGBENCH_GIT_SHA);
+    benchmark::AddCustomContext("hardware_threads",
+                                std::to_string(std::thread::hardware_concurrency()));
+    benchmark::AddCustomContext("omp_max_threads", std::to_string(omp_get_max_threads()));
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

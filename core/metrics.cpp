@@ -1,0 +1,58 @@
+#include "core/metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/kd_tree.hpp"
+#include "core/transform.hpp"
+
+namespace regbench {
+
+PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est) {
+    PairMetrics m;
+    const Eigen::Matrix3d R_gt = T_gt.topLeftCorner<3, 3>();
+    const Eigen::Matrix3d R_est = T_est.topLeftCorner<3, 3>();
+    const Eigen::Vector3d dr =
+        (EulerZyxDegFromRotation(R_gt) - EulerZyxDegFromRotation(R_est)).cwiseAbs();
+    const Eigen::Vector3d dt = (T_gt.topRightCorner<3, 1>() - T_est.topRightCorner<3, 1>());
+    m.mae_r = dr.mean();
+    m.mae_t = dt.cwiseAbs().mean();
+    m.mse_r = dr.squaredNorm() / 3.0;
+    m.mse_t = dt.squaredNorm() / 3.0;
+    m.rre = RotationAngleDeg(R_gt, R_est);
+    m.rte = dt.norm();
+    return m;
+}
+
+ChamferResult ChamferDistances(const PointCloud& a, const PointCloud& b, double clip) {
+    ChamferResult r;
+    if (a.rows() == 0 || b.rows() == 0) {
+        r.ccd = r.chamfer = std::numeric_limits<double>::quiet_NaN();
+        r.within_clip = false;
+        return r;
+    }
+    const KdTree tree_a(a);
+    const KdTree tree_b(b);
+    const Eigen::VectorXd d_ab = NearestDistances(tree_b, a);
+    const Eigen::VectorXd d_ba = NearestDistances(tree_a, b);
+    r.ccd = d_ab.cwiseMin(clip).mean() + d_ba.cwiseMin(clip).mean();
+    r.chamfer = d_ab.squaredNorm() / static_cast<double>(d_ab.size()) +
+                d_ba.squaredNorm() / static_cast<double>(d_ba.size());
+    r.within_clip = d_ab.mean() < clip && d_ba.mean() < clip;
+    return r;
+}
+
+PairMetrics ComputeMetrics(const Transform& T_gt,
+                           const Transform& T_est,
+                           const PointCloud& source,
+                           const PointCloud& target) {
+    PairMetrics m = MotionMetrics(T_gt, T_est);
+    const ChamferResult c = ChamferDistances(Apply(T_est, source), target);
+    m.ccd = c.ccd;
+    m.chamfer = c.chamfer;
+    m.ccd_within_clip = c.within_clip;
+    return m;
+}
+
+}  // namespace regbench

@@ -1,0 +1,53 @@
+#pragma once
+// JSON binding for method options: defaults from the struct, unknown keys rejected by name.
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace regbench {
+
+/// Parses `j` into Options (a struct with to_json/from_json, e.g. from
+/// NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT). Keys absent from `j` keep the struct's
+/// defaults. Throws std::invalid_argument naming `method` and the first unknown key or the
+/// key whose value has the wrong type.
+template <class Options>
+Options ParseOptions(const nlohmann::json& j, const std::string& method) {
+    if (j.is_null()) return Options{};
+    if (!j.is_object()) {
+        throw std::invalid_argument(method + ": parameters must be a JSON object, got " + j.dump());
+    }
+    const nlohmann::json defaults = Options{};
+    for (const auto& item : j.items()) {
+        if (!defaults.contains(item.key())) {
+            std::string known;
+            for (const auto& d : defaults.items()) known += (known.empty() ? "" : ", ") + d.key();
+            throw std::invalid_argument(method + ": unknown parameter '" + item.key() +
+                                        "' (known: " + known + ")");
+        }
+    }
+    nlohmann::json merged = defaults;
+    for (const auto& item : j.items()) {
+        const auto& def = defaults.at(item.key());
+        const bool numeric_ok = def.is_number() && item.value().is_number();
+        if (!numeric_ok && def.type() != item.value().type()) {
+            throw std::invalid_argument(method + ": parameter '" + item.key() + "' expects " +
+                                        def.type_name() + ", got " + item.value().dump());
+        }
+        merged[item.key()] = item.value();
+    }
+    try {
+        return merged.get<Options>();
+    } catch (const nlohmann::json::exception& e) {
+        throw std::invalid_argument(method + ": bad parameters: " + e.what());
+    }
+}
+
+/// Throws std::invalid_argument("<method>: parameter '<name>' ...") unless `ok`.
+inline void Require(bool ok, const std::string& method, const std::string& name,
+                    const std::string& why) {
+    if (!ok) throw std::invalid_argument(method + ": parameter '" + name + "' " + why);
+}
+
+}  // namespace regbench

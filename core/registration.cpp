@@ -1,0 +1,73 @@
+#include "core/registration.hpp"
+
+#include <chrono>
+#include <exception>
+
+#include "core/transform.hpp"
+
+namespace regbench {
+
+const char* ToString(AlignStatus status) {
+    switch (status) {
+        case AlignStatus::kOk:
+            return "ok";
+        case AlignStatus::kFailed:
+            return "failed";
+    }
+    return "failed";
+}
+
+std::string ValidateCloud(const PointCloud& cloud, const std::string& which) {
+    constexpr Eigen::Index kMinPoints = 3;
+    if (cloud.rows() == 0) return which + " cloud is empty";
+    if (cloud.rows() < kMinPoints) {
+        return which + " cloud has " + std::to_string(cloud.rows()) + " points (need >= 3)";
+    }
+    if (!cloud.allFinite()) return which + " cloud has non-finite (NaN or Inf) coordinates";
+    return {};
+}
+
+namespace {
+AlignResult Failed(std::string message, double seconds = 0.0) {
+    AlignResult r;
+    r.status = AlignStatus::kFailed;
+    r.message = std::move(message);
+    r.stop_reason = "error";
+    r.seconds = seconds;
+    return r;
+}
+}  // namespace
+
+AlignResult RegistrationMethod::Align(const PointCloud& source, const PointCloud& target) {
+    for (const auto& problem : {ValidateCloud(source, "source"), ValidateCloud(target, "target")}) {
+        if (!problem.empty()) return Failed(Name() + ": " + problem);
+    }
+    const auto start = std::chrono::steady_clock::now();
+    AlignResult result;
+    try {
+        result = DoAlign(source, target);
+    } catch (const std::exception& e) {
+        result = Failed(Name() + ": " + e.what());
+    } catch (...) {
+        result = Failed(Name() + ": unknown exception");
+    }
+    result.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (result.status != AlignStatus::kOk) {
+        result.T_target_source = Transform::Identity();
+        return result;
+    }
+    Eigen::Matrix3d sR = result.T_target_source.topLeftCorner<3, 3>();
+    if (!result.T_target_source.allFinite()) {
+        return Failed(Name() + ": produced a non-finite transform", result.seconds);
+    }
+    const double s = AllowsScale() ? std::cbrt(sR.determinant()) : 1.0;
+    constexpr double kRotationTol = 1e-6;
+    if (!(s > 0.0) || !IsRotation(sR / s, kRotationTol)) {
+        return Failed(Name() + ": produced a non-rigid transform", result.seconds);
+    }
+    if (!AllowsScale()) result.scale = 1.0;
+    return result;
+}
+
+}  // namespace regbench

@@ -1,0 +1,72 @@
+#pragma once
+// The one interface every registration method implements.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/point_cloud.hpp"
+
+namespace regbench {
+
+enum class AlignStatus { kOk, kFailed };
+
+/// What a method returns for one pair. Methods never see ground truth.
+struct AlignResult {
+    Transform T_target_source = Transform::Identity();  ///< maps source into the target frame
+    int iterations = 0;
+    std::string stop_reason;  ///< e.g. "converged", "max_iterations", "line_search_failed"
+    double seconds = 0.0;     ///< wall time of the DoAlign call (steady_clock)
+    AlignStatus status = AlignStatus::kOk;
+    std::string message;        ///< empty when ok; why it failed otherwise
+    double scale = 1.0;         ///< estimated scale when a method estimates one (else 1)
+    nlohmann::json extra = nlohmann::json::object();  ///< method-specific diagnostics
+};
+
+const char* ToString(AlignStatus status);
+
+/// Base class. `Align` validates input, times the call and turns exceptions, NaNs and
+/// non-rigid outputs into a failed status; subclasses implement `DoAlign`.
+/// Thread-safety: an instance may keep scratch buffers; use one instance per thread.
+class RegistrationMethod {
+public:
+    virtual ~RegistrationMethod() = default;
+    virtual std::string Name() const = 0;
+    /// Effective parameters, defaults filled in (recorded in every result row).
+    virtual nlohmann::json Params() const = 0;
+
+    /// Estimates T_target_source. Never throws.
+    AlignResult Align(const PointCloud& source, const PointCloud& target);
+
+protected:
+    virtual AlignResult DoAlign(const PointCloud& source, const PointCloud& target) = 0;
+    /// Methods that estimate a similarity transform on request return true here, so Align
+    /// accepts s*R (it still requires R itself to be a rotation).
+    virtual bool AllowsScale() const { return false; }
+};
+
+/// Checks one input cloud; returns an empty string when fine, else why not
+/// ("source cloud is empty", "target cloud has 2 points (need >= 3)", "... non-finite ...").
+std::string ValidateCloud(const PointCloud& cloud, const std::string& which);
+
+}  // namespace regbench
+
+#include <functional>
+#include <map>
+#include <memory>
+
+namespace regbench {
+
+/// What the registry knows about a method: each method's file provides one of these
+/// (e.g. `MethodInfo CpdMethodInfo();`), and runners/registry.cpp lists them.
+struct MethodInfo {
+    std::string name;     ///< registry name, e.g. "cpd"
+    std::string summary;  ///< one line: what it is and which implementation
+    /// parameter name -> one-line meaning (units, range, why this default)
+    std::map<std::string, std::string> param_docs;
+    /// Default parameters (what Params() returns for an empty JSON object).
+    nlohmann::json defaults;
+    /// Creates an instance; throws std::invalid_argument on unknown keys / bad values.
+    std::function<std::unique_ptr<RegistrationMethod>(const nlohmann::json&)> create;
+};
+
+}  // namespace regbench
