@@ -1,0 +1,33 @@
+#pragma once
+// Triangle meshes: reading, normalising into the unit sphere, area-weighted surface sampling.
+#include <random>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/point_cloud.hpp"
+
+namespace regbench {
+
+struct Mesh {
+    Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> vertices;
+    Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> faces;  ///< triangles (polygons fanned)
+};
+
+/// Reads an OFF / COFF / NOFF file, tolerating ModelNet40's malformed header ("OFF490 ...") and
+/// polygonal faces (fanned into triangles). Throws std::runtime_error naming the path on a
+/// missing, truncated or corrupt file.
+Mesh ReadOff(const std::string& path);
+
+/// Centres the mesh at its bounding-box centre and scales it so every vertex lies in the unit
+/// sphere (max vertex norm = 1), as ModelNet40 preprocessing does.
+Mesh NormalizeToUnitSphere(const Mesh& mesh);
+
+/// n points uniformly on the surface: triangle chosen with probability proportional to area,
+/// uniform barycentric coordinates (sqrt trick). Uses only `rng`.
+PointCloud SampleSurface(const Mesh& mesh, Eigen::Index n, std::mt19937_64& rng);
+
+/// Total surface area.
+double SurfaceArea(const Mesh& mesh);
+
+}  // namespace regbench
