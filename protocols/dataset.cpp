@@ -3,6 +3,7 @@
 #include "protocols/dataset.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -124,6 +125,13 @@ using detail::SplitSpec;
 
 int IndexOf(const std::vector<std::string>& names, const std::string& name) {
     return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin());
+}
+
+std::string LowerExtension(const fs::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
 }
 
 detail::EntryLoader MeshLoader(bool normalize) {
@@ -295,9 +303,7 @@ std::unique_ptr<Dataset> OpenProcedural(const SplitSpec& split, const DatasetOpt
 std::vector<fs::path> SortedFiles(const fs::path& dir, const std::set<std::string>& extensions) {
     std::vector<fs::path> files;
     for (const auto& entry : fs::directory_iterator(dir)) {
-        std::string ext = entry.path().extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(),
-                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        const std::string ext = LowerExtension(entry.path());
         if (entry.is_regular_file() && extensions.count(ext) > 0) files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
@@ -404,9 +410,7 @@ std::unique_ptr<Dataset> OpenPointFiles(const fs::path& path,
         files.push_back(path);
     } else {
         for (const auto& entry : fs::recursive_directory_iterator(path)) {
-            std::string ext = entry.path().extension().string();
-            std::transform(ext.begin(), ext.end(), ext.begin(),
-                           [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+            const std::string ext = LowerExtension(entry.path());
             if (entry.is_regular_file() && (PointExtensions().count(ext) > 0 || ext == ".off")) {
                 files.push_back(entry.path());
             }
@@ -437,7 +441,7 @@ std::unique_ptr<Dataset> OpenPointFiles(const fs::path& path,
     const detail::EntryLoader points = PointLoader();
     return detail::MakeListDataset(
         "points", split.text, categories, std::move(entries), [meshes, points](const Entry& e) {
-            return fs::path(e.file).extension() == ".off" ? meshes(e) : points(e);
+            return LowerExtension(e.file) == ".off" ? meshes(e) : points(e);
         });
 }
 
@@ -458,7 +462,7 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
                                  "procedural)");
     }
     if (fs::is_regular_file(path)) {
-        const std::string ext = path.extension().string();
+        const std::string ext = LowerExtension(path);
         if (ext == ".h5" || ext == ".hdf5") return detail::OpenPointsH5(path.string(), spec);
         return OpenPointFiles(path, spec, options);
     }
