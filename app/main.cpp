@@ -8,6 +8,10 @@ int main(int argc, char** argv) {
     CLI::App app{"regbench: reproducible benchmarks for rigid point-cloud registration"};
     app.require_subcommand(1);
     regbench::app::AddMethodsCommand(app);
+    regbench::app::AddGenerateCommand(app);
+    regbench::app::AddInspectCommand(app);
+    regbench::app::AddExportCommand(app);
+    regbench::app::AddImportCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -329,5 +329,13 @@ TEST(ShapeSource, MeshSamplesLieOnTheSurface) {
     EXPECT_NEAR(upper, 0.5, 0.05);
 }
 
+TEST(ShapeSource, MeshSamplingMatchesSampleSurfaceDrawForDraw) {
+    // The cached area table must not change the samples: same rng, same points as mesh.hpp.
+    const Mesh mesh = test::EllipsoidMesh(1.0, 0.6, 0.4);
+    const ShapeSource s = ShapeSource::FromMesh(mesh, "e", "");
+    std::mt19937_64 a(42), b(42);
+    EXPECT_EQ(s.Sample(500, a), SampleSurface(mesh, 500, b));
+}
+
 }  // namespace
 }  // namespace regbench
