@@ -1,4 +1,6 @@
 // `regbench generate`: freeze pairs of one protocol into an HDF5 benchmark file.
+#include <unistd.h>
+
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -38,12 +40,16 @@ ProtocolOptions BuildOptions(const CLI::App& cmd, const GenerateArgs& a) {
     return o;
 }
 
-/// One stderr line, rewritten in place about every percent.
+/// Progress on stderr: one line rewritten in place about every percent on a terminal, a new
+/// line about every 10% otherwise (logs).
 void PrintProgress(std::size_t done, std::size_t total) {
-    const std::size_t step = total >= 100 ? total / 100 : 1;
+    const bool terminal = isatty(fileno(stderr)) != 0;
+    const std::size_t parts = terminal ? 100 : 10;
+    const std::size_t step = total >= parts ? total / parts : 1;
     if (done % step != 0 && done != total) return;
-    std::fprintf(stderr, "\rgenerate: %zu/%zu pairs", done, total);
-    if (done == total) std::fprintf(stderr, "\n");
+    std::fprintf(stderr, terminal ? "\rgenerate: %zu/%zu pairs" : "generate: %zu/%zu pairs\n", done,
+                 total);
+    if (terminal && done == total) std::fprintf(stderr, "\n");
     std::fflush(stderr);
 }
 
