@@ -61,7 +61,9 @@ private:
 
 /// Axis-aligned box [lo, hi] turned by `yaw` about the vertical axis through its centre:
 /// 8 corners, 12 triangles.
-void AppendBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double yaw,
+void AppendBox(const Eigen::Vector3d& lo,
+               const Eigen::Vector3d& hi,
+               double yaw,
                MeshBuilder& builder) {
     const Eigen::Vector3d centre = 0.5 * (lo + hi);
     const Eigen::Matrix3d R = RotationFromAxisAngle(Eigen::Vector3d::UnitZ(), yaw);
@@ -72,9 +74,9 @@ void AppendBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double yaw,
         corners.push_back(centre + R * (c - centre));
     }
     // Two triangles per side: -x, +x, -y, +y, -z, +z.
-    const std::vector<Eigen::Vector3i> faces = {
-        {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}, {0, 1, 5}, {0, 5, 4},
-        {2, 6, 7}, {2, 7, 3}, {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
+    const std::vector<Eigen::Vector3i> faces = {{0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5},
+                                                {0, 1, 5}, {0, 5, 4}, {2, 6, 7}, {2, 7, 3},
+                                                {0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}};
     builder.Append(corners, faces);
 }
 
@@ -84,8 +86,11 @@ int UniformCount(std::mt19937_64& rng, int lo, int hi) {
 
 /// A free footprint centre for an object of bounding radius `radius`, or false after
 /// `placement_attempts` tries (objects do not intersect each other or the walls).
-bool PlaceFootprint(const IndoorSimOptions& o, const IndoorRoom& room, double radius,
-                    std::mt19937_64& rng, Eigen::Vector2d& centre) {
+bool PlaceFootprint(const IndoorSimOptions& o,
+                    const IndoorRoom& room,
+                    double radius,
+                    std::mt19937_64& rng,
+                    Eigen::Vector2d& centre) {
     const double pad = o.object_wall_margin_m + radius;
     if (2.0 * pad >= room.size_m.x() || 2.0 * pad >= room.size_m.y()) return false;
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
@@ -104,7 +109,9 @@ bool PlaceFootprint(const IndoorSimOptions& o, const IndoorRoom& room, double ra
     return false;
 }
 
-void AddBoxes(const IndoorSimOptions& o, std::mt19937_64& rng, IndoorRoom& room,
+void AddBoxes(const IndoorSimOptions& o,
+              std::mt19937_64& rng,
+              IndoorRoom& room,
               MeshBuilder& builder) {
     const int count = UniformCount(rng, o.min_boxes, o.max_boxes);
     for (int i = 0; i < count; ++i) {
@@ -121,8 +128,11 @@ void AddBoxes(const IndoorSimOptions& o, std::mt19937_64& rng, IndoorRoom& room,
     }
 }
 
-void AddCorpusMeshes(const IndoorSimOptions& o, const FurnitureLibrary& library,
-                     std::mt19937_64& rng, IndoorRoom& room, MeshBuilder& builder) {
+void AddCorpusMeshes(const IndoorSimOptions& o,
+                     const FurnitureLibrary& library,
+                     std::mt19937_64& rng,
+                     IndoorRoom& room,
+                     MeshBuilder& builder) {
     if (library.meshes.empty()) return;
     const int count = UniformCount(rng, o.min_meshes, o.max_meshes);
     for (int i = 0; i < count; ++i) {
@@ -189,7 +199,9 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
 
 /// Camera A: a free eye looking at a random object's mid-height or a random point of the room.
 /// Returns false when `placement_attempts` draws gave no usable view.
-bool DrawViewA(const IndoorSimOptions& o, const IndoorRoom& room, std::mt19937_64& rng,
+bool DrawViewA(const IndoorSimOptions& o,
+               const IndoorRoom& room,
+               std::mt19937_64& rng,
                Transform& T_world_camera) {
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
         const Eigen::Vector3d eye(UniformReal(rng, 0.0, room.size_m.x()),
@@ -216,8 +228,11 @@ bool DrawViewA(const IndoorSimOptions& o, const IndoorRoom& room, std::mt19937_6
 
 /// Camera B: camera A turned about a random axis (in A's frame) and moved along a random
 /// direction. Returns false when `placement_attempts` draws gave no free eye.
-bool DrawViewB(const IndoorSimOptions& o, const IndoorRoom& room, const Transform& T_world_a,
-               std::mt19937_64& rng, Transform& T_world_b) {
+bool DrawViewB(const IndoorSimOptions& o,
+               const IndoorRoom& room,
+               const Transform& T_world_a,
+               std::mt19937_64& rng,
+               Transform& T_world_b) {
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
         const Eigen::Vector3d axis = RandomUnitVector(rng);
         const double angle = UniformReal(rng, o.min_rotation_deg, o.max_rotation_deg) * kDegToRad;
@@ -282,11 +297,10 @@ void ValidateIndoorSimOptions(const IndoorSimOptions& o) {
     Require(o.min_valid_points >= 1, kName, "min_valid_points", "must be >= 1");
     Require(o.max_incidence_deg > 0.0 && o.max_incidence_deg <= 90.0, kName, "max_incidence_deg",
             "must be in (0, 90]");
-    Require(o.axial_sigma_const_m >= 0.0 && o.axial_sigma_quad >= 0.0 &&
-                o.axial_sigma_angle >= 0.0,
+    Require(o.axial_sigma_const_m >= 0.0 && o.axial_sigma_quad >= 0.0 && o.axial_sigma_angle >= 0.0,
             kName, "axial_sigma_*", "must be >= 0");
-    Require(o.lateral_sigma_px >= 0.0 && o.lateral_sigma_angle_px >= 0.0, kName,
-            "lateral_sigma_*", "must be >= 0");
+    Require(o.lateral_sigma_px >= 0.0 && o.lateral_sigma_angle_px >= 0.0, kName, "lateral_sigma_*",
+            "must be >= 0");
     Require(o.sensor_focal_px > 0.0, kName, "sensor_focal_px", "must be > 0");
     Require(o.stereo_baseline_m > 0.0, kName, "stereo_baseline_m", "must be > 0");
     Require(o.disparity_subpixel >= 0, kName, "disparity_subpixel", "must be >= 0 (0 = off)");
@@ -367,7 +381,7 @@ Transform LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
     const Eigen::Vector3d x_raw = z.cross(Eigen::Vector3d::UnitZ());
     if (!(x_raw.norm() > 1e-9)) throw std::invalid_argument("LookAt: vertical view direction");
     const Eigen::Vector3d x = x_raw.normalized();  // right
-    const Eigen::Vector3d y = z.cross(x);           // down
+    const Eigen::Vector3d y = z.cross(x);          // down
     Eigen::Matrix3d R;
     R.col(0) = x;
     R.col(1) = y;

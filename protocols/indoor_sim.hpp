@@ -17,13 +17,13 @@
 // Everything is drawn from the std::mt19937_64 passed in, through core/rng.hpp (no std
 // distributions), in a fixed order: the same seed gives bitwise the same room, poses and points
 // whatever the thread count (rendering is per-pixel independent; noise is drawn serially).
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include "core/point_cloud.hpp"
 #include "protocols/mesh.hpp"
@@ -34,22 +34,22 @@ namespace regbench {
 /// All simulation parameters (flat, so core/options.hpp's ParseOptions checks every key).
 struct IndoorSimOptions {
     // Room (uniform ranges).
-    double room_min_side_m = 3.0;    ///< floor width and depth drawn in [min, max]
-    double room_max_side_m = 6.0;    ///<
-    double room_min_height_m = 2.5;  ///< ceiling height drawn in [min, max]
-    double room_max_height_m = 3.0;  ///<
-    int min_boxes = 2;               ///< furniture boxes per room, in [min, max]
-    int max_boxes = 5;               ///<
-    double box_min_side_m = 0.3;     ///< box footprint sides in [min, max]
-    double box_max_side_m = 1.5;     ///<
-    double box_min_height_m = 0.3;   ///< box heights in [min, max]
-    double box_max_height_m = 1.2;   ///<
-    int min_meshes = 2;              ///< corpus meshes per room, in [min, max] (0 if no corpus)
-    int max_meshes = 4;              ///<
-    double mesh_min_size_m = 0.3;    ///< largest bounding-box side of a placed mesh, [min, max]
-    double mesh_max_size_m = 1.5;    ///<
+    double room_min_side_m = 3.0;       ///< floor width and depth drawn in [min, max]
+    double room_max_side_m = 6.0;       ///<
+    double room_min_height_m = 2.5;     ///< ceiling height drawn in [min, max]
+    double room_max_height_m = 3.0;     ///<
+    int min_boxes = 2;                  ///< furniture boxes per room, in [min, max]
+    int max_boxes = 5;                  ///<
+    double box_min_side_m = 0.3;        ///< box footprint sides in [min, max]
+    double box_max_side_m = 1.5;        ///<
+    double box_min_height_m = 0.3;      ///< box heights in [min, max]
+    double box_max_height_m = 1.2;      ///<
+    int min_meshes = 2;                 ///< corpus meshes per room, in [min, max] (0 if no corpus)
+    int max_meshes = 4;                 ///<
+    double mesh_min_size_m = 0.3;       ///< largest bounding-box side of a placed mesh, [min, max]
+    double mesh_max_size_m = 1.5;       ///<
     double object_wall_margin_m = 0.1;  ///< objects keep this distance from the walls
-    int placement_attempts = 30;     ///< tries per object to find a free spot, else it is left out
+    int placement_attempts = 30;  ///< tries per object to find a free spot, else it is left out
 
     // Camera intrinsics (pinhole, pixel centres at integer coordinates). Default: a Kinect
     // (640 x 480, f = 525 px) downscaled by 2 for speed.
@@ -61,16 +61,16 @@ struct IndoorSimOptions {
     double cy = 119.5;       ///< principal point [px]
 
     // Camera placement.
-    double camera_min_height_m = 1.0;     ///< eye height in [min, max]
-    double camera_max_height_m = 1.8;     ///<
-    double camera_wall_clearance_m = 0.4; ///< cameras stay this far inside the walls and
-                                          ///< outside object footprints
-    double min_baseline_m = 0.1;          ///< view B = view A moved by a random direction times
-    double max_baseline_m = 0.4;          ///< a length in [min, max] ...
-    double min_rotation_deg = 5.0;        ///< ... and turned about a random axis by an angle
-    double max_rotation_deg = 20.0;       ///< in [min, max]
-    int view_attempts = 20;               ///< redraws of a pose pair before giving up (throws)
-    int min_valid_points = 4096;          ///< a view with fewer returns is redrawn
+    double camera_min_height_m = 1.0;      ///< eye height in [min, max]
+    double camera_max_height_m = 1.8;      ///<
+    double camera_wall_clearance_m = 0.4;  ///< cameras stay this far inside the walls and
+                                           ///< outside object footprints
+    double min_baseline_m = 0.1;           ///< view B = view A moved by a random direction times
+    double max_baseline_m = 0.4;           ///< a length in [min, max] ...
+    double min_rotation_deg = 5.0;         ///< ... and turned about a random axis by an angle
+    double max_rotation_deg = 20.0;        ///< in [min, max]
+    int view_attempts = 20;                ///< redraws of a pose pair before giving up (throws)
+    int min_valid_points = 4096;           ///< a view with fewer returns is redrawn
 
     // Sensor model: missing returns.
     double min_range_m = 0.5;         ///< depths (z) below this return nothing
@@ -79,30 +79,66 @@ struct IndoorSimOptions {
                                       ///< no return (grazing)
     // Sensor model: noise (Nguyen et al. 2012).
     bool noise = true;  ///< false: exact depths (no Gaussian noise, no quantisation)
-    double axial_sigma_const_m = 0.0012;  ///< sigma_z = c + q (z - z0)^2 + a / sqrt(z) *
-    double axial_sigma_quad = 0.0019;     ///<   theta^2 / (pi/2 - theta)^2   (Nguyen eq. 1)
-    double axial_sigma_offset_m = 0.4;    ///< z0
-    double axial_sigma_angle = 0.0001;    ///< a
-    double lateral_sigma_px = 0.8;        ///< sigma_L = p + l theta / (pi/2 - theta) [sensor px]
+    double axial_sigma_const_m = 0.0012;    ///< sigma_z = c + q (z - z0)^2 + a / sqrt(z) *
+    double axial_sigma_quad = 0.0019;       ///<   theta^2 / (pi/2 - theta)^2   (Nguyen eq. 1)
+    double axial_sigma_offset_m = 0.4;      ///< z0
+    double axial_sigma_angle = 0.0001;      ///< a
+    double lateral_sigma_px = 0.8;          ///< sigma_L = p + l theta / (pi/2 - theta) [sensor px]
     double lateral_sigma_angle_px = 0.035;  ///< l (Nguyen eq. 2)
-    double sensor_focal_px = 525.0;   ///< focal of the physical sensor, for lateral noise and
-                                      ///< disparity (independent of the render resolution)
-    double stereo_baseline_m = 0.075; ///< projector-camera baseline of the disparity model
-    int disparity_subpixel = 8;       ///< disparity quantised to 1/this px (Kinect: 8); 0 = off
+    double sensor_focal_px = 525.0;         ///< focal of the physical sensor, for lateral noise and
+                                            ///< disparity (independent of the render resolution)
+    double stereo_baseline_m = 0.075;       ///< projector-camera baseline of the disparity model
+    int disparity_subpixel = 8;  ///< disparity quantised to 1/this px (Kinect: 8); 0 = off
 
     // Labels.
     double overlap_eta_m = 0.05;  ///< a point overlaps when the other scan has a point this close
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
-    IndoorSimOptions, room_min_side_m, room_max_side_m, room_min_height_m, room_max_height_m,
-    min_boxes, max_boxes, box_min_side_m, box_max_side_m, box_min_height_m, box_max_height_m,
-    min_meshes, max_meshes, mesh_min_size_m, mesh_max_size_m, object_wall_margin_m,
-    placement_attempts, image_width, image_height, fx, fy, cx, cy, camera_min_height_m,
-    camera_max_height_m, camera_wall_clearance_m, min_baseline_m, max_baseline_m,
-    min_rotation_deg, max_rotation_deg, view_attempts, min_valid_points, min_range_m, max_range_m,
-    max_incidence_deg, noise, axial_sigma_const_m, axial_sigma_quad, axial_sigma_offset_m,
-    axial_sigma_angle, lateral_sigma_px, lateral_sigma_angle_px, sensor_focal_px,
-    stereo_baseline_m, disparity_subpixel, overlap_eta_m)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IndoorSimOptions,
+                                                room_min_side_m,
+                                                room_max_side_m,
+                                                room_min_height_m,
+                                                room_max_height_m,
+                                                min_boxes,
+                                                max_boxes,
+                                                box_min_side_m,
+                                                box_max_side_m,
+                                                box_min_height_m,
+                                                box_max_height_m,
+                                                min_meshes,
+                                                max_meshes,
+                                                mesh_min_size_m,
+                                                mesh_max_size_m,
+                                                object_wall_margin_m,
+                                                placement_attempts,
+                                                image_width,
+                                                image_height,
+                                                fx,
+                                                fy,
+                                                cx,
+                                                cy,
+                                                camera_min_height_m,
+                                                camera_max_height_m,
+                                                camera_wall_clearance_m,
+                                                min_baseline_m,
+                                                max_baseline_m,
+                                                min_rotation_deg,
+                                                max_rotation_deg,
+                                                view_attempts,
+                                                min_valid_points,
+                                                min_range_m,
+                                                max_range_m,
+                                                max_incidence_deg,
+                                                noise,
+                                                axial_sigma_const_m,
+                                                axial_sigma_quad,
+                                                axial_sigma_offset_m,
+                                                axial_sigma_angle,
+                                                lateral_sigma_px,
+                                                lateral_sigma_angle_px,
+                                                sensor_focal_px,
+                                                stereo_baseline_m,
+                                                disparity_subpixel,
+                                                overlap_eta_m)
 
 /// Throws std::invalid_argument("indoor: parameter '<name>' ...") on an inconsistent option.
 void ValidateIndoorSimOptions(const IndoorSimOptions& options);
@@ -112,8 +148,8 @@ IndoorSimOptions ParseIndoorSimOptions(const nlohmann::json& j);
 /// Meshes from the corpus, read once and shared by every room (no global cache: the caller owns
 /// it and passes it in).
 struct FurnitureLibrary {
-    std::vector<std::string> names;  ///< file stem, sorted
-    std::vector<Mesh> meshes;        ///< as read (any scale; rooms rescale them)
+    std::vector<std::string> names;    ///< file stem, sorted
+    std::vector<Mesh> meshes;          ///< as read (any scale; rooms rescale them)
     std::vector<std::string> skipped;  ///< "<file>: <reason>" for files not used
 };
 
@@ -174,7 +210,7 @@ struct IndoorScan {
     PointCloud points_camera;  ///< [m], camera frame
     PointCloud points_world;   ///< the same points in the world frame
     Transform T_world_camera = Transform::Identity();
-    Eigen::VectorXi pixel;     ///< v * width + u of each point
+    Eigen::VectorXi pixel;  ///< v * width + u of each point
 };
 
 /// Turns a render into points: drops missing returns (no hit, z outside [min_range, max_range],
@@ -193,8 +229,8 @@ IndoorScan SimulateScan(const RayCaster& scene,
 
 /// Two views of one room.
 struct IndoorScanPair {
-    IndoorScan a;  ///< source
-    IndoorScan b;  ///< target
+    IndoorScan a;                             ///< source
+    IndoorScan b;                             ///< target
     Transform T_b_a = Transform::Identity();  ///< maps A's camera frame into B's (= T_gt)
     Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> a_overlap;  ///< 1: B has a point within eta
     Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> b_overlap;  ///< of T_b_a * a (and back)

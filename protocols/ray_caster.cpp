@@ -1,16 +1,17 @@
 // CGAL translation unit: AABB tree over triangles, first_intersection per ray.
 #include "protocols/ray_caster.hpp"
 
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 namespace regbench {
 namespace {
@@ -91,7 +92,8 @@ RayHit RayCaster::CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& 
     } else {
         return result;
     }
-    const auto triangle = static_cast<std::size_t>(intersection->second - impl_->triangles.cbegin());
+    const auto triangle =
+        static_cast<std::size_t>(intersection->second - impl_->triangles.cbegin());
     result.hit = true;
     result.point = point;
     result.distance = std::max((point - origin).dot(unit), 0.0);

@@ -6,9 +6,8 @@
 // t_hit = inf for rays that plainly hit a mesh (a unit box hit head-on, a 20 m quad at z = 2),
 // while its ComputeDistance works; CGAL's AABB_tree::first_intersection is exact-predicate,
 // double precision and single-threaded per query, so depths are bitwise reproducible.
-#include <memory>
-
 #include <Eigen/Core>
+#include <memory>
 
 #include "protocols/mesh.hpp"
 
@@ -16,12 +15,12 @@ namespace regbench {
 
 /// Result of one ray query.
 struct RayHit {
-    bool hit = false;                              ///< false: the ray leaves the scene
-    double distance = 0.0;                         ///< along the unit direction [m]
+    bool hit = false;                                  ///< false: the ray leaves the scene
+    double distance = 0.0;                             ///< along the unit direction [m]
     Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< the hit point
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< unit normal of the hit triangle
-                                                   ///< (sign as the face winding gives it)
-    Eigen::Index face = -1;                        ///< index of the hit triangle in the mesh
+                                                       ///< (sign as the face winding gives it)
+    Eigen::Index face = -1;                            ///< index of the hit triangle in the mesh
 };
 
 /// Thread-safety: construction builds the tree; CastRay is const and may run concurrently.
