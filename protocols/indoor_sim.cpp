@@ -1,6 +1,7 @@
 // Indoor scan simulation: room assembly, pinhole depth rendering, Kinect noise, view pairs.
 #include "protocols/indoor_sim.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,7 +26,7 @@ constexpr const char* kName = "indoor";
 /// LookAt has no roll-free frame there, and a Kinect held by a person rarely points so.
 constexpr double kMaxViewVerticalCos = 0.95;
 /// A look-at target closer than this to the eye gives a view filled by one surface.
-constexpr double kMinTargetDistanceM = 0.8;
+constexpr double kMinTargetDistanceM = 1.2;
 /// A corpus mesh is "flat" (a patch, a plane) when a bounding-box side is below this fraction
 /// of its largest side; flat meshes make poor free-standing furniture.
 constexpr double kFlatMeshRatio = 0.01;
@@ -124,8 +125,22 @@ void AddBoxes(const IndoorSimOptions& o,
         if (!PlaceFootprint(o, room, radius, rng, c)) continue;
         AppendBox(Eigen::Vector3d(c.x() - 0.5 * sx, c.y() - 0.5 * sy, 0.0),
                   Eigen::Vector3d(c.x() + 0.5 * sx, c.y() + 0.5 * sy, h), yaw, builder);
-        room.objects.push_back({"box", c, radius, h});
+        room.objects.push_back({"box", c, radius, h, 0.5 * std::min(sx, sy), -1});
     }
+}
+
+/// A random box whose free top fits a footprint of `radius` and leaves room for `height`
+/// below the ceiling, or -1 if none does.
+int PickSupport(const IndoorRoom& room, double radius, double height, std::mt19937_64& rng) {
+    std::vector<int> candidates;
+    for (std::size_t i = 0; i < room.objects.size(); ++i) {
+        const RoomObject& box = room.objects[i];
+        if (box.top_radius_m >= radius && box.height_m + height < room.size_m.z()) {
+            candidates.push_back(static_cast<int>(i));
+        }
+    }
+    if (candidates.empty()) return -1;
+    return candidates[UniformIndex(rng, candidates.size())];
 }
 
 void AddCorpusMeshes(const IndoorSimOptions& o,
@@ -140,7 +155,7 @@ void AddCorpusMeshes(const IndoorSimOptions& o,
         const double size = UniformReal(rng, o.mesh_min_size_m, o.mesh_max_size_m);
         const double yaw = UniformReal(rng, 0.0, 2.0 * kPi);
         const Mesh& mesh = library.meshes[pick];
-        // Scale the largest bounding-box side to `size`, turn by yaw, stand on the floor.
+        // Scale the largest bounding-box side to `size`, turn by yaw, stand on a box or the floor.
         const Eigen::RowVector3d lo = mesh.vertices.colwise().minCoeff();
         const Eigen::RowVector3d hi = mesh.vertices.colwise().maxCoeff();
         const double scale = size / (hi - lo).maxCoeff();
@@ -161,15 +176,27 @@ void AddCorpusMeshes(const IndoorSimOptions& o,
             p -= anchor;
             radius = std::max(radius, p.head<2>().norm());
         }
-        Eigen::Vector2d c;
-        if (!PlaceFootprint(o, room, radius, rng, c)) continue;
-        for (auto& p : placed) p.head<2>() += c;
+        const bool on_box = UniformReal(rng, 0.0, 1.0) < o.on_box_probability;
+        const int support =
+            on_box ? PickSupport(room, radius, placed_hi.z() - placed_lo.z(), rng) : -1;
+        Eigen::Vector3d base = Eigen::Vector3d::Zero();
+        if (support >= 0) {
+            RoomObject& box = room.objects[static_cast<std::size_t>(support)];
+            base << box.centre_xy, box.height_m;
+            box.top_radius_m = 0.0;  // one object per table top
+        } else {
+            Eigen::Vector2d c;
+            if (!PlaceFootprint(o, room, radius, rng, c)) continue;
+            base.head<2>() = c;
+        }
+        for (auto& p : placed) p += base;
         std::vector<Eigen::Vector3i> faces(static_cast<std::size_t>(mesh.faces.rows()));
         for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
             faces[static_cast<std::size_t>(f)] = mesh.faces.row(f).transpose();
         }
         builder.Append(placed, faces);
-        room.objects.push_back({library.names[pick], c, radius, placed_hi.z() - placed_lo.z()});
+        room.objects.push_back({library.names[pick], base.head<2>(), radius,
+                                base.z() + placed_hi.z() - placed_lo.z(), 0.0, support});
     }
 }
 
@@ -197,21 +224,80 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
     }
 }
 
-/// Camera A: a free eye looking at a random object's mid-height or a random point of the room.
-/// Returns false when `placement_attempts` draws gave no usable view.
+/// Probe grid for view acceptance: coarse enough to cost ~1% of a render.
+constexpr int kProbeColumns = 16;
+constexpr int kProbeRows = 12;
+
+/// What a coarse ray grid sees of a view: missing returns excluded.
+struct ViewProbe {
+    double object_fraction = 0.0;  ///< returns on furniture rather than the room shell
+    double normal_spread = 0.0;    ///< smallest eigenvalue of mean(n n^T) over returns
+};
+
+/// Probes a view on a kProbeColumns x kProbeRows ray grid. normal_spread is 0 when all surfaces
+/// seen share one normal direction (a plane) or two (planes meeting in a line, which leave a
+/// sliding direction unconstrained); a well-conditioned view has some of all three
+/// (Gelfand et al., "Geometrically stable sampling for the ICP algorithm", 3DIM 2003).
+ViewProbe ProbeView(const RayCaster& scene,
+                    const IndoorRoom& room,
+                    const IndoorSimOptions& o,
+                    const Transform& T_world_camera) {
+    const Eigen::Matrix3d R = T_world_camera.topLeftCorner<3, 3>();
+    const Eigen::Vector3d eye = T_world_camera.topRightCorner<3, 1>();
+    const double max_incidence_cos = std::cos(o.max_incidence_deg * kDegToRad);
+    int returns = 0;
+    int on_objects = 0;
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (int row = 0; row < kProbeRows; ++row) {
+        for (int col = 0; col < kProbeColumns; ++col) {
+            const double u = (col + 0.5) * o.image_width / kProbeColumns - 0.5;
+            const double v = (row + 0.5) * o.image_height / kProbeRows - 0.5;
+            const Eigen::Vector3d ray =
+                R * Eigen::Vector3d((u - o.cx) / o.fx, (v - o.cy) / o.fy, 1.0).normalized();
+            const RayHit hit = scene.CastRay(eye, ray);
+            if (!hit.hit) continue;
+            const double z = (hit.point - eye).dot(R.col(2));
+            if (z < o.min_range_m || z > o.max_range_m) continue;
+            if (std::abs(hit.normal.dot(ray)) < max_incidence_cos) continue;
+            ++returns;
+            if (hit.face >= room.shell_triangles) ++on_objects;
+            scatter += hit.normal * hit.normal.transpose();
+        }
+    }
+    ViewProbe probe;
+    if (returns == 0) return probe;
+    probe.object_fraction = room.objects.empty() ? 1.0 : static_cast<double>(on_objects) / returns;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter / returns,
+                                                               Eigen::EigenvaluesOnly);
+    probe.normal_spread = eigen.eigenvalues().minCoeff();
+    return probe;
+}
+
+bool AcceptView(const RayCaster& scene,
+                const IndoorRoom& room,
+                const IndoorSimOptions& o,
+                const Transform& T_world_camera) {
+    const ViewProbe probe = ProbeView(scene, room, o, T_world_camera);
+    return probe.object_fraction >= o.min_object_fraction &&
+           probe.normal_spread >= o.min_normal_spread;
+}
+
+/// Camera A: a free eye looking at a random height of a random object (a random point of the
+/// room when there is no furniture), with enough furniture in view. Returns false when
+/// `placement_attempts` draws gave no usable view.
 bool DrawViewA(const IndoorSimOptions& o,
                const IndoorRoom& room,
+               const RayCaster& scene,
                std::mt19937_64& rng,
                Transform& T_world_camera) {
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
         const Eigen::Vector3d eye(UniformReal(rng, 0.0, room.size_m.x()),
                                   UniformReal(rng, 0.0, room.size_m.y()),
                                   UniformReal(rng, o.camera_min_height_m, o.camera_max_height_m));
-        const std::size_t k = UniformIndex(rng, room.objects.size() + 1);
         Eigen::Vector3d target;
-        if (k < room.objects.size()) {
-            const auto& obj = room.objects[k];
-            target << obj.centre_xy, 0.5 * obj.height_m;
+        if (!room.objects.empty()) {
+            const auto& obj = room.objects[UniformIndex(rng, room.objects.size())];
+            target << obj.centre_xy, UniformReal(rng, 0.2, 0.8) * obj.height_m;
         } else {
             target << UniformReal(rng, 0.0, room.size_m.x()),
                 UniformReal(rng, 0.0, room.size_m.y()), UniformReal(rng, 0.0, room.size_m.z());
@@ -220,7 +306,9 @@ bool DrawViewA(const IndoorSimOptions& o,
         const Eigen::Vector3d view = target - eye;
         if (view.norm() < kMinTargetDistanceM) continue;
         if (std::abs(view.normalized().z()) > kMaxViewVerticalCos) continue;
-        T_world_camera = LookAt(eye, target);
+        const Transform T = LookAt(eye, target);
+        if (!AcceptView(scene, room, o, T)) continue;
+        T_world_camera = T;
         return true;
     }
     return false;
@@ -230,6 +318,7 @@ bool DrawViewA(const IndoorSimOptions& o,
 /// direction. Returns false when `placement_attempts` draws gave no free eye.
 bool DrawViewB(const IndoorSimOptions& o,
                const IndoorRoom& room,
+               const RayCaster& scene,
                const Transform& T_world_a,
                std::mt19937_64& rng,
                Transform& T_world_b) {
@@ -243,7 +332,9 @@ bool DrawViewB(const IndoorSimOptions& o,
         const Eigen::Vector3d eye = T_world_a.topRightCorner<3, 1>() + baseline * direction;
         if (!IsFreeEye(o, room, eye)) continue;
         if (std::abs(R.col(2).z()) > kMaxViewVerticalCos) continue;
-        T_world_b = MakeTransform(R, eye);
+        const Transform T = MakeTransform(R, eye);
+        if (!AcceptView(scene, room, o, T)) continue;
+        T_world_b = T;
         return true;
     }
     return false;
@@ -286,6 +377,8 @@ void ValidateIndoorSimOptions(const IndoorSimOptions& o) {
             "must be >= min_boxes >= 0");
     Require(o.min_meshes >= 0 && o.max_meshes >= o.min_meshes, kName, "max_meshes",
             "must be >= min_meshes >= 0");
+    Require(o.on_box_probability >= 0.0 && o.on_box_probability <= 1.0, kName, "on_box_probability",
+            "must be in [0, 1]");
     Require(o.object_wall_margin_m >= 0.0, kName, "object_wall_margin_m", "must be >= 0");
     Require(o.camera_wall_clearance_m >= 0.0, kName, "camera_wall_clearance_m", "must be >= 0");
     Require(o.placement_attempts >= 1, kName, "placement_attempts", "must be >= 1");
@@ -304,6 +397,10 @@ void ValidateIndoorSimOptions(const IndoorSimOptions& o) {
     Require(o.sensor_focal_px > 0.0, kName, "sensor_focal_px", "must be > 0");
     Require(o.stereo_baseline_m > 0.0, kName, "stereo_baseline_m", "must be > 0");
     Require(o.disparity_subpixel >= 0, kName, "disparity_subpixel", "must be >= 0 (0 = off)");
+    Require(o.min_object_fraction >= 0.0 && o.min_object_fraction <= 1.0, kName,
+            "min_object_fraction", "must be in [0, 1]");
+    Require(o.min_normal_spread >= 0.0 && o.min_normal_spread <= 1.0 / 3.0, kName,
+            "min_normal_spread", "must be in [0, 1/3]");
     Require(o.overlap_eta_m > 0.0, kName, "overlap_eta_m", "must be > 0");
 }
 
@@ -368,6 +465,7 @@ IndoorRoom AssembleRoom(const IndoorSimOptions& options,
         UniformReal(rng, options.room_min_height_m, options.room_max_height_m);
     MeshBuilder builder;
     AppendBox(Eigen::Vector3d::Zero(), room.size_m, 0.0, builder);  // floor, ceiling, walls
+    room.shell_triangles = 12;
     AddBoxes(options, rng, room, builder);
     AddCorpusMeshes(options, library, rng, room, builder);
     room.mesh = builder.Build();
@@ -514,8 +612,8 @@ IndoorScanPair SimulateIndoorPair(const IndoorSimOptions& options,
     for (int attempt = 0; attempt < options.view_attempts; ++attempt) {
         Transform T_world_a;
         Transform T_world_b;
-        if (!DrawViewA(options, pair.room, rng, T_world_a)) continue;
-        if (!DrawViewB(options, pair.room, T_world_a, rng, T_world_b)) continue;
+        if (!DrawViewA(options, pair.room, scene, rng, T_world_a)) continue;
+        if (!DrawViewB(options, pair.room, scene, T_world_a, rng, T_world_b)) continue;
         pair.a = SimulateScan(scene, options, T_world_a, rng);
         pair.b = SimulateScan(scene, options, T_world_b, rng);
         if (pair.a.points_camera.rows() < options.min_valid_points ||
@@ -545,7 +643,7 @@ IndoorScan SimulateIndoorScan(const IndoorSimOptions& options,
     const RayCaster scene(room.mesh);
     for (int attempt = 0; attempt < options.view_attempts; ++attempt) {
         Transform T_world_camera;
-        if (!DrawViewA(options, room, rng, T_world_camera)) continue;
+        if (!DrawViewA(options, room, scene, rng, T_world_camera)) continue;
         IndoorScan scan = SimulateScan(scene, options, T_world_camera, rng);
         if (scan.points_camera.rows() >= options.min_valid_points) return scan;
     }

@@ -38,16 +38,18 @@ struct IndoorSimOptions {
     double room_max_side_m = 6.0;       ///<
     double room_min_height_m = 2.5;     ///< ceiling height drawn in [min, max]
     double room_max_height_m = 3.0;     ///<
-    int min_boxes = 2;                  ///< furniture boxes per room, in [min, max]
-    int max_boxes = 5;                  ///<
+    int min_boxes = 1;                  ///< furniture boxes per room, in [min, max]
+    int max_boxes = 4;                  ///<
     double box_min_side_m = 0.3;        ///< box footprint sides in [min, max]
     double box_max_side_m = 1.5;        ///<
     double box_min_height_m = 0.3;      ///< box heights in [min, max]
     double box_max_height_m = 1.2;      ///<
-    int min_meshes = 2;                 ///< corpus meshes per room, in [min, max] (0 if no corpus)
-    int max_meshes = 4;                 ///<
+    int min_meshes = 3;                 ///< corpus meshes per room, in [min, max] (0 if no corpus)
+    int max_meshes = 6;                 ///<
     double mesh_min_size_m = 0.3;       ///< largest bounding-box side of a placed mesh, [min, max]
     double mesh_max_size_m = 1.5;       ///<
+    double on_box_probability = 0.5;    ///< a corpus mesh stands on a free box that fits it (a
+                                        ///< table top) with this probability, else on the floor
     double object_wall_margin_m = 0.1;  ///< objects keep this distance from the walls
     int placement_attempts = 30;  ///< tries per object to find a free spot, else it is left out
 
@@ -69,8 +71,14 @@ struct IndoorSimOptions {
     double max_baseline_m = 0.4;           ///< a length in [min, max] ...
     double min_rotation_deg = 5.0;         ///< ... and turned about a random axis by an angle
     double max_rotation_deg = 20.0;        ///< in [min, max]
-    int view_attempts = 20;                ///< redraws of a pose pair before giving up (throws)
+    int view_attempts = 50;                ///< redraws of a pose pair before giving up (throws)
     int min_valid_points = 4096;           ///< a view with fewer returns is redrawn
+    double min_object_fraction = 0.3;  ///< a view whose returns hit furniture (not floor, walls,
+                                       ///< ceiling) less often than this, probed on a 16 x 12
+                                       ///< ray grid, is redrawn: walls alone are degenerate
+    double min_normal_spread = 0.05;   ///< a view whose probed surface normals n have
+                                       ///< lambda_min(mean n n^T) below this is redrawn: one
+                                       ///< plane (0) or two (0) leave a motion unconstrained
 
     // Sensor model: missing returns.
     double min_range_m = 0.5;         ///< depths (z) below this return nothing
@@ -108,6 +116,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IndoorSimOptions,
                                                 max_meshes,
                                                 mesh_min_size_m,
                                                 mesh_max_size_m,
+                                                on_box_probability,
                                                 object_wall_margin_m,
                                                 placement_attempts,
                                                 image_width,
@@ -125,6 +134,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IndoorSimOptions,
                                                 max_rotation_deg,
                                                 view_attempts,
                                                 min_valid_points,
+                                                min_object_fraction,
+                                                min_normal_spread,
                                                 min_range_m,
                                                 max_range_m,
                                                 max_incidence_deg,
@@ -167,11 +178,14 @@ struct RoomObject {
     Eigen::Vector2d centre_xy;  ///< footprint centre [m]
     double radius_m = 0.0;      ///< footprint bounding-circle radius [m]
     double height_m = 0.0;      ///< top above the floor [m]
+    double top_radius_m = 0.0;  ///< free circle on its top (an unused box's inscribed circle)
+    int support = -1;           ///< index of the object it stands on; -1: the floor
 };
 
 /// A furnished room: one triangle mesh (shell first, then objects) and its layout.
 struct IndoorRoom {
     Mesh mesh;
+    Eigen::Index shell_triangles = 12;  ///< mesh.faces rows before this are floor/walls/ceiling
     Eigen::Vector3d size_m = Eigen::Vector3d::Zero();  ///< width (x), depth (y), height (z)
     std::vector<RoomObject> objects;
 };

@@ -199,7 +199,8 @@ TEST(IndoorSim, FurnitureLibraryHoldsUsableMeshes) {
 
 TEST(IndoorSim, RoomObjectsStandInsideTheRoomWithoutOverlap) {
     const IndoorSimOptions o;
-    for (std::uint64_t k = 0; k < 5; ++k) {
+    int on_boxes = 0;
+    for (std::uint64_t k = 0; k < 10; ++k) {
         std::mt19937_64 rng = MakePairRng(11, k);
         const IndoorRoom room = AssembleRoom(o, Library(), rng);
         ASSERT_GE(room.objects.size(), 1u);
@@ -210,12 +211,22 @@ TEST(IndoorSim, RoomObjectsStandInsideTheRoomWithoutOverlap) {
         for (std::size_t i = 0; i < room.objects.size(); ++i) {
             const auto& a = room.objects[i];
             EXPECT_GE(a.centre_xy.minCoeff() - a.radius_m, o.object_wall_margin_m - 1e-9);
+            if (a.support >= 0) {  // on a table top: inside the box's inscribed circle
+                const auto& box = room.objects[static_cast<std::size_t>(a.support)];
+                EXPECT_EQ(box.name, "box");
+                EXPECT_TRUE(a.centre_xy.isApprox(box.centre_xy));
+                EXPECT_GT(a.height_m, box.height_m);
+                ++on_boxes;
+                continue;
+            }
             for (std::size_t j = i + 1; j < room.objects.size(); ++j) {
                 const auto& b = room.objects[j];
+                if (b.support >= 0) continue;
                 EXPECT_GE((a.centre_xy - b.centre_xy).norm(), a.radius_m + b.radius_m - 1e-9);
             }
         }
     }
+    EXPECT_GT(on_boxes, 0);  // some meshes stand on table tops
 }
 
 /// Options for the pair tests: a 160 x 120 image (fast) with proportionally fewer points.
@@ -263,9 +274,12 @@ TEST(IndoorSim, TwoViewsOverlapAfterGroundTruth) {
     // The labels are what OverlapLabels computes.
     EXPECT_EQ(pair.a_overlap, OverlapLabels(pair.a.points_camera, pair.b.points_camera, pair.T_b_a,
                                             o.overlap_eta_m));
-    // A wrong ground truth (30 cm off) destroys most of the overlap.
-    Transform wrong = pair.T_b_a;
-    wrong(0, 3) += 0.3;
+    // A wrong ground truth (15 degrees and 35 cm off) destroys most of the overlap. (A pure
+    // shift can slide walls and floor along themselves and keep them overlapping.)
+    const Transform error =
+        MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 1), 15.0 * kPi / 180.0),
+                      Eigen::Vector3d::Constant(0.2));
+    const Transform wrong = Compose(error, pair.T_b_a);
     const auto wrong_labels =
         OverlapLabels(pair.a.points_camera, pair.b.points_camera, wrong, o.overlap_eta_m);
     EXPECT_LT(wrong_labels.cast<double>().mean(), 0.5 * pair.a_overlap_ratio);
