@@ -1,6 +1,7 @@
 #include "protocols/indoor_sim.hpp"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -301,6 +302,23 @@ TEST(IndoorSim, SameSeedGivesBitwiseSamePair) {
     EXPECT_EQ(p1.name, p2.name);
     EXPECT_FALSE(p1.a.points_camera.rows() == p3.a.points_camera.rows() &&
                  (p1.a.points_camera.array() == p3.a.points_camera.array()).all());
+}
+
+TEST(IndoorSim, RenderIsIndependentOfThreadCount) {
+    const IndoorSimOptions o = PairOptions();
+    std::mt19937_64 rng = MakePairRng(8, 0);
+    const IndoorRoom room = AssembleRoom(o, Library(), rng);
+    const RayCaster scene(room.mesh);
+    const Transform T = LookAt(Eigen::Vector3d(0.5, 0.5, 1.5), Eigen::Vector3d(2.5, 2.0, 0.5));
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const DepthRender one = RenderDepth(scene, o, T);
+    omp_set_num_threads(3);
+    const DepthRender three = RenderDepth(scene, o, T);
+    omp_set_num_threads(threads);
+    EXPECT_TRUE((one.depth.array() == three.depth.array()).all());
+    EXPECT_TRUE((one.incidence.array() == three.incidence.array()).all());
+    EXPECT_GT((one.depth.array() > 0.0).count(), one.depth.size() / 2);
 }
 
 TEST(IndoorSim, SingleScanIsReproducibleAndInMetres) {
