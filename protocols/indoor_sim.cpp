@@ -27,6 +27,11 @@ constexpr const char* kName = "indoor";
 constexpr double kMaxViewVerticalCos = 0.95;
 /// A look-at target closer than this to the eye gives a view filled by one surface.
 constexpr double kMinTargetDistanceM = 1.2;
+/// Cameras aim between these fractions of an object's height (not at its base or tip).
+constexpr double kTargetMinHeightFraction = 0.2;
+constexpr double kTargetMaxHeightFraction = 0.8;
+/// Cameras stay this far below the ceiling.
+constexpr double kCeilingClearanceM = 0.1;
 /// A corpus mesh is "flat" (a patch, a plane) when a bounding-box side is below this fraction
 /// of its largest side; flat meshes make poor free-standing furniture.
 constexpr double kFlatMeshRatio = 0.01;
@@ -205,7 +210,8 @@ void AddCorpusMeshes(const IndoorSimOptions& o,
 bool IsFreeEye(const IndoorSimOptions& o, const IndoorRoom& room, const Eigen::Vector3d& eye) {
     const double clear = o.camera_wall_clearance_m;
     if (eye.x() < clear || eye.x() > room.size_m.x() - clear || eye.y() < clear ||
-        eye.y() > room.size_m.y() - clear || eye.z() < clear || eye.z() > room.size_m.z() - 0.1) {
+        eye.y() > room.size_m.y() - clear || eye.z() < clear ||
+        eye.z() > room.size_m.z() - kCeilingClearanceM) {
         return false;
     }
     for (const auto& obj : room.objects) {
@@ -297,7 +303,8 @@ bool DrawViewA(const IndoorSimOptions& o,
         Eigen::Vector3d target;
         if (!room.objects.empty()) {
             const auto& obj = room.objects[UniformIndex(rng, room.objects.size())];
-            target << obj.centre_xy, UniformReal(rng, 0.2, 0.8) * obj.height_m;
+            target << obj.centre_xy,
+                UniformReal(rng, kTargetMinHeightFraction, kTargetMaxHeightFraction) * obj.height_m;
         } else {
             target << UniformReal(rng, 0.0, room.size_m.x()),
                 UniformReal(rng, 0.0, room.size_m.y()), UniformReal(rng, 0.0, room.size_m.z());
