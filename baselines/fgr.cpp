@@ -20,8 +20,8 @@ constexpr const char* kName = "fgr";
 /// Radii follow the Open3D tutorial (and the OGMM repo's unused FPFH helper) as multiples of
 /// one voxel size; the FGR solver settings are Open3D's Python defaults.
 struct FgrOptions {
-    /// Base length: 0.05 is about the mean point spacing of a 717-point, 70% crop of a
-    /// unit-sphere object, so FPFH (5 voxels = 0.25) sees ~50-100 neighbours.
+    /// Base length: 0.05 is about the sample spacing sqrt(area / 1024) of a unit-sphere
+    /// object (0.06 on the test object), so FPFH (5 voxels = 0.25) sees ~50-100 neighbours.
     double voxel_size = 0.05;
     bool voxel_downsample = false;  ///< tutorial downsamples dense scans; ours are already sparse
     double normal_radius_voxels = 2.0;                ///< normal radius = 2 * voxel (tutorial)
@@ -135,8 +135,8 @@ MethodInfo FgrMethodInfo() {
         "FastGlobalRegistrationBasedOnFeatureMatching), Open3D tutorial radii";
     info.param_docs = {
         {"voxel_size",
-         "base length for the radii below [unit-sphere units], > 0; 0.05 ~ the mean point "
-         "spacing of a 717-point crop of a unit-sphere object"},
+         "base length for the radii below [unit-sphere units], > 0; 0.05 ~ the sample spacing "
+         "sqrt(area / 1024) of a unit-sphere object, so FPFH (0.25) sees 50-100 neighbours"},
         {"voxel_downsample",
          "voxel-downsample both clouds first (tutorial step for dense scans); false: 717 "
          "points are already at ~voxel spacing"},

@@ -18,7 +18,7 @@ struct IcpPlOptions {
     double relative_fitness = 1e-6;             ///< Open3D default
     double relative_rmse = 1e-6;                ///< Open3D default
     /// Normal neighbourhood radius: 2 * voxel with voxel 0.05 (Open3D tutorial recipe, the
-    /// same as `fgr`), i.e. about twice the point spacing of a 717-point unit-scale object.
+    /// same as `fgr`), i.e. about twice the sample spacing of a unit-sphere object.
     double normal_radius = 0.1;
     int normal_max_nn = 30;  ///< at most this many neighbours per normal (Open3D tutorial)
 };
@@ -81,7 +81,7 @@ MethodInfo IcpPlMethodInfo() {
         {"relative_rmse", "stop threshold on the inlier-RMSE change, >= 0; 1e-6 = Open3D default"},
         {"normal_radius",
          "target-normal neighbourhood radius, > 0; 0.1 = 2 * voxel (0.05), Open3D tutorial "
-         "recipe, ~2x the spacing of 717 points on a unit-scale object"},
+         "recipe, ~2x the sample spacing of a unit-sphere object"},
         {"normal_max_nn", "neighbour cap per normal, >= 3; 30 = Open3D tutorial recipe"},
     };
     info.defaults = IcpPlOptions{};

@@ -27,6 +27,17 @@ TEST(Gicp, CloudSmallerThanNeighbourhoodFails) {
     EXPECT_NE(r.message.find("correspondence_randomness"), std::string::npos) << r.message;
 }
 
+TEST(Gicp, DistantCloudsStopWithOptimizerError) {
+    // No pair within max_correspondence_distance: PCL's BFGS step throws, the method returns
+    // the identity and says why instead of claiming convergence.
+    auto pair = CleanCompletePair(0.0);
+    pair.target.col(0).array() += 10.0;
+    const AlignResult r = CreateMethod("gicp")->Align(pair.source, pair.target);
+    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    EXPECT_EQ(r.stop_reason, "optimizer_error");
+    EXPECT_TRUE(r.T_target_source.isIdentity(1e-12));
+}
+
 TEST(Ndt, RecoversFiveDegreesOnCleanCompletePair) {
     constexpr double kRreTolDeg = 1.0;
     const auto pair = CleanCompletePair(5.0);
