@@ -1,14 +1,13 @@
 // BM_Align: one registration of the bench pair per iteration, for every registered method.
 // Benchmarks are registered from AllMethods(), so new methods are timed without edits here.
 #include <benchmark/benchmark.h>
-#include <omp.h>
 
-#include <cstdlib>
 #include <exception>
 #include <string>
 
 #include "bench/bench_pair.hpp"
 #include "core/metrics.hpp"
+#include "core/threads.hpp"
 #include "runners/registry.hpp"
 
 namespace regbench::bench {
@@ -17,17 +16,9 @@ namespace {
 /// Thread counts timed for every method; single-threaded is the reported number.
 constexpr int kThreadCounts[] = {1, 2};
 
-/// Sets the OpenMP thread count seen by the methods. Open3D 0.16's EstimateMaxThreads()
-/// (used by EstimateNormals and ComputeFPFHFeature) ignores omp_set_num_threads() unless
-/// OMP_NUM_THREADS is present in the environment, so set both.
-void SetThreads(int threads) {
-    setenv("OMP_NUM_THREADS", std::to_string(threads).c_str(), /*overwrite=*/1);
-    omp_set_num_threads(threads);
-}
-
 void BM_Align(benchmark::State& state, const std::string& method_name) {
     const Pair& pair = GetBenchPair().pair;
-    SetThreads(static_cast<int>(state.range(1)));
+    SetOmpThreads(static_cast<int>(state.range(1)));  // also covers Open3D, see threads.hpp
     const auto method = CreateMethod(method_name);
     AlignResult result = method->Align(pair.source, pair.target);  // warm-up, untimed
     if (result.status != AlignStatus::kOk) {

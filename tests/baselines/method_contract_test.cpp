@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/rng.hpp"
+#include "core/threads.hpp"
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
 #include "tests/baselines/synthetic_shape.hpp"
@@ -90,17 +91,14 @@ TEST_P(MethodContract, IdenticalCloudsGiveNearIdentity) {
     EXPECT_LE(trans, tol.trans);
 }
 
-/// Sets the OpenMP thread count for the scope, restoring the previous one after. Sets the
-/// OMP_NUM_THREADS variable too: Open3D 0.16's EstimateMaxThreads() ignores
-/// omp_set_num_threads() when that variable is absent.
+/// SetOmpThreads for the scope; restores the previous count and OMP_NUM_THREADS after.
 class ScopedOmpThreads {
 public:
     explicit ScopedOmpThreads(int threads) : previous_(omp_get_max_threads()) {
         const char* env = std::getenv("OMP_NUM_THREADS");
         had_env_ = env != nullptr;
         if (had_env_) previous_env_ = env;
-        setenv("OMP_NUM_THREADS", std::to_string(threads).c_str(), 1);
-        omp_set_num_threads(threads);
+        SetOmpThreads(threads);
     }
     ~ScopedOmpThreads() {
         omp_set_num_threads(previous_);
