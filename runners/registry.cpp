@@ -2,13 +2,19 @@
 
 #include <stdexcept>
 
+#include "baselines/fgr.hpp"
+#include "baselines/gicp.hpp"
+#include "baselines/icp.hpp"
+#include "baselines/icp_pl.hpp"
 #include "baselines/identity.hpp"
+#include "baselines/ndt.hpp"
 
 namespace regbench {
 
 const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
-        IdentityMethodInfo(),
+        IdentityMethodInfo(), IcpMethodInfo(),  IcpPlMethodInfo(),
+        FgrMethodInfo(),      GicpMethodInfo(), NdtMethodInfo(),
     };
     return methods;
 }
