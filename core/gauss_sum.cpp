@@ -85,6 +85,57 @@ struct LeafJob {
     double* m1;  ///< row-major (query, 3) or nullptr
 };
 
+struct ChunkSums {
+    float s0, s1, s2, s3;
+};
+
+/// Float SIMD sums over one chunk of <= kChunk points: sum w k, sum w k p (p = x, y, z).
+/// Only locals and restrict pointers in the loop, so it vectorises.
+template <bool kWeighted, bool kMoment>
+__attribute__((always_inline)) inline ChunkSums SumChunk(const float* __restrict px,
+                                                         const float* __restrict py,
+                                                         const float* __restrict pz,
+                                                         const float* __restrict w,
+                                                         Eigen::Index count,
+                                                         float qx,
+                                                         float qy,
+                                                         float qz,
+                                                         float neg_inv_two_sigma2,
+                                                         float cutoff2) {
+    // Eight independent lanes (one AVX register) written as plain arrays: GCC vectorises
+    // this without -ffast-math, and the lane order fixes the summation order.
+    constexpr int kLanes = 8;
+    float l0[kLanes] = {}, l1[kLanes] = {}, l2[kLanes] = {}, l3[kLanes] = {};
+    const auto lane_term = [&](Eigen::Index j, float& a0, float& a1, float& a2, float& a3) {
+        const float dx = qx - px[j];
+        const float dy = qy - py[j];
+        const float dz = qz - pz[j];
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        float k = FastExp(d2 * neg_inv_two_sigma2);
+        k = d2 <= cutoff2 ? k : 0.0f;
+        if (kWeighted) k *= w[j];
+        a0 += k;
+        if (kMoment) {
+            a1 += k * px[j];
+            a2 += k * py[j];
+            a3 += k * pz[j];
+        }
+    };
+    Eigen::Index j = 0;
+    for (; j + kLanes <= count; j += kLanes) {
+        for (int l = 0; l < kLanes; ++l) lane_term(j + l, l0[l], l1[l], l2[l], l3[l]);
+    }
+    for (int l = 0; j < count; ++j, ++l) lane_term(j, l0[l], l1[l], l2[l], l3[l]);
+    float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+    for (int l = 0; l < kLanes; ++l) {
+        s0 += l0[l];
+        s1 += l1[l];
+        s2 += l2[l];
+        s3 += l3[l];
+    }
+    return {s0, s1, s2, s3};
+}
+
 /// The kernel: for each query in the leaf, the candidate leaves its own position can reach
 /// (merged into contiguous ranges), then float SIMD sums over chunks of each range,
 /// accumulated in double. Written once, compiled for AVX2+FMA and for the baseline ISA.
@@ -111,28 +162,14 @@ __attribute__((always_inline)) inline std::int64_t EvaluateLeafImpl(const LeafJo
             evaluated += range.second - range.first;
             for (Eigen::Index c0 = range.first; c0 < range.second; c0 += kChunk) {
                 const Eigen::Index c1 = std::min(range.second, c0 + kChunk);
-                float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
-#pragma omp simd reduction(+ : s0, s1, s2, s3)
-                for (Eigen::Index j = c0; j < c1; ++j) {
-                    const float dx = qx - job.px[j];
-                    const float dy = qy - job.py[j];
-                    const float dz = qz - job.pz[j];
-                    const float d2 = dx * dx + dy * dy + dz * dz;
-                    float k = FastExp(d2 * job.neg_inv_two_sigma2);
-                    k = d2 <= job.cutoff2 ? k : 0.0f;
-                    if (kWeighted) k *= job.w[j];
-                    s0 += k;
-                    if (kMoment) {
-                        s1 += k * job.px[j];
-                        s2 += k * job.py[j];
-                        s3 += k * job.pz[j];
-                    }
-                }
-                a0 += s0;
+                const ChunkSums s = SumChunk<kWeighted, kMoment>(
+                    job.px + c0, job.py + c0, job.pz + c0, job.w ? job.w + c0 : nullptr, c1 - c0,
+                    qx, qy, qz, job.neg_inv_two_sigma2, job.cutoff2);
+                a0 += s.s0;
                 if (kMoment) {
-                    a1 += s1;
-                    a2 += s2;
-                    a3 += s3;
+                    a1 += s.s1;
+                    a2 += s.s2;
+                    a3 += s.s3;
                 }
             }
         }
