@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/LU>
+
 namespace regbench {
 
 double SquaredDistanceMean(const PointCloud& Y, const PointCloud& X) {

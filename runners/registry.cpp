@@ -6,6 +6,7 @@
 #include "baselines/gicp.hpp"
 #include "baselines/icp.hpp"
 #include "baselines/icp_pl.hpp"
+#include "baselines/cpd.hpp"
 #include "baselines/identity.hpp"
 #include "baselines/ndt.hpp"
 
@@ -15,6 +16,8 @@ const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
         IdentityMethodInfo(), IcpMethodInfo(),  IcpPlMethodInfo(),
         FgrMethodInfo(),      GicpMethodInfo(), NdtMethodInfo(),
+        IdentityMethodInfo(),
+        CpdMethodInfo(),
     };
     return methods;
 }
