@@ -150,4 +150,43 @@ double RigidGmmL2Cost::operator()(const Eigen::VectorXd& theta, Eigen::VectorXd&
     return f;
 }
 
+L2Frame L2Frame::CenteredScaled(const PointCloud& source, const PointCloud& target, double scale) {
+    if (!(scale > 0.0) || !std::isfinite(scale)) {
+        throw std::invalid_argument("L2Frame: scale must be positive and finite");
+    }
+    L2Frame f;
+    f.source_center = source.colwise().mean().transpose();
+    f.target_center = target.colwise().mean().transpose();
+    f.scale = scale;
+    return f;
+}
+
+PointCloud L2Frame::SourceIn(const PointCloud& source) const {
+    return (source.rowwise() - source_center.transpose()) / scale;
+}
+
+PointCloud L2Frame::TargetIn(const PointCloud& target) const {
+    return (target.rowwise() - target_center.transpose()) / scale;
+}
+
+Transform L2Frame::ToInput(const Transform& T_frame) const {
+    // x = c_t + s (R (y - c_s) / s + t') = R y + (c_t + s t' - R c_s)
+    const Eigen::Matrix3d R = T_frame.topLeftCorner<3, 3>();
+    const Eigen::Vector3d t =
+        target_center + scale * T_frame.topRightCorner<3, 1>() - R * source_center;
+    return MakeTransform(R, t);
+}
+
+BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
+                           const MixtureFeatures& target,
+                           double sigma,
+                           L2Gradient gradient,
+                           const Eigen::VectorXd& theta0,
+                           const BfgsOptions& options) {
+    const RigidGmmL2Cost cost(source, target, sigma, gradient);
+    return MinimizeBfgs(
+        [&cost](const Eigen::VectorXd& theta, Eigen::VectorXd& grad) { return cost(theta, grad); },
+        theta0, options);
+}
+
 }  // namespace regbench

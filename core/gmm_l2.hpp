@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 
+#include "core/bfgs.hpp"
 #include "core/point_cloud.hpp"
 
 namespace regbench {
@@ -54,5 +55,30 @@ private:
     double sigma_;
     L2Gradient gradient_;
 };
+
+/// Where an L2 method optimises: y' = (y - c_source) / scale, x' = (x - c_target) / scale.
+/// probreg works in the input frame (centers 0, scale 1); the "correct" modes centre both
+/// clouds and divide by the source's sigma so that gtol and the rotation/translation coupling
+/// do not depend on the input's units and offset.
+struct L2Frame {
+    Eigen::Vector3d source_center = Eigen::Vector3d::Zero();
+    Eigen::Vector3d target_center = Eigen::Vector3d::Zero();
+    double scale = 1.0;
+
+    /// Centroids of each cloud, common scale `scale` (> 0).
+    static L2Frame CenteredScaled(const PointCloud& source, const PointCloud& target, double scale);
+    PointCloud SourceIn(const PointCloud& source) const;
+    PointCloud TargetIn(const PointCloud& target) const;
+    /// T_target_source in the input frame from T' estimated in this frame.
+    Transform ToInput(const Transform& T_frame) const;
+};
+
+/// One BFGS run of RigidGmmL2Cost from theta0 (probreg's minimize(..., method='BFGS')).
+BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
+                           const MixtureFeatures& target,
+                           double sigma,
+                           L2Gradient gradient,
+                           const Eigen::VectorXd& theta0,
+                           const BfgsOptions& options);
 
 }  // namespace regbench

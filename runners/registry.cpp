@@ -2,13 +2,17 @@
 
 #include <stdexcept>
 
+#include "baselines/gmmreg.hpp"
 #include "baselines/identity.hpp"
+#include "baselines/svr.hpp"
 
 namespace regbench {
 
 const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
         IdentityMethodInfo(),
+        GmmRegMethodInfo(),
+        SvrMethodInfo(),
     };
     return methods;
 }
