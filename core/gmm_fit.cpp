@@ -35,7 +35,7 @@ struct Soa {
 };
 
 /// d[i] = min(d[i], |p_i - c|^2); returns sum_i d[i] (k-means++ potential with candidate c).
-__attribute__((target_clones("arch=haswell", "default"))) double MinDistancesTo(
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) double MinDistancesTo(
     const double* px,
     const double* py,
     const double* pz,
@@ -58,15 +58,16 @@ __attribute__((target_clones("arch=haswell", "default"))) double MinDistancesTo(
 }
 
 /// Index of the nearest center (first on ties) and its squared distance.
-__attribute__((target_clones("arch=haswell", "default"))) int NearestCenter(double x,
-                                                                            double y,
-                                                                            double z,
-                                                                            const double* cx,
-                                                                            const double* cy,
-                                                                            const double* cz,
-                                                                            long k,
-                                                                            double* scratch,
-                                                                            double* best_d2) {
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) int NearestCenter(
+    double x,
+    double y,
+    double z,
+    const double* cx,
+    const double* cy,
+    const double* cz,
+    long k,
+    double* scratch,
+    double* best_d2) {
 #pragma omp simd
     for (long j = 0; j < k; ++j) {
         const double dx = x - cx[j], dy = y - cy[j], dz = z - cz[j];
@@ -83,17 +84,17 @@ __attribute__((target_clones("arch=haswell", "default"))) int NearestCenter(doub
 /// One E-step row: resp_k = exp(wlp_k - logsumexp(wlp)) with the spherical log density
 /// wlp_k = -0.5 (D log 2pi + |x - mu_k|^2 / var_k) - D/2 log var_k + log w_k (sklearn's
 /// _estimate_weighted_log_prob). Writes resp into `row`, returns log sum_k exp(wlp_k).
-__attribute__((target_clones("arch=haswell", "default"))) double ResponsibilityRow(
-    double x,
-    double y,
-    double z,
-    const double* mx,
-    const double* my,
-    const double* mz,
-    const double* neg_half_prec,
-    const double* log_const,
-    long k,
-    double* row) {
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) double
+ResponsibilityRow(double x,
+                  double y,
+                  double z,
+                  const double* mx,
+                  const double* my,
+                  const double* mz,
+                  const double* neg_half_prec,
+                  const double* log_const,
+                  long k,
+                  double* row) {
     double max_wlp = -std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(max : max_wlp)
     for (long j = 0; j < k; ++j) {
@@ -116,16 +117,17 @@ __attribute__((target_clones("arch=haswell", "default"))) double ResponsibilityR
 }
 
 /// M-step accumulation of one row: mass_k += r_k, sum_k += r_k x, sumsq_k += r_k |x|^2.
-__attribute__((target_clones("arch=haswell", "default"))) void AccumulateRow(const double* row,
-                                                                             long k,
-                                                                             double x,
-                                                                             double y,
-                                                                             double z,
-                                                                             double* mass,
-                                                                             double* sx,
-                                                                             double* sy,
-                                                                             double* sz,
-                                                                             double* sxx) {
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void AccumulateRow(
+    const double* row,
+    long k,
+    double x,
+    double y,
+    double z,
+    double* mass,
+    double* sx,
+    double* sy,
+    double* sz,
+    double* sxx) {
     const double xx = x * x + y * y + z * z;
 #pragma omp simd
     for (long j = 0; j < k; ++j) {

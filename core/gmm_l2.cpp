@@ -21,7 +21,7 @@ struct RowSums {
 
 /// s0 = sum_j w_j e_j, s1 = sum_j w_j e_j mu_j with e_j = exp(-|x - mu_j|^2 / 2 sigma^2).
 /// Compiled twice (AVX2+FMA and baseline); the loop vectorises via `omp simd`.
-__attribute__((target_clones("arch=haswell", "default"))) RowSums GaussRowSums(
+__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) RowSums GaussRowSums(
     double x,
     double y,
     double z,
