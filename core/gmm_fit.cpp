@@ -18,6 +18,8 @@ constexpr double kLog2Pi = 1.8378770664093454836;
 constexpr double kMassFloor = 10.0 * std::numeric_limits<double>::epsilon();
 /// Below this many point-component pairs the loops stay on one thread.
 constexpr long kMinParallelPairs = 200000;
+/// Components per M-step work item (a multiple of the SIMD width).
+constexpr long kComponentBlock = 64;
 
 /// Points in structure-of-arrays form so inner loops over points vectorise.
 struct Soa {
@@ -57,7 +59,8 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) do
     return pot;
 }
 
-/// Index of the nearest center (first on ties) and its squared distance.
+/// Index of the nearest center (first on ties) and its squared distance: a vectorised pass
+/// for the distances and their minimum, then a scan for the first index that attains it.
 __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) int NearestCenter(
     double x,
     double y,
@@ -68,22 +71,25 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) in
     long k,
     double* scratch,
     double* best_d2) {
-#pragma omp simd
+    double best = std::numeric_limits<double>::infinity();
+#pragma omp simd reduction(min : best)
     for (long j = 0; j < k; ++j) {
         const double dx = x - cx[j], dy = y - cy[j], dz = z - cz[j];
-        scratch[j] = dx * dx + dy * dy + dz * dz;
+        const double d = dx * dx + dy * dy + dz * dz;
+        scratch[j] = d;
+        best = d < best ? d : best;
     }
-    long best = 0;
-    for (long j = 1; j < k; ++j) {
-        if (scratch[j] < scratch[best]) best = j;
-    }
-    *best_d2 = scratch[best];
-    return static_cast<int>(best);
+    long j = 0;
+    while (j + 1 < k && scratch[j] != best) ++j;
+    *best_d2 = scratch[j];
+    return static_cast<int>(j);
 }
 
 /// One E-step row: resp_k = exp(wlp_k - logsumexp(wlp)) with the spherical log density
 /// wlp_k = -0.5 (D log 2pi + |x - mu_k|^2 / var_k) - D/2 log var_k + log w_k (sklearn's
-/// _estimate_weighted_log_prob). Writes resp into `row`, returns log sum_k exp(wlp_k).
+/// _estimate_weighted_log_prob). Writes exp(wlp_k - max_k wlp_k) into `row` and the inverse
+/// of its sum into `inv_sum` (resp = row * inv_sum, applied in AccumulateRow); returns the
+/// log-normaliser log sum_k exp(wlp_k).
 __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) double
 ResponsibilityRow(double x,
                   double y,
@@ -94,7 +100,8 @@ ResponsibilityRow(double x,
                   const double* neg_half_prec,
                   const double* log_const,
                   long k,
-                  double* row) {
+                  double* row,
+                  double* inv_sum) {
     double max_wlp = -std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(max : max_wlp)
     for (long j = 0; j < k; ++j) {
@@ -110,15 +117,15 @@ ResponsibilityRow(double x,
         row[j] = e;
         sum += e;
     }
-    const double inv = 1.0 / sum;
-#pragma omp simd
-    for (long j = 0; j < k; ++j) row[j] *= inv;
+    *inv_sum = 1.0 / sum;
     return max_wlp + std::log(sum);
 }
 
-/// M-step accumulation of one row: mass_k += r_k, sum_k += r_k x, sumsq_k += r_k |x|^2.
+/// M-step accumulation of one row, r_k = row_k * scale: mass_k += r_k, sum_k += r_k x,
+/// sumsq_k += r_k |x|^2.
 __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void AccumulateRow(
     const double* row,
+    double scale,
     long k,
     double x,
     double y,
@@ -131,7 +138,7 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) vo
     const double xx = x * x + y * y + z * z;
 #pragma omp simd
     for (long j = 0; j < k; ++j) {
-        const double r = row[j];
+        const double r = row[j] * scale;
         mass[j] += r;
         sx[j] += r * x;
         sy[j] += r * y;
@@ -313,7 +320,7 @@ SphericalGmm FitSphericalGmm(const PointCloud& X,
     m_step();
 
     std::vector<double> resp(static_cast<size_t>(n) * ks);
-    std::vector<double> log_norm(static_cast<size_t>(n));
+    std::vector<double> log_norm(static_cast<size_t>(n)), inv_sum(static_cast<size_t>(n));
     std::vector<double> mx(ks), my(ks), mz(ks), neg_half_prec(ks), log_const(ks);
     const bool parallel = n * k >= kMinParallelPairs;
     double lower_bound = -std::numeric_limits<double>::infinity();
@@ -331,16 +338,24 @@ SphericalGmm FitSphericalGmm(const PointCloud& X,
 #pragma omp parallel for schedule(static) if (parallel)
         for (long i = 0; i < n; ++i) {
             const auto is = static_cast<size_t>(i);
-            log_norm[is] =
-                ResponsibilityRow(p.x[is], p.y[is], p.z[is], mx.data(), my.data(), mz.data(),
-                                  neg_half_prec.data(), log_const.data(), k, &resp[is * ks]);
+            log_norm[is] = ResponsibilityRow(p.x[is], p.y[is], p.z[is], mx.data(), my.data(),
+                                             mz.data(), neg_half_prec.data(), log_const.data(), k,
+                                             &resp[is * ks], &inv_sum[is]);
         }
-        // M-step, rows accumulated in order (thread-count independent).
+        // M-step: threads own blocks of components and add the rows in order, so every sum
+        // has the same order for any thread count.
         clear();
-        for (long i = 0; i < n; ++i) {
-            const auto is = static_cast<size_t>(i);
-            AccumulateRow(&resp[is * ks], k, p.x[is], p.y[is], p.z[is], mass.data(), sx.data(),
-                          sy.data(), sz.data(), sxx.data());
+        const long blocks = (k + kComponentBlock - 1) / kComponentBlock;
+#pragma omp parallel for schedule(static) if (parallel)
+        for (long b = 0; b < blocks; ++b) {
+            const long j0 = b * kComponentBlock;
+            const long len = std::min<long>(kComponentBlock, k - j0);
+            const auto j = static_cast<size_t>(j0);
+            for (long i = 0; i < n; ++i) {
+                const auto is = static_cast<size_t>(i);
+                AccumulateRow(&resp[is * ks + j], inv_sum[is], len, p.x[is], p.y[is], p.z[is],
+                              &mass[j], &sx[j], &sy[j], &sz[j], &sxx[j]);
+            }
         }
         m_step();
         const double previous = lower_bound;
