@@ -93,10 +93,21 @@ void BM_GmmL2Evaluation(benchmark::State& state) {
         ->Unit(benchmark::kMillisecond)
 
 BENCHMARK_CAPTURE(BM_L2Align, gmmreg, std::string("gmmreg"), std::string("{}"))->REGBENCH_L2_SIZES;
+// Point features cost O(M N) per evaluation: 10k-point pairs would take several seconds.
 BENCHMARK_CAPTURE(BM_L2Align,
                   gmmreg_correct,
                   std::string("gmmreg"),
                   std::string(R"({"compat": "correct"})"))
+    ->Args({717, 1})
+    ->Args({717, 2})
+    ->Args({2048, 1})
+    ->Args({2048, 2})
+    ->ArgNames({"points", "threads"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_L2Align,
+                  gmmreg_correct_sklearn,
+                  std::string("gmmreg"),
+                  std::string(R"({"compat": "correct", "gmm": "sklearn"})"))
     ->REGBENCH_L2_SIZES;
 BENCHMARK_CAPTURE(BM_L2Align, svr, std::string("svr"), std::string("{}"))->REGBENCH_L2_SIZES;
 BENCHMARK_CAPTURE(BM_L2Align,
