@@ -129,7 +129,9 @@ public:
     /// Later calls: f, g at the step last returned; may change stp.
     std::string Next(double& stp, double f, double g) {
         const double ftest = finit_ + stp * gtest_;
-        if (stage_ == 1 && f <= ftest && g >= std::min(ftol_, gtol_) * ginit_) stage_ = 2;
+        // MINPACK-2 enters stage 2 once psi(stp) <= 0 and f'(stp) >= 0 (MINPACK-1's cvsrch used
+        // min(ftol, gtol) f'(0) instead of 0).
+        if (stage_ == 1 && f <= ftest && g >= 0.0) stage_ = 2;
         std::string task;
         if (st_.brackt && (stp <= stmin_ || stp >= stmax_)) {
             task = "WARNING: ROUNDING ERRORS PREVENT PROGRESS";
