@@ -37,16 +37,15 @@ struct Soa {
 };
 
 /// d[i] = min(d[i], |p_i - c|^2); returns sum_i d[i] (k-means++ potential with candidate c).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) double MinDistancesTo(
-    const double* px,
-    const double* py,
-    const double* pz,
-    long n,
-    double cx,
-    double cy,
-    double cz,
-    const double* closest,
-    double* out) {
+REGBENCH_SIMD_CLONES double MinDistancesTo(const double* px,
+                                           const double* py,
+                                           const double* pz,
+                                           long n,
+                                           double cx,
+                                           double cy,
+                                           double cz,
+                                           const double* closest,
+                                           double* out) {
     double pot = 0.0;
 #pragma omp simd reduction(+ : pot)
     for (long i = 0; i < n; ++i) {
@@ -61,16 +60,15 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) do
 
 /// Index of the nearest center (first on ties) and its squared distance: a vectorised pass
 /// for the distances and their minimum, then a scan for the first index that attains it.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) int NearestCenter(
-    double x,
-    double y,
-    double z,
-    const double* cx,
-    const double* cy,
-    const double* cz,
-    long k,
-    double* scratch,
-    double* best_d2) {
+REGBENCH_SIMD_CLONES int NearestCenter(double x,
+                                       double y,
+                                       double z,
+                                       const double* cx,
+                                       const double* cy,
+                                       const double* cz,
+                                       long k,
+                                       double* scratch,
+                                       double* best_d2) {
     double best = std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(min : best)
     for (long j = 0; j < k; ++j) {
@@ -90,18 +88,17 @@ __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) in
 /// _estimate_weighted_log_prob). Writes exp(wlp_k - max_k wlp_k) into `row` and the inverse
 /// of its sum into `inv_sum` (resp = row * inv_sum, applied in AccumulateRow); returns the
 /// log-normaliser log sum_k exp(wlp_k).
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) double
-ResponsibilityRow(double x,
-                  double y,
-                  double z,
-                  const double* mx,
-                  const double* my,
-                  const double* mz,
-                  const double* neg_half_prec,
-                  const double* log_const,
-                  long k,
-                  double* row,
-                  double* inv_sum) {
+REGBENCH_SIMD_CLONES double ResponsibilityRow(double x,
+                                              double y,
+                                              double z,
+                                              const double* mx,
+                                              const double* my,
+                                              const double* mz,
+                                              const double* neg_half_prec,
+                                              const double* log_const,
+                                              long k,
+                                              double* row,
+                                              double* inv_sum) {
     double max_wlp = -std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(max : max_wlp)
     for (long j = 0; j < k; ++j) {
@@ -123,18 +120,17 @@ ResponsibilityRow(double x,
 
 /// M-step accumulation of one row, r_k = row_k * scale: mass_k += r_k, sum_k += r_k x,
 /// sumsq_k += r_k |x|^2.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) void AccumulateRow(
-    const double* row,
-    double scale,
-    long k,
-    double x,
-    double y,
-    double z,
-    double* mass,
-    double* sx,
-    double* sy,
-    double* sz,
-    double* sxx) {
+REGBENCH_SIMD_CLONES void AccumulateRow(const double* row,
+                                        double scale,
+                                        long k,
+                                        double x,
+                                        double y,
+                                        double z,
+                                        double* mass,
+                                        double* sx,
+                                        double* sy,
+                                        double* sz,
+                                        double* sxx) {
     const double xx = x * x + y * y + z * z;
 #pragma omp simd
     for (long j = 0; j < k; ++j) {

@@ -21,16 +21,15 @@ struct RowSums {
 
 /// s0 = sum_j w_j e_j, s1 = sum_j w_j e_j mu_j with e_j = exp(-|x - mu_j|^2 / 2 sigma^2).
 /// Compiled twice (AVX2+FMA and baseline); the loop vectorises via `omp simd`.
-__attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default"))) RowSums GaussRowSums(
-    double x,
-    double y,
-    double z,
-    const double* tx,
-    const double* ty,
-    const double* tz,
-    const double* tw,
-    long n,
-    double neg_inv_two_sigma2) {
+REGBENCH_SIMD_CLONES RowSums GaussRowSums(double x,
+                                          double y,
+                                          double z,
+                                          const double* tx,
+                                          const double* ty,
+                                          const double* tz,
+                                          const double* tw,
+                                          long n,
+                                          double neg_inv_two_sigma2) {
     double s0 = 0.0, s1x = 0.0, s1y = 0.0, s1z = 0.0;
 #pragma omp simd reduction(+ : s0, s1x, s1y, s1z)
     for (long j = 0; j < n; ++j) {

@@ -4,6 +4,16 @@
 #include <cstdint>
 #include <cstring>
 
+/// Compiles a hot kernel for x86-64-v4 (AVX-512), v3 (AVX2+FMA) and the baseline, picked at
+/// load time (GCC function multiversioning). Results may differ in the last bits between
+/// clones (FMA contraction), never between runs or thread counts on one machine.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define REGBENCH_SIMD_CLONES \
+    __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define REGBENCH_SIMD_CLONES
+#endif
+
 namespace regbench {
 
 /// exp(x) for x <= 709, relative error below 1e-15; returns exactly 0 for x < -708.39
