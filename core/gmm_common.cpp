@@ -1,5 +1,6 @@
 #include "core/gmm_common.hpp"
 
+#include <Eigen/LU>  // determinant()
 #include <cmath>
 
 #include <Eigen/LU>
