@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "baselines/filterreg.hpp"
 #include "baselines/identity.hpp"
 
 namespace regbench {
@@ -9,6 +10,7 @@ namespace regbench {
 const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
         IdentityMethodInfo(),
+        FilterRegMethodInfo(),
     };
     return methods;
 }

@@ -1,0 +1,47 @@
+#include "baselines/filterreg.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "core/metrics.hpp"
+#include "core/rng.hpp"
+#include "core/transform.hpp"
+#include "runners/registry.hpp"
+
+namespace regbench {
+namespace {
+
+PointCloud Ellipsoid(std::mt19937_64& rng, Eigen::Index n) {
+    PointCloud p(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        Eigen::Vector3d v(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng));
+        v.normalize();
+        p.row(i) << 0.9 * v.x(), 0.6 * v.y(), 0.4 * v.z();
+    }
+    return p;
+}
+
+TEST(FilterRegExplore, Print) {
+    auto rng = MakePairRng(7, 0);
+    const PointCloud Y = Ellipsoid(rng, 717);
+    for (double deg : {30.0}) {
+        const Transform T = MakeTransform(RotationFromAxisAngle({0, 0, 1}, deg * M_PI / 180),
+                                          {0.1, -0.05, 0.2});
+        const PointCloud X = Apply(T, Y);
+        for (const char* params : {"{}", R"({"update_sigma2":true})", R"({"compat":"none"})",
+                                   R"({"estimator":"exact"})", R"({"estimator":"exact","update_sigma2":true})",
+                                   R"({"objective":"pt2pl"})", R"({"objective":"pt2pl","update_sigma2":true})"}) {
+            auto method = CreateMethod("filterreg", nlohmann::json::parse(params));
+            const AlignResult r = method->Align(Y, X);
+            const PairMetrics pm = MotionMetrics(T, r.T_target_source);
+            std::printf("%-50s %s it=%d %s rre=%.4f rte=%.5f %s %.3f ms\n", params, ToString(r.status),
+                        r.iterations, r.stop_reason.c_str(), pm.rre, pm.rte, r.extra.dump().c_str(),
+                        r.seconds * 1e3);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace regbench
