@@ -5,5 +5,7 @@
 namespace regbench::app {
 
 void AddMethodsCommand(CLI::App& app);
+void AddRunCommand(CLI::App& app);
+void AddReportCommand(CLI::App& app);
 
 }  // namespace regbench::app

@@ -8,6 +8,8 @@ int main(int argc, char** argv) {
     CLI::App app{"regbench: reproducible benchmarks for rigid point-cloud registration"};
     app.require_subcommand(1);
     regbench::app::AddMethodsCommand(app);
+    regbench::app::AddRunCommand(app);
+    regbench::app::AddReportCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

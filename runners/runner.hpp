@@ -1,0 +1,64 @@
+#pragma once
+// Runs registration methods over a frozen pair file: timing, fault isolation, resume, shards.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/metrics.hpp"
+#include "core/registration.hpp"
+#include "protocols/pair.hpp"
+
+namespace regbench {
+
+/// A method to run and its parameters (JSON object; missing keys take defaults).
+struct MethodSpec {
+    std::string name;
+    nlohmann::json params = nlohmann::json::object();
+};
+
+struct RunOptions {
+    std::string pairs_path;            ///< frozen HDF5 pair file
+    std::vector<MethodSpec> methods;   ///< run in this order for every pair
+    std::string out_path;              ///< JSONL; written as <out>.part, renamed when complete
+    int jobs = 1;                      ///< pairs processed in parallel (one method instance each)
+    int threads_per_call = 1;          ///< OpenMP threads inside one Align call (timing: 1)
+    bool resume = false;               ///< keep finished rows of <out>.part and skip them
+    int shard_index = 0;               ///< process pairs with k % shard_count == shard_index
+    int shard_count = 1;
+    double timeout_seconds = 0.0;      ///< > 0: each call runs in a child process, killed after it
+    bool progress = true;              ///< progress line (done, rate, ETA) on stderr
+};
+
+/// Summary of a finished run.
+struct RunSummary {
+    std::size_t rows_written = 0;
+    std::size_t rows_skipped = 0;  ///< already present (resume)
+    std::size_t failures = 0;
+    double wall_seconds = 0.0;
+};
+
+/// Parses "a,b,c" (or "all": every registered method) plus an optional JSON object {"a": {...params...}} into specs. Checks that
+/// every method exists and its parameters are valid (instantiates each once). Throws
+/// std::invalid_argument with a clear message otherwise.
+std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
+                                         const nlohmann::json& params_by_method);
+
+/// One JSONL row: the spec'd keys (pair, method, params, transform, seconds, iterations, status,
+/// message) plus stop_reason, scale, extra, shape, category, threads, and the metrics against
+/// T_gt computed after the timed call.
+nlohmann::json MakeResultRow(std::size_t pair_index,
+                             const Pair& pair,
+                             const std::string& method,
+                             const nlohmann::json& params,
+                             const AlignResult& result,
+                             int threads);
+
+/// Runs everything; throws std::runtime_error for bad input files before any work is done.
+RunSummary RunBenchmark(const RunOptions& options);
+
+/// Reads a JSONL results file (one object per line). Throws naming file and line.
+std::vector<nlohmann::json> ReadJsonl(const std::string& path);
+
+}  // namespace regbench

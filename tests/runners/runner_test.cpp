@@ -1,0 +1,175 @@
+#include "runners/runner.hpp"
+
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "protocols/pair_file.hpp"
+#include "runners/registry.hpp"
+#include "tests/testing/synthetic.hpp"
+
+namespace regbench {
+namespace {
+
+class RunnerTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = std::filesystem::temp_directory_path() /
+               ("regbench_runner_" + std::string(::testing::UnitTest::GetInstance()
+                                                     ->current_test_info()
+                                                     ->name()));
+        std::filesystem::remove_all(dir_);
+        std::filesystem::create_directories(dir_);
+        PairSet set;
+        set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
+        for (int k = 0; k < 6; ++k) {
+            set.pairs.push_back(testing::SyntheticPair(
+                50, 10 + k, MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
+        }
+        pairs_ = (dir_ / "pairs.h5").string();
+        WritePairFile(pairs_, set);
+    }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+
+    RunOptions Options(const std::string& out) const {
+        RunOptions o;
+        o.pairs_path = pairs_;
+        o.methods = ParseMethodSpecs("identity", {});
+        o.out_path = (dir_ / out).string();
+        o.progress = false;
+        return o;
+    }
+    std::filesystem::path dir_;
+    std::string pairs_;
+};
+
+TEST_F(RunnerTest, WritesOneRowPerPairAndMethodWithRequiredKeys) {
+    const RunOptions o = Options("r.jsonl");
+    const RunSummary s = RunBenchmark(o);
+    EXPECT_EQ(s.rows_written, 6u);
+    EXPECT_FALSE(std::filesystem::exists(o.out_path + ".part"));
+    const auto rows = ReadJsonl(o.out_path);
+    ASSERT_EQ(rows.size(), 6u);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        for (const char* key : {"pair", "method", "params", "transform", "seconds", "iterations",
+                                "status", "message", "metrics", "data"}) {
+            EXPECT_TRUE(rows[k].contains(key)) << key;
+        }
+        EXPECT_EQ(rows[k]["pair"], k);
+        EXPECT_EQ(rows[k]["method"], "identity");
+        EXPECT_EQ(rows[k]["status"], "ok");
+        EXPECT_EQ(rows[k]["transform"].size(), 4u);
+        EXPECT_EQ(rows[k]["data"]["dataset"], "synthetic");
+    }
+    // Identity against a 5k-degree rotation about z: rre = 5k exactly.
+    EXPECT_NEAR(rows[3]["metrics"]["rre"].get<double>(), 15.0, 1e-6);
+}
+
+TEST_F(RunnerTest, ParallelJobsGiveTheSameRowsInTheSameOrder) {
+    RunOptions a = Options("a.jsonl");
+    RunOptions b = Options("b.jsonl");
+    b.jobs = 3;
+    RunBenchmark(a);
+    RunBenchmark(b);
+    const auto ra = ReadJsonl(a.out_path);
+    const auto rb = ReadJsonl(b.out_path);
+    ASSERT_EQ(ra.size(), rb.size());
+    for (std::size_t i = 0; i < ra.size(); ++i) {
+        EXPECT_EQ(ra[i]["pair"], rb[i]["pair"]);
+        EXPECT_EQ(ra[i]["transform"], rb[i]["transform"]);
+        EXPECT_EQ(ra[i]["metrics"], rb[i]["metrics"]);
+    }
+}
+
+TEST_F(RunnerTest, ResumeSkipsFinishedRowsAndDropsATornLine) {
+    RunOptions o = Options("resume.jsonl");
+    RunBenchmark(o);
+    auto rows = ReadJsonl(o.out_path);
+    // Simulate an interrupted run: two complete rows and half a third one.
+    {
+        std::ofstream part(o.out_path + ".part");
+        part << rows[0].dump() << "\n" << rows[1].dump() << "\n" << rows[2].dump().substr(0, 20);
+    }
+    std::filesystem::remove(o.out_path);
+    o.resume = true;
+    const RunSummary s = RunBenchmark(o);
+    EXPECT_EQ(s.rows_skipped, 2u);
+    EXPECT_EQ(s.rows_written, 4u);
+    EXPECT_EQ(ReadJsonl(o.out_path).size(), 6u);
+}
+
+TEST_F(RunnerTest, ShardsPartitionThePairs) {
+    std::size_t total = 0;
+    for (int i = 0; i < 3; ++i) {
+        RunOptions o = Options("shard" + std::to_string(i) + ".jsonl");
+        o.shard_index = i;
+        o.shard_count = 3;
+        RunBenchmark(o);
+        for (const auto& r : ReadJsonl(o.out_path)) {
+            EXPECT_EQ(r["pair"].get<int>() % 3, i);
+            ++total;
+        }
+    }
+    EXPECT_EQ(total, 6u);
+}
+
+TEST_F(RunnerTest, IsolatedCallsGiveTheSameResult) {
+    RunOptions a = Options("inproc.jsonl");
+    RunOptions b = Options("isolated.jsonl");
+    b.timeout_seconds = 30.0;
+    RunBenchmark(a);
+    RunBenchmark(b);
+    const auto ra = ReadJsonl(a.out_path);
+    const auto rb = ReadJsonl(b.out_path);
+    ASSERT_EQ(ra.size(), rb.size());
+    for (std::size_t i = 0; i < ra.size(); ++i) {
+        EXPECT_EQ(rb[i]["status"], "ok");
+        EXPECT_EQ(ra[i]["transform"], rb[i]["transform"]);
+    }
+}
+
+TEST_F(RunnerTest, BadInputFailsBeforeWritingAnything) {
+    RunOptions o = Options("never.jsonl");
+    o.pairs_path = (dir_ / "missing.h5").string();
+    try {
+        RunBenchmark(o);
+        FAIL() << "missing pair file accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("missing.h5"), std::string::npos);
+    }
+    EXPECT_FALSE(std::filesystem::exists(o.out_path));
+    EXPECT_FALSE(std::filesystem::exists(o.out_path + ".part"));
+}
+
+TEST(MethodSpecs, UnknownMethodOrParameterIsAClearError) {
+    try {
+        ParseMethodSpecs("identity,nosuch", {});
+        FAIL();
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("unknown method 'nosuch'"), std::string::npos);
+    }
+    try {
+        ParseMethodSpecs("identity", {{"identity", {{"bogus", 1}}}});
+        FAIL();
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("unknown parameter 'bogus'"), std::string::npos);
+    }
+    EXPECT_THROW(ParseMethodSpecs("identity", {{"other", {}}}), std::invalid_argument);
+    EXPECT_THROW(ParseMethodSpecs("", {}), std::invalid_argument);
+}
+
+TEST(ResultsFile, CorruptLineIsReportedWithFileAndLine) {
+    const auto path = std::filesystem::temp_directory_path() / "regbench_corrupt.jsonl";
+    std::ofstream(path) << "{\"a\": 1}\n{broken\n";
+    try {
+        ReadJsonl(path.string());
+        FAIL();
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("regbench_corrupt.jsonl:2"), std::string::npos);
+    }
+    std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace regbench
