@@ -1,5 +1,6 @@
 #include "baselines/filterreg.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -7,8 +8,6 @@
 #include <stdexcept>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "core/gmm_common.hpp"
 #include "core/kabsch.hpp"
@@ -109,22 +108,38 @@ private:
         return (points / sigma).cast<float>();
     }
 
-    void PrepareTarget(double sigma2) {
-        if (sigma2 == prepared_sigma2_) return;
+    void PrepareTarget(double sigma2, Eigen::Index num_source) {
+        if (sigma2 == prepared_sigma2_ && num_source == prepared_sources_) return;
         prepared_sigma2_ = sigma2;
-        const LatticeFeatures features = Features(target_, std::sqrt(sigma2));
+        prepared_sources_ = num_source;
+        LatticeFeatures features = Features(target_, std::sqrt(sigma2));
+        // The reference's padding simplex (at the zero feature) belongs in the blurred
+        // lattice: it counts toward the size and relays values in the blur. It holds 0, so
+        // the plain lattice does not need it.
+        padded_ = PermutohedralLattice::ReferencePadding(target_.rows() + num_source) > 0;
         plain_.Build(features, false);
         plain_values_ = plain_.Splat(values_, 0, plain_.NumPoints());
-        blurred_target_.Build(features, true);
+        if (padded_) {
+            features.conservativeResize(features.rows() + 1, Eigen::NoChange);
+            features.row(features.rows() - 1).setZero();
+        }
         // Adding the source points only adds vertices, so a target that alone exceeds the
-        // limit rules the blur out for every iteration at this sigma.
-        blur_possible_ = blurred_target_.NumVertices() <= BlurLimit();
+        // limit rules the blur out for every iteration at this sigma (the build stops there).
+        if (blur_ == LatticeBlur::kOff) {
+            blur_possible_ = false;
+        } else {
+            const int limit = blur_ == LatticeBlur::kOn ? -1 : BlurLimit();
+            blur_possible_ = blurred_target_.Build(features, true, limit);
+        }
     }
 
-    double BlurLimit() const { return kBlurVertexRatio * static_cast<double>(target_.rows()); }
+    /// Largest vertex count that keeps the blur: probreg blurs unless size > 0.015 N.
+    int BlurLimit() const {
+        return static_cast<int>(std::floor(kBlurVertexRatio * static_cast<double>(target_.rows())));
+    }
 
     FilterRegMoments Lattice(const PointCloud& moved, double sigma2) {
-        PrepareTarget(sigma2);
+        PrepareTarget(sigma2, moved.rows());
         const LatticeFeatures source_features = Features(moved, std::sqrt(sigma2));
         FilterRegMoments out;
         LatticeValues sliced;
@@ -133,13 +148,16 @@ private:
         if (try_blur) {
             // The lattice over [X; Y] (probreg stacks [Y; X]; the order changes vertex ids only).
             PermutohedralLattice lattice = blurred_target_;
-            lattice.AddPoints(source_features);
-            out.lattice_vertices = lattice.NumVertices();
-            if (blur_ == LatticeBlur::kOn || lattice.NumVertices() <= BlurLimit()) {
-                LatticeValues vertex_values = lattice.Splat(values_, 0, target_.rows());
+            const bool within =
+                lattice.AddPoints(source_features, blur_ == LatticeBlur::kOn ? -1 : BlurLimit());
+            if (within) {
+                out.lattice_vertices = lattice.NumVertices();
+                LatticeValues vertex_values =
+                    lattice.Splat(values_, 0, static_cast<int>(target_.rows()));
                 lattice.Blur(vertex_values);
-                const int n = static_cast<int>(target_.rows());
-                lattice.Slice(vertex_values, n, n + static_cast<int>(moved.rows()), sliced);
+                // Points: targets, the padding point (if any), then the sources.
+                const int first = static_cast<int>(target_.rows()) + (padded_ ? 1 : 0);
+                lattice.Slice(vertex_values, first, first + static_cast<int>(moved.rows()), sliced);
                 out.blurred = true;
             }
         }
@@ -217,6 +235,8 @@ private:
     // lattice
     LatticeValues values_;
     double prepared_sigma2_ = -1.0;
+    Eigen::Index prepared_sources_ = -1;
+    bool padded_ = false;
     PermutohedralLattice plain_;
     LatticeValues plain_values_;
     PermutohedralLattice blurred_target_;
@@ -279,8 +299,8 @@ double UpdatedSigma2(const Selection& s, const FilterRegMoments& mom, double c) 
         const Eigen::Index i = s.index[static_cast<std::size_t>(k)];
         const Eigen::Vector3d y = s.y.row(k).transpose();
         const double m0 = mom.m0[i];
-        num += (m0 * y.squaredNorm() - 2.0 * y.dot(mom.m1.row(i).transpose()) + mom.m2[i]) /
-               (m0 + c);
+        num +=
+            (m0 * y.squaredNorm() - 2.0 * y.dot(mom.m1.row(i).transpose()) + mom.m2[i]) / (m0 + c);
     }
     return num / (3.0 * s.omega.sum());
 }
@@ -313,9 +333,7 @@ MStep PointToPoint(const Selection& s, bool probreg_weights) {
 /// xi = (omega, tau) for residuals r_i = n_i . (u_i - y_i), Jacobian J_i = (y_i x n_i, n_i),
 /// with n_i = nx_i / m0_i the filtered (unnormalised) normal. probreg weights J J^T and r J by
 /// w_i; the consistent Gauss-Newton step for sum_i w_i^2 r_i^2 weights them by w_i^2.
-MStep PointToPlane(const Selection& s,
-                   const FilterRegMoments& mom,
-                   bool probreg_weights) {
+MStep PointToPlane(const Selection& s, const FilterRegMoments& mom, bool probreg_weights) {
     using Matrix6d = Eigen::Matrix<double, 6, 6>;
     using Vector6d = Eigen::Matrix<double, 6, 1>;
     Matrix6d ata = Matrix6d::Zero();
@@ -397,8 +415,8 @@ AlignResult FilterRegMethod::DoAlign(const PointCloud& source, const PointCloud&
             conv.stop_reason = "no_overlap";  // probreg: stop and keep the previous transform
             break;
         }
-        MStep step = pt2pl ? PointToPlane(sel, mom, probreg_weights)
-                           : PointToPoint(sel, probreg_weights);
+        MStep step =
+            pt2pl ? PointToPlane(sel, mom, probreg_weights) : PointToPoint(sel, probreg_weights);
         if (!step.ok) {
             conv.stop_reason = step.failure;
             break;
@@ -463,8 +481,7 @@ FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
     Require(o.w >= 0.0 && o.w < 1.0, kName, "w", "must be in [0, 1)");
     Require(o.maxiter >= 1, kName, "maxiter", "must be >= 1");
     Require(std::isfinite(o.tol) && o.tol >= 0.0, kName, "tol", "must be >= 0");
-    Require(std::isfinite(o.min_sigma2) && o.min_sigma2 > 0.0, kName, "min_sigma2",
-            "must be > 0");
+    Require(std::isfinite(o.min_sigma2) && o.min_sigma2 > 0.0, kName, "min_sigma2", "must be > 0");
     Require(Uses(o.objective, {"pt2pt", "pt2pl"}), kName, "objective",
             "must be \"pt2pt\" or \"pt2pl\", got \"" + o.objective + "\"");
     Require(Uses(o.estimator, {"lattice", "exact"}), kName, "estimator",

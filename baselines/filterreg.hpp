@@ -5,10 +5,9 @@
 // a permutohedral lattice built over [T(Y)/sigma; X/sigma] and a weighted Kabsch (pt2pt) or
 // twist Gauss-Newton (pt2pl) M-step. See ../shared/specs/probabilistic-baselines.md sec. 4 and
 // docs/probabilistic-baselines.md ("FilterReg") for what matches probreg and what does not.
-#include <string>
-
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
@@ -18,13 +17,13 @@ namespace regbench {
 /// Options of `filterreg`. Defaults are probreg's `registration_filterreg` defaults, except
 /// that compat "none" switches update_sigma2 on unless it is given (see FilterRegMethodInfo).
 struct FilterRegOptions {
-    double sigma2 = 0.0;         ///< initial variance [length^2]; 0 = auto: max(sqsum(Y,X), min_sigma2)
+    double sigma2 = 0.0;  ///< initial variance [length^2]; 0 = auto: max(sqsum(Y,X), min_sigma2)
     bool update_sigma2 = false;  ///< re-estimate sigma2 each M-step (probreg: false, sigma fixed)
     double w = 0.0;              ///< outlier weight of the uniform component, in [0, 1)
     int maxiter = 50;            ///< maximum EM iterations, >= 1
     double tol = 1e-3;           ///< stop when |q - q_prev| < tol (absolute), from iteration 2
     double min_sigma2 = 1e-4;    ///< floor on sigma2 [length^2], > 0
-    std::string objective = "pt2pt";  ///< "pt2pt" (Kabsch) or "pt2pl" (twist, target normals)
+    std::string objective = "pt2pt";    ///< "pt2pt" (Kabsch) or "pt2pl" (twist, target normals)
     std::string estimator = "lattice";  ///< "lattice" (probreg) or "exact" (3-sigma Gaussian sums)
     std::string compat = "probreg";     ///< "probreg" (w / w^2 Kabsch) or "none" (consistent)
     int normals_k = 30;  ///< pt2pl only: neighbours for the target's PCA normals, >= 3
@@ -58,11 +57,10 @@ enum class LatticeBlur {
 struct FilterRegMoments {
     Eigen::VectorXd m0;
     PointCloud m1;
-    Eigen::VectorXd m2;  ///< empty unless requested
-    PointCloud nx;       ///< empty unless normals were given
+    Eigen::VectorXd m2;        ///< empty unless requested
+    PointCloud nx;             ///< empty unless normals were given
     bool blurred = false;      ///< lattice only: the blurred lattice was used
-    int lattice_vertices = 0;  ///< lattice only: vertices of the blurred lattice that was tested
-                               ///< (0 when the target alone already exceeded the limit)
+    int lattice_vertices = 0;  ///< lattice only: vertices of the blurred lattice when used, else 0
 };
 
 /// One E-step on its own (tests, diagnostics). `target_normals` may be null. The lattice

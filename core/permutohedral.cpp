@@ -1,5 +1,6 @@
 #include "core/permutohedral.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -31,7 +32,13 @@ LatticeHashTable::LatticeHashTable(std::size_t expected_vertices) {
     while (capacity < 2 * expected_vertices) capacity *= 2;
     slots_key_.assign(capacity, kEmpty);
     slots_id_.assign(capacity, -1);
+    SetCapacity(capacity);
+}
+
+void LatticeHashTable::SetCapacity(std::size_t capacity) {
     mask_ = capacity - 1;
+    shift_ = 64;
+    for (std::size_t c = capacity; c > 1; c >>= 1) --shift_;
 }
 
 std::uint64_t LatticeHashTable::Pack(const int key[3]) {
@@ -48,15 +55,15 @@ std::uint64_t LatticeHashTable::Pack(const int key[3]) {
 }
 
 std::size_t LatticeHashTable::Slot(std::uint64_t packed) const {
-    // Multiply-shift hashing; the high bits mix all three fields.
-    return static_cast<std::size_t>((packed * kFibonacci) >> 32) & mask_;
+    // Multiply-shift hashing (Knuth): the top bits of the product mix all three fields.
+    return static_cast<std::size_t>((packed * kFibonacci) >> shift_);
 }
 
 void LatticeHashTable::Grow() {
     const std::size_t capacity = 2 * slots_key_.size();
     slots_key_.assign(capacity, kEmpty);
     slots_id_.assign(capacity, -1);
-    mask_ = capacity - 1;
+    SetCapacity(capacity);
     for (std::size_t id = 0; id < keys_by_id_.size(); ++id) {
         std::size_t h = Slot(keys_by_id_[id]);
         while (slots_key_[h] != kEmpty) h = (h + 1) & mask_;
@@ -145,34 +152,30 @@ void PermutohedralLattice::Embed(const float feature[kDim],
     }
 
     // Rank of each coordinate of the remainder in decreasing order: the simplex we are in.
+    // Branch-free: the comparisons are data-dependent coin flips.
+    float diff[kV];
+    for (int i = 0; i <= kD; ++i) diff[i] = elevated[i] - rem0[i];
     int rank[kV] = {0, 0, 0, 0};
     for (int i = 0; i < kD; ++i) {
-        const float di = elevated[i] - rem0[i];
         for (int j = i + 1; j <= kD; ++j) {
-            if (di < elevated[j] - rem0[j]) {
-                ++rank[i];
-            } else {
-                ++rank[j];
-            }
+            const int less = diff[i] < diff[j] ? 1 : 0;
+            rank[i] += less;
+            rank[j] += 1 - less;
         }
     }
     // If the rounded point is off the plane (sum != 0), move it back.
     const int isum = static_cast<int>(sum);
     for (int i = 0; i <= kD; ++i) {
         rank[i] += isum;
-        if (rank[i] < 0) {
-            rank[i] += kD + 1;
-            rem0[i] += kUp;
-        } else if (rank[i] > kD) {
-            rank[i] -= kD + 1;
-            rem0[i] -= kUp;
-        }
+        const int wrap = (rank[i] < 0 ? kD + 1 : 0) - (rank[i] > kD ? kD + 1 : 0);
+        rank[i] += wrap;
+        rem0[i] += static_cast<float>(wrap);
     }
 
     // Barycentric coordinates (Adams et al. 2010 p. 10).
     float bary[kD + 2] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     for (int i = 0; i <= kD; ++i) {
-        const float v = (elevated[i] - rem0[i]) * kDown;
+        const float v = (elevated[i] - rem0[i]) * kDown;  // rem0 may have moved: recompute
         bary[kD - rank[i]] += v;
         bary[kD - rank[i] + 1] -= v;
     }
@@ -189,25 +192,59 @@ void PermutohedralLattice::Embed(const float feature[kDim],
     }
 }
 
-void PermutohedralLattice::Build(const LatticeFeatures& features, bool blur) {
+bool PermutohedralLattice::Build(const LatticeFeatures& features, bool blur, int max_vertices) {
     blur_ = blur;
+    complete_ = true;
     elevation_ = ElevationFor(blur);
-    table_ = LatticeHashTable(static_cast<std::size_t>(features.rows()));
+    std::size_t expected = static_cast<std::size_t>(features.rows()) * kV;
+    if (max_vertices >= 0)
+        expected = std::min(expected, static_cast<std::size_t>(max_vertices) + 1);
+    table_ = LatticeHashTable(expected);
     vertex_.clear();
     weights_.clear();
-    Insert(features, 0);
+    return Insert(features, max_vertices);
 }
 
-void PermutohedralLattice::AddPoints(const LatticeFeatures& features) {
-    Insert(features, NumPoints());
+bool PermutohedralLattice::AddPoints(const LatticeFeatures& features, int max_vertices) {
+    RequireComplete("AddPoints");
+    return Insert(features, max_vertices);
 }
 
-void PermutohedralLattice::Insert(const LatticeFeatures& features, int first_point) {
+void PermutohedralLattice::RequireComplete(const char* what) const {
+    if (!complete_) {
+        throw std::logic_error(std::string("PermutohedralLattice::") + what +
+                               ": lattice is incomplete (stopped at max_vertices)");
+    }
+}
+
+bool PermutohedralLattice::Insert(const LatticeFeatures& features, int max_vertices) {
     const std::int64_t n = features.rows();
+    const std::int64_t first_point = NumPoints();
+    vertex_.resize(static_cast<std::size_t>(first_point + n) * kV);
+    weights_.resize(static_cast<std::size_t>(first_point + n) * kV);
+    auto insert = [&](std::int64_t i, const SimplexEmbedding& e) {
+        const std::size_t base = static_cast<std::size_t>(first_point + i) * kV;
+        for (int r = 0; r < kV; ++r) {
+            vertex_[base + r] = table_.FindOrInsert(e.key[r]);
+            weights_[base + r] = e.weight[r];
+        }
+    };
+    if (max_vertices >= 0 || n < kParallelMin) {
+        SimplexEmbedding e;
+        for (std::int64_t i = 0; i < n; ++i) {
+            Embed(features.row(i).data(), elevation_, e);
+            insert(i, e);
+            if (max_vertices >= 0 && NumVertices() > max_vertices) {
+                complete_ = false;
+                return false;
+            }
+        }
+        return true;
+    }
+    // Embedding is per point and pure; hashing stays serial so vertex ids are deterministic.
     std::vector<SimplexEmbedding> embedded(static_cast<std::size_t>(n));
-    // Embedding is per point and pure; hashing below stays serial so ids are deterministic.
     bool failed = false;
-#pragma omp parallel for schedule(static) if (n >= kParallelMin) reduction(|| : failed)
+#pragma omp parallel for schedule(static) reduction(|| : failed)
     for (std::int64_t i = 0; i < n; ++i) {
         try {
             Embed(features.row(i).data(), elevation_, embedded[static_cast<std::size_t>(i)]);
@@ -219,16 +256,8 @@ void PermutohedralLattice::Insert(const LatticeFeatures& features, int first_poi
         throw std::runtime_error(
             "permutohedral lattice: a feature is non-finite or too large for the kernel width");
     }
-    vertex_.resize(static_cast<std::size_t>(first_point + n) * kV);
-    weights_.resize(static_cast<std::size_t>(first_point + n) * kV);
-    for (std::int64_t i = 0; i < n; ++i) {
-        const SimplexEmbedding& e = embedded[static_cast<std::size_t>(i)];
-        const std::size_t base = static_cast<std::size_t>(first_point + i) * kV;
-        for (int r = 0; r < kV; ++r) {
-            vertex_[base + r] = table_.FindOrInsert(e.key[r]);
-            weights_[base + r] = e.weight[r];
-        }
-    }
+    for (std::int64_t i = 0; i < n; ++i) insert(i, embedded[static_cast<std::size_t>(i)]);
+    return true;
 }
 
 LatticeValues PermutohedralLattice::Splat(const LatticeValues& point_values,
@@ -242,6 +271,7 @@ LatticeValues PermutohedralLattice::Splat(const LatticeValues& point_values,
 }
 
 LatticeValues PermutohedralLattice::SplatBlock(const LatticeValues& block, int begin) const {
+    RequireComplete("Splat");
     const Eigen::Index width = block.cols();
     if (begin < 0 || begin + block.rows() > NumPoints()) {
         throw std::invalid_argument("PermutohedralLattice::SplatBlock: block out of range");
@@ -261,6 +291,7 @@ LatticeValues PermutohedralLattice::SplatBlock(const LatticeValues& block, int b
 
 void PermutohedralLattice::Blur(LatticeValues& vertex_values) const {
     if (!blur_) throw std::logic_error("PermutohedralLattice::Blur: lattice built without blur");
+    RequireComplete("Blur");
     const int m = NumVertices();
     const Eigen::Index width = vertex_values.cols();
     // Neighbours of vertex i along axis j: key -/+ 1 on every coordinate but j, which moves
@@ -305,6 +336,7 @@ void PermutohedralLattice::Slice(const LatticeValues& vertex_values,
                                  int begin,
                                  int end,
                                  LatticeValues& out) const {
+    RequireComplete("Slice");
     if (begin < 0 || begin > end || end > NumPoints() || vertex_values.rows() != NumVertices()) {
         throw std::invalid_argument("PermutohedralLattice::Slice: bad range or vertex values");
     }
@@ -329,6 +361,7 @@ void PermutohedralLattice::SliceAt(const LatticeFeatures& queries,
     if (blur_) {
         throw std::logic_error("PermutohedralLattice::SliceAt: needs a lattice built without blur");
     }
+    RequireComplete("SliceAt");
     if (vertex_values.rows() != NumVertices()) {
         throw std::invalid_argument("PermutohedralLattice::SliceAt: vertex values do not match");
     }

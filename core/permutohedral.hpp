@@ -12,12 +12,19 @@
 // are the last-ulp rounding of the slice product (we form (b * alpha) * v for every channel)
 // and of the blur's 1/2 (float, where the reference's scalar path promotes to double).
 //
+// Block padding: the reference's SSE build (what probreg's x86-64 wheels run) embeds points
+// in blocks of 4 and also inserts the simplex of the zero feature for the padding slots of the
+// last block when the point count is not a multiple of 4. Those vertices carry 0 but count in
+// the lattice size and relay values during the blur. ReferencePadding() says how many such
+// slots there are; a caller that wants the reference's lattice appends that many zero rows
+// (one suffices: they share a simplex) with zero values. Checked against Krähenbühl's code:
+// identical vertex counts and filter outputs within float rounding on random features.
+//
 // Deterministic: vertex ids follow first-insertion order, and no result depends on them.
 // Thread-safety: const methods may run concurrently; Build/AddPoints may not.
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace regbench {
 
@@ -47,12 +54,14 @@ private:
     static std::uint64_t Pack(const int key[3]);
     std::size_t Slot(std::uint64_t packed) const;
     void Grow();
+    void SetCapacity(std::size_t capacity);
 
     std::vector<std::uint64_t> slots_key_;  ///< kEmpty or a packed key
     std::vector<int> slots_id_;
     std::vector<std::uint64_t> keys_by_id_;
     std::vector<int> coords_by_id_;
     std::size_t mask_ = 0;
+    int shift_ = 60;
 };
 
 /// Where one feature lands: the d+1 vertices of its enclosing simplex and its barycentric
@@ -64,8 +73,8 @@ struct SimplexEmbedding {
 
 class PermutohedralLattice {
 public:
-    static constexpr int kDim = 3;                 ///< feature dimension d
-    static constexpr int kVertices = kDim + 1;     ///< vertices of an enclosing simplex
+    static constexpr int kDim = 3;                      ///< feature dimension d
+    static constexpr int kVertices = kDim + 1;          ///< vertices of an enclosing simplex
     static constexpr std::int64_t kParallelMin = 4096;  ///< points below this: one thread
 
     /// Diagonal of the elevation matrix E (Adams et al. 2010 p. 5), 1/sqrt((i+1)(i+2)),
@@ -75,6 +84,10 @@ public:
         float scale[kDim];
     };
     static Elevation ElevationFor(bool blur);
+    /// Padding slots the reference's SSE build adds after `num_points` points (see above).
+    static int ReferencePadding(std::int64_t num_points) {
+        return static_cast<int>((kVertices - num_points % kVertices) % kVertices);
+    }
     /// Slice normalisation alpha = 1 / (1 + 2^-d) of the reference implementation.
     static float SliceNormalisation();
     /// Elevates one feature and finds its enclosing simplex (Adams et al. 2010 sec. 3-4).
@@ -82,10 +95,14 @@ public:
     static void Embed(const float feature[kDim], const Elevation& elevation, SimplexEmbedding& out);
 
     /// Builds the lattice over `features` (point i = row i). `blur` selects the elevation
-    /// scale and enables Blur().
-    void Build(const LatticeFeatures& features, bool blur);
-    /// Appends points (they get ids NumPoints()...), inserting their simplex vertices.
-    void AddPoints(const LatticeFeatures& features);
+    /// scale and enables Blur(). With max_vertices >= 0 it stops as soon as the lattice has
+    /// more vertices than that and returns false; the lattice is then incomplete (only
+    /// NumVertices() > max_vertices is meaningful, the other methods throw). Returns true
+    /// when every point went in.
+    bool Build(const LatticeFeatures& features, bool blur, int max_vertices = -1);
+    /// Appends points (they get ids NumPoints()...), inserting their simplex vertices; same
+    /// early stop as Build.
+    bool AddPoints(const LatticeFeatures& features, int max_vertices = -1);
 
     int NumVertices() const { return table_.size(); }
     int NumPoints() const { return static_cast<int>(weights_.size() / kVertices); }
@@ -113,9 +130,11 @@ public:
     LatticeValues Filter(const LatticeValues& point_values) const;
 
 private:
-    void Insert(const LatticeFeatures& features, int first_point);
+    bool Insert(const LatticeFeatures& features, int max_vertices);
+    void RequireComplete(const char* what) const;
 
     bool blur_ = true;
+    bool complete_ = true;
     Elevation elevation_{};
     LatticeHashTable table_;
     std::vector<int> vertex_;     ///< NumPoints x (d+1) vertex ids

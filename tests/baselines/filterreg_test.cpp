@@ -9,6 +9,7 @@
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
+#include "tests/testing/synthetic.hpp"
 
 namespace regbench {
 namespace {
@@ -21,6 +22,25 @@ PointCloud Ellipsoid(std::mt19937_64& rng, Eigen::Index n) {
         p.row(i) << 0.9 * v.x(), 0.6 * v.y(), 0.4 * v.z();
     }
     return p;
+}
+
+TEST(FilterRegExplore, Independent) {
+    for (int seed = 1; seed <= 3; ++seed) {
+        for (Eigen::Vector3d axis : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(1, 2, 3)}) {
+            const Transform T = MakeTransform(RotationFromAxisAngle(axis, 30 * M_PI / 180), {0.1, -0.05, 0.2});
+            const Pair pair = testing::SyntheticPair(717, seed, T);
+            for (const char* params : {R"({"update_sigma2":true,"maxiter":200})",R"({"update_sigma2":true,"maxiter":800})",
+                                       R"({"estimator":"exact","update_sigma2":true,"maxiter":200})",
+                                       R"({"estimator":"exact","update_sigma2":true,"maxiter":800})", R"({"estimator":"exact","update_sigma2":true,"min_sigma2":0.003})"}) {
+                auto method = CreateMethod("filterreg", nlohmann::json::parse(params));
+                const AlignResult r = method->Align(pair.source, pair.target);
+                const PairMetrics pm = MotionMetrics(T, r.T_target_source);
+                std::printf("seed %d axis %.0f %-45s it=%2d %-14s rre=%.4f rte=%.5f s2=%.5f used=%d %.2f ms\n", seed, axis.x(), params,
+                            r.iterations, r.stop_reason.c_str(), pm.rre, pm.rte, r.extra["sigma2"].get<double>(),
+                            r.extra["points_used"].get<int>(), r.seconds * 1e3);
+            }
+        }
+    }
 }
 
 TEST(FilterRegExplore, Print) {
