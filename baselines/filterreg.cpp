@@ -511,7 +511,8 @@ MethodInfo FilterRegMethodInfo() {
         {"min_sigma2", "floor on sigma2 after each iteration and on the auto init (> 0); 1e-4"},
         {"objective",
          "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton on "
-         "filtered target normals, normals by PCA of normals_k neighbours)"},
+         "filtered target normals, normals by PCA of normals_k neighbours; give a small sigma2, "
+         "e.g. 0.01 as probreg's example: from sqsum its undamped steps can flip the cloud)"},
         {"estimator",
          "\"lattice\": permutohedral lattice, blurred only while <= 0.015 N vertices (probreg); "
          "\"exact\": Gaussian sums within 3 sigma (kd-tree), not probreg-equivalent"},
