@@ -25,18 +25,6 @@ constexpr double kCleanRreTolDeg = 1.0;     // issue: clean complete pair, 30 de
 constexpr double kCleanRteTol = 0.01;
 constexpr double kProbregTranslationTol = 1e-2;
 
-/// The spec's ellipsoid surface (semi-axes 0.9 / 0.6 / 0.4), directions from a normal draw.
-PointCloud EllipsoidSurface(Eigen::Index n, std::uint64_t seed) {
-    auto rng = MakePairRng(seed, 0);
-    PointCloud p(n, 3);
-    for (Eigen::Index i = 0; i < n; ++i) {
-        Eigen::Vector3d v(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng));
-        v.normalize();
-        p.row(i) << 0.9 * v.x(), 0.6 * v.y(), 0.4 * v.z();
-    }
-    return p;
-}
-
 Transform SpecMotion() {
     return MakeTransform(RotationFromAxisAngle({0.0, 0.0, 1.0}, 30.0 * kDegToRad),
                          {0.1, -0.05, 0.2});
@@ -58,8 +46,8 @@ double MaxEulerErrorRad(const Transform& T_gt, const Transform& T_est) {
 // ---- E-step ---------------------------------------------------------------------------------
 
 TEST(FilterRegEStep, ExactEstimatorMatchesBruteForceWithinCutoff) {
-    const PointCloud Y = EllipsoidSurface(200, 1);
-    const PointCloud X = Apply(SpecMotion(), EllipsoidSurface(200, 2));
+    const PointCloud Y = testing::EllipsoidSurface(200, 1);
+    const PointCloud X = Apply(SpecMotion(), testing::EllipsoidSurface(200, 2));
     const Normals normals = EstimateNormals(X, 10);
     const double sigma2 = 0.02;
     const FilterRegMoments mom = FilterRegEStep(Y, X, &normals, sigma2, true, "exact");
@@ -86,7 +74,7 @@ TEST(FilterRegEStep, ExactEstimatorMatchesBruteForceWithinCutoff) {
 // Spec test 4 (second half): with the blur forced on, the lattice's m1/m0 is within 0.2 sigma
 // of the exact Gaussian mean sum_j k_ij x_j / sum_j k_ij.
 TEST(FilterRegEStep, BlurredLatticeMeanIsCloseToGaussianMean) {
-    const PointCloud Y = EllipsoidSurface(717, 7);
+    const PointCloud Y = testing::EllipsoidSurface(717, 7);
     const PointCloud X = Apply(
         MakeTransform(RotationFromAxisAngle({0, 0, 1}, 30.0 * kDegToRad), Eigen::Vector3d::Zero()),
         Y);
@@ -116,7 +104,7 @@ TEST(FilterRegEStep, BlurredLatticeMeanIsCloseToGaussianMean) {
 TEST(FilterRegEStep, UnblurredLatticeLeavesFarPointsWithoutMass) {
     // A source point far from every target gets m0 == 0 (compact tent kernel), the case the
     // M-step drops.
-    PointCloud X = EllipsoidSurface(100, 3);
+    PointCloud X = testing::EllipsoidSurface(100, 3);
     PointCloud Y(2, 3);
     Y << 0.9, 0.0, 0.0, 50.0, 50.0, 50.0;
     const FilterRegMoments mom = FilterRegEStep(Y, X, nullptr, 0.01, true);
@@ -129,7 +117,7 @@ TEST(FilterRegEStep, UnblurredLatticeLeavesFarPointsWithoutMass) {
 
 // Spec test 5: target = R(30 deg about z) Y + (0.1, -0.05, 0.2).
 TEST(FilterReg, SpecMotionWithinEulerToleranceWithDefaults) {
-    const PointCloud Y = EllipsoidSurface(717, 7);
+    const PointCloud Y = testing::EllipsoidSurface(717, 7);
     const PointCloud X = Apply(SpecMotion(), Y);
     const AlignResult r = RunFilterReg("{}", Y, X);
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
@@ -140,7 +128,7 @@ TEST(FilterReg, SpecMotionWithinEulerToleranceWithDefaults) {
 }
 
 TEST(FilterReg, SpecMotionWithUpdateSigma2) {
-    const PointCloud Y = EllipsoidSurface(717, 7);
+    const PointCloud Y = testing::EllipsoidSurface(717, 7);
     const PointCloud X = Apply(SpecMotion(), Y);
     const AlignResult r = RunFilterReg(R"({"update_sigma2": true})", Y, X);
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
@@ -213,7 +201,7 @@ TEST(FilterReg, IdenticalCloudsGiveIdentity) {
 }
 
 TEST(FilterReg, ReportsIterationsStopReasonObjectiveAndSigma2) {
-    const PointCloud Y = EllipsoidSurface(300, 4);
+    const PointCloud Y = testing::EllipsoidSurface(300, 4);
     const PointCloud X = Apply(SpecMotion(), Y);
     const AlignResult capped = RunFilterReg(R"({"maxiter": 2, "tol": 0})", Y, X);
     EXPECT_EQ(capped.iterations, 2);
@@ -228,7 +216,7 @@ TEST(FilterReg, ReportsIterationsStopReasonObjectiveAndSigma2) {
 }
 
 TEST(FilterReg, NoOverlapStopsWithPreviousTransform) {
-    const PointCloud Y = EllipsoidSurface(200, 5);
+    const PointCloud Y = testing::EllipsoidSurface(200, 5);
     PointCloud X = Y;
     X.rowwise() += Eigen::RowVector3d(100.0, 0.0, 0.0);
     const AlignResult r = RunFilterReg(R"({"sigma2": 0.01})", Y, X);
@@ -241,7 +229,7 @@ TEST(FilterReg, NoOverlapStopsWithPreviousTransform) {
 TEST(FilterReg, CompatWeightingMattersOnlyWithOutlierWeight) {
     // With w = 0 every omega_i = 1, so probreg's w vs w^2 Kabsch weighting is the same fit;
     // with w > 0 the weights vary and the two modes part.
-    const PointCloud Y = EllipsoidSurface(400, 6);
+    const PointCloud Y = testing::EllipsoidSurface(400, 6);
     const PointCloud X = Apply(SpecMotion(), Y);
     const AlignResult a =
         RunFilterReg(R"({"update_sigma2": false, "compat": "probreg", "maxiter": 5})", Y, X);

@@ -10,6 +10,7 @@
 #include "core/gmm_common.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
+#include "tests/testing/synthetic.hpp"
 
 namespace regbench {
 namespace {
@@ -22,17 +23,6 @@ LatticeFeatures RandomFeatures(std::mt19937_64& rng, Eigen::Index n, double scal
         for (int k = 0; k < 3; ++k) f(i, k) = static_cast<float>(scale * StandardNormal(rng));
     }
     return f;
-}
-
-/// The spec's ellipsoid surface (semi-axes 0.9 / 0.6 / 0.4), directions from a normal draw.
-PointCloud EllipsoidSurface(std::mt19937_64& rng, Eigen::Index n) {
-    PointCloud p(n, 3);
-    for (Eigen::Index i = 0; i < n; ++i) {
-        Eigen::Vector3d v(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng));
-        v.normalize();
-        p.row(i) << 0.9 * v.x(), 0.6 * v.y(), 0.4 * v.z();
-    }
-    return p;
 }
 
 TEST(LatticeHashTable, AssignsDenseIdsAndFindsEveryKey) {
@@ -206,8 +196,7 @@ TEST(PermutohedralLattice, RejectsNonFiniteFeatures) {
 // Spec test 4: on the 717 + 717 ellipsoid (target turned 30 deg about z), at sigma2 = sqsum,
 // probreg's blurred lattice is too big (> 0.015 N vertices) and the unblurred one is coarse.
 TEST(PermutohedralLattice, EllipsoidAtSqsumIsTooBigToBlurAndCoarseWithout) {
-    auto rng = MakePairRng(7, 0);
-    const PointCloud Y = EllipsoidSurface(rng, 717);
+    const PointCloud Y = testing::EllipsoidSurface(717, 7);
     const PointCloud X = Apply(
         MakeTransform(RotationFromAxisAngle({0, 0, 1}, M_PI / 6.0), Eigen::Vector3d::Zero()), Y);
     const double sigma2 = SquaredDistanceMean(Y, X);
