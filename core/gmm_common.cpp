@@ -1,9 +1,8 @@
 #include "core/gmm_common.hpp"
 
-#include <Eigen/LU>  // determinant()
 #include <cmath>
 
-#include <Eigen/LU>
+#include <Eigen/LU>  // determinant()
 
 namespace regbench {
 
