@@ -19,6 +19,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/progress.hpp"
 #include "runners/registry.hpp"
@@ -345,6 +346,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
             }
         }
     };
+    // setenv is not thread-safe: set the process-wide part once, before any worker starts.
+    SetOmpThreads(options.threads_per_call);
     const int jobs = std::max(1, std::min<int>(options.jobs, static_cast<int>(indices.size())));
     std::vector<std::thread> threads;
     for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
