@@ -333,6 +333,7 @@ def summarize(rows):
             "mean_ccd": statistics.fmean(r["metrics"]["ccd"] for r in rs),
             "median_seconds": statistics.median(r["seconds"] for r in rs),
             "mean_seconds": statistics.fmean(r["seconds"] for r in rs),
+            "median_cpu_seconds": statistics.median(r["extra"]["cpu_seconds"] for r in rs),
             "mean_iterations": statistics.fmean(r["iterations"] for r in rs),
         })
     return out
@@ -340,12 +341,13 @@ def summarize(rows):
 
 def print_summary(summary, stream):
     hdr = (f"{'method':<22}{'seed':>5}{'pairs':>6}{'fail':>5}{'mae_r':>9}{'med_r':>9}"
-           f"{'mae_t':>9}{'rre':>9}{'ccd':>8}{'med_s':>9}{'iters':>7}")
+           f"{'mae_t':>9}{'rre':>9}{'ccd':>8}{'med_s':>9}{'med_cpu':>9}{'iters':>7}")
     print(hdr, file=stream)
     for s in summary:
         print(f"{s['method']:<22}{s['seed']:>5}{s['pairs']:>6}{s['failed']:>5}"
               f"{s['mean_mae_r']:>9.3f}{s['median_mae_r']:>9.3f}{s['mean_mae_t']:>9.4f}"
               f"{s['mean_rre']:>9.3f}{s['mean_ccd']:>8.4f}{s['median_seconds']:>9.4f}"
+              f"{s['median_cpu_seconds']:>9.4f}"
               f"{s['mean_iterations']:>7.1f}", file=stream)
     methods = sorted({s["method"] for s in summary})
     for m in methods:
@@ -426,11 +428,13 @@ def main(argv=None):
                     status, message = "ok", ""
                     T, iters, stop, scale, extra = np.eye(4), 0, "", 1.0, {}
                     t0 = time.perf_counter()
+                    c0 = time.process_time()
                     try:
                         T, iters, stop, scale, extra = fn(p["source"], p["target"])
                     except Exception as e:  # a failed call is a row, not a crash
                         status, message = "failed", f"probreg-{m}: {type(e).__name__}: {e}"
                     seconds = time.perf_counter() - t0
+                    cpu_seconds = time.process_time() - c0
                     if status == "ok" and not np.isfinite(T).all():
                         status, message = "failed", f"probreg-{m}: non-finite transform"
                     if status != "ok":
@@ -440,6 +444,8 @@ def main(argv=None):
                         d = euler_zyx_deg_of_block(p["T_gt"][:3, :3]) - euler_zyx_deg_of_block(
                             T[:3, :3])
                         extra["mae_r_on_sR_block"] = float(np.abs(d).mean())
+                    # CPU time of this process: less disturbed than wall time on a busy machine.
+                    extra["cpu_seconds"] = cpu_seconds
                     row = {
                         "pair": k,
                         "method": f"probreg-{m}",
