@@ -7,7 +7,8 @@
 namespace regbench::app {
 
 void AddMethodsCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("methods", "List registered methods, their parameters and defaults");
+    auto* cmd =
+        app.add_subcommand("methods", "List registered methods, their parameters and defaults");
     auto* json_out = cmd->add_flag("--json", "Print as JSON instead of text");
     cmd->callback([json_out] {
         if (*json_out) {

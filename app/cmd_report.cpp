@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "app/commands.hpp"
+#include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "runners/runner.hpp"
 
@@ -15,6 +16,8 @@ void AddReportCommand(CLI::App& app) {
     auto format = std::make_shared<std::string>("md");
     auto out = std::make_shared<std::string>();
     auto o = std::make_shared<ReportOptions>();
+    auto paper = std::make_shared<std::string>();
+    auto paper_file = std::make_shared<std::string>(DefaultPaperTablesPath());
     cmd->add_option("results", *files, "One or more JSONL result files (e.g. shards)")->required();
     cmd->add_option("--format,-f", *format, "md | csv | json | latex")
         ->check(CLI::IsMember({"md", "csv", "json", "latex"}));
@@ -22,6 +25,10 @@ void AddReportCommand(CLI::App& app) {
     cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r threshold [deg]");
     cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t threshold");
     cmd->add_option("--bootstrap", o->bootstrap_samples, "Bootstrap resamples for the 95% CIs");
+    cmd->add_option("--paper", *paper,
+                    "Also print the paper's cells side by side: TABLE[:GROUP], e.g. "
+                    "table1_modelnet_partial:same_category (md format)");
+    cmd->add_option("--paper-file", *paper_file, "The paper's tables (JSON)");
     cmd->callback([=] {
         std::vector<nlohmann::json> rows;
         for (const auto& f : *files) {
@@ -33,6 +40,15 @@ void AddReportCommand(CLI::App& app) {
         std::string text;
         if (*format == "md") {
             text = "Data: " + DescribeData(rows) + "\n\n" + FormatMarkdown(summaries, *o);
+            if (!paper->empty()) {
+                const auto colon = paper->find(':');
+                const std::string table = paper->substr(0, colon);
+                const std::string group = colon == std::string::npos ? "" : paper->substr(colon + 1);
+                text += "\n" + FormatPaperComparison(summaries, LoadPaperTables(*paper_file), table,
+                                                     group);
+                text += "\nOurs: " + DescribeData(rows) + ". Paper: ModelNet40 / 7Scenes / ICL-NUIM "
+                        "as published (their machine, their pairs).\n";
+            }
         } else if (*format == "csv") {
             text = FormatCsv(summaries);
         } else if (*format == "latex") {

@@ -7,5 +7,9 @@ namespace regbench::app {
 void AddMethodsCommand(CLI::App& app);
 void AddRunCommand(CLI::App& app);
 void AddReportCommand(CLI::App& app);
+void AddGenerateCommand(CLI::App& app);
+void AddInspectCommand(CLI::App& app);
+void AddExportCommand(CLI::App& app);
+void AddImportCommand(CLI::App& app);
 
 }  // namespace regbench::app

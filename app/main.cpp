@@ -10,6 +10,10 @@ int main(int argc, char** argv) {
     regbench::app::AddMethodsCommand(app);
     regbench::app::AddRunCommand(app);
     regbench::app::AddReportCommand(app);
+    regbench::app::AddGenerateCommand(app);
+    regbench::app::AddInspectCommand(app);
+    regbench::app::AddExportCommand(app);
+    regbench::app::AddImportCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

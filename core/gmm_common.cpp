@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/LU>  // determinant()
+
 namespace regbench {
 
 double SquaredDistanceMean(const PointCloud& Y, const PointCloud& X) {

@@ -1,9 +1,8 @@
 #pragma once
 // Triangle meshes: reading, normalising into the unit sphere, area-weighted surface sampling.
+#include <Eigen/Core>
 #include <random>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "core/point_cloud.hpp"
 

@@ -1,11 +1,10 @@
 #pragma once
 // One registration pair as frozen in a benchmark file (schema: docs/benchmark-format.md).
+#include <Eigen/Core>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <nlohmann/json.hpp>
 
 #include "core/point_cloud.hpp"
 
@@ -21,6 +20,9 @@ struct Pair {
     double target_overlap_ratio = 0.0;
     std::string shape;     ///< mesh / scan name
     std::string category;  ///< its category
+    /// Per-pair generation details (e.g. {"source_keep": 0.7, "target_keep": 0.7}); stored as
+    /// the optional JSON string attribute "meta" (absent or empty object when none).
+    nlohmann::json meta = nlohmann::json::object();
 };
 
 /// A frozen benchmark: pairs plus provenance (protocol, parameters, seed, dataset, version).

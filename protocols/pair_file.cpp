@@ -1,12 +1,12 @@
 #include "protocols/pair_file.hpp"
 
+#include <hdf5.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <hdf5.h>
 
 namespace regbench {
 namespace {
@@ -55,8 +55,7 @@ void WriteStringAttr(const std::string& path, hid_t obj, const char* name, const
     H5Tset_size(type.get(), v.empty() ? 1 : v.size());
     H5Tset_strpad(type.get(), H5T_STR_NULLPAD);
     Handle space(H5Screate(H5S_SCALAR), H5Sclose);
-    Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
-                H5Aclose);
+    Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
     const std::string data = v.empty() ? std::string(1, '\0') : v;
     if (!attr.ok() || H5Awrite(attr.get(), type.get(), data.data()) < 0) {
         Fail(path, std::string("cannot write attribute ") + name);
@@ -197,6 +196,7 @@ void WritePair(const std::string& path, hid_t file, std::size_t k, const Pair& p
     WriteStringAttr(path, g.get(), "category", p.category);
     WriteDoubleAttr(path, g.get(), "source_overlap_ratio", p.source_overlap_ratio);
     WriteDoubleAttr(path, g.get(), "target_overlap_ratio", p.target_overlap_ratio);
+    if (!p.meta.empty()) WriteStringAttr(path, g.get(), "meta", p.meta.dump());
 }
 
 Pair ReadPair(const std::string& path, hid_t file, std::size_t k) {
@@ -222,6 +222,13 @@ Pair ReadPair(const std::string& path, hid_t file, std::size_t k) {
     p.category = ReadStringAttr(where, g.get(), "category");
     p.source_overlap_ratio = ReadDoubleAttr(where, g.get(), "source_overlap_ratio");
     p.target_overlap_ratio = ReadDoubleAttr(where, g.get(), "target_overlap_ratio");
+    if (H5Aexists(g.get(), "meta") > 0) {
+        try {
+            p.meta = nlohmann::json::parse(ReadStringAttr(where, g.get(), "meta"));
+        } catch (const nlohmann::json::exception& e) {
+            Fail(where, std::string("meta is not valid JSON: ") + e.what());
+        }
+    }
     return p;
 }
 
@@ -259,7 +266,8 @@ void WritePairFile(const std::string& path, const PairSet& set) {
         Handle pairs(H5Gcreate2(file.get(), "/pairs", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
                      H5Gclose);
         if (!pairs.ok()) Fail(path, "cannot create /pairs");
-        for (std::size_t k = 0; k < set.pairs.size(); ++k) WritePair(path, file.get(), k, set.pairs[k]);
+        for (std::size_t k = 0; k < set.pairs.size(); ++k)
+            WritePair(path, file.get(), k, set.pairs[k]);
     } catch (...) {
         std::filesystem::remove(tmp);
         throw;

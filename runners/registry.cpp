@@ -2,13 +2,24 @@
 
 #include <stdexcept>
 
+#include "baselines/cpd.hpp"
+#include "baselines/fgr.hpp"
+#include "baselines/filterreg.hpp"
+#include "baselines/gicp.hpp"
+#include "baselines/gmmreg.hpp"
+#include "baselines/icp.hpp"
+#include "baselines/icp_pl.hpp"
 #include "baselines/identity.hpp"
+#include "baselines/ndt.hpp"
+#include "baselines/svr.hpp"
 
 namespace regbench {
 
 const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
-        IdentityMethodInfo(),
+        IdentityMethodInfo(), IcpMethodInfo(),    IcpPlMethodInfo(), FgrMethodInfo(),
+        GicpMethodInfo(),     NdtMethodInfo(),    CpdMethodInfo(),   GmmRegMethodInfo(),
+        SvrMethodInfo(),      FilterRegMethodInfo(),
     };
     return methods;
 }

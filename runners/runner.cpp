@@ -190,7 +190,12 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
     }
     std::vector<MethodSpec> specs;
     std::set<std::string> seen;
-    std::stringstream ss(comma_list);
+    std::string list = comma_list;
+    if (list == "all") {
+        list.clear();
+        for (const auto& m : AllMethods()) list += (list.empty() ? "" : ",") + m.name;
+    }
+    std::stringstream ss(list);
     std::string name;
     while (std::getline(ss, name, ',')) {
         name.erase(0, name.find_first_not_of(" \t"));

@@ -39,7 +39,7 @@ struct RunSummary {
     double wall_seconds = 0.0;
 };
 
-/// Parses "a,b,c" plus an optional JSON object {"a": {...params...}} into specs. Checks that
+/// Parses "a,b,c" (or "all": every registered method) plus an optional JSON object {"a": {...params...}} into specs. Checks that
 /// every method exists and its parameters are valid (instantiates each once). Throws
 /// std::invalid_argument with a clear message otherwise.
 std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,

@@ -22,6 +22,19 @@ inline PointCloud BumpyEllipsoid(Eigen::Index n, std::uint64_t seed) {
     return p;
 }
 
+/// n points on the plain ellipsoid surface of the probabilistic-baselines spec (semi-axes
+/// 0.9/0.6/0.4), directions from a normal draw; deterministic in `seed`.
+inline PointCloud EllipsoidSurface(Eigen::Index n, std::uint64_t seed) {
+    auto rng = MakePairRng(seed, 0);
+    PointCloud p(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        Eigen::Vector3d v(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng));
+        v.normalize();
+        p.row(i) << 0.9 * v.x(), 0.6 * v.y(), 0.4 * v.z();
+    }
+    return p;
+}
+
 /// A pair whose target is T_gt applied to an independent sample of the same surface.
 inline Pair SyntheticPair(Eigen::Index n, std::uint64_t seed, const Transform& T_gt) {
     Pair p;

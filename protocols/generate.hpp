@@ -1,0 +1,38 @@
+#pragma once
+// `regbench generate` as a library call: validate, load shapes, generate pairs, write one file.
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "protocols/pair_protocols.hpp"
+#include "protocols/shape_source.hpp"
+
+namespace regbench {
+
+/// Loads the shapes of (dataset, split). Throws std::runtime_error naming the dataset or path.
+using ShapeLoader =
+    std::function<std::vector<ShapeSource>(const std::string& dataset, const std::string& split)>;
+
+struct GenerateRequest {
+    std::string dataset = "cgal";  ///< dataset name (the embedded corpus is "cgal")
+    std::string split = "test";    ///< dataset split
+    std::size_t num_pairs = 0;     ///< pairs to generate, >= 1
+    std::uint64_t seed = 0;        ///< benchmark seed: pair k uses MakePairRng(seed, k)
+    ProtocolOptions options;       ///< protocol and its parameters
+    std::string out;               ///< output HDF5 path
+    /// Extra provenance merged in verbatim (e.g. {"regbench_version", "git_sha"}). Must not hold
+    /// anything time- or machine-dependent: the same request must give byte-identical files.
+    nlohmann::json extra_provenance = nlohmann::json::object();
+};
+
+/// Checks the request (options, num_pairs >= 1, output directory exists) before any work, then
+/// loads the shapes, generates the pairs and writes `out` atomically. On any failure nothing is
+/// left at `out` (an existing file there is not replaced). Provenance: ProtocolProvenance plus
+/// seed, num_pairs, num_shapes, dataset, split and extra_provenance.
+void GenerateToFile(const GenerateRequest& request,
+                    const ShapeLoader& load_shapes,
+                    const ProgressCallback& progress = nullptr);
+
+}  // namespace regbench

@@ -1,0 +1,425 @@
+#include "protocols/pair_protocols.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <utility>
+
+#include "core/kd_tree.hpp"
+#include "core/rng.hpp"
+#include "core/transform.hpp"
+
+namespace regbench {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+/// Fewest points a cropped cloud may keep: registration needs three non-collinear points.
+constexpr Eigen::Index kMinCloudPoints = 3;
+/// Indoor (Tab. 3) samples 2048 points per scan; the ModelNet protocols 1024.
+constexpr int kIndoorPoints = 2048;
+
+template <class Enum>
+struct EnumName {
+    Enum value;
+    const char* name;
+};
+
+constexpr EnumName<Protocol> kProtocolNames[] = {
+    {Protocol::kPartial, "partial"},
+    {Protocol::kJitter, "jitter"},
+    {Protocol::kDensity, "density"},
+    {Protocol::kComplete, "complete"},
+    {Protocol::kCompleteToPartial, "complete-to-partial"},
+    {Protocol::kOverlapSweep, "overlap-sweep"},
+    {Protocol::kIndoor, "indoor"},
+};
+constexpr EnumName<MotionConvention> kMotionNames[] = {
+    {MotionConvention::kEuler, "euler"},
+    {MotionConvention::kAxisAngle, "axis-angle"},
+};
+constexpr EnumName<Pairing> kPairingNames[] = {
+    {Pairing::kIndependent, "independent"},
+    {Pairing::kShared, "shared"},
+};
+
+template <class Enum, std::size_t N>
+std::string NameOf(const EnumName<Enum> (&table)[N], Enum v) {
+    for (const auto& e : table) {
+        if (e.value == v) return e.name;
+    }
+    throw std::logic_error("enum value without a name");
+}
+
+template <class Enum, std::size_t N>
+Enum ValueOf(const EnumName<Enum> (&table)[N], const std::string& what, const std::string& name) {
+    std::string known;
+    for (const auto& e : table) {
+        if (name == e.name) return e.value;
+        known += (known.empty() ? "" : ", ") + std::string(e.name);
+    }
+    throw std::invalid_argument("unknown " + what + " '" + name + "' (known: " + known + ")");
+}
+
+void Require(bool ok, const std::string& name, const std::string& why) {
+    if (!ok) throw std::invalid_argument("protocol parameter '" + name + "' " + why);
+}
+
+/// Crop keep ratios of (source, target) for `o` at overlap-sweep level `level`.
+std::pair<double, double> KeepRatios(const ProtocolOptions& o, std::size_t level) {
+    switch (o.protocol) {
+        case Protocol::kComplete:
+            return {1.0, 1.0};
+        case Protocol::kCompleteToPartial:
+            return {o.keep, 1.0};
+        case Protocol::kOverlapSweep:
+            return {o.sweep_keeps[level], o.sweep_keeps[level]};
+        default:
+            return {o.keep, o.keep};
+    }
+}
+
+std::size_t NumLevels(const ProtocolOptions& o) {
+    return o.protocol == Protocol::kOverlapSweep ? o.sweep_keeps.size() : 1;
+}
+
+double Fraction(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels) {
+    if (labels.size() == 0) return 0.0;
+    return labels.cast<double>().sum() / static_cast<double>(labels.size());
+}
+
+/// Paper pairing: two independent samples, each cropped; the motion moves the target.
+/// Draw order: source sample, target sample, source crop, target crop, density, motion, noise.
+Pair IndependentPair(const ShapeSource& shape,
+                     const ProtocolOptions& o,
+                     double keep_source,
+                     double keep_target,
+                     std::mt19937_64& rng) {
+    const PointCloud source_full = shape.Sample(o.points, rng);
+    const PointCloud target_full = shape.Sample(o.points, rng);
+    Pair pair;
+    pair.source = Gather(source_full, CropIndices(source_full, keep_source, rng));
+    PointCloud target = Gather(target_full, CropIndices(target_full, keep_target, rng));
+    if (o.protocol == Protocol::kDensity) {
+        target = Gather(target, ThinAndRepeat(target.rows(), o.density_keep, rng));
+    }
+    pair.T_gt = DrawMotion(o.motion, o.max_rotation_deg, o.max_translation, rng);
+    pair.target = Apply(pair.T_gt, target);
+    if (ProtocolAddsNoise(o.protocol)) {
+        AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
+        AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
+    }
+    LabelOverlapByRadius(pair, o.eta);
+    return pair;
+}
+
+Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> SurvivesIn(const std::vector<Eigen::Index>& index,
+                                                          const std::vector<char>& kept_other) {
+    Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> labels(static_cast<Eigen::Index>(index.size()));
+    for (std::size_t i = 0; i < index.size(); ++i) {
+        labels(static_cast<Eigen::Index>(i)) =
+            kept_other[static_cast<std::size_t>(index[i])] ? 1 : 0;
+    }
+    return labels;
+}
+
+std::vector<char> Membership(const std::vector<Eigen::Index>& index, Eigen::Index n) {
+    std::vector<char> in(static_cast<std::size_t>(n), 0);
+    for (Eigen::Index i : index) in[static_cast<std::size_t>(i)] = 1;
+    return in;
+}
+
+/// Authors' pairing (ogmm.md section 4): both clouds are crops of one sample; a point overlaps
+/// iff the same sample point survives the other crop; the motion moves the source, so the
+/// ground truth is its inverse; both are shuffled, then jittered.
+/// Draw order: sample, source crop, target crop, density, source shuffle, target shuffle,
+/// motion, noise.
+Pair SharedPair(const ShapeSource& shape,
+                const ProtocolOptions& o,
+                double keep_source,
+                double keep_target,
+                std::mt19937_64& rng) {
+    const PointCloud full = shape.Sample(o.points, rng);
+    std::vector<Eigen::Index> source_index = CropIndices(full, keep_source, rng);
+    std::vector<Eigen::Index> target_index = CropIndices(full, keep_target, rng);
+    const std::vector<char> in_source = Membership(source_index, full.rows());
+    const std::vector<char> in_target = Membership(target_index, full.rows());
+    if (o.protocol == Protocol::kDensity) {
+        const std::vector<Eigen::Index> thin =
+            ThinAndRepeat(static_cast<Eigen::Index>(target_index.size()), o.density_keep, rng);
+        std::vector<Eigen::Index> repeated(thin.size());
+        for (std::size_t i = 0; i < thin.size(); ++i) {
+            repeated[i] = target_index[static_cast<std::size_t>(thin[i])];
+        }
+        target_index = std::move(repeated);
+    }
+    Shuffle(source_index, rng);
+    Shuffle(target_index, rng);
+    const Transform motion = DrawMotion(o.motion, o.max_rotation_deg, o.max_translation, rng);
+    Pair pair;
+    pair.source = Apply(motion, Gather(full, source_index));
+    pair.target = Gather(full, target_index);
+    pair.T_gt = InvertRigid(motion);
+    if (ProtocolAddsNoise(o.protocol)) {
+        AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
+        AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
+    }
+    pair.source_overlap = SurvivesIn(source_index, in_target);
+    pair.target_overlap = SurvivesIn(target_index, in_source);
+    pair.source_overlap_ratio = Fraction(pair.source_overlap);
+    pair.target_overlap_ratio = Fraction(pair.target_overlap);
+    return pair;
+}
+
+}  // namespace
+
+std::string ToString(Protocol p) { return NameOf(kProtocolNames, p); }
+std::string ToString(MotionConvention m) { return NameOf(kMotionNames, m); }
+std::string ToString(Pairing p) { return NameOf(kPairingNames, p); }
+Protocol ParseProtocol(const std::string& name) {
+    return ValueOf(kProtocolNames, "protocol", name);
+}
+MotionConvention ParseMotionConvention(const std::string& name) {
+    return ValueOf(kMotionNames, "motion convention", name);
+}
+Pairing ParsePairing(const std::string& name) { return ValueOf(kPairingNames, "pairing", name); }
+
+std::vector<std::string> ProtocolNames() {
+    std::vector<std::string> names;
+    for (const auto& e : kProtocolNames) names.emplace_back(e.name);
+    return names;
+}
+
+void to_json(nlohmann::json& j, const ProtocolOptions& o) {
+    j = nlohmann::json{{"protocol", ToString(o.protocol)},
+                       {"points", o.points},
+                       {"keep", o.keep},
+                       {"noise_sigma", o.noise_sigma},
+                       {"noise_clip", o.noise_clip},
+                       {"motion", ToString(o.motion)},
+                       {"max_rotation_deg", o.max_rotation_deg},
+                       {"max_translation", o.max_translation},
+                       {"pairing", ToString(o.pairing)},
+                       {"eta", o.eta},
+                       {"density_keep", o.density_keep},
+                       {"sweep_keeps", o.sweep_keeps}};
+}
+
+void from_json(const nlohmann::json& j, ProtocolOptions& o) {
+    if (!j.is_object()) throw std::invalid_argument("protocol options must be a JSON object");
+    if (j.contains("protocol")) o = DefaultProtocolOptions(ParseProtocol(j.at("protocol")));
+    const nlohmann::json known = o;
+    for (const auto& item : j.items()) {
+        if (!known.contains(item.key())) {
+            throw std::invalid_argument("unknown protocol parameter '" + item.key() + "'");
+        }
+        const auto& def = known.at(item.key());
+        const bool numeric_ok = def.is_number() && item.value().is_number();
+        if (!numeric_ok && def.type() != item.value().type()) {
+            throw std::invalid_argument("protocol parameter '" + item.key() + "' expects " +
+                                        def.type_name() + ", got " + item.value().dump());
+        }
+    }
+    try {
+        o.points = j.value("points", o.points);
+        o.keep = j.value("keep", o.keep);
+        o.noise_sigma = j.value("noise_sigma", o.noise_sigma);
+        o.noise_clip = j.value("noise_clip", o.noise_clip);
+        if (j.contains("motion")) o.motion = ParseMotionConvention(j.at("motion"));
+        o.max_rotation_deg = j.value("max_rotation_deg", o.max_rotation_deg);
+        o.max_translation = j.value("max_translation", o.max_translation);
+        if (j.contains("pairing")) o.pairing = ParsePairing(j.at("pairing"));
+        o.eta = j.value("eta", o.eta);
+        o.density_keep = j.value("density_keep", o.density_keep);
+        o.sweep_keeps = j.value("sweep_keeps", o.sweep_keeps);
+    } catch (const nlohmann::json::exception& e) {
+        throw std::invalid_argument(std::string("bad protocol parameters: ") + e.what());
+    }
+}
+
+ProtocolOptions DefaultProtocolOptions(Protocol p) {
+    ProtocolOptions o;
+    o.protocol = p;
+    if (p == Protocol::kIndoor) o.points = kIndoorPoints;
+    return o;
+}
+
+bool ProtocolAddsNoise(Protocol p) {
+    return p == Protocol::kJitter || p == Protocol::kComplete ||
+           p == Protocol::kCompleteToPartial || p == Protocol::kOverlapSweep;
+}
+
+Eigen::Index CropCount(Eigen::Index n, double keep) {
+    return static_cast<Eigen::Index>(std::llround(keep * static_cast<double>(n)));
+}
+
+void ValidateProtocolOptions(const ProtocolOptions& o) {
+    Require(o.points >= kMinCloudPoints, "points", "must be >= 3, got " + std::to_string(o.points));
+    const auto check_keep = [&](double keep, const std::string& name) {
+        Require(std::isfinite(keep) && keep > 0.0 && keep <= 1.0, name,
+                "must be in (0, 1], got " + std::to_string(keep));
+        Require(CropCount(o.points, keep) >= kMinCloudPoints, name,
+                "leaves " + std::to_string(CropCount(o.points, keep)) + " of " +
+                    std::to_string(o.points) + " points; at least 3 are needed");
+    };
+    check_keep(o.keep, "keep");
+    Require(std::isfinite(o.noise_sigma) && o.noise_sigma >= 0.0, "noise_sigma", "must be >= 0");
+    Require(std::isfinite(o.noise_clip) && o.noise_clip >= 0.0, "noise_clip", "must be >= 0");
+    Require(std::isfinite(o.max_rotation_deg) && o.max_rotation_deg >= 0.0 &&
+                o.max_rotation_deg <= 180.0,
+            "max_rotation_deg", "must be in [0, 180]");
+    Require(std::isfinite(o.max_translation) && o.max_translation >= 0.0, "max_translation",
+            "must be >= 0");
+    Require(std::isfinite(o.eta) && o.eta > 0.0, "eta", "must be > 0");
+    Require(std::isfinite(o.density_keep) && o.density_keep > 0.0 && o.density_keep <= 1.0,
+            "density_keep", "must be in (0, 1]");
+    if (o.protocol == Protocol::kOverlapSweep) {
+        Require(!o.sweep_keeps.empty(), "sweep_keeps", "must list at least one keep ratio");
+        for (double k : o.sweep_keeps) check_keep(k, "sweep_keeps");
+    }
+}
+
+Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
+    const double phi = UniformReal(rng, 0.0, 2.0 * kPi);
+    const double cos_theta = UniformReal(rng, -1.0, 1.0);
+    const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
+    return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+}
+
+std::vector<Eigen::Index> CropIndices(const PointCloud& cloud, double keep, std::mt19937_64& rng) {
+    const Eigen::Index n = cloud.rows();
+    std::vector<Eigen::Index> index(static_cast<std::size_t>(n));
+    std::iota(index.begin(), index.end(), Eigen::Index{0});
+    if (keep >= 1.0) return index;
+    const Eigen::Vector3d direction = RandomUnitVector(rng);
+    const Eigen::RowVector3d centroid = cloud.colwise().mean();
+    const Eigen::VectorXd signed_distance = (cloud.rowwise() - centroid) * direction;
+    // Keep the m largest projections: those above the (1 - keep) quantile.
+    const auto m = static_cast<std::size_t>(std::clamp<Eigen::Index>(CropCount(n, keep), 0, n));
+    std::partial_sort(index.begin(), index.begin() + static_cast<std::ptrdiff_t>(m), index.end(),
+                      [&](Eigen::Index a, Eigen::Index b) {
+                          if (signed_distance(a) != signed_distance(b)) {
+                              return signed_distance(a) > signed_distance(b);
+                          }
+                          return a < b;
+                      });
+    index.resize(m);
+    std::sort(index.begin(), index.end());
+    return index;
+}
+
+Transform DrawMotion(MotionConvention convention,
+                     double max_rotation_deg,
+                     double max_translation,
+                     std::mt19937_64& rng) {
+    if (convention == MotionConvention::kEuler) {
+        // Paper: three angles U[0, max], R = Rx * Ry * Rz; t ~ U[-max_t, max_t]^3.
+        const double x = UniformReal(rng, 0.0, max_rotation_deg);
+        const double y = UniformReal(rng, 0.0, max_rotation_deg);
+        const double z = UniformReal(rng, 0.0, max_rotation_deg);
+        Eigen::Vector3d t;
+        for (int i = 0; i < 3; ++i) t(i) = UniformReal(rng, -max_translation, max_translation);
+        return MakeTransform(RotationXyzProductDeg(x, y, z), t);
+    }
+    // Authors' code: uniform axis, angle U[0, max]; translation uniform direction * U[0, max_t].
+    const Eigen::Vector3d axis = RandomUnitVector(rng);
+    const double angle_rad = UniformReal(rng, 0.0, max_rotation_deg) * kPi / 180.0;
+    const Eigen::Vector3d direction = RandomUnitVector(rng);
+    const double length = UniformReal(rng, 0.0, max_translation);
+    return MakeTransform(RotationFromAxisAngle(axis, angle_rad), direction * length);
+}
+
+void AddClippedNoise(PointCloud& cloud, double sigma, double clip, std::mt19937_64& rng) {
+    if (sigma <= 0.0) return;
+    for (Eigen::Index i = 0; i < cloud.rows(); ++i) {
+        for (int d = 0; d < 3; ++d) {
+            cloud(i, d) += std::clamp(sigma * StandardNormal(rng), -clip, clip);
+        }
+    }
+}
+
+void Shuffle(std::vector<Eigen::Index>& v, std::mt19937_64& rng) {
+    for (std::size_t i = v.size(); i > 1; --i) {
+        const auto j = static_cast<std::size_t>(UniformIndex(rng, i));
+        std::swap(v[i - 1], v[j]);
+    }
+}
+
+std::vector<Eigen::Index> ThinAndRepeat(Eigen::Index n, double keep, std::mt19937_64& rng) {
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
+    std::iota(order.begin(), order.end(), Eigen::Index{0});
+    if (n == 0) return order;
+    Shuffle(order, rng);
+    const auto m = static_cast<std::size_t>(std::clamp<Eigen::Index>(CropCount(n, keep), 1, n));
+    std::vector<Eigen::Index> out(static_cast<std::size_t>(n));
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = order[i % m];
+    return out;
+}
+
+PointCloud Gather(const PointCloud& cloud, const std::vector<Eigen::Index>& index) {
+    PointCloud out(static_cast<Eigen::Index>(index.size()), 3);
+    for (std::size_t i = 0; i < index.size(); ++i) {
+        out.row(static_cast<Eigen::Index>(i)) = cloud.row(index[i]);
+    }
+    return out;
+}
+
+void LabelOverlapByRadius(Pair& pair, double eta) {
+    const PointCloud moved_source = Apply(pair.T_gt, pair.source);
+    const KdTree target_tree(pair.target);
+    const KdTree source_tree(moved_source);
+    pair.source_overlap =
+        (NearestDistances(target_tree, moved_source).array() < eta).cast<std::uint8_t>();
+    pair.target_overlap =
+        (NearestDistances(source_tree, pair.target).array() < eta).cast<std::uint8_t>();
+    pair.source_overlap_ratio = Fraction(pair.source_overlap);
+    pair.target_overlap_ratio = Fraction(pair.target_overlap);
+}
+
+Pair GeneratePair(const std::vector<ShapeSource>& shapes,
+                  const ProtocolOptions& options,
+                  std::uint64_t seed,
+                  std::uint64_t pair_index) {
+    if (shapes.empty()) throw std::invalid_argument("no shapes to generate pairs from");
+    const std::size_t levels = NumLevels(options);
+    const auto level = static_cast<std::size_t>(pair_index % levels);
+    const ShapeSource& shape =
+        shapes[static_cast<std::size_t>((pair_index / levels) % shapes.size())];
+    const auto [keep_source, keep_target] = KeepRatios(options, level);
+    std::mt19937_64 rng = MakePairRng(seed, pair_index);
+    Pair pair = options.pairing == Pairing::kShared
+                    ? SharedPair(shape, options, keep_source, keep_target, rng)
+                    : IndependentPair(shape, options, keep_source, keep_target, rng);
+    pair.shape = shape.name();
+    pair.category = shape.category();
+    pair.meta = {{"source_keep", keep_source}, {"target_keep", keep_target}};
+    return pair;
+}
+
+nlohmann::json ProtocolProvenance(const ProtocolOptions& options) {
+    return {{"protocol", ToString(options.protocol)},
+            {"params", options},
+            {"overlap_labels", options.pairing == Pairing::kShared ? "shared-index" : "radius"}};
+}
+
+PairSet GeneratePairs(const std::vector<ShapeSource>& shapes,
+                      const ProtocolOptions& options,
+                      std::uint64_t seed,
+                      std::size_t num_pairs,
+                      const ProgressCallback& progress) {
+    ValidateProtocolOptions(options);
+    if (shapes.empty()) throw std::invalid_argument("no shapes to generate pairs from");
+    PairSet set;
+    set.provenance = ProtocolProvenance(options);
+    set.provenance["seed"] = seed;
+    set.provenance["num_pairs"] = num_pairs;
+    set.provenance["num_shapes"] = shapes.size();
+    set.pairs.reserve(num_pairs);
+    for (std::size_t k = 0; k < num_pairs; ++k) {
+        set.pairs.push_back(GeneratePair(shapes, options, seed, k));
+        if (progress) progress(k + 1, num_pairs);
+    }
+    return set;
+}
+
+}  // namespace regbench

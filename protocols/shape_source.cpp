@@ -1,0 +1,99 @@
+#include "protocols/shape_source.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <utility>
+
+#include "core/rng.hpp"
+
+namespace regbench {
+
+ShapeSource ShapeSource::FromMesh(Mesh mesh, std::string name, std::string category) {
+    const Eigen::Index nv = mesh.vertices.rows();
+    if (mesh.faces.rows() > 0 && (mesh.faces.minCoeff() < 0 || mesh.faces.maxCoeff() >= nv)) {
+        throw std::invalid_argument("shape '" + name + "': face index out of range");
+    }
+    if (!mesh.vertices.allFinite()) {
+        throw std::invalid_argument("shape '" + name + "': non-finite vertex");
+    }
+    auto cumulative = std::make_shared<std::vector<double>>();
+    cumulative->reserve(static_cast<std::size_t>(mesh.faces.rows()));
+    double total = 0.0;
+    for (Eigen::Index f = 0; f < mesh.faces.rows(); ++f) {
+        const Eigen::Vector3d a = mesh.vertices.row(mesh.faces(f, 0)).transpose();
+        const Eigen::Vector3d b = mesh.vertices.row(mesh.faces(f, 1)).transpose();
+        const Eigen::Vector3d c = mesh.vertices.row(mesh.faces(f, 2)).transpose();
+        total += 0.5 * (b - a).cross(c - a).norm();
+        cumulative->push_back(total);
+    }
+    if (!(total > 0.0)) {
+        throw std::invalid_argument("shape '" + name + "': mesh has no face of positive area");
+    }
+    ShapeSource s;
+    s.name_ = std::move(name);
+    s.category_ = std::move(category);
+    s.mesh_ = std::make_shared<const Mesh>(std::move(mesh));
+    s.cumulative_area_ = std::move(cumulative);
+    return s;
+}
+
+ShapeSource ShapeSource::FromPoints(PointCloud points, std::string name, std::string category) {
+    if (points.rows() == 0) throw std::invalid_argument("shape '" + name + "': no points");
+    if (!points.allFinite()) throw std::invalid_argument("shape '" + name + "': non-finite point");
+    ShapeSource s;
+    s.name_ = std::move(name);
+    s.category_ = std::move(category);
+    s.points_ = std::make_shared<const PointCloud>(std::move(points));
+    return s;
+}
+
+Eigen::Index ShapeSource::size() const { return is_mesh() ? mesh_->faces.rows() : points_->rows(); }
+
+PointCloud ShapeSource::Sample(Eigen::Index n, std::mt19937_64& rng) const {
+    if (n < 0) throw std::invalid_argument("shape '" + name_ + "': negative sample size");
+    return is_mesh() ? SampleMesh(n, rng) : SamplePoints(n, rng);
+}
+
+PointCloud ShapeSource::SampleMesh(Eigen::Index n, std::mt19937_64& rng) const {
+    const std::vector<double>& cum = *cumulative_area_;
+    const double total = cum.back();
+    PointCloud out(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        // Area-weighted face choice: first face whose running area exceeds u.
+        const double u = UniformReal(rng, 0.0, total);
+        const auto it = std::upper_bound(cum.begin(), cum.end(), u);
+        const Eigen::Index f = std::min<Eigen::Index>(static_cast<Eigen::Index>(it - cum.begin()),
+                                                      mesh_->faces.rows() - 1);
+        const double r1 = std::sqrt(UniformReal(rng, 0.0, 1.0));
+        const double r2 = UniformReal(rng, 0.0, 1.0);
+        // p = (1 - sqrt(r1)) a + sqrt(r1) (1 - r2) b + sqrt(r1) r2 c  (uniform on the triangle).
+        out.row(i) = (1.0 - r1) * mesh_->vertices.row(mesh_->faces(f, 0)) +
+                     r1 * (1.0 - r2) * mesh_->vertices.row(mesh_->faces(f, 1)) +
+                     r1 * r2 * mesh_->vertices.row(mesh_->faces(f, 2));
+    }
+    return out;
+}
+
+PointCloud ShapeSource::SamplePoints(Eigen::Index n, std::mt19937_64& rng) const {
+    const PointCloud& pts = *points_;
+    if (n > pts.rows()) {
+        throw std::invalid_argument("shape '" + name_ + "' has " + std::to_string(pts.rows()) +
+                                    " points, " + std::to_string(n) + " requested");
+    }
+    std::vector<Eigen::Index> index(static_cast<std::size_t>(pts.rows()));
+    std::iota(index.begin(), index.end(), Eigen::Index{0});
+    PointCloud out(n, 3);
+    for (Eigen::Index i = 0; i < n; ++i) {
+        // Partial Fisher-Yates: position i receives a uniform pick among the untaken points.
+        const auto remaining = static_cast<std::uint64_t>(pts.rows() - i);
+        const auto j = static_cast<std::size_t>(i) + UniformIndex(rng, remaining);
+        std::swap(index[static_cast<std::size_t>(i)], index[j]);
+        out.row(i) = pts.row(index[static_cast<std::size_t>(i)]);
+    }
+    return out;
+}
+
+}  // namespace regbench

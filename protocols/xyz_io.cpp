@@ -1,0 +1,227 @@
+#include "protocols/xyz_io.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <stdexcept>
+#include <vector>
+
+#include "core/transform.hpp"
+#include "protocols/pair_protocols.hpp"
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Tolerance on |R^T R - I| and |det R - 1| for an imported ground truth (text round-off).
+constexpr double kRotationTolerance = 1e-6;
+
+[[noreturn]] void FailAt(const std::string& path, std::size_t line, const std::string& what) {
+    throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
+}
+
+/// Parses the whitespace-separated numbers of one line (locale-independent from_chars).
+std::vector<double> ParseNumbers(const std::string& path,
+                                 std::size_t line_no,
+                                 const std::string& line) {
+    std::vector<double> values;
+    const char* p = line.data();
+    const char* end = line.data() + line.size();
+    while (true) {
+        while (p < end && std::isspace(static_cast<unsigned char>(*p))) ++p;
+        if (p == end) break;
+        double v = 0.0;
+        const auto [next, ec] = std::from_chars(p, end, v);
+        const char* token_end = p;
+        while (token_end < end && !std::isspace(static_cast<unsigned char>(*token_end)))
+            ++token_end;
+        if (ec != std::errc() || next != token_end) {
+            FailAt(path, line_no, "not a number: '" + std::string(p, token_end) + "'");
+        }
+        if (!std::isfinite(v)) FailAt(path, line_no, "non-finite value");
+        values.push_back(v);
+        p = next;
+    }
+    return values;
+}
+
+bool SkipLine(const std::string& line) {
+    const auto first = line.find_first_not_of(" \t\r");
+    return first == std::string::npos || line[first] == '#';
+}
+
+std::ifstream OpenText(const std::string& path) {
+    if (!fs::exists(path)) throw std::runtime_error(path + ": no such file");
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open");
+    return in;
+}
+
+void WriteTextFile(const std::string& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error(path + ": cannot write");
+}
+
+std::string FormatRow(double a, double b, double c) {
+    char buf[96];
+    std::snprintf(buf, sizeof(buf), "%.17g %.17g %.17g\n", a, b, c);
+    return buf;
+}
+
+std::string XyzText(const PointCloud& cloud) {
+    std::string text;
+    for (Eigen::Index i = 0; i < cloud.rows(); ++i)
+        text += FormatRow(cloud(i, 0), cloud(i, 1), cloud(i, 2));
+    return text;
+}
+
+std::string PlyText(const PointCloud& cloud) {
+    std::string text = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(cloud.rows()) +
+                       "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    return text + XyzText(cloud);
+}
+
+std::string TransformText(const Transform& T) {
+    std::string text;
+    char buf[128];
+    for (int r = 0; r < 4; ++r) {
+        std::snprintf(buf, sizeof(buf), "%.17g %.17g %.17g %.17g\n", T(r, 0), T(r, 1), T(r, 2),
+                      T(r, 3));
+        text += buf;
+    }
+    return text;
+}
+
+void PrepareDir(const std::string& dir) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create directory");
+}
+
+}  // namespace
+
+PointCloud ReadXyz(const std::string& path) {
+    std::ifstream in = OpenText(path);
+    std::vector<double> values;
+    std::string line;
+    std::size_t line_no = 0;
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (SkipLine(line)) continue;
+        const std::vector<double> v = ParseNumbers(path, line_no, line);
+        if (v.size() != 3) {
+            FailAt(path, line_no, "expected 3 numbers 'x y z', got " + std::to_string(v.size()));
+        }
+        values.insert(values.end(), v.begin(), v.end());
+    }
+    if (values.empty()) throw std::runtime_error(path + ": no points");
+    PointCloud cloud(static_cast<Eigen::Index>(values.size() / 3), 3);
+    std::copy(values.begin(), values.end(), cloud.data());
+    return cloud;
+}
+
+Transform ReadTransformTxt(const std::string& path) {
+    std::ifstream in = OpenText(path);
+    Transform T = Transform::Zero();
+    int row = 0;
+    std::string line;
+    std::size_t line_no = 0;
+    std::size_t last_row_line = 0;
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (SkipLine(line)) continue;
+        const std::vector<double> v = ParseNumbers(path, line_no, line);
+        if (row == 4) FailAt(path, line_no, "more than 4 rows (expected a 4 x 4 matrix)");
+        if (v.size() != 4) {
+            FailAt(path, line_no, "expected 4 numbers per row, got " + std::to_string(v.size()));
+        }
+        for (int c = 0; c < 4; ++c) T(row, c) = v[static_cast<std::size_t>(c)];
+        ++row;
+        last_row_line = line_no;
+    }
+    if (row != 4) {
+        FailAt(path, line_no, "expected 4 rows of a 4 x 4 matrix, got " + std::to_string(row));
+    }
+    if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kRotationTolerance) {
+        FailAt(path, last_row_line, "last row must be 0 0 0 1");
+    }
+    T.row(3) << 0, 0, 0, 1;
+    if (!IsRotation(T.topLeftCorner<3, 3>(), kRotationTolerance)) {
+        throw std::runtime_error(path + ": rows 1-3: the 3 x 3 block is not a rotation");
+    }
+    return T;
+}
+
+std::string PairStem(std::size_t k) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%04zu", k);
+    return buf;
+}
+
+void ExportXyz(const PairSet& set, const std::string& dir) {
+    PrepareDir(dir);
+    for (std::size_t k = 0; k < set.pairs.size(); ++k) {
+        const std::string stem = (fs::path(dir) / PairStem(k)).string();
+        WriteTextFile(stem + "_src.xyz", XyzText(set.pairs[k].source));
+        WriteTextFile(stem + "_tgt.xyz", XyzText(set.pairs[k].target));
+        WriteTextFile(stem + "_gt.txt", TransformText(set.pairs[k].T_gt));
+    }
+}
+
+void ExportPly(const PairSet& set, const std::string& dir) {
+    PrepareDir(dir);
+    for (std::size_t k = 0; k < set.pairs.size(); ++k) {
+        const std::string stem = (fs::path(dir) / PairStem(k)).string();
+        WriteTextFile(stem + "_src.ply", PlyText(set.pairs[k].source));
+        WriteTextFile(stem + "_tgt.ply", PlyText(set.pairs[k].target));
+        WriteTextFile(stem + "_gt.txt", TransformText(set.pairs[k].T_gt));
+    }
+}
+
+PairSet ImportXyzDir(const std::string& dir, double eta) {
+    if (!fs::is_directory(dir)) throw std::runtime_error(dir + ": not a directory");
+    if (!(eta > 0.0)) throw std::invalid_argument("import: eta must be > 0");
+    // Collect the pair numbers present, from any of the three file kinds.
+    const std::regex pattern(R"((\d+)_(src\.xyz|tgt\.xyz|gt\.txt))");
+    std::map<std::size_t, int> seen;
+    for (const auto& entry : fs::directory_iterator(dir)) {
+        std::smatch m;
+        const std::string name = entry.path().filename().string();
+        if (std::regex_match(name, m, pattern)) seen[std::stoul(m[1].str())] += 1;
+    }
+    if (seen.empty()) {
+        throw std::runtime_error(dir + ": no NNNN_src.xyz / NNNN_tgt.xyz / NNNN_gt.txt files");
+    }
+    PairSet set;
+    std::size_t k = 0;
+    for (const auto& [number, count] : seen) {
+        (void)count;
+        const std::string stem = (fs::path(dir) / PairStem(k)).string();
+        if (number != k)
+            throw std::runtime_error(stem +
+                                     "_src.xyz: missing (pairs must be numbered 0, 1, 2, ...)");
+        Pair pair;
+        pair.source = ReadXyz(stem + "_src.xyz");
+        pair.target = ReadXyz(stem + "_tgt.xyz");
+        pair.T_gt = ReadTransformTxt(stem + "_gt.txt");
+        pair.shape = PairStem(k);
+        LabelOverlapByRadius(pair, eta);
+        set.pairs.push_back(std::move(pair));
+        ++k;
+    }
+    set.provenance = {{"protocol", "imported"},
+                      {"format", "xyz"},
+                      {"overlap_labels", "radius"},
+                      {"params", {{"eta", eta}}},
+                      {"num_pairs", set.pairs.size()}};
+    return set;
+}
+
+}  // namespace regbench

@@ -1,0 +1,229 @@
+// The contract every registered method keeps; methods added to the registry join here.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/rng.hpp"
+#include "core/threads.hpp"
+#include "core/transform.hpp"
+#include "runners/registry.hpp"
+#include "tests/baselines/synthetic_shape.hpp"
+
+namespace regbench {
+namespace {
+
+using testing::PartialCloud;
+
+struct IdentityTolerance {
+    double rot_deg;
+    double trans;
+};
+
+/// How close to the identity a method must stay on identical clouds. Exact-correspondence
+/// methods land on it to rounding (the arccos in RotationAngleDeg resolves ~1e-6 deg); PCL
+/// runs in float32; NDT's optimum fits the target's voxel Gaussians, not the points, and
+/// sits ~0.5 deg off the identity on the 717-point crop. Methods not listed get kDefault.
+IdentityTolerance IdentityToleranceFor(const std::string& method) {
+    static const std::map<std::string, IdentityTolerance> kTolerances = {
+        {"identity", {1e-12, 1e-12}}, {"icp", {1e-5, 1e-9}},  {"icp-pl", {1e-5, 1e-9}},
+        {"fgr", {1e-3, 1e-5}},        {"gicp", {0.01, 1e-4}}, {"ndt", {1.0, 0.01}},
+    };
+    constexpr IdentityTolerance kDefault{1.0, 0.01};
+    const auto it = kTolerances.find(method);
+    return it == kTolerances.end() ? kDefault : it->second;
+}
+
+std::vector<std::string> MethodNames() {
+    std::vector<std::string> names;
+    for (const auto& m : AllMethods()) names.push_back(m.name);
+    return names;
+}
+
+class MethodContract : public ::testing::TestWithParam<std::string> {
+protected:
+    static void SetUpTestSuite() {
+        auto rng = MakePairRng(/*benchmark_seed=*/7, /*pair_index=*/0);
+        source_ = new PointCloud(PartialCloud(rng));
+        const Transform T_gt =
+            MakeTransform(RotationXyzProductDeg(20.0, 10.0, 15.0), {0.1, -0.05, 0.05});
+        target_ = new PointCloud(Apply(T_gt, PartialCloud(rng)));
+    }
+    static void TearDownTestSuite() {
+        delete source_;
+        delete target_;
+    }
+    std::unique_ptr<RegistrationMethod> Create() const { return CreateMethod(GetParam()); }
+
+    static const PointCloud* source_;
+    static const PointCloud* target_;
+};
+const PointCloud* MethodContract::source_ = nullptr;
+const PointCloud* MethodContract::target_ = nullptr;
+
+TEST_P(MethodContract, PartialPairGivesRigidTransform) {
+    ASSERT_EQ(source_->rows(), 717);
+    const AlignResult r = Create()->Align(*source_, *target_);
+    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const Eigen::Matrix3d R = r.T_target_source.topLeftCorner<3, 3>();
+    EXPECT_TRUE(r.T_target_source.allFinite());
+    EXPECT_NEAR(R.determinant(), 1.0, 1e-9);
+    EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_EQ(r.T_target_source.row(3), Eigen::RowVector4d(0, 0, 0, 1));
+    EXPECT_GE(r.iterations, 0);
+    EXPECT_FALSE(r.stop_reason.empty());
+}
+
+TEST_P(MethodContract, IdenticalCloudsGiveNearIdentity) {
+    const AlignResult r = Create()->Align(*source_, *source_);
+    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const IdentityTolerance tol = IdentityToleranceFor(GetParam());
+    const double rot_deg =
+        RotationAngleDeg(r.T_target_source.topLeftCorner<3, 3>(), Eigen::Matrix3d::Identity());
+    EXPECT_LE(rot_deg, tol.rot_deg);
+    const double trans = r.T_target_source.topRightCorner<3, 1>().norm();
+    EXPECT_LE(trans, tol.trans);
+}
+
+/// SetOmpThreads for the scope; restores the previous count and OMP_NUM_THREADS after.
+class ScopedOmpThreads {
+public:
+    explicit ScopedOmpThreads(int threads) : previous_(omp_get_max_threads()) {
+        const char* env = std::getenv("OMP_NUM_THREADS");
+        had_env_ = env != nullptr;
+        if (had_env_) previous_env_ = env;
+        SetOmpThreads(threads);
+    }
+    ~ScopedOmpThreads() {
+        omp_set_num_threads(previous_);
+        if (had_env_) {
+            setenv("OMP_NUM_THREADS", previous_env_.c_str(), 1);
+        } else {
+            unsetenv("OMP_NUM_THREADS");
+        }
+    }
+
+private:
+    int previous_;
+    bool had_env_ = false;
+    std::string previous_env_;
+};
+
+TEST_P(MethodContract, ThreadCountDoesNotChangeResult) {
+    constexpr double kThreadTol = 1e-9;
+    AlignResult one;
+    AlignResult two;
+    {
+        ScopedOmpThreads threads(1);
+        one = Create()->Align(*source_, *target_);
+    }
+    {
+        ScopedOmpThreads threads(2);
+        two = Create()->Align(*source_, *target_);
+    }
+    ASSERT_EQ(one.status, AlignStatus::kOk) << one.message;
+    ASSERT_EQ(two.status, AlignStatus::kOk) << two.message;
+    EXPECT_LT((one.T_target_source - two.T_target_source).cwiseAbs().maxCoeff(), kThreadTol);
+}
+
+void ExpectFailsNaming(RegistrationMethod& method,
+                       const PointCloud& source,
+                       const PointCloud& target,
+                       const std::string& expected_in_message) {
+    const AlignResult r = method.Align(source, target);
+    EXPECT_EQ(r.status, AlignStatus::kFailed);
+    EXPECT_NE(r.message.find(expected_in_message), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find(method.Name()), std::string::npos) << r.message;
+    EXPECT_TRUE(r.T_target_source.allFinite());
+}
+
+TEST_P(MethodContract, EmptyCloudFails) {
+    auto method = Create();
+    const PointCloud empty(0, 3);
+    ExpectFailsNaming(*method, empty, *target_, "source cloud is empty");
+    ExpectFailsNaming(*method, *source_, empty, "target cloud is empty");
+}
+
+TEST_P(MethodContract, TwoPointsFail) {
+    auto method = Create();
+    const PointCloud two = source_->topRows(2);
+    ExpectFailsNaming(*method, two, *target_, "source cloud has 2 points");
+    ExpectFailsNaming(*method, *source_, two, "target cloud has 2 points");
+}
+
+TEST_P(MethodContract, NonFiniteCoordinatesFail) {
+    auto method = Create();
+    for (const double bad :
+         {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+        PointCloud corrupted = *source_;
+        corrupted(100, 1) = bad;
+        ExpectFailsNaming(*method, corrupted, *target_, "source cloud has non-finite");
+        ExpectFailsNaming(*method, *source_, corrupted, "target cloud has non-finite");
+    }
+}
+
+TEST_P(MethodContract, UnknownParameterIsNamed) {
+    const MethodInfo& info = FindMethod(GetParam());
+    try {
+        info.create({{"no_such_parameter", 1}});
+        FAIL() << "expected std::invalid_argument";
+    } catch (const std::invalid_argument& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("no_such_parameter"), std::string::npos) << what;
+        EXPECT_NE(what.find(GetParam()), std::string::npos) << what;
+    }
+}
+
+TEST_P(MethodContract, DefaultsRoundTripAndAreDocumented) {
+    const MethodInfo& info = FindMethod(GetParam());
+    EXPECT_FALSE(info.summary.empty());
+    EXPECT_EQ(Create()->Params(), info.defaults);
+    // Every parameter is settable through JSON: passing all defaults explicitly is accepted.
+    EXPECT_EQ(info.create(info.defaults)->Params(), info.defaults);
+    for (const auto& item : info.defaults.items()) {
+        const auto doc = info.param_docs.find(item.key());
+        ASSERT_NE(doc, info.param_docs.end()) << "undocumented parameter " << item.key();
+        EXPECT_FALSE(doc->second.empty());
+    }
+    for (const auto& doc : info.param_docs) {
+        EXPECT_TRUE(info.defaults.contains(doc.first)) << "doc for unknown key " << doc.first;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllMethods,
+                         MethodContract,
+                         ::testing::ValuesIn(MethodNames()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                             std::string name = info.param;
+                             for (char& c : name) {
+                                 if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                             }
+                             return name;
+                         });
+
+TEST(Registry, UnknownMethodListsKnownNames) {
+    try {
+        CreateMethod("no-such-method");
+        FAIL() << "expected std::invalid_argument";
+    } catch (const std::invalid_argument& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("unknown method 'no-such-method'"), std::string::npos) << what;
+        EXPECT_NE(what.find("icp"), std::string::npos) << what;
+    }
+}
+
+TEST(Registry, NamesAreUnique) {
+    const auto names = MethodNames();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        for (std::size_t j = i + 1; j < names.size(); ++j) EXPECT_NE(names[i], names[j]);
+    }
+}
+
+}  // namespace
+}  // namespace regbench

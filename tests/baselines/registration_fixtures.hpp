@@ -1,0 +1,33 @@
+#pragma once
+// Test-only pairs with known motion for the per-method tests.
+#include "core/rng.hpp"
+#include "core/transform.hpp"
+#include "tests/baselines/synthetic_shape.hpp"
+
+namespace regbench::testing {
+
+struct KnownPair {
+    PointCloud source;
+    PointCloud target;
+    Transform T_gt;
+};
+
+/// Clean complete pair: 1024 samples, target = T_gt(source) point for point, with a
+/// rotation of `angle_deg` about a fixed oblique axis and a small translation.
+inline KnownPair CleanCompletePair(double angle_deg, std::uint64_t seed = 11) {
+    auto rng = MakePairRng(seed, 0);
+    KnownPair pair;
+    pair.source = SampleBumpyEllipsoid(rng, 1024);
+    const Eigen::Matrix3d R =
+        RotationFromAxisAngle({1.0, 0.5, -0.3}, angle_deg * 3.14159265358979323846 / 180.0);
+    pair.T_gt = MakeTransform(R, {0.03, -0.02, 0.01});
+    pair.target = Apply(pair.T_gt, pair.source);
+    return pair;
+}
+
+/// Rotation error in degrees of an estimate against the pair's ground truth.
+inline double RreDeg(const KnownPair& pair, const Transform& T_est) {
+    return RotationAngleDeg(pair.T_gt.topLeftCorner<3, 3>(), T_est.topLeftCorner<3, 3>());
+}
+
+}  // namespace regbench::testing

@@ -1,0 +1,186 @@
+#include "core/gauss_sum.hpp"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+
+#include "core/rng.hpp"
+#include "core/synthetic_shapes.hpp"
+#include "core/transform.hpp"
+
+namespace regbench {
+namespace {
+
+constexpr double kFastExpRelTol = 3e-7;  // the bound documented in gauss_sum.hpp
+constexpr double kSumRelTol = 2e-5;      // float kernels, double accumulation
+constexpr double kThreadTol = 1e-9;      // spec required test 9
+
+/// Brute-force double CPD E-step, P stored in full (the reference).
+struct BruteCpd {
+    Eigen::MatrixXd P;  // M x N
+    Eigen::VectorXd den;
+};
+BruteCpd BruteForceCpd(const PointCloud& Yhat, const PointCloud& X, double sigma2, double c) {
+    BruteCpd b;
+    const Eigen::Index m = Yhat.rows(), n = X.rows();
+    Eigen::MatrixXd K(m, n);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        for (Eigen::Index j = 0; j < n; ++j) {
+            K(i, j) = std::exp(-(Yhat.row(i) - X.row(j)).squaredNorm() / (2.0 * sigma2));
+        }
+    }
+    b.den = K.colwise().sum().transpose();
+    for (Eigen::Index j = 0; j < n; ++j) {
+        if (b.den[j] == 0.0) b.den[j] = CpdEStep::kDenFloor;
+    }
+    b.den.array() += c;
+    b.P = K * b.den.cwiseInverse().asDiagonal();
+    return b;
+}
+
+double MaxRelDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+    return (a - b).cwiseAbs().maxCoeff() / std::max(b.cwiseAbs().maxCoeff(), 1e-300);
+}
+
+TEST(FastExp, MatchesStdExpWithinBound) {
+    double worst = 0.0;
+    for (int i = 0; i <= 2000000; ++i) {
+        const float x = -87.0f * static_cast<float>(i) / 2000000.0f;
+        const double ref = std::exp(static_cast<double>(x));
+        worst = std::max(worst, std::abs(FastExp(x) - ref) / ref);
+    }
+    EXPECT_LT(worst, kFastExpRelTol);
+    EXPECT_EQ(FastExp(-87.5f), 0.0f);
+    EXPECT_EQ(FastExp(-1e30f), 0.0f);
+    EXPECT_FLOAT_EQ(FastExp(0.0f), 1.0f);
+}
+
+TEST(KernelSums, MatchesBruteForceWithWeightsAndMoments) {
+    auto rng = MakePairRng(3, 0);
+    const PointCloud q = UniformBox(rng, 300, {-1, -1, -1}, {1, 1, 1});
+    const PointCloud p = UniformBox(rng, 500, {-1, -1, -1}, {1, 1, 1});
+    const Eigen::Vector3d origin(0.3, -0.2, 0.1);
+    const BlockedCloud bq(q, origin), bp(p, origin);
+    std::vector<float> w(500);
+    for (size_t j = 0; j < w.size(); ++j) w[j] = static_cast<float>(0.5 + 0.001 * j);
+    for (double sigma2 : {1.0, 0.05, 1e-4}) {
+        KernelSumResult out;
+        KernelSums(bq, bp, sigma2, 1e30, w.data(), true, out);
+        Eigen::VectorXd m0(300);
+        PointCloud m1(300, 3);
+        for (Eigen::Index i = 0; i < 300; ++i) {
+            const Eigen::Index qi = bq.order()[static_cast<size_t>(i)];
+            double s0 = 0.0;
+            Eigen::RowVector3d s1 = Eigen::RowVector3d::Zero();
+            for (Eigen::Index j = 0; j < 500; ++j) {
+                const Eigen::Index pj = bp.order()[static_cast<size_t>(j)];
+                const double k = w[static_cast<size_t>(j)] *
+                                 std::exp(-(q.row(qi) - p.row(pj)).squaredNorm() / (2.0 * sigma2));
+                s0 += k;
+                s1 += k * (p.row(pj) - origin.transpose());
+            }
+            m0[i] = s0;
+            m1.row(i) = s1;
+        }
+        EXPECT_LT(MaxRelDiff(out.m0, m0), kSumRelTol) << "sigma2 " << sigma2;
+        EXPECT_LT(MaxRelDiff(out.m1, m1), kSumRelTol) << "sigma2 " << sigma2;
+        if (sigma2 == 1e-4) {
+            EXPECT_LT(out.evaluated_pairs, 300 * 500) << "pruning should skip far leaves";
+        }
+    }
+}
+
+TEST(CpdEStep, MatchesBruteForceAndColumnIdentity) {
+    auto rng = MakePairRng(5, 0);
+    const PointCloud Y = SmoothBlobSurface(rng, 400);
+    PointCloud X = SmoothBlobSurface(rng, 350);
+    X.row(0) << 40.0, 40.0, 40.0;  // far away: its column underflows and takes the den floor
+    const Transform T = MakeTransform(0.9 * RotationFromAxisAngle({1, 2, 3}, 0.4), {0.1, 0, -0.2});
+    const PointCloud Yhat = Apply(T, Y);
+    for (GaussSumMode mode : {GaussSumMode::kDense, GaussSumMode::kAuto}) {
+        GaussSumOptions opt;
+        opt.mode = mode;
+        CpdEStep e_step(Y, X, opt);
+        for (double sigma2 : {0.3, 0.01}) {
+            const double c = 0.05;
+            CpdPosteriors post;
+            e_step.Compute(T, sigma2, c, post);
+            const BruteCpd ref = BruteForceCpd(Yhat, X, sigma2, c);
+            const Eigen::VectorXd p1 = ref.P.rowwise().sum();
+            const Eigen::VectorXd pt1 = ref.P.colwise().sum().transpose();
+            const Eigen::MatrixXd px = ref.P * X;
+            EXPECT_LT(MaxRelDiff(post.p1, p1), kSumRelTol);
+            EXPECT_LT(MaxRelDiff(post.pt1, pt1), kSumRelTol);
+            EXPECT_LT(MaxRelDiff(post.px, px), kSumRelTol);
+            EXPECT_NEAR(post.np, p1.sum(), kSumRelTol * p1.sum());
+            // sum_m P_mn = 1 - c / den_n, den_n including c (spec required test 1).
+            const Eigen::VectorXd identity = (1.0 - c * ref.den.cwiseInverse().array()).matrix();
+            EXPECT_LT((post.pt1 - identity).cwiseAbs().maxCoeff(), kSumRelTol);
+            EXPECT_NEAR(post.pt1[0], CpdEStep::kDenFloor / (CpdEStep::kDenFloor + c), 1e-12);
+            EXPECT_FALSE(post.truncated);
+        }
+    }
+}
+
+TEST(CpdEStep, ThreadCountDoesNotChangeResults) {
+    auto rng = MakePairRng(7, 0);
+    const PointCloud Y = SmoothBlobSurface(rng, 1500);
+    const PointCloud X = SmoothBlobSurface(rng, 1400);
+    const Transform T = MakeTransform(RotationFromAxisAngle({0, 0, 1}, 0.3), {0.05, 0, 0});
+    CpdEStep e_step(Y, X);
+    const int saved = omp_get_max_threads();
+    CpdPosteriors one, two;
+    omp_set_num_threads(1);
+    e_step.Compute(T, 0.02, 0.01, one);
+    omp_set_num_threads(2);
+    e_step.Compute(T, 0.02, 0.01, two);
+    omp_set_num_threads(saved);
+    EXPECT_LT((one.p1 - two.p1).cwiseAbs().maxCoeff(), kThreadTol);
+    EXPECT_LT((one.pt1 - two.pt1).cwiseAbs().maxCoeff(), kThreadTol);
+    EXPECT_LT((one.px - two.px).cwiseAbs().maxCoeff(), kThreadTol);
+}
+
+TEST(CpdEStep, TruncatedAgreesWithDenseOnLargerCloud) {
+    auto rng = MakePairRng(9, 0);
+    const PointCloud Y = SmoothBlobSurface(rng, 6000);
+    const PointCloud X = SmoothBlobSurface(rng, 6000);
+    const Transform T = MakeTransform(RotationFromAxisAngle({0, 1, 0}, 0.05), {0.01, 0, 0});
+    GaussSumOptions dense_opt, trunc_opt;
+    dense_opt.mode = GaussSumMode::kDense;
+    trunc_opt.mode = GaussSumMode::kTruncated;
+    CpdEStep dense(Y, X, dense_opt), trunc(Y, X, trunc_opt);
+    const double sigma2 = 1e-3;  // sigma ~ 0.03: 4 sigma is well inside the shape
+    CpdPosteriors a, b;
+    dense.Compute(T, sigma2, 0.0, a);
+    trunc.Compute(T, sigma2, 0.0, b);
+    EXPECT_TRUE(b.truncated);
+    EXPECT_LT(b.evaluated_pairs, a.evaluated_pairs);
+    // Truncation at 4 sigma drops Gaussian tail mass of order exp(-8) per neighbour.
+    EXPECT_LT(MaxRelDiff(b.p1, a.p1), 5e-3);
+    EXPECT_LT(MaxRelDiff(b.px, a.px), 5e-3);
+    EXPECT_NEAR(b.np, a.np, 1e-3 * a.np);
+}
+
+TEST(CpdEStep, AutoSwitchRule) {
+    auto rng = MakePairRng(11, 0);
+    const PointCloud Y = SmoothBlobSurface(rng, 100);
+    GaussSumOptions opt;
+    opt.truncation_min_points = 50;
+    CpdEStep e_step(Y, Y, opt);
+    // Target bbox diagonal ~ 2.4: r = 4 sigma must be below ~0.6.
+    EXPECT_FALSE(e_step.UsesTruncation(0.1));  // r = 1.26
+    EXPECT_TRUE(e_step.UsesTruncation(0.01));  // r = 0.4
+    opt.truncation_min_points = 101;
+    EXPECT_FALSE(CpdEStep(Y, Y, opt).UsesTruncation(0.01));
+}
+
+TEST(GaussSumMode, ParsesNamesAndRejectsOthers) {
+    EXPECT_EQ(ParseGaussSumMode("dense", "x"), GaussSumMode::kDense);
+    EXPECT_EQ(ParseGaussSumMode("truncated", "x"), GaussSumMode::kTruncated);
+    EXPECT_EQ(ParseGaussSumMode("auto", "x"), GaussSumMode::kAuto);
+    EXPECT_THROW(ParseGaussSumMode("fgt", "cpd: parameter 'e_step'"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace regbench

@@ -1,0 +1,105 @@
+#include "protocols/xyz_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "protocols/pair_protocols.hpp"
+#include "tests/protocols/test_shapes.hpp"
+
+namespace regbench {
+namespace {
+
+void WriteText(const std::string& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+
+std::string ErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(XyzIo, ExportThenImportRoundTripsExactly) {
+    const std::string dir = test::FreshTempDir("xyz_round_trip");
+    const PairSet set =
+        GeneratePairs(test::TestShapes(), DefaultProtocolOptions(Protocol::kJitter), 3, 3);
+    ExportXyz(set, dir);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/0002_gt.txt"));
+    const PairSet back = ImportXyzDir(dir, 0.1);
+    ASSERT_EQ(back.pairs.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(back.pairs[k].source, set.pairs[k].source);
+        EXPECT_EQ(back.pairs[k].target, set.pairs[k].target);
+        EXPECT_EQ(back.pairs[k].T_gt, set.pairs[k].T_gt);
+        // Same radius -> same labels as the generator computed.
+        EXPECT_EQ(back.pairs[k].source_overlap, set.pairs[k].source_overlap);
+        EXPECT_EQ(back.pairs[k].target_overlap, set.pairs[k].target_overlap);
+        EXPECT_EQ(back.pairs[k].shape, PairStem(k));
+    }
+    EXPECT_EQ(back.provenance.at("params").at("eta").get<double>(), 0.1);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(XyzIo, PlyExportHasHeaderAndAllPoints) {
+    const std::string dir = test::FreshTempDir("ply_export");
+    const PairSet set = GeneratePairs(test::TestShapes(), ProtocolOptions{}, 3, 1);
+    ExportPly(set, dir);
+    std::ifstream in(dir + "/0000_src.ply");
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line, "ply");
+    int rows = 0;
+    bool header = true;
+    while (std::getline(in, line)) {
+        if (!header) ++rows;
+        if (line == "end_header") header = false;
+    }
+    EXPECT_EQ(rows, 717);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(XyzIo, MalformedFilesAreRejectedWithFileAndLine) {
+    const std::string dir = test::FreshTempDir("xyz_bad");
+    WriteText(dir + "/0000_src.xyz", "0 0 0\n1 0 0\n0 1 zero\n");
+    WriteText(dir + "/0000_tgt.xyz", "0 0 0\n1 0 0\n0 1 0\n");
+    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_src.xyz:3: not a number"),
+              std::string::npos)
+        << ErrorOf([&] { ImportXyzDir(dir, 0.1); });
+
+    WriteText(dir + "/0000_src.xyz", "0 0 0\n1 0 0 5\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_src.xyz:2: expected 3 numbers"),
+              std::string::npos);
+
+    WriteText(dir + "/0000_src.xyz", "# comment\n\n0 0 0\n1 0 0\n0 1 0\n");
+    EXPECT_NO_THROW(ImportXyzDir(dir, 0.1));
+
+    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_gt.txt:3: expected 4 rows"),
+              std::string::npos);
+    WriteText(dir + "/0000_gt.txt", "2 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("not a rotation"), std::string::npos);
+    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_gt.txt:4: last row"),
+              std::string::npos);
+
+    // A pair number with a missing partner file, and a gap in the numbering.
+    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    WriteText(dir + "/0001_src.xyz", "0 0 0\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0001_tgt.xyz: no such file"),
+              std::string::npos);
+    std::filesystem::remove(dir + "/0001_src.xyz");
+    WriteText(dir + "/0002_src.xyz", "0 0 0\n");
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0001_src.xyz: missing"),
+              std::string::npos);
+    std::filesystem::remove_all(dir);
+    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("not a directory"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace regbench
