@@ -1,5 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages regbench needs. Idempotent: installs only what is missing.
+# --reference also installs what scripts/probreg_reference.py needs to run probreg (Python
+# modules for /usr/bin/python3 and pybind11 to build probreg's extensions; see
+# docs/probreg-equivalence.md). The C++ build and tests do not need them.
 set -euo pipefail
 
 PACKAGES=(
@@ -9,6 +12,12 @@ PACKAGES=(
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
 )
+if [ "${1:-}" = "--reference" ]; then
+  PACKAGES+=(
+    python3-dev python3-numpy python3-scipy python3-sklearn python3-h5py python3-open3d
+    python3-transforms3d python3-six python3-matplotlib python3-pybind11 pybind11-dev
+  )
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
