@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+
+#include <Eigen/LU>
 #include <limits>
 
 #include "core/kd_tree.hpp"
@@ -12,7 +14,11 @@ namespace regbench {
 PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est) {
     PairMetrics m;
     const Eigen::Matrix3d R_gt = T_gt.topLeftCorner<3, 3>();
-    const Eigen::Matrix3d R_est = T_est.topLeftCorner<3, 3>();
+    // A similarity estimate (e.g. CPD with update_scale) carries s*R: divide the scale out so the
+    // rotation metrics measure the rotation only (scale is reported separately in the row).
+    Eigen::Matrix3d R_est = T_est.topLeftCorner<3, 3>();
+    const double det = R_est.determinant();
+    if (det > 0.0) R_est /= std::cbrt(det);
     const Eigen::Vector3d dr =
         (EulerZyxDegFromRotation(R_gt) - EulerZyxDegFromRotation(R_est)).cwiseAbs();
     const Eigen::Vector3d dt = (T_gt.topRightCorner<3, 1>() - T_est.topRightCorner<3, 1>());

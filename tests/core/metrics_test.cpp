@@ -69,3 +69,19 @@ TEST(Metrics, PerfectEstimateGivesZeroErrors) {
 
 }  // namespace
 }  // namespace regbench
+
+namespace regbench {
+namespace {
+
+TEST(Metrics, ScaleIsDividedOutOfRotationErrors) {
+    // A similarity estimate 1.3 * R_gt has the right rotation: rotation errors are zero.
+    const Eigen::Matrix3d R = RotationFromEulerZyxDeg(20, 10, 5);
+    const Transform T_gt = MakeTransform(R, {0.1, 0.2, 0.3});
+    const Transform T_est = MakeTransform(1.3 * R, {0.1, 0.2, 0.3});
+    const PairMetrics m = MotionMetrics(T_gt, T_est);
+    EXPECT_NEAR(m.mae_r, 0.0, 1e-9);
+    EXPECT_NEAR(m.rre, 0.0, 1e-5);
+}
+
+}  // namespace
+}  // namespace regbench
