@@ -489,7 +489,9 @@ FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
     Require(Uses(o.compat, {"probreg", "none"}), kName, "compat",
             "must be \"probreg\" or \"none\", got \"" + o.compat + "\"");
     Require(o.normals_k >= 3, kName, "normals_k", "must be >= 3");
-    if (o.compat == "none" && !j.contains("update_sigma2")) o.update_sigma2 = true;
+    if (o.compat == "probreg" && !(j.is_object() && j.contains("update_sigma2"))) {
+        o.update_sigma2 = false;
+    }
     return o;
 }
 
@@ -503,8 +505,8 @@ MethodInfo FilterRegMethodInfo() {
         {"sigma2",
          "initial kernel variance [length^2]; 0 or null = max(sqsum(Y,X), min_sigma2) (probreg)"},
         {"update_sigma2",
-         "re-estimate sigma2 in every M-step; probreg default false (sigma never changes); "
-         "defaults to true when compat = \"none\" and not given"},
+         "re-estimate sigma2 in every M-step; default true; false under compat = \"probreg\" "
+         "unless given (probreg keeps sigma fixed)"},
         {"w", "weight of the uniform outlier component, in [0, 1); probreg default 0"},
         {"maxiter", "maximum EM iterations (>= 1); probreg default 50"},
         {"tol", "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3"},
@@ -517,8 +519,9 @@ MethodInfo FilterRegMethodInfo() {
          "\"lattice\": permutohedral lattice, blurred only while <= 0.015 N vertices (probreg); "
          "\"exact\": Gaussian sums within 3 sigma (kd-tree), not probreg-equivalent"},
         {"compat",
-         "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by w_i; "
-         "\"none\": consistent w_i^2 weights and update_sigma2 on by default"},
+         "\"none\" (default): consistent w_i^2 weights and update_sigma2 on unless given; "
+         "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by w_i, "
+         "sigma fixed"},
         {"normals_k", "pt2pl only: neighbours for the target's PCA normals (>= 3); 30"},
     };
     info.defaults = FilterRegOptions{};

@@ -15,18 +15,18 @@
 namespace regbench {
 
 /// Options of `filterreg`. Defaults are probreg's `registration_filterreg` defaults, except
-/// that compat "none" switches update_sigma2 on unless it is given (see FilterRegMethodInfo).
+/// that compat "probreg" switches update_sigma2 off unless it is given (see FilterRegMethodInfo).
 struct FilterRegOptions {
     double sigma2 = 0.0;  ///< initial variance [length^2]; 0 = auto: max(sqsum(Y,X), min_sigma2)
-    bool update_sigma2 = false;  ///< re-estimate sigma2 each M-step (probreg: false, sigma fixed)
+    bool update_sigma2 = true;  ///< re-estimate sigma2 each M-step (probreg: false, sigma fixed)
     double w = 0.0;              ///< outlier weight of the uniform component, in [0, 1)
     int maxiter = 50;            ///< maximum EM iterations, >= 1
     double tol = 1e-3;           ///< stop when |q - q_prev| < tol (absolute), from iteration 2
     double min_sigma2 = 1e-4;    ///< floor on sigma2 [length^2], > 0
     std::string objective = "pt2pt";    ///< "pt2pt" (Kabsch) or "pt2pl" (twist, target normals)
     std::string estimator = "lattice";  ///< "lattice" (probreg) or "exact" (3-sigma Gaussian sums)
-    std::string compat = "probreg";     ///< "probreg" (w / w^2 Kabsch) or "none" (consistent)
-    int normals_k = 30;  ///< pt2pl only: neighbours for the target's PCA normals, >= 3
+    std::string compat = "none";  ///< "none" (consistent, default) or "probreg" (w / w^2 Kabsch)
+    int normals_k = 30;           ///< pt2pl only: neighbours for the target's PCA normals, >= 3
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FilterRegOptions,
                                                 sigma2,

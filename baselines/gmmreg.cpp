@@ -22,18 +22,19 @@ constexpr char kName[] = "gmmreg";
 constexpr double kComponentFraction = 0.8;
 
 struct GmmRegOptions {
-    std::string compat = "probreg";  ///< "probreg" | "correct" (sets the defaults below)
-    std::string gmm = "sklearn";     ///< features: "sklearn" GMM fit | "points" (mu = points)
-    int n_gmm_components = 800;      ///< K = min(this, floor(0.8 M)), M = source size
-    std::string gradient = "probreg_half";  ///< "probreg_half" (1/2 of true) | "exact"
-    bool normalize = false;                 ///< optimise in a centred frame scaled by sigma
+    std::string compat =
+        "none";  ///< "none" (correct algorithm, default) | "probreg" (sets the defaults below)
+    std::string gmm = "points";  ///< features: "sklearn" GMM fit (probreg) | "points" (mu = points)
+    int n_gmm_components = 800;   ///< K = min(this, floor(0.8 M)), M = source size
+    std::string gradient = "exact";  ///< "probreg_half" (1/2 of true, probreg) | "exact"
+    bool normalize = true;           ///< optimise in a centred frame scaled by sigma
     double sigma = 1.0;                     ///< bandwidth, used when use_estimated_sigma is false
     bool use_estimated_sigma = true;        ///< sigma = det(cov(source))^(1/6)
     double delta = 0.9;                     ///< sigma *= delta between outer iterations, in (0, 1]
     int outer_iterations = 1;  ///< kernel-scale schedule steps (probreg: 1, no schedule)
     double outer_tol = 1e-3;   ///< stop the schedule when |f - f_prev| < outer_tol
-    int maxiter = 50;          ///< BFGS iterations per outer iteration
-    double gtol = 1e-3;        ///< BFGS |grad|_inf tolerance
+    int maxiter = 200;         ///< BFGS iterations per outer iteration (probreg: 50)
+    double gtol = 1e-6;        ///< BFGS |grad|_inf tolerance (probreg: 1e-3)
     int gmm_max_iter = 100;    ///< EM iterations (sklearn max_iter)
     double gmm_tol = 1e-3;     ///< EM lower-bound tolerance (sklearn tol)
     int seed = 0;              ///< k-means++ seed of the GMM fits
@@ -55,19 +56,19 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GmmRegOptions,
                                                 gmm_tol,
                                                 seed)
 
-/// compat "correct": Jian & Vemuri's point features, the true gradient, a unit-free frame
-/// and a tight gtol. Keys the caller gave explicitly win.
+/// Defaults (compat "none"): Jian & Vemuri's point features, the true gradient, a unit-free frame
+/// and a tight gtol. compat "probreg" switches to probreg's values; explicit keys win.
 GmmRegOptions ResolveOptions(const nlohmann::json& j) {
     GmmRegOptions o = ParseOptions<GmmRegOptions>(j, kName);
-    Require(o.compat == "probreg" || o.compat == "correct", kName, "compat",
-            "must be \"probreg\" or \"correct\", got \"" + o.compat + "\"");
-    if (o.compat == "correct") {
+    Require(o.compat == "probreg" || o.compat == "none", kName, "compat",
+            "must be \"none\" or \"probreg\", got \"" + o.compat + "\"");
+    if (o.compat == "probreg") {
         auto unset = [&](const char* key) { return !j.is_object() || !j.contains(key); };
-        if (unset("gmm")) o.gmm = "points";
-        if (unset("gradient")) o.gradient = "exact";
-        if (unset("normalize")) o.normalize = true;
-        if (unset("gtol")) o.gtol = 1e-6;
-        if (unset("maxiter")) o.maxiter = 200;
+        if (unset("gmm")) o.gmm = "sklearn";
+        if (unset("gradient")) o.gradient = "probreg_half";
+        if (unset("normalize")) o.normalize = false;
+        if (unset("gtol")) o.gtol = 1e-3;
+        if (unset("maxiter")) o.maxiter = 50;
     }
     Require(o.gmm == "sklearn" || o.gmm == "points", kName, "gmm",
             "must be \"sklearn\" or \"points\", got \"" + o.gmm + "\"");
@@ -181,8 +182,9 @@ MethodInfo GmmRegMethodInfo() {
         "cost, scipy-like BFGS (More-Thuente); dense exact Gauss sums instead of IFGT";
     info.param_docs = {
         {"compat",
-         "\"probreg\" (default: probreg v0.3.7 behaviour) or \"correct\" (defaults become "
-         "gmm=points, gradient=exact, normalize=true, gtol=1e-6, maxiter=200; explicit keys win)"},
+         "\"none\" (default, the correct algorithm: defaults become "
+         "gmm=points, gradient=exact, normalize=true, gtol=1e-6, maxiter=200) or \"probreg\" "
+         "(probreg v0.3.7 behaviour); explicit keys win"},
         {"gmm",
          "features: \"sklearn\" = GaussianMixture(K, spherical) means/weights (probreg), "
          "\"points\" = every point with weight 1/N (Jian & Vemuri, faster)"},

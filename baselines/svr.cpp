@@ -26,10 +26,11 @@ constexpr double kLibsvmCacheMb = 200.0;  // sklearn's OneClassSVM cache_size
 void QuietLibsvm(const char*) {}
 
 struct SvrOptions {
-    std::string compat = "probreg";         ///< "probreg" | "correct" (sets the defaults below)
-    double nu = 0.1;                        ///< one-class nu in (0, 1]
-    std::string gradient = "probreg_half";  ///< "probreg_half" | "exact"
-    bool normalize = false;                 ///< optimise in a centred frame scaled by sigma
+    std::string compat =
+        "none";       ///< "none" (correct algorithm, default) | "probreg" (sets the defaults below)
+    double nu = 0.1;  ///< one-class nu in (0, 1]
+    std::string gradient = "exact";  ///< "probreg_half" (probreg) | "exact"
+    bool normalize = true;           ///< optimise in a centred frame scaled by sigma
     double sigma = 1.0;                     ///< bandwidth when use_estimated_sigma is false
     double gamma = 0.5;                     ///< RBF gamma when use_estimated_sigma is false
     bool use_estimated_sigma = true;        ///< sigma = sigma_est(source), gamma = 1 / (2 sigma^2)
@@ -37,8 +38,8 @@ struct SvrOptions {
     double gamma_delta = 10.0;  ///< probreg: SVM gamma *= gamma_delta per outer iteration
     int outer_iterations = 1;   ///< probreg's maxiter
     double outer_tol = 1e-3;    ///< probreg's tol on |f - f_prev|
-    int maxiter = 50;           ///< probreg's opt_maxiter (BFGS)
-    double gtol = 1e-3;         ///< probreg's opt_tol (BFGS |grad|_inf)
+    int maxiter = 200;          ///< BFGS iterations (probreg's opt_maxiter: 50)
+    double gtol = 1e-6;         ///< BFGS |grad|_inf tolerance (probreg's opt_tol: 1e-3)
     double svm_tol = 1e-3;      ///< libsvm eps (sklearn tol)
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SvrOptions,
@@ -59,14 +60,14 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SvrOptions,
 
 SvrOptions ResolveOptions(const nlohmann::json& j) {
     SvrOptions o = ParseOptions<SvrOptions>(j, kName);
-    Require(o.compat == "probreg" || o.compat == "correct", kName, "compat",
-            "must be \"probreg\" or \"correct\", got \"" + o.compat + "\"");
-    if (o.compat == "correct") {
+    Require(o.compat == "probreg" || o.compat == "none", kName, "compat",
+            "must be \"none\" or \"probreg\", got \"" + o.compat + "\"");
+    if (o.compat == "probreg") {
         auto unset = [&](const char* key) { return !j.is_object() || !j.contains(key); };
-        if (unset("gradient")) o.gradient = "exact";
-        if (unset("normalize")) o.normalize = true;
-        if (unset("gtol")) o.gtol = 1e-6;
-        if (unset("maxiter")) o.maxiter = 200;
+        if (unset("gradient")) o.gradient = "probreg_half";
+        if (unset("normalize")) o.normalize = false;
+        if (unset("gtol")) o.gtol = 1e-3;
+        if (unset("maxiter")) o.maxiter = 50;
     }
     Require(o.nu > 0.0 && o.nu <= 1.0, kName, "nu", "must be in (0, 1]");
     Require(o.gradient == "probreg_half" || o.gradient == "exact", kName, "gradient",
@@ -140,7 +141,7 @@ protected:
         Eigen::Index sv_source = 0, sv_target = 0;
         for (outer = 1; outer <= o.outer_iterations; ++outer) {
             // probreg refits both SVMs each outer step with gamma *= 10 while phi keeps the
-            // first sigma and the cost uses sigma * 0.9^k (inconsistent). "correct" keeps
+            // first sigma and the cost uses sigma * 0.9^k (inconsistent). "none" keeps
             // gamma = 1 / 2 sigma^2 and phi consistent with the annealed sigma.
             const double fs_sigma = probreg ? phi_sigma : sigma;
             const MixtureFeatures fs = SvmFeatures(Y, o.nu, gamma, fs_sigma, o.svm_tol);
@@ -231,9 +232,9 @@ MethodInfo SvrMethodInfo() {
         "cloud (support vectors = GMM means), L2 cost, scipy-like BFGS; dense exact Gauss sums";
     info.param_docs = {
         {"compat",
-         "\"probreg\" (default: probreg v0.3.7, incl. its gamma*=10 annealing) or \"correct\" "
-         "(gradient=exact, normalize=true, gtol=1e-6, maxiter=200, consistent sigma schedule; "
-         "explicit keys win)"},
+         "\"none\" (default, correct: gradient=exact, normalize=true, gtol=1e-6, maxiter=200, "
+         "consistent sigma schedule) or \"probreg\" (probreg v0.3.7, incl. its gamma*=10 "
+         "annealing); explicit keys win"},
         {"nu", "one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)"},
         {"gradient", "\"probreg_half\" = probreg's gradient (1/2 of the true one), \"exact\""},
         {"normalize", "optimise with both clouds centred and divided by sigma; probreg: false"},

@@ -116,10 +116,10 @@ TEST(FilterRegEStep, UnblurredLatticeLeavesFarPointsWithoutMass) {
 // ---- Registration ---------------------------------------------------------------------------
 
 // Spec test 5: target = R(30 deg about z) Y + (0.1, -0.05, 0.2).
-TEST(FilterReg, SpecMotionWithinEulerToleranceWithDefaults) {
+TEST(FilterReg, SpecMotionWithinEulerToleranceWithProbregDefaults) {
     const PointCloud Y = testing::EllipsoidSurface(717, 7);
     const PointCloud X = Apply(SpecMotion(), Y);
-    const AlignResult r = RunFilterReg("{}", Y, X);
+    const AlignResult r = RunFilterReg(R"({"compat": "probreg"})", Y, X);
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(MaxEulerErrorRad(SpecMotion(), r.T_target_source), kEulerTolRad);
     EXPECT_EQ(r.extra["blurred_iterations"], 0);  // sigma2 = sqsum: blur is never kept
@@ -175,7 +175,8 @@ TEST(FilterReg, CleanCompletePairWithCorrectDefaults) {
             EXPECT_LT(m.rre, kCleanRreTolDeg) << params << " seed " << seed;
             EXPECT_LT(m.rte, kCleanRteTol) << params << " seed " << seed;
         }
-        const PairMetrics probreg = MotionMetrics(T, RunFilterReg("{}", Y, X).T_target_source);
+        const PairMetrics probreg =
+            MotionMetrics(T, RunFilterReg(R"({"compat": "probreg"})", Y, X).T_target_source);
         EXPECT_GT(probreg.rre, kCleanRreTolDeg) << "seed " << seed;  // the documented bias
     }
 }
@@ -194,7 +195,7 @@ TEST(FilterReg, IdenticalCloudsGiveIdentity) {
     // probreg's fixed sigma (sqsum): the identity is not its fixed point, because the
     // unblurred lattice's mean m1/m0 is an anisotropic tent average of the target; it stays
     // within a few degrees.
-    const AlignResult r = RunFilterReg("{}", Y, Y);
+    const AlignResult r = RunFilterReg(R"({"compat": "probreg"})", Y, Y);
     const PairMetrics m = MotionMetrics(Transform::Identity(), r.T_target_source);
     EXPECT_LT(m.rre, 3.0);
     EXPECT_LT(m.rte, 0.03);
@@ -203,12 +204,12 @@ TEST(FilterReg, IdenticalCloudsGiveIdentity) {
 TEST(FilterReg, ReportsIterationsStopReasonObjectiveAndSigma2) {
     const PointCloud Y = testing::EllipsoidSurface(300, 4);
     const PointCloud X = Apply(SpecMotion(), Y);
-    const AlignResult capped = RunFilterReg(R"({"maxiter": 2, "tol": 0})", Y, X);
+    const AlignResult capped = RunFilterReg(R"({"maxiter": 2, "tol": 0, "compat": "probreg"})", Y, X);
     EXPECT_EQ(capped.iterations, 2);
     EXPECT_EQ(capped.stop_reason, "max_iterations");
     EXPECT_TRUE(std::isfinite(capped.extra["objective"].get<double>()));
     EXPECT_EQ(capped.extra["sigma2"].get<double>(), SquaredDistanceMean(Y, X));
-    const AlignResult given = RunFilterReg(R"({"sigma2": 0.05, "maxiter": 3})", Y, X);
+    const AlignResult given = RunFilterReg(R"({"sigma2": 0.05, "maxiter": 3, "compat": "probreg"})", Y, X);
     EXPECT_EQ(given.extra["sigma2"].get<double>(), 0.05);
     const AlignResult floored = RunFilterReg(R"({"sigma2": 1e-6, "maxiter": 1})", Y, Y);
     ASSERT_EQ(floored.iterations, 1);
@@ -291,10 +292,12 @@ TEST(FilterRegOptions, RejectsBadParametersNamingThem) {
     }
 }
 
-TEST(FilterRegOptions, DefaultsAndCompatNoneSwitchesUpdateSigma2On) {
-    const FilterRegOptions probreg = ParseFilterRegOptions(nlohmann::json::object());
+TEST(FilterRegOptions, DefaultsAndCompatProbregSwitchesUpdateSigma2Off) {
+    const FilterRegOptions defaults = ParseFilterRegOptions(nlohmann::json::object());
+    EXPECT_TRUE(defaults.update_sigma2);
+    EXPECT_EQ(defaults.compat, "none");
+    const FilterRegOptions probreg = ParseFilterRegOptions({{"compat", "probreg"}});
     EXPECT_FALSE(probreg.update_sigma2);
-    EXPECT_EQ(probreg.compat, "probreg");
     EXPECT_EQ(probreg.maxiter, 50);
     EXPECT_EQ(probreg.tol, 1e-3);
     EXPECT_EQ(probreg.min_sigma2, 1e-4);
