@@ -21,7 +21,7 @@ constexpr const char* kName = "gicp";
 struct GicpOptions {
     /// As `icp` (OGMM: 2 * overlap_radius) so the ICP family differs only in the cost;
     /// PCL's default 5 would be unbounded at unit-sphere scale.
-    double max_correspondence_distance = 0.07;
+    double max_correspondence_distance = 1.0;
     int max_iterations = 200;              ///< outer ICP iterations (PCL default)
     double transformation_epsilon = 5e-4;  ///< stop: translation entries change < this (PCL)
     double rotation_epsilon = 2e-3;        ///< ... and rotation entries change < this (PCL)
@@ -127,8 +127,8 @@ MethodInfo GicpMethodInfo() {
         "Generalized-ICP from the identity (PCL GeneralizedIterativeClosestPoint, float32)";
     info.param_docs = {
         {"max_correspondence_distance",
-         "pairs farther apart are ignored [unit-sphere units], > 0; 0.07 as `icp` (PCL's 5 "
-         "is unbounded at unit scale)"},
+         "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp` (covers the "
+         "protocols' motions from the identity)"},
         {"max_iterations", "outer iteration cap, >= 1; 200 = PCL default"},
         {"transformation_epsilon",
          "stop when every translation entry changes less than this, > 0; 5e-4 = PCL default "

@@ -13,10 +13,10 @@ namespace {
 constexpr const char* kName = "icp-pl";
 
 struct IcpPlOptions {
-    double max_correspondence_distance = 0.07;  ///< as `icp`: 2 * overlap_radius (OGMM code)
-    int max_iterations = 30;                    ///< Open3D ICPConvergenceCriteria default
-    double relative_fitness = 1e-6;             ///< Open3D default
-    double relative_rmse = 1e-6;                ///< Open3D default
+    double max_correspondence_distance = 1.0;  ///< as `icp`
+    int max_iterations = 30;                   ///< Open3D ICPConvergenceCriteria default
+    double relative_fitness = 1e-6;            ///< Open3D default
+    double relative_rmse = 1e-6;               ///< Open3D default
     /// Normal neighbourhood radius: 2 * voxel with voxel 0.05 (Open3D tutorial recipe, the
     /// same as `fgr`), i.e. about twice the sample spacing of a unit-sphere object.
     double normal_radius = 0.1;
@@ -74,8 +74,8 @@ MethodInfo IcpPlMethodInfo() {
         "Open3D EstimateNormals (hybrid radius/kNN)";
     info.param_docs = {
         {"max_correspondence_distance",
-         "pairs farther apart are ignored [unit-sphere units], > 0; 0.07 as `icp` (OGMM: 2 * "
-         "overlap_radius) so the two ICPs differ only in the cost"},
+         "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp`, so the two "
+         "ICPs differ only in the cost"},
         {"max_iterations", "iteration cap, >= 1; 30 = Open3D default, as `icp`"},
         {"relative_fitness", "stop threshold on the fitness change, >= 0; 1e-6 = Open3D default"},
         {"relative_rmse", "stop threshold on the inlier-RMSE change, >= 0; 1e-6 = Open3D default"},

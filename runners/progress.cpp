@@ -22,7 +22,8 @@ void ProgressMeter::Advance(std::size_t n) {
     constexpr double kTtyRedrawSeconds = 0.2;
     constexpr double kLogRedrawSeconds = 5.0;
     const double every = isatty(fileno(stderr)) != 0 ? kTtyRedrawSeconds : kLogRedrawSeconds;
-    if (done_ >= total_ || std::chrono::duration<double>(now - last_draw_).count() >= every) {
+    // The final line is Finish()'s.
+    if (done_ < total_ && std::chrono::duration<double>(now - last_draw_).count() >= every) {
         last_draw_ = now;
         Draw(false);
     }

@@ -281,7 +281,9 @@ RunSummary RunBenchmark(const RunOptions& options) {
         {"pairs_file", std::filesystem::path(options.pairs_path).filename().string()},
         {"dataset", set.provenance.value("dataset", "unknown")},
         {"protocol", set.provenance.value("protocol", "unknown")},
-        {"pairing", set.provenance.value("pairing", "unknown")},
+        {"pairing", set.provenance.value(
+                        "pairing", set.provenance.value("params", nlohmann::json::object())
+                                       .value("pairing", "unknown"))},
         {"seed", set.provenance.value("seed", nlohmann::json())}};
     std::vector<std::size_t> indices;
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
