@@ -43,10 +43,12 @@ void AddReportCommand(CLI::App& app) {
             if (!paper->empty()) {
                 const auto colon = paper->find(':');
                 const std::string table = paper->substr(0, colon);
-                const std::string group = colon == std::string::npos ? "" : paper->substr(colon + 1);
+                const std::string group =
+                    colon == std::string::npos ? "" : paper->substr(colon + 1);
                 text += "\n" + FormatPaperComparison(summaries, LoadPaperTables(*paper_file), table,
                                                      group);
-                text += "\nOurs: " + DescribeData(rows) + ". Paper: ModelNet40 / 7Scenes / ICL-NUIM "
+                text += "\nOurs: " + DescribeData(rows) +
+                        ". Paper: ModelNet40 / 7Scenes / ICL-NUIM "
                         "as published (their machine, their pairs).\n";
             }
         } else if (*format == "csv") {
@@ -55,7 +57,8 @@ void AddReportCommand(CLI::App& app) {
             text = "% Data: " + DescribeData(rows) + "\n" + FormatLatex(summaries, *o);
         } else {
             text = nlohmann::json{{"data", DescribeData(rows)}, {"methods", ToJson(summaries, *o)}}
-                       .dump(2) + "\n";
+                       .dump(2) +
+                   "\n";
         }
         if (out->empty()) {
             std::cout << text;

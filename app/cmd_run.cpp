@@ -21,14 +21,19 @@ void AddRunCommand(CLI::App& app) {
         ->required();
     cmd->add_option("--params", *params,
                     "JSON object of parameters per method, e.g. '{\"cpd\": {\"w\": 0.1}}'");
-    cmd->add_option("--out", opts->out_path, "Output JSONL (written as OUT.part, renamed at the end)")
+    cmd->add_option("--out", opts->out_path,
+                    "Output JSONL (written as OUT.part, renamed at the end)")
         ->required();
-    cmd->add_option("--jobs,-j", opts->jobs, "Pairs processed in parallel")->check(CLI::PositiveNumber);
-    cmd->add_option("--threads", opts->threads_per_call,
-                    "OpenMP threads inside one method call (timings are single-threaded by default)")
+    cmd->add_option("--jobs,-j", opts->jobs, "Pairs processed in parallel")
         ->check(CLI::PositiveNumber);
-    cmd->add_flag("--resume", opts->resume, "Keep rows of an interrupted run (OUT.part) and skip them");
-    cmd->add_option("--shard", *shard, "Process pairs k with k % n == i, given as i/n (Slurm arrays)");
+    cmd->add_option(
+           "--threads", opts->threads_per_call,
+           "OpenMP threads inside one method call (timings are single-threaded by default)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_flag("--resume", opts->resume,
+                  "Keep rows of an interrupted run (OUT.part) and skip them");
+    cmd->add_option("--shard", *shard,
+                    "Process pairs k with k % n == i, given as i/n (Slurm arrays)");
     cmd->add_option("--timeout", opts->timeout_seconds,
                     "Seconds per call; > 0 runs each call in a child process (isolates crashes)");
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");

@@ -1,11 +1,10 @@
 // regbench_bench main: records the machine context with every run.
+#include <benchmark/benchmark.h>
 #include <omp.h>
 
 #include <fstream>
 #include <string>
 #include <thread>
-
-#include <benchmark/benchmark.h>
 
 namespace {
 std::string CpuModel() {

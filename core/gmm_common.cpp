@@ -1,8 +1,7 @@
 #include "core/gmm_common.hpp"
 
-#include <cmath>
-
 #include <Eigen/LU>  // determinant()
+#include <cmath>
 
 namespace regbench {
 

@@ -1,9 +1,8 @@
 #pragma once
 // Pieces shared by the GMM-family methods (CPD, GMMReg, SVR, FilterReg, DeepGMR, OGMM).
 // Notation as ../shared/specs/probabilistic-baselines.md: source Y (M x D), target X (N x D).
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/point_cloud.hpp"
 
@@ -18,8 +17,8 @@ double EstimateSigmaFromCovariance(const PointCloud& Y);
 /// Iteration bookkeeping every iterative method reports in its result row.
 struct Convergence {
     int iterations = 0;
-    double objective = 0.0;     ///< final objective value (method-defined)
-    std::string stop_reason;    ///< "converged", "max_iterations", "line_search_failed", ...
+    double objective = 0.0;   ///< final objective value (method-defined)
+    std::string stop_reason;  ///< "converged", "max_iterations", "line_search_failed", ...
     nlohmann::json ToJson() const {
         return {{"iterations", iterations}, {"objective", objective}, {"stop_reason", stop_reason}};
     }

@@ -1,7 +1,6 @@
 #include "core/kd_tree.hpp"
 
 #include <limits>
-
 #include <nanoflann.hpp>
 
 namespace regbench {
@@ -57,8 +56,8 @@ void KdTree::Knn(const Eigen::Vector3d& query,
                  std::vector<double>& sq_distances) const {
     indices.clear();
     sq_distances.clear();
-    const size_t kk = std::min(static_cast<size_t>(std::max(k, 0)),
-                               static_cast<size_t>(points_.rows()));
+    const size_t kk =
+        std::min(static_cast<size_t>(std::max(k, 0)), static_cast<size_t>(points_.rows()));
     if (kk == 0) return;
     std::vector<size_t> idx(kk);
     sq_distances.resize(kk);

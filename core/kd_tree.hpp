@@ -1,11 +1,10 @@
 #pragma once
 // 3-D kd-tree over a PointCloud (nanoflann). The tree references the cloud: the cloud must
 // outlive the tree and must not be modified while it exists.
+#include <Eigen/Core>
 #include <memory>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "core/point_cloud.hpp"
 

@@ -1,9 +1,8 @@
 #include "core/metrics.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/LU>
 #include <limits>
 
 #include "core/kd_tree.hpp"

@@ -10,13 +10,13 @@ namespace regbench {
 constexpr double kCcdClip = 0.1;
 
 struct PairMetrics {
-    double mae_r = 0.0;  ///< mean |e_zyx(R_gt) - e_zyx(R_est)| over 3 angles [deg], no wrapping
-    double mae_t = 0.0;  ///< mean |t_gt - t_est| over 3 axes
-    double mse_r = 0.0;  ///< mean squared angle error [deg^2] (rmse_r = sqrt(mean over pairs))
-    double mse_t = 0.0;  ///< mean squared axis error (rmse_t = sqrt(mean over pairs))
-    double rre = 0.0;    ///< relative rotation error [deg]
-    double rte = 0.0;    ///< |t_gt - t_est|
-    double ccd = 0.0;    ///< clipped Chamfer distance of T_est(source) vs target, clip 0.1
+    double mae_r = 0.0;    ///< mean |e_zyx(R_gt) - e_zyx(R_est)| over 3 angles [deg], no wrapping
+    double mae_t = 0.0;    ///< mean |t_gt - t_est| over 3 axes
+    double mse_r = 0.0;    ///< mean squared angle error [deg^2] (rmse_r = sqrt(mean over pairs))
+    double mse_t = 0.0;    ///< mean squared axis error (rmse_t = sqrt(mean over pairs))
+    double rre = 0.0;      ///< relative rotation error [deg]
+    double rte = 0.0;      ///< |t_gt - t_est|
+    double ccd = 0.0;      ///< clipped Chamfer distance of T_est(source) vs target, clip 0.1
     double chamfer = 0.0;  ///< same, unclipped, squared distances
     /// Paper-text variant: the pair counts for CCD only when its unclipped one-sided mean
     /// distances are both below the clip; false means "discard this pair" under that variant.
@@ -33,8 +33,8 @@ PairMetrics ComputeMetrics(const Transform& T_gt,
                            const PointCloud& target);
 
 struct ChamferResult {
-    double ccd = 0.0;      ///< mean_a min(d, clip) + mean_b min(d, clip)
-    double chamfer = 0.0;  ///< mean_a d^2 + mean_b d^2, unclipped
+    double ccd = 0.0;         ///< mean_a min(d, clip) + mean_b min(d, clip)
+    double chamfer = 0.0;     ///< mean_a d^2 + mean_b d^2, unclipped
     bool within_clip = true;  ///< both unclipped one-sided mean distances below clip
 };
 

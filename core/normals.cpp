@@ -1,9 +1,8 @@
 #include "core/normals.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <stdexcept>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 #include "core/kd_tree.hpp"
 

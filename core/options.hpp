@@ -1,10 +1,9 @@
 #pragma once
 // JSON binding for method options: defaults from the struct, unknown keys rejected by name.
+#include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 namespace regbench {
 
@@ -45,7 +44,9 @@ Options ParseOptions(const nlohmann::json& j, const std::string& method) {
 }
 
 /// Throws std::invalid_argument("<method>: parameter '<name>' ...") unless `ok`.
-inline void Require(bool ok, const std::string& method, const std::string& name,
+inline void Require(bool ok,
+                    const std::string& method,
+                    const std::string& name,
                     const std::string& why) {
     if (!ok) throw std::invalid_argument(method + ": parameter '" + name + "' " + why);
 }

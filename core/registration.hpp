@@ -1,8 +1,7 @@
 #pragma once
 // The one interface every registration method implements.
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "core/point_cloud.hpp"
 
@@ -17,8 +16,8 @@ struct AlignResult {
     std::string stop_reason;  ///< e.g. "converged", "max_iterations", "line_search_failed"
     double seconds = 0.0;     ///< wall time of the DoAlign call (steady_clock)
     AlignStatus status = AlignStatus::kOk;
-    std::string message;        ///< empty when ok; why it failed otherwise
-    double scale = 1.0;         ///< estimated scale when a method estimates one (else 1)
+    std::string message;  ///< empty when ok; why it failed otherwise
+    double scale = 1.0;   ///< estimated scale when a method estimates one (else 1)
     nlohmann::json extra = nlohmann::json::object();  ///< method-specific diagnostics
 };
 

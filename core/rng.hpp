@@ -1,7 +1,7 @@
 #pragma once
 // Seeded per-pair random number generators: no global RNG anywhere in regbench.
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 
@@ -43,8 +43,8 @@ inline double StandardNormal(std::mt19937_64& rng) {
 
 /// Uniform integer in [0, n) by rejection: portable across standard libraries.
 inline std::uint64_t UniformIndex(std::mt19937_64& rng, std::uint64_t n) {
-    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                                std::numeric_limits<std::uint64_t>::max() % n;
+    const std::uint64_t limit =
+        std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % n;
     std::uint64_t x = rng();
     while (x >= limit) x = rng();
     return x % n;

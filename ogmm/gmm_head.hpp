@@ -27,7 +27,8 @@ torch::Tensor GmmRegister(const torch::Tensor& pi_s,
 
 /// Log-domain Sinkhorn (OGMM section 1): cost C [B, N, M], marginals p [B, N], q [B, M].
 /// u, v start at 0; each iteration updates u then v; stops when the batch mean of
-/// sum |du| + sum |dv| < threshold or after max_iterations. Returns Gamma = exp((-C + u + v) / eps).
+/// sum |du| + sum |dv| < threshold or after max_iterations. Returns Gamma = exp((-C + u + v) /
+/// eps).
 torch::Tensor LogSinkhorn(const torch::Tensor& cost,
                           const torch::Tensor& p,
                           const torch::Tensor& q,

@@ -1,10 +1,10 @@
 #include "reports/paper_tables.hpp"
 
+#include <fmt/format.h>
+
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
-
-#include <fmt/format.h>
 
 namespace regbench {
 
@@ -29,8 +29,9 @@ std::string DefaultPaperTablesPath() {
 
 std::optional<std::string> PaperRowName(const std::string& method) {
     static const std::map<std::string, std::string> kNames = {
-        {"icp", "ICP"},       {"fgr", "FGR"},         {"cpd", "CPD"},         {"gmmreg", "GMMReg"},
-        {"svr", "SVR"},       {"filterreg", "FilterReg"}, {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}};
+        {"icp", "ICP"},         {"fgr", "FGR"},  {"cpd", "CPD"},
+        {"gmmreg", "GMMReg"},   {"svr", "SVR"},  {"filterreg", "FilterReg"},
+        {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}};
     const auto it = kNames.find(method);
     if (it == kNames.end()) return std::nullopt;
     return it->second;
@@ -64,13 +65,17 @@ std::string FormatPaperComparison(const std::vector<MethodSummary>& ours,
     const auto cell = [&](const std::string& row, const std::string& metric) -> std::string {
         const int c = column_index(metric);
         if (c < 0 || !t.at("rows").contains(row)) return "-";
-        return fmt::format("{:g}", t.at("rows").at(row).at(static_cast<std::size_t>(c)).get<double>());
+        return fmt::format("{:g}",
+                           t.at("rows").at(row).at(static_cast<std::size_t>(c)).get<double>());
     };
     std::string out = fmt::format("Paper: {} ({}){}\n\n", table, t.value("caption", ""),
                                   group.empty() ? "" : ", columns " + group);
-    out += "| method | mae_r | paper mae_r | mae_t | paper mae_t | ccd | paper ccd | median s | paper s |\n";
+    out +=
+        "| method | mae_r | paper mae_r | mae_t | paper mae_t | ccd | paper ccd | median s | paper "
+        "s |\n";
     out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    const auto& time_rows = paper.at("tables").value("table6_inference_time", nlohmann::json::object());
+    const auto& time_rows =
+        paper.at("tables").value("table6_inference_time", nlohmann::json::object());
     for (const auto& s : ours) {
         const auto row = PaperRowName(s.method);
         const std::string name = row.value_or("");
@@ -78,8 +83,8 @@ std::string FormatPaperComparison(const std::vector<MethodSummary>& ours,
         if (row && time_rows.contains("rows") && time_rows["rows"].contains(name)) {
             paper_s = fmt::format("{:g}", time_rows["rows"][name].at(0).get<double>());
         }
-        out += fmt::format("| {} | {:.4f} | {} | {:.4f} | {} | {:.4f} | {} | {:.5f} | {} |\n", s.method,
-                           s.mae_r.mean, row ? cell(name, "mae_r") : "-", s.mae_t.mean,
+        out += fmt::format("| {} | {:.4f} | {} | {:.4f} | {} | {:.4f} | {} | {:.5f} | {} |\n",
+                           s.method, s.mae_r.mean, row ? cell(name, "mae_r") : "-", s.mae_t.mean,
                            row ? cell(name, "mae_t") : "-", s.ccd.mean,
                            row ? cell(name, "ccd") : "-", s.median_seconds, paper_s);
     }

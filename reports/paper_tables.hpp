@@ -1,11 +1,10 @@
 #pragma once
 // The OGMM paper's published numbers (data/paper/ogmm_wacv2023_tables.json) next to ours.
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "reports/report.hpp"
 

@@ -1,12 +1,12 @@
 #include "reports/report.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
 #include <stdexcept>
-
-#include <fmt/format.h>
 
 #include "core/rng.hpp"
 
@@ -57,9 +57,9 @@ Estimate Bootstrap(const std::vector<double>& v, int samples, std::uint64_t stre
 
 double Metric(const nlohmann::json& row, const char* key) {
     if (!row.contains("metrics") || !row["metrics"].contains(key)) {
-        throw std::runtime_error("result row for pair " + row.value("pair", nlohmann::json()).dump() +
-                                 ", method " + row.value("method", std::string("?")) +
-                                 " has no metrics." + key);
+        throw std::runtime_error("result row for pair " +
+                                 row.value("pair", nlohmann::json()).dump() + ", method " +
+                                 row.value("method", std::string("?")) + " has no metrics." + key);
     }
     return row["metrics"][key].get<double>();
 }
@@ -125,10 +125,10 @@ std::string DescribeData(const std::vector<nlohmann::json>& rows) {
             continue;
         }
         const auto& d = r["data"];
-        descriptions.insert(fmt::format("dataset `{}`, protocol `{}`, pairing `{}`, seed {}, file `{}`",
-                                        d.value("dataset", "?"), d.value("protocol", "?"),
-                                        d.value("pairing", "?"), d.value("seed", nlohmann::json()).dump(),
-                                        d.value("pairs_file", "?")));
+        descriptions.insert(
+            fmt::format("dataset `{}`, protocol `{}`, pairing `{}`, seed {}, file `{}`",
+                        d.value("dataset", "?"), d.value("protocol", "?"), d.value("pairing", "?"),
+                        d.value("seed", nlohmann::json()).dump(), d.value("pairs_file", "?")));
     }
     std::string out;
     for (const auto& d : descriptions) out += (out.empty() ? "" : "; ") + d;
@@ -143,7 +143,8 @@ std::string FormatMarkdown(const std::vector<MethodSummary>& ss, const ReportOpt
     out += "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const auto& s : ss) {
         out += fmt::format(
-            "| {} | {} | {} | {:.4f} | [{:.3f}, {:.3f}] | {:.4f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
+            "| {} | {} | {} | {:.4f} | [{:.3f}, {:.3f}] | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
+            "{:.4f} | "
             "{:.4f} | {:.3f} | {:.3f} | {:.5f} | {:.5f} |\n",
             s.method, s.pairs, s.failed, s.mae_r.mean, s.mae_r.lo, s.mae_r.hi, s.mae_t.mean,
             s.ccd.mean, s.rre.mean, s.rte.mean, s.rmse_r, s.rmse_t, s.recall, s.success,

@@ -1,9 +1,8 @@
 #pragma once
 // Aggregates JSONL result rows into per-method tables (Markdown, CSV, JSON, LaTeX).
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace regbench {
 

@@ -40,7 +40,8 @@ void ProgressMeter::Draw(bool final_line) {
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     const double rate = elapsed > 0.0 ? static_cast<double>(done_) / elapsed : 0.0;
-    const double eta = rate > 0.0 ? static_cast<double>(total_ - std::min(done_, total_)) / rate : 0.0;
+    const double eta =
+        rate > 0.0 ? static_cast<double>(total_ - std::min(done_, total_)) / rate : 0.0;
     // On a terminal redraw in place; in logs (CI, Slurm) print one line per update.
     const bool tty = isatty(fileno(stderr)) != 0;
     std::fprintf(stderr, "%s[%s] %zu/%zu done, %.1f/s, elapsed %.1f s, ETA %.1f s%s",

@@ -17,8 +17,8 @@ namespace regbench {
 
 const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
-        IdentityMethodInfo(), IcpMethodInfo(),    IcpPlMethodInfo(), FgrMethodInfo(),
-        GicpMethodInfo(),     NdtMethodInfo(),    CpdMethodInfo(),   GmmRegMethodInfo(),
+        IdentityMethodInfo(), IcpMethodInfo(),       IcpPlMethodInfo(), FgrMethodInfo(),
+        GicpMethodInfo(),     NdtMethodInfo(),       CpdMethodInfo(),   GmmRegMethodInfo(),
         SvrMethodInfo(),      FilterRegMethodInfo(),
     };
     return methods;

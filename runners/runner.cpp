@@ -90,7 +90,8 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
                           double timeout,
                           int threads) {
     int fds[2];
-    if (pipe(fds) != 0) return Failure("failed", "pipe() failed: " + std::string(strerror(errno)), 0);
+    if (pipe(fds) != 0)
+        return Failure("failed", "pipe() failed: " + std::string(strerror(errno)), 0);
     const pid_t pid = fork();
     if (pid < 0) {
         close(fds[0]);
@@ -100,7 +101,8 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     if (pid == 0) {
         close(fds[0]);
         omp_set_num_threads(threads);
-        const std::string payload = AlignResultToJson(method.Align(pair.source, pair.target)).dump();
+        const std::string payload =
+            AlignResultToJson(method.Align(pair.source, pair.target)).dump();
         size_t off = 0;
         while (off < payload.size()) {
             const ssize_t n = write(fds[1], payload.data() + off, payload.size() - off);
@@ -117,7 +119,8 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     bool timed_out = false;
     for (;;) {
         const double left =
-            timeout - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            timeout -
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (left <= 0.0) {
             timed_out = true;
             break;
@@ -137,13 +140,16 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     int wstatus = 0;
     waitpid(pid, &wstatus, 0);
     if (timed_out) {
-        return Failure("timeout", method.Name() + ": exceeded timeout of " +
-                                      std::to_string(timeout) + " s", elapsed);
+        return Failure("timeout",
+                       method.Name() + ": exceeded timeout of " + std::to_string(timeout) + " s",
+                       elapsed);
     }
     if (WIFSIGNALED(wstatus)) {
-        return Failure("crashed", method.Name() + ": crashed with signal " +
-                                      std::to_string(WTERMSIG(wstatus)) + " (" +
-                                      strsignal(WTERMSIG(wstatus)) + ")", elapsed);
+        return Failure("crashed",
+                       method.Name() + ": crashed with signal " +
+                           std::to_string(WTERMSIG(wstatus)) + " (" + strsignal(WTERMSIG(wstatus)) +
+                           ")",
+                       elapsed);
     }
     try {
         CallOutcome out;
@@ -202,7 +208,8 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
         name.erase(0, name.find_first_not_of(" \t"));
         name.erase(name.find_last_not_of(" \t") + 1);
         if (name.empty()) continue;
-        if (!seen.insert(name).second) throw std::invalid_argument("method '" + name + "' listed twice");
+        if (!seen.insert(name).second)
+            throw std::invalid_argument("method '" + name + "' listed twice");
         MethodSpec spec{name, nlohmann::json::object()};
         if (params_by_method.is_object() && params_by_method.contains(name)) {
             spec.params = params_by_method.at(name);
@@ -235,11 +242,12 @@ nlohmann::json MakeResultRow(std::size_t pair_index,
     row["threads"] = threads;
     row["shape"] = pair.shape;
     row["category"] = pair.category;
-    const PairMetrics m = ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target);
-    row["metrics"] = {{"mae_r", m.mae_r},     {"mae_t", m.mae_t},   {"mse_r", m.mse_r},
-                      {"mse_t", m.mse_t},     {"rre", m.rre},       {"rte", m.rte},
-                      {"ccd", m.ccd},         {"chamfer", m.chamfer},
-                      {"ccd_within_clip", m.ccd_within_clip}};
+    const PairMetrics m =
+        ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target);
+    row["metrics"] = {
+        {"mae_r", m.mae_r}, {"mae_t", m.mae_t},     {"mse_r", m.mse_r},
+        {"mse_t", m.mse_t}, {"rre", m.rre},         {"rte", m.rte},
+        {"ccd", m.ccd},     {"chamfer", m.chamfer}, {"ccd_within_clip", m.ccd_within_clip}};
     return row;
 }
 
@@ -255,7 +263,8 @@ std::vector<nlohmann::json> ReadJsonl(const std::string& path) {
         try {
             rows.push_back(nlohmann::json::parse(line));
         } catch (const nlohmann::json::exception& e) {
-            throw std::runtime_error(path + ":" + std::to_string(lineno) + ": not JSON: " + e.what());
+            throw std::runtime_error(path + ":" + std::to_string(lineno) +
+                                     ": not JSON: " + e.what());
         }
         if (!rows.back().is_object()) {
             throw std::runtime_error(path + ":" + std::to_string(lineno) + ": not a JSON object");
@@ -281,9 +290,10 @@ RunSummary RunBenchmark(const RunOptions& options) {
         {"pairs_file", std::filesystem::path(options.pairs_path).filename().string()},
         {"dataset", set.provenance.value("dataset", "unknown")},
         {"protocol", set.provenance.value("protocol", "unknown")},
-        {"pairing", set.provenance.value(
-                        "pairing", set.provenance.value("params", nlohmann::json::object())
-                                       .value("pairing", "unknown"))},
+        {"pairing",
+         set.provenance.value(
+             "pairing",
+             set.provenance.value("params", nlohmann::json::object()).value("pairing", "unknown"))},
         {"seed", set.provenance.value("seed", nlohmann::json())}};
     std::vector<std::size_t> indices;
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
@@ -298,7 +308,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
     if (options.resume) {
         const bool have_part = std::filesystem::exists(part_path);
         rows = ReadPartialRows(have_part ? part_path : options.out_path);
-        for (const auto& r : rows) done.insert(RowKey(r.at("pair").get<std::size_t>(), r.at("method")));
+        for (const auto& r : rows)
+            done.insert(RowKey(r.at("pair").get<std::size_t>(), r.at("method")));
     }
     RunSummary summary;
     summary.rows_skipped = rows.size();
@@ -320,7 +331,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
         // Each worker owns its method instances: methods keep scratch buffers.
         omp_set_num_threads(options.threads_per_call);
         std::vector<std::unique_ptr<RegistrationMethod>> methods;
-        for (const auto& spec : options.methods) methods.push_back(CreateMethod(spec.name, spec.params));
+        for (const auto& spec : options.methods)
+            methods.push_back(CreateMethod(spec.name, spec.params));
         for (;;) {
             const std::size_t i = next.fetch_add(1);
             if (i >= indices.size()) return;
@@ -329,10 +341,11 @@ RunSummary RunBenchmark(const RunOptions& options) {
             for (std::size_t m = 0; m < methods.size(); ++m) {
                 const auto& spec = options.methods[m];
                 if (done.count(RowKey(k, spec.name))) continue;
-                CallOutcome outcome = options.timeout_seconds > 0.0
-                                          ? AlignIsolated(*methods[m], pair, options.timeout_seconds,
-                                                          options.threads_per_call)
-                                          : AlignInProcess(*methods[m], pair);
+                CallOutcome outcome =
+                    options.timeout_seconds > 0.0
+                        ? AlignIsolated(*methods[m], pair, options.timeout_seconds,
+                                        options.threads_per_call)
+                        : AlignInProcess(*methods[m], pair);
                 nlohmann::json row = MakeResultRow(k, pair, spec.name, spec.params, outcome.result,
                                                    options.threads_per_call);
                 row["status"] = outcome.status;

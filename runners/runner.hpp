@@ -1,10 +1,9 @@
 #pragma once
 // Runs registration methods over a frozen pair file: timing, fault isolation, resume, shards.
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/metrics.hpp"
 #include "core/registration.hpp"
@@ -19,16 +18,16 @@ struct MethodSpec {
 };
 
 struct RunOptions {
-    std::string pairs_path;            ///< frozen HDF5 pair file
-    std::vector<MethodSpec> methods;   ///< run in this order for every pair
-    std::string out_path;              ///< JSONL; written as <out>.part, renamed when complete
-    int jobs = 1;                      ///< pairs processed in parallel (one method instance each)
-    int threads_per_call = 1;          ///< OpenMP threads inside one Align call (timing: 1)
-    bool resume = false;               ///< keep finished rows of <out>.part and skip them
-    int shard_index = 0;               ///< process pairs with k % shard_count == shard_index
+    std::string pairs_path;           ///< frozen HDF5 pair file
+    std::vector<MethodSpec> methods;  ///< run in this order for every pair
+    std::string out_path;             ///< JSONL; written as <out>.part, renamed when complete
+    int jobs = 1;                     ///< pairs processed in parallel (one method instance each)
+    int threads_per_call = 1;         ///< OpenMP threads inside one Align call (timing: 1)
+    bool resume = false;              ///< keep finished rows of <out>.part and skip them
+    int shard_index = 0;              ///< process pairs with k % shard_count == shard_index
     int shard_count = 1;
-    double timeout_seconds = 0.0;      ///< > 0: each call runs in a child process, killed after it
-    bool progress = true;              ///< progress line (done, rate, ETA) on stderr
+    double timeout_seconds = 0.0;  ///< > 0: each call runs in a child process, killed after it
+    bool progress = true;          ///< progress line (done, rate, ETA) on stderr
 };
 
 /// Summary of a finished run.
@@ -39,9 +38,9 @@ struct RunSummary {
     double wall_seconds = 0.0;
 };
 
-/// Parses "a,b,c" (or "all": every registered method) plus an optional JSON object {"a": {...params...}} into specs. Checks that
-/// every method exists and its parameters are valid (instantiates each once). Throws
-/// std::invalid_argument with a clear message otherwise.
+/// Parses "a,b,c" (or "all": every registered method) plus an optional JSON object {"a":
+/// {...params...}} into specs. Checks that every method exists and its parameters are valid
+/// (instantiates each once). Throws std::invalid_argument with a clear message otherwise.
 std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
                                          const nlohmann::json& params_by_method);
 

@@ -72,9 +72,9 @@ TEST(Kabsch, ZeroWeightsIgnoreOutliers) {
 TEST(Kabsch, RejectsMismatchedOrEmptyInput) {
     EXPECT_FALSE(WeightedProcrustes(PointCloud(0, 3), PointCloud(0, 3)).valid);
     EXPECT_FALSE(WeightedProcrustes(PointCloud::Zero(3, 3), PointCloud::Zero(4, 3)).valid);
-    EXPECT_FALSE(WeightedProcrustes(PointCloud::Ones(3, 3), PointCloud::Ones(3, 3),
-                                    Eigen::VectorXd::Zero(3))
-                     .valid);
+    EXPECT_FALSE(
+        WeightedProcrustes(PointCloud::Ones(3, 3), PointCloud::Ones(3, 3), Eigen::VectorXd::Zero(3))
+            .valid);
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 #include "core/metrics.hpp"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "core/transform.hpp"
 
@@ -27,8 +27,8 @@ TEST(Metrics, RotationErrorsMatchHandComputation) {
 
 TEST(Metrics, RreOfKnownAxisAngle) {
     const Transform T_gt = Transform::Identity();
-    const Transform T_est =
-        MakeTransform(RotationFromAxisAngle({0, 0, 1}, 7.5 * M_PI / 180.0), Eigen::Vector3d::Zero());
+    const Transform T_est = MakeTransform(RotationFromAxisAngle({0, 0, 1}, 7.5 * M_PI / 180.0),
+                                          Eigen::Vector3d::Zero());
     EXPECT_NEAR(MotionMetrics(T_gt, T_est).rre, 7.5, 1e-9);
     // About z only, the zyx angles differ in z alone: mae_r = 7.5 / 3.
     EXPECT_NEAR(MotionMetrics(T_gt, T_est).mae_r, 2.5, 1e-9);

@@ -1,8 +1,8 @@
 #include "core/transform.hpp"
 
-#include <random>
-
 #include <gtest/gtest.h>
+
+#include <random>
 
 #include "core/rng.hpp"
 
@@ -58,8 +58,8 @@ TEST(Transform, InvertComposeApply) {
     PointCloud p(2, 3);
     p << 1, 0, 0, 0, 1, 0;
     const PointCloud q = Apply(T, p);
-    const Eigen::Vector3d q0 = T.topLeftCorner<3, 3>() * Eigen::Vector3d(1, 0, 0) +
-                               T.topRightCorner<3, 1>();
+    const Eigen::Vector3d q0 =
+        T.topLeftCorner<3, 3>() * Eigen::Vector3d(1, 0, 0) + T.topRightCorner<3, 1>();
     EXPECT_LT((q.row(0).transpose() - q0).norm(), kTol);
     EXPECT_LT((Apply(InvertRigid(T), q) - p).cwiseAbs().maxCoeff(), kTol);
 }

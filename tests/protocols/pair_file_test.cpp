@@ -1,9 +1,9 @@
 #include "protocols/pair_file.hpp"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "tests/testing/synthetic.hpp"
 
@@ -17,8 +17,8 @@ std::string TempPath(const std::string& name) {
 PairSet TwoPairs() {
     PairSet set;
     set.provenance = {{"protocol", "test"}, {"seed", 5}};
-    set.pairs.push_back(
-        testing::SyntheticPair(20, 1, MakeTransform(RotationFromEulerZyxDeg(10, 0, 0), {0.1, 0, 0})));
+    set.pairs.push_back(testing::SyntheticPair(
+        20, 1, MakeTransform(RotationFromEulerZyxDeg(10, 0, 0), {0.1, 0, 0})));
     set.pairs.push_back(testing::SyntheticPair(30, 2, Transform::Identity()));
     set.pairs[1].target_overlap[3] = 0;
     set.pairs[1].target_overlap_ratio = 29.0 / 30.0;

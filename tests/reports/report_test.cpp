@@ -5,14 +5,23 @@
 namespace regbench {
 namespace {
 
-nlohmann::json Row(const std::string& method, double mae_r, double mae_t, double seconds,
+nlohmann::json Row(const std::string& method,
+                   double mae_r,
+                   double mae_t,
+                   double seconds,
                    const std::string& status = "ok") {
     return {{"method", method},
             {"status", status},
             {"seconds", seconds},
             {"metrics",
-             {{"mae_r", mae_r}, {"mae_t", mae_t}, {"mse_r", mae_r * mae_r}, {"mse_t", mae_t * mae_t},
-              {"rre", mae_r * 2}, {"rte", mae_t * 2}, {"ccd", 0.05}, {"chamfer", 0.01}}}};
+             {{"mae_r", mae_r},
+              {"mae_t", mae_t},
+              {"mse_r", mae_r * mae_r},
+              {"mse_t", mae_t * mae_t},
+              {"rre", mae_r * 2},
+              {"rte", mae_t * 2},
+              {"ccd", 0.05},
+              {"chamfer", 0.01}}}};
 }
 
 TEST(Report, AggregatesPerMethodByHand) {
@@ -39,9 +48,9 @@ TEST(Report, AggregatesPerMethodByHand) {
 }
 
 TEST(Report, MedianOfEvenCountAveragesTheMiddle) {
-    const auto s = Summarize({Row("a", 1, 0, 1.0), Row("a", 1, 0, 4.0), Row("a", 1, 0, 2.0),
-                              Row("a", 1, 0, 3.0)},
-                             ReportOptions{});
+    const auto s = Summarize(
+        {Row("a", 1, 0, 1.0), Row("a", 1, 0, 4.0), Row("a", 1, 0, 2.0), Row("a", 1, 0, 3.0)},
+        ReportOptions{});
     EXPECT_NEAR(s[0].median_seconds, 2.5, 1e-12);
 }
 

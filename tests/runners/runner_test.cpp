@@ -1,9 +1,9 @@
 #include "runners/runner.hpp"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "protocols/pair_file.hpp"
 #include "runners/registry.hpp"
@@ -16,16 +16,16 @@ class RunnerTest : public ::testing::Test {
 protected:
     void SetUp() override {
         dir_ = std::filesystem::temp_directory_path() /
-               ("regbench_runner_" + std::string(::testing::UnitTest::GetInstance()
-                                                     ->current_test_info()
-                                                     ->name()));
+               ("regbench_runner_" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
         std::filesystem::remove_all(dir_);
         std::filesystem::create_directories(dir_);
         PairSet set;
         set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
         for (int k = 0; k < 6; ++k) {
             set.pairs.push_back(testing::SyntheticPair(
-                50, 10 + k, MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
+                50, 10 + k,
+                MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
         }
         pairs_ = (dir_ / "pairs.h5").string();
         WritePairFile(pairs_, set);
