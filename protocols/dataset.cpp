@@ -116,9 +116,19 @@ std::unique_ptr<Dataset> MakeListDataset(std::string kind,
                                          std::move(entries), std::move(loader));
 }
 
+std::string DataDir(const DatasetOptions& options) {
+    if (!options.data_dir.empty()) return options.data_dir;
+    if (const char* d = std::getenv("REGBENCH_DATA_DIR"); d != nullptr && *d != '\0') return d;
+    if (const char* s = std::getenv("REGBENCH_SOURCE_DIR"); s != nullptr && *s != '\0') {
+        return (fs::path(s) / "data").string();
+    }
+    return "data";
+}
+
 }  // namespace detail
 
 namespace {
+using detail::DataDir;
 
 using detail::Entry;
 using detail::SplitSpec;
@@ -168,15 +178,6 @@ void RequireSplit(const SplitSpec& split, const std::string& where, bool has_tra
 }
 
 // ---- cgal: data/corpus.json + data/meshes ----
-
-std::string DataDir(const DatasetOptions& options) {
-    if (!options.data_dir.empty()) return options.data_dir;
-    if (const char* d = std::getenv("REGBENCH_DATA_DIR"); d != nullptr && *d != '\0') return d;
-    if (const char* s = std::getenv("REGBENCH_SOURCE_DIR"); s != nullptr && *s != '\0') {
-        return (fs::path(s) / "data").string();
-    }
-    return "data";
-}
 
 std::unique_ptr<Dataset> OpenCgal(const SplitSpec& split, const DatasetOptions& options) {
     const fs::path dir = DataDir(options);

@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "protocols/indoor_dataset.hpp"
+
 namespace regbench {
 
 std::vector<ShapeSource> LoadShapeSources(const Dataset& dataset) {
@@ -23,6 +25,7 @@ std::vector<ShapeSource> LoadShapeSources(const Dataset& dataset) {
 
 ShapeLoader DatasetShapeLoader(const DatasetOptions& options) {
     return [options](const std::string& name, const std::string& split) {
+        if (name == "indoor-sim") return LoadIndoorSimShapes(split, options);
         const std::unique_ptr<Dataset> dataset = OpenDataset(name, split, options);
         return LoadShapeSources(*dataset);
     };
