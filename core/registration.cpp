@@ -53,6 +53,9 @@ AlignResult RegistrationMethod::Align(const PointCloud& source, const PointCloud
     }
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (result.extra.is_object() && result.extra.contains(kExcludedSecondsKey)) {
+        result.seconds -= result.extra[kExcludedSecondsKey].get<double>();
+    }
     if (result.status != AlignStatus::kOk) {
         result.T_target_source = Transform::Identity();
         return result;

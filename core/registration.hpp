@@ -9,6 +9,10 @@ namespace regbench {
 
 enum class AlignStatus { kOk, kFailed };
 
+/// A method may put seconds spent not computing (e.g. waiting for a process-wide lock of a
+/// library) under this key of AlignResult::extra; Align subtracts them from `seconds`.
+constexpr char kExcludedSecondsKey[] = "excluded_seconds";
+
 /// What a method returns for one pair. Methods never see ground truth.
 struct AlignResult {
     Transform T_target_source = Transform::Identity();  ///< maps source into the target frame
