@@ -4,9 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <nanoflann.hpp>
 #include <stdexcept>
 #include <utility>
+
+#include "core/nanoflann_adaptor.hpp"
 
 namespace regbench {
 namespace {
@@ -14,22 +15,7 @@ namespace {
 /// Float partial sums run over at most this many terms before they are added into double.
 constexpr Eigen::Index kChunk = 256;
 
-/// nanoflann dataset adaptor over a row-major N x 3 matrix.
-struct CloudAdaptor {
-    const PointCloud& points;
-    size_t kdtree_get_point_count() const { return static_cast<size_t>(points.rows()); }
-    double kdtree_get_pt(size_t i, size_t dim) const {
-        return points(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(dim));
-    }
-    template <class BBox>
-    bool kdtree_get_bbox(BBox&) const {
-        return false;
-    }
-};
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
-                                                 CloudAdaptor,
-                                                 3,
-                                                 size_t>;
+using Tree = CloudKdTree;
 
 using Range = std::pair<Eigen::Index, Eigen::Index>;
 

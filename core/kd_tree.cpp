@@ -1,33 +1,14 @@
 #include "core/kd_tree.hpp"
 
 #include <limits>
-#include <nanoflann.hpp>
+
+#include "core/nanoflann_adaptor.hpp"
 
 namespace regbench {
-namespace {
-
-/// nanoflann dataset adaptor over a row-major N x 3 matrix.
-struct CloudAdaptor {
-    const PointCloud& points;
-    size_t kdtree_get_point_count() const { return static_cast<size_t>(points.rows()); }
-    double kdtree_get_pt(size_t i, size_t dim) const {
-        return points(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(dim));
-    }
-    template <class BBox>
-    bool kdtree_get_bbox(BBox&) const {
-        return false;
-    }
-};
-
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
-                                                 CloudAdaptor,
-                                                 3,
-                                                 size_t>;
-}  // namespace
 
 struct KdTree::Impl {
     CloudAdaptor adaptor;
-    Tree tree;
+    CloudKdTree tree;
     Impl(const PointCloud& p, int leaf)
         : adaptor{p},
           tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(static_cast<size_t>(leaf))) {
