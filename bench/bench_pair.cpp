@@ -8,8 +8,10 @@
 #include <vector>
 
 #include "core/rng.hpp"
+#include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
 #include "protocols/pair_file.hpp"
+#include "protocols/pair_protocols.hpp"
 
 namespace regbench::bench {
 namespace {
@@ -19,41 +21,10 @@ constexpr Eigen::Index kSampledPoints = 1024;
 constexpr double kKeepRatio = 0.7;  // 1024 -> 717, the paper's partial protocol
 constexpr double kRotationDeg = 15.0;
 
-Eigen::Vector3d RandomDirection(std::mt19937_64& rng) {
-    return Eigen::Vector3d(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng))
-        .normalized();
-}
-
-/// r(u) * diag(0.8, 0.55, 0.4) u with a smooth bump r in [0.88, 1.12]: no symmetry axis,
-/// every point inside the unit sphere.
-PointCloud SampleObject(std::mt19937_64& rng, Eigen::Index n) {
-    const Eigen::Vector3d axes(0.8, 0.55, 0.4);
-    PointCloud points(n, 3);
-    for (Eigen::Index i = 0; i < n; ++i) {
-        const Eigen::Vector3d u = RandomDirection(rng);
-        const double bump =
-            1.0 + 0.12 * std::sin(3.0 * u.x()) * std::cos(2.0 * u.y() + 0.5 * u.z());
-        points.row(i) = (bump * axes.cwiseProduct(u)).transpose();
-    }
-    return points;
-}
-
-/// Keeps the round(keep * N) points farthest from the centroid along a random direction.
-PointCloud Crop(std::mt19937_64& rng, const PointCloud& points) {
-    const Eigen::Vector3d n = RandomDirection(rng);
-    const Eigen::RowVector3d centroid = points.colwise().mean();
-    const Eigen::VectorXd score = (points.rowwise() - centroid) * n;
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(points.rows()));
-    std::iota(order.begin(), order.end(), 0);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](Eigen::Index a, Eigen::Index b) { return score(a) > score(b); });
-    const auto kept =
-        static_cast<Eigen::Index>(std::lround(kKeepRatio * static_cast<double>(points.rows())));
-    PointCloud out(kept, 3);
-    for (Eigen::Index i = 0; i < kept; ++i) {
-        out.row(i) = points.row(order[static_cast<std::size_t>(i)]);
-    }
-    return out;
+/// 1024 samples of core's bumpy ellipsoid, cropped with the partial protocol's crop: 717.
+PointCloud PartialSample(std::mt19937_64& rng) {
+    const PointCloud full = BumpyEllipsoidSurface(rng, kSampledPoints);
+    return Gather(full, CropIndices(full, kKeepRatio, rng));
 }
 
 BenchPair LoadPair() {
@@ -85,8 +56,8 @@ BenchPair LoadPair() {
 Pair MakeSyntheticPair() {
     auto rng = MakePairRng(kSeed, 0);
     Pair pair;
-    pair.source = Crop(rng, SampleObject(rng, kSampledPoints));
-    const PointCloud target_local = Crop(rng, SampleObject(rng, kSampledPoints));
+    pair.source = PartialSample(rng);
+    const PointCloud target_local = PartialSample(rng);
     const Eigen::Matrix3d R =
         RotationFromAxisAngle({1.0, -0.6, 0.8}, kRotationDeg * 3.14159265358979323846 / 180.0);
     pair.T_gt = MakeTransform(R, {0.05, -0.03, 0.02});

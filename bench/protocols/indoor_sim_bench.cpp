@@ -12,6 +12,7 @@
 #include "core/kd_tree.hpp"
 #include "core/rng.hpp"
 #include "protocols/indoor_sim.hpp"
+#include "protocols/pair_protocols.hpp"
 
 namespace regbench {
 namespace {
@@ -53,23 +54,9 @@ PointCloud Resample(const PointCloud& points, Eigen::Index n, std::mt19937_64& r
     return out;
 }
 
-/// The protocol's crop (specs/protocols.md): keep the round(keep * N) points farthest along a
-/// uniformly random direction from the centroid.
+/// The protocol's crop (protocols/pair_protocols.hpp).
 PointCloud Crop(const PointCloud& points, double keep, std::mt19937_64& rng) {
-    Eigen::Vector3d n(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng));
-    n.normalize();
-    const Eigen::RowVector3d centroid = points.colwise().mean();
-    const Eigen::VectorXd along = (points.rowwise() - centroid) * n;
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(points.rows()));
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](Eigen::Index a, Eigen::Index b) { return along[a] > along[b]; });
-    const auto m =
-        static_cast<Eigen::Index>(std::lround(keep * static_cast<double>(points.rows())));
-    PointCloud out(m, 3);
-    for (Eigen::Index i = 0; i < m; ++i)
-        out.row(i) = points.row(order[static_cast<std::size_t>(i)]);
-    return out;
+    return Gather(points, CropIndices(points, keep, rng));
 }
 
 void BM_SimulateIndoorPair(benchmark::State& state) {
