@@ -150,8 +150,7 @@ private:
 
 CpdOptions ParseCpdOptions(const nlohmann::json& j) {
     CpdOptions o = ParseOptions<CpdOptions>(j, kName);
-    Require(o.compat == "none" || o.compat == "probreg", kName, "compat",
-            "must be \"none\" or \"probreg\", got \"" + o.compat + "\"");
+    RequireOneOf(o.compat, {"none", "probreg"}, kName, "compat");
     const bool given = j.is_object();
     if (o.compat == "probreg") {
         if (!given || !j.contains("update_scale")) o.update_scale = true;
@@ -161,12 +160,10 @@ CpdOptions ParseCpdOptions(const nlohmann::json& j) {
     Require(o.maxiter >= 1, kName, "maxiter", "must be >= 1, got " + std::to_string(o.maxiter));
     Require(o.tol >= 0.0 && std::isfinite(o.tol), kName, "tol",
             "must be finite and >= 0, got " + std::to_string(o.tol));
-    Require(o.sigma2_formula == "ml" || o.sigma2_formula == "probreg", kName, "sigma2_formula",
-            "must be \"ml\" or \"probreg\", got \"" + o.sigma2_formula + "\"");
+    RequireOneOf(o.sigma2_formula, {"ml", "probreg"}, kName, "sigma2_formula");
     Require(o.sigma2 >= 0.0 && std::isfinite(o.sigma2), kName, "sigma2",
             "must be > 0, or 0 for sqsum(Y, X); got " + std::to_string(o.sigma2));
-    Require(o.e_step == "auto" || o.e_step == "dense" || o.e_step == "truncated", kName, "e_step",
-            "must be \"auto\", \"dense\" or \"truncated\", got \"" + o.e_step + "\"");
+    RequireOneOf(o.e_step, {"auto", "dense", "truncated"}, kName, "e_step");
     Require(o.truncation_sigmas > 0.0 && std::isfinite(o.truncation_sigmas), kName,
             "truncation_sigmas", "must be > 0, got " + std::to_string(o.truncation_sigmas));
     Require(o.truncation_min_points >= 0, kName, "truncation_min_points",

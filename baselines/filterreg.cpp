@@ -31,12 +31,6 @@ constexpr double kExactCutoffSigmas = 3.0;
 constexpr double kTreeRadiusFraction = 0.25;
 constexpr std::int64_t kParallelMinPoints = 2048;
 
-bool Uses(const std::string& value, std::initializer_list<const char*> allowed) {
-    for (const char* a : allowed) {
-        if (value == a) return true;
-    }
-    return false;
-}
 
 // ---------------------------------------------------------------------------------------------
 // E-step
@@ -461,7 +455,7 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
     if (!(sigma2 > 0.0) || !std::isfinite(sigma2)) {
         throw std::invalid_argument("FilterRegEStep: sigma2 must be positive and finite");
     }
-    if (!Uses(estimator, {"lattice", "exact"})) {
+    if (estimator != "lattice" && estimator != "exact") {
         throw std::invalid_argument("FilterRegEStep: unknown estimator '" + estimator + "'");
     }
     if (target_normals != nullptr && target_normals->rows() != target.rows()) {
@@ -482,12 +476,9 @@ FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
     Require(o.maxiter >= 1, kName, "maxiter", "must be >= 1");
     Require(std::isfinite(o.tol) && o.tol >= 0.0, kName, "tol", "must be >= 0");
     Require(std::isfinite(o.min_sigma2) && o.min_sigma2 > 0.0, kName, "min_sigma2", "must be > 0");
-    Require(Uses(o.objective, {"pt2pt", "pt2pl"}), kName, "objective",
-            "must be \"pt2pt\" or \"pt2pl\", got \"" + o.objective + "\"");
-    Require(Uses(o.estimator, {"lattice", "exact"}), kName, "estimator",
-            "must be \"lattice\" or \"exact\", got \"" + o.estimator + "\"");
-    Require(Uses(o.compat, {"probreg", "none"}), kName, "compat",
-            "must be \"probreg\" or \"none\", got \"" + o.compat + "\"");
+    RequireOneOf(o.objective, {"pt2pt", "pt2pl"}, kName, "objective");
+    RequireOneOf(o.estimator, {"lattice", "exact"}, kName, "estimator");
+    RequireOneOf(o.compat, {"probreg", "none"}, kName, "compat");
     Require(o.normals_k >= 3, kName, "normals_k", "must be >= 3");
     if (o.compat == "probreg" && !(j.is_object() && j.contains("update_sigma2"))) {
         o.update_sigma2 = false;

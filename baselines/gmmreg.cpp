@@ -25,19 +25,19 @@ struct GmmRegOptions {
     std::string compat =
         "none";  ///< "none" (correct algorithm, default) | "probreg" (sets the defaults below)
     std::string gmm = "points";  ///< features: "sklearn" GMM fit (probreg) | "points" (mu = points)
-    int n_gmm_components = 800;   ///< K = min(this, floor(0.8 M)), M = source size
-    std::string gradient = "exact";  ///< "probreg_half" (1/2 of true, probreg) | "exact"
-    bool normalize = true;           ///< optimise in a centred frame scaled by sigma
-    double sigma = 1.0;                     ///< bandwidth, used when use_estimated_sigma is false
-    bool use_estimated_sigma = true;        ///< sigma = det(cov(source))^(1/6)
-    double delta = 0.9;                     ///< sigma *= delta between outer iterations, in (0, 1]
-    int outer_iterations = 1;  ///< kernel-scale schedule steps (probreg: 1, no schedule)
-    double outer_tol = 1e-3;   ///< stop the schedule when |f - f_prev| < outer_tol
-    int maxiter = 200;         ///< BFGS iterations per outer iteration (probreg: 50)
-    double gtol = 1e-6;        ///< BFGS |grad|_inf tolerance (probreg: 1e-3)
-    int gmm_max_iter = 100;    ///< EM iterations (sklearn max_iter)
-    double gmm_tol = 1e-3;     ///< EM lower-bound tolerance (sklearn tol)
-    int seed = 0;              ///< k-means++ seed of the GMM fits
+    int n_gmm_components = 800;  ///< K = min(this, floor(0.8 M)), M = source size
+    std::string gradient = "exact";   ///< "probreg_half" (1/2 of true, probreg) | "exact"
+    bool normalize = true;            ///< optimise in a centred frame scaled by sigma
+    double sigma = 1.0;               ///< bandwidth, used when use_estimated_sigma is false
+    bool use_estimated_sigma = true;  ///< sigma = det(cov(source))^(1/6)
+    double delta = 0.9;               ///< sigma *= delta between outer iterations, in (0, 1]
+    int outer_iterations = 1;         ///< kernel-scale schedule steps (probreg: 1, no schedule)
+    double outer_tol = 1e-3;          ///< stop the schedule when |f - f_prev| < outer_tol
+    int maxiter = 200;                ///< BFGS iterations per outer iteration (probreg: 50)
+    double gtol = 1e-6;               ///< BFGS |grad|_inf tolerance (probreg: 1e-3)
+    int gmm_max_iter = 100;           ///< EM iterations (sklearn max_iter)
+    double gmm_tol = 1e-3;            ///< EM lower-bound tolerance (sklearn tol)
+    int seed = 0;                     ///< k-means++ seed of the GMM fits
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GmmRegOptions,
                                                 compat,
@@ -60,8 +60,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GmmRegOptions,
 /// and a tight gtol. compat "probreg" switches to probreg's values; explicit keys win.
 GmmRegOptions ResolveOptions(const nlohmann::json& j) {
     GmmRegOptions o = ParseOptions<GmmRegOptions>(j, kName);
-    Require(o.compat == "probreg" || o.compat == "none", kName, "compat",
-            "must be \"none\" or \"probreg\", got \"" + o.compat + "\"");
+    RequireOneOf(o.compat, {"probreg", "none"}, kName, "compat");
     if (o.compat == "probreg") {
         auto unset = [&](const char* key) { return !j.is_object() || !j.contains(key); };
         if (unset("gmm")) o.gmm = "sklearn";
@@ -70,10 +69,8 @@ GmmRegOptions ResolveOptions(const nlohmann::json& j) {
         if (unset("gtol")) o.gtol = 1e-3;
         if (unset("maxiter")) o.maxiter = 50;
     }
-    Require(o.gmm == "sklearn" || o.gmm == "points", kName, "gmm",
-            "must be \"sklearn\" or \"points\", got \"" + o.gmm + "\"");
-    Require(o.gradient == "probreg_half" || o.gradient == "exact", kName, "gradient",
-            "must be \"probreg_half\" or \"exact\", got \"" + o.gradient + "\"");
+    RequireOneOf(o.gmm, {"sklearn", "points"}, kName, "gmm");
+    RequireOneOf(o.gradient, {"probreg_half", "exact"}, kName, "gradient");
     Require(o.n_gmm_components >= 1, kName, "n_gmm_components", "must be >= 1");
     Require(o.sigma > 0.0 && std::isfinite(o.sigma), kName, "sigma", "must be > 0");
     Require(o.delta > 0.0 && o.delta <= 1.0, kName, "delta", "must be in (0, 1]");

@@ -29,18 +29,18 @@ struct SvrOptions {
     std::string compat =
         "none";       ///< "none" (correct algorithm, default) | "probreg" (sets the defaults below)
     double nu = 0.1;  ///< one-class nu in (0, 1]
-    std::string gradient = "exact";  ///< "probreg_half" (probreg) | "exact"
-    bool normalize = true;           ///< optimise in a centred frame scaled by sigma
-    double sigma = 1.0;                     ///< bandwidth when use_estimated_sigma is false
-    double gamma = 0.5;                     ///< RBF gamma when use_estimated_sigma is false
-    bool use_estimated_sigma = true;        ///< sigma = sigma_est(source), gamma = 1 / (2 sigma^2)
-    double delta = 0.9;                     ///< cost sigma *= delta per outer iteration
-    double gamma_delta = 10.0;  ///< probreg: SVM gamma *= gamma_delta per outer iteration
-    int outer_iterations = 1;   ///< probreg's maxiter
-    double outer_tol = 1e-3;    ///< probreg's tol on |f - f_prev|
-    int maxiter = 200;          ///< BFGS iterations (probreg's opt_maxiter: 50)
-    double gtol = 1e-6;         ///< BFGS |grad|_inf tolerance (probreg's opt_tol: 1e-3)
-    double svm_tol = 1e-3;      ///< libsvm eps (sklearn tol)
+    std::string gradient = "exact";   ///< "probreg_half" (probreg) | "exact"
+    bool normalize = true;            ///< optimise in a centred frame scaled by sigma
+    double sigma = 1.0;               ///< bandwidth when use_estimated_sigma is false
+    double gamma = 0.5;               ///< RBF gamma when use_estimated_sigma is false
+    bool use_estimated_sigma = true;  ///< sigma = sigma_est(source), gamma = 1 / (2 sigma^2)
+    double delta = 0.9;               ///< cost sigma *= delta per outer iteration
+    double gamma_delta = 10.0;        ///< probreg: SVM gamma *= gamma_delta per outer iteration
+    int outer_iterations = 1;         ///< probreg's maxiter
+    double outer_tol = 1e-3;          ///< probreg's tol on |f - f_prev|
+    int maxiter = 200;                ///< BFGS iterations (probreg's opt_maxiter: 50)
+    double gtol = 1e-6;               ///< BFGS |grad|_inf tolerance (probreg's opt_tol: 1e-3)
+    double svm_tol = 1e-3;            ///< libsvm eps (sklearn tol)
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SvrOptions,
                                                 compat,
@@ -60,8 +60,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SvrOptions,
 
 SvrOptions ResolveOptions(const nlohmann::json& j) {
     SvrOptions o = ParseOptions<SvrOptions>(j, kName);
-    Require(o.compat == "probreg" || o.compat == "none", kName, "compat",
-            "must be \"none\" or \"probreg\", got \"" + o.compat + "\"");
+    RequireOneOf(o.compat, {"probreg", "none"}, kName, "compat");
     if (o.compat == "probreg") {
         auto unset = [&](const char* key) { return !j.is_object() || !j.contains(key); };
         if (unset("gradient")) o.gradient = "probreg_half";
@@ -70,8 +69,7 @@ SvrOptions ResolveOptions(const nlohmann::json& j) {
         if (unset("maxiter")) o.maxiter = 50;
     }
     Require(o.nu > 0.0 && o.nu <= 1.0, kName, "nu", "must be in (0, 1]");
-    Require(o.gradient == "probreg_half" || o.gradient == "exact", kName, "gradient",
-            "must be \"probreg_half\" or \"exact\", got \"" + o.gradient + "\"");
+    RequireOneOf(o.gradient, {"probreg_half", "exact"}, kName, "gradient");
     Require(o.sigma > 0.0 && std::isfinite(o.sigma), kName, "sigma", "must be > 0");
     Require(o.gamma > 0.0 && std::isfinite(o.gamma), kName, "gamma", "must be > 0");
     Require(o.delta > 0.0 && o.delta <= 1.0, kName, "delta", "must be in (0, 1]");

@@ -1,5 +1,6 @@
 #pragma once
 // JSON binding for method options: defaults from the struct, unknown keys rejected by name.
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
@@ -49,6 +50,23 @@ inline void Require(bool ok,
                     const std::string& name,
                     const std::string& why) {
     if (!ok) throw std::invalid_argument(method + ": parameter '" + name + "' " + why);
+}
+
+/// Throws std::invalid_argument("<method>: parameter '<name>' must be "a", "b" or "c", got "x"")
+/// unless `value` is one of `allowed`.
+inline void RequireOneOf(const std::string& value,
+                         std::initializer_list<const char*> allowed,
+                         const std::string& method,
+                         const std::string& name) {
+    std::string list;
+    std::size_t i = 0;
+    for (const char* a : allowed) {
+        if (value == a) return;
+        list += (i == 0 ? "" : (i + 1 == allowed.size() ? " or " : ", ")) + std::string("\"") + a +
+                "\"";
+        ++i;
+    }
+    Require(false, method, name, "must be " + list + ", got \"" + value + "\"");
 }
 
 }  // namespace regbench
