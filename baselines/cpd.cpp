@@ -86,7 +86,9 @@ public:
 protected:
     bool AllowsScale() const override { return options_.update_scale; }
 
-    AlignResult DoAlign(const PointCloud& Y, const PointCloud& X) override {
+    AlignResult DoAlign(const PointCloud& Y,
+                        const PointCloud& X,
+                        const AlignContext& /*context*/) override {
         const double m = static_cast<double>(Y.rows());
         const double n = static_cast<double>(X.rows());
         GaussSumOptions gs;

@@ -1,5 +1,7 @@
 #include "baselines/fgr.hpp"
 
+#include "core/rng.hpp"
+
 #include <open3d/geometry/KDTreeSearchParam.h>
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/pipelines/registration/FastGlobalRegistration.h>
@@ -78,7 +80,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& context) override {
         namespace o3r = open3d::pipelines::registration;
         const auto source_o3d = Prepare(source);
         const auto target_o3d = Prepare(target);
@@ -98,7 +102,11 @@ protected:
         std::unique_lock<std::mutex> lock(open3d_random_mutex);
         const double waited =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-        open3d::utility::random::Seed(options_.seed);
+        // The per-pair stream (AlignContext) mixed with the user's seed: each pair draws its own
+        // triplets, identically whatever the run's order or --jobs.
+        open3d::utility::random::Seed(static_cast<int>(
+            SplitMix64(context.MethodSeed() ^ static_cast<std::uint64_t>(options_.seed)) &
+            0x7fffffffULL));
         const o3r::RegistrationResult reg = o3r::FastGlobalRegistrationBasedOnFeatureMatching(
             *source_o3d, *target_o3d, *source_fpfh, *target_fpfh, fgr_option);
         lock.unlock();

@@ -371,13 +371,17 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override;
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) override;
 
 private:
     FilterRegOptions options_;
 };
 
-AlignResult FilterRegMethod::DoAlign(const PointCloud& source, const PointCloud& target) {
+AlignResult FilterRegMethod::DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) {
     const FilterRegOptions& o = options_;
     const bool pt2pl = o.objective == "pt2pl";
     const bool probreg_weights = o.compat == "probreg";

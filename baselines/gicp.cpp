@@ -70,7 +70,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) override {
         // PCL indexes an empty covariance vector (undefined behaviour) when a cloud has
         // fewer points than k, so refuse that here.
         const Eigen::Index k = options_.correspondence_randomness;

@@ -91,7 +91,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& context) override {
         const GmmRegOptions& o = options_;
         // Bandwidth from the source only (probreg's _estimate_sigma).
         double sigma = o.use_estimated_sigma ? EstimateSigmaFromCovariance(source) : o.sigma;
@@ -104,7 +106,8 @@ protected:
         const PointCloud Y = frame.SourceIn(source);
         const PointCloud X = frame.TargetIn(target);
 
-        auto rng = MakePairRng(static_cast<std::uint64_t>(o.seed), 0);
+        // Per-pair stream (AlignContext) mixed with the user's seed for the GMM fit's k-means++.
+        std::mt19937_64 rng(SplitMix64(context.MethodSeed() ^ static_cast<std::uint64_t>(o.seed)));
         int em_iterations = 0;
         const int k = std::max(
             1, std::min(o.n_gmm_components, static_cast<int>(kComponentFraction * Y.rows())));

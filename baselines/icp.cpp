@@ -37,7 +37,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) override {
         namespace o3r = open3d::pipelines::registration;
         const o3r::ICPConvergenceCriteria criteria(options_.relative_fitness,
                                                    options_.relative_rmse, options_.max_iterations);

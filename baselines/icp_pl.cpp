@@ -47,7 +47,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) override {
         namespace o3r = open3d::pipelines::registration;
         // Point-to-plane (Chen & Medioni 1992) minimises distances along the target's normals,
         // so only the target needs them.

@@ -15,7 +15,7 @@ public:
     nlohmann::json Params() const override { return IdentityOptions{}; }
 
 protected:
-    AlignResult DoAlign(const PointCloud&, const PointCloud&) override {
+    AlignResult DoAlign(const PointCloud&, const PointCloud&, const AlignContext&) override {
         AlignResult r;
         r.stop_reason = "no_op";
         return r;

@@ -68,7 +68,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) override {
         CheckedNdt ndt;
         // Order matters: PCL voxelises the target inside setInputTarget.
         ndt.setMinPointPerVoxel(static_cast<unsigned int>(options_.min_points_per_voxel));

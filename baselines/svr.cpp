@@ -104,7 +104,9 @@ public:
     nlohmann::json Params() const override { return options_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target) override {
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& /*context*/) override {
         const SvrOptions& o = options_;
         double sigma = o.sigma;
         double gamma = o.gamma;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <exception>
 
+#include "core/rng.hpp"
 #include "core/transform.hpp"
 
 namespace regbench {
@@ -27,6 +28,11 @@ std::string ValidateCloud(const PointCloud& cloud, const std::string& which) {
     return {};
 }
 
+std::uint64_t AlignContext::MethodSeed() const {
+    constexpr std::uint64_t kMethodStream = 0x4D4554484F44ULL;  // "METHOD": not the pair stream
+    return SplitMix64(PairSeed(seed, pair_index) ^ kMethodStream);
+}
+
 namespace {
 AlignResult Failed(std::string message, double seconds = 0.0) {
     AlignResult r;
@@ -38,14 +44,16 @@ AlignResult Failed(std::string message, double seconds = 0.0) {
 }
 }  // namespace
 
-AlignResult RegistrationMethod::Align(const PointCloud& source, const PointCloud& target) {
+AlignResult RegistrationMethod::Align(const PointCloud& source,
+                                      const PointCloud& target,
+                                      const AlignContext& context) {
     for (const auto& problem : {ValidateCloud(source, "source"), ValidateCloud(target, "target")}) {
         if (!problem.empty()) return Failed(Name() + ": " + problem);
     }
     const auto start = std::chrono::steady_clock::now();
     AlignResult result;
     try {
-        result = DoAlign(source, target);
+        result = DoAlign(source, target, context);
     } catch (const std::exception& e) {
         result = Failed(Name() + ": " + e.what());
     } catch (...) {

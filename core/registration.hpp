@@ -1,6 +1,9 @@
 #pragma once
 // The one interface every registration method implements.
+#include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <random>
 #include <string>
 
 #include "core/point_cloud.hpp"
@@ -27,6 +30,26 @@ struct AlignResult {
 
 const char* ToString(AlignStatus status);
 
+/// Per-call context every method receives: which pair of which benchmark this is, so a method
+/// that draws random numbers (FPS starts, RANSAC, library-global RNGs) draws the same numbers
+/// for the same pair whatever the order, sharding or --jobs of the run.
+struct AlignContext {
+    std::uint64_t seed = 0;        ///< benchmark seed (the pair file's generation seed)
+    std::uint64_t pair_index = 0;  ///< index of the pair in its pair file
+    int threads = 1;               ///< threads the method may use inside this call
+    /// Optional start T_target_source for methods that refine (ICP and the like); methods that
+    /// cannot use one ignore it.
+    std::optional<Transform> initial_guess;
+
+    /// 64-bit seed of this pair's method RNG stream: PairSeed mixed with a constant, so it never
+    /// equals the stream that generated the pair itself.
+    std::uint64_t MethodSeed() const;
+    /// A fresh RNG seeded with MethodSeed() (each call returns the same stream).
+    std::mt19937_64 MakeRng() const { return std::mt19937_64(MethodSeed()); }
+    /// MethodSeed() folded into 31 bits, for libraries that take an int seed (Open3D, torch).
+    int IntSeed() const { return static_cast<int>(MethodSeed() & 0x7fffffffULL); }
+};
+
 /// Base class. `Align` validates input, times the call and turns exceptions, NaNs and
 /// non-rigid outputs into a failed status; subclasses implement `DoAlign`.
 /// Thread-safety: an instance may keep scratch buffers; use one instance per thread.
@@ -38,10 +61,14 @@ public:
     virtual nlohmann::json Params() const = 0;
 
     /// Estimates T_target_source. Never throws.
-    AlignResult Align(const PointCloud& source, const PointCloud& target);
+    AlignResult Align(const PointCloud& source,
+                      const PointCloud& target,
+                      const AlignContext& context = {});
 
 protected:
-    virtual AlignResult DoAlign(const PointCloud& source, const PointCloud& target) = 0;
+    virtual AlignResult DoAlign(const PointCloud& source,
+                                const PointCloud& target,
+                                const AlignContext& context) = 0;
     /// Methods that estimate a similarity transform on request return true here, so Align
     /// accepts s*R (it still requires R itself to be a rotation).
     virtual bool AllowsScale() const { return false; }

@@ -87,6 +87,7 @@ CallOutcome Failure(const std::string& status, const std::string& message, doubl
 /// sends the result as JSON through a pipe; the parent kills it after `timeout` seconds.
 CallOutcome AlignIsolated(RegistrationMethod& method,
                           const Pair& pair,
+                          const AlignContext& context,
                           double timeout,
                           int threads) {
     int fds[2];
@@ -102,7 +103,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
         close(fds[0]);
         omp_set_num_threads(threads);
         const std::string payload =
-            AlignResultToJson(method.Align(pair.source, pair.target)).dump();
+            AlignResultToJson(method.Align(pair.source, pair.target, context)).dump();
         size_t off = 0;
         while (off < payload.size()) {
             const ssize_t n = write(fds[1], payload.data() + off, payload.size() - off);
@@ -161,9 +162,11 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     }
 }
 
-CallOutcome AlignInProcess(RegistrationMethod& method, const Pair& pair) {
+CallOutcome AlignInProcess(RegistrationMethod& method,
+                           const Pair& pair,
+                           const AlignContext& context) {
     CallOutcome out;
-    out.result = method.Align(pair.source, pair.target);
+    out.result = method.Align(pair.source, pair.target, context);
     out.status = ToString(out.result.status);
     return out;
 }
@@ -295,6 +298,12 @@ RunSummary RunBenchmark(const RunOptions& options) {
              "pairing",
              set.provenance.value("params", nlohmann::json::object()).value("pairing", "unknown"))},
         {"seed", set.provenance.value("seed", nlohmann::json())}};
+    // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
+    const nlohmann::json& seed_json = set.provenance.value("seed", nlohmann::json());
+    const std::uint64_t benchmark_seed =
+        seed_json.is_number_unsigned() ? seed_json.get<std::uint64_t>()
+        : seed_json.is_number_integer() ? static_cast<std::uint64_t>(seed_json.get<std::int64_t>())
+                                        : 0;
     std::vector<std::size_t> indices;
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
         if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
@@ -338,14 +347,18 @@ RunSummary RunBenchmark(const RunOptions& options) {
             if (i >= indices.size()) return;
             const std::size_t k = indices[i];
             const Pair& pair = set.pairs[k];
+            AlignContext context;
+            context.seed = benchmark_seed;
+            context.pair_index = k;
+            context.threads = options.threads_per_call;
             for (std::size_t m = 0; m < methods.size(); ++m) {
                 const auto& spec = options.methods[m];
                 if (done.count(RowKey(k, spec.name))) continue;
                 CallOutcome outcome =
                     options.timeout_seconds > 0.0
-                        ? AlignIsolated(*methods[m], pair, options.timeout_seconds,
+                        ? AlignIsolated(*methods[m], pair, context, options.timeout_seconds,
                                         options.threads_per_call)
-                        : AlignInProcess(*methods[m], pair);
+                        : AlignInProcess(*methods[m], pair, context);
                 nlohmann::json row = MakeResultRow(k, pair, spec.name, spec.params, outcome.result,
                                                    options.threads_per_call);
                 row["status"] = outcome.status;

@@ -3,5 +3,13 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="${REGBENCH_BUILD_JOBS:-$(nproc)}"
-cmake -S "$root" -B "$root/build" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
-cmake --build "$root/build" -j "$jobs"
+build_dir="${REGBENCH_BUILD_DIR:-$root/build}"
+launcher=()
+# ccache (when installed) makes rebuilds and several worktrees cheap; CCACHE_BASEDIR lets
+# worktrees at different paths share hits.
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$root")}"
+fi
+cmake -S "$root" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@"
+cmake --build "$build_dir" -j "$jobs"
