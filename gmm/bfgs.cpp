@@ -1,4 +1,4 @@
-#include "core/bfgs.hpp"
+#include "gmm/bfgs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +12,8 @@ constexpr double kRhoWhenCurvatureZero = 1000.0;  // scipy: "Divide-by-zero enco
 
 /// MINPACK-2 dcstep: safeguarded cubic/quadratic step for the interval [stx, sty]
 /// (Moré & Thuente 1994, Sec. 4, cases 1-4). Updates the interval and returns the new step.
+/// Step() is long on purpose: it follows dcstep line by line (four cases sharing the interval
+/// update), so it can be checked against the reference and against scipy's results.
 struct Dcstep {
     double stx, fx, dx, sty, fy, dy;
     bool brackt = false;

@@ -5,9 +5,12 @@
 // Notation (probabilistic-baselines.md Sec. 2): theta = (q_w, q_x, q_y, q_z, t), q unnormalised.
 #include <Eigen/Core>
 #include <array>
+#include <functional>
+#include <nlohmann/json.hpp>
 
-#include "core/bfgs.hpp"
 #include "core/point_cloud.hpp"
+#include "core/registration.hpp"
+#include "gmm/bfgs.hpp"
 
 namespace regbench {
 
@@ -16,6 +19,9 @@ enum class L2Gradient {
     kProbregHalf,  ///< probreg's g_i = ... / (2 sigma^2): exactly 1/2 of the true gradient
     kExact,        ///< the true gradient of f
 };
+NLOHMANN_JSON_SERIALIZE_ENUM(L2Gradient,
+                             {{L2Gradient::kProbregHalf, "probreg_half"},
+                              {L2Gradient::kExact, "exact"}})
 
 /// Component means and (unnormalised) weights of one mixture.
 struct MixtureFeatures {
@@ -80,5 +86,56 @@ BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            L2Gradient gradient,
                            const Eigen::VectorXd& theta0,
                            const BfgsOptions& options);
+
+/// Schedule of the annealed outer loop shared by GMMReg and SVR (probreg's
+/// L2DistRegistration.registration): BFGS at bandwidth sigma, then sigma *= delta, until
+/// outer_iterations steps or |f_k - f_{k-1}| < outer_tol (checked from the second step on).
+struct AnnealedL2Options {
+    int outer_iterations = 1;  ///< outer (annealing) steps, >= 1
+    double delta = 1.0;        ///< sigma multiplier after each step
+    double outer_tol = 0.0;    ///< stop when the objective changes by less than this
+    L2Gradient gradient = L2Gradient::kExact;
+    BfgsOptions bfgs;  ///< options of every inner BFGS run
+};
+
+/// The schedule from a method's options struct: GMMReg's and SVR's options share the field
+/// names outer_iterations, delta, outer_tol, gradient, maxiter and gtol, so both read them
+/// through this one function.
+template <class MethodOptions>
+AnnealedL2Options AnnealedL2OptionsFrom(const MethodOptions& o) {
+    AnnealedL2Options anneal;
+    anneal.outer_iterations = o.outer_iterations;
+    anneal.delta = o.delta;
+    anneal.outer_tol = o.outer_tol;
+    anneal.gradient = o.gradient;
+    anneal.bfgs.maxiter = o.maxiter;
+    anneal.bfgs.gtol = o.gtol;
+    return anneal;
+}
+
+/// Outcome of MinimizeAnnealedL2.
+struct AnnealedL2Result {
+    Eigen::VectorXd theta;  ///< final (q, t), see TransformFromTheta
+    BfgsResult last;        ///< the last inner BFGS run
+    int iterations = 0;     ///< BFGS iterations summed over all outer steps
+    int outer_steps = 0;    ///< outer steps run
+};
+
+/// Called at the start of every outer step with that step's bandwidth; refits the mixtures
+/// in place (SVR refits its support vectors each step; GMMReg's mixtures stay fixed).
+using RefitMixtures =
+    std::function<void(double sigma, MixtureFeatures& source, MixtureFeatures& target)>;
+
+/// The annealed L2 loop from theta = InitialTheta(). `refit` may be empty (fixed mixtures).
+AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source,
+                                    MixtureFeatures& target,
+                                    double sigma,
+                                    const AnnealedL2Options& options,
+                                    const RefitMixtures& refit = {});
+
+/// The AlignResult of an annealed L2 fit made in `frame`: transform back in the input frame,
+/// iterations, stop reason and the diagnostics both methods report (iterations, objective,
+/// stop_reason, outer_iterations, evaluations).
+AlignResult AnnealedL2AlignResult(const L2Frame& frame, const AnnealedL2Result& fit);
 
 }  // namespace regbench

@@ -1,4 +1,4 @@
-#include "core/gmm_common.hpp"
+#include "gmm/gmm_common.hpp"
 
 #include <Eigen/LU>  // determinant()
 #include <cmath>

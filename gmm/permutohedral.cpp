@@ -1,4 +1,4 @@
-#include "core/permutohedral.hpp"
+#include "gmm/permutohedral.hpp"
 
 #include <algorithm>
 #include <cmath>

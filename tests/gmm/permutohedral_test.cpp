@@ -1,4 +1,4 @@
-#include "core/permutohedral.hpp"
+#include "gmm/permutohedral.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,10 +7,10 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "core/gmm_common.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
-#include "tests/testing/synthetic.hpp"
+#include "gmm/gmm_common.hpp"
+#include "tests/testing/shapes.hpp"
 
 namespace regbench {
 namespace {

@@ -1,6 +1,6 @@
 #pragma once
 // Branch-free double-precision exp that compilers vectorise inside `#pragma omp simd` loops
-// (libm's exp is a scalar call). Dense Gaussian sums are exp-bound (performance-anchors.md).
+// (libm's exp is a scalar call). Dense Gaussian sums are exp-bound.
 #include <cstdint>
 #include <cstring>
 

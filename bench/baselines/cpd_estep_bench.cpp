@@ -1,15 +1,14 @@
-// Micro-benchmarks of the fused CPD E-step (core/gauss_sum.hpp) on one 717 x 717 pair:
-// the "dense E-step floor" of ../shared/specs/performance-anchors.md (~1.8 ms, float
-// polynomial exp, one thread). wide = sigma^2 = sqsum (first iteration, nothing pruned);
-// narrow = sigma^2 = 1e-3 (a late iteration, kd-leaf pruning active).
+// Micro-benchmarks of CPD's fused E-step (baselines/cpd.hpp) on one 717 x 717 pair: the dense
+// E-step floor (float polynomial exp, one thread). wide = sigma^2 = sqsum (first iteration,
+// nothing pruned); narrow = sigma^2 = 1e-3 (a late iteration, kd-leaf pruning active).
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include "core/gauss_sum.hpp"
-#include "core/gmm_common.hpp"
+#include "baselines/cpd.hpp"
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
+#include "gmm/gmm_common.hpp"
 
 namespace regbench {
 namespace {
@@ -48,23 +47,6 @@ BENCHMARK_CAPTURE(BM_CpdEStep, narrow, 1e-3)
     ->ArgNames({"points", "threads"})
     ->Unit(benchmark::kMicrosecond)
     ->UseRealTime();
-
-/// The exp kernel alone: FastExp vs std::exp over 717^2 arguments in [-20, 0].
-void BM_Exp(benchmark::State& state, bool fast) {
-    std::vector<float> x(717 * 717), y(x.size());
-    for (size_t i = 0; i < x.size(); ++i) x[i] = -20.0f * static_cast<float>(i) / x.size();
-    for (auto _ : state) {
-        if (fast) {
-            for (size_t i = 0; i < x.size(); ++i) y[i] = FastExp(x[i]);
-        } else {
-            for (size_t i = 0; i < x.size(); ++i) y[i] = std::exp(x[i]);
-        }
-        benchmark::DoNotOptimize(y.data());
-    }
-    state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * x.size()));
-}
-BENCHMARK_CAPTURE(BM_Exp, fast_exp, true)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_Exp, std_exp, false)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace regbench

@@ -1,4 +1,4 @@
-#include "core/gmm_l2.hpp"
+#include "gmm/gmm_l2.hpp"
 
 #include <gtest/gtest.h>
 

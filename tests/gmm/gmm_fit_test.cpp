@@ -1,4 +1,4 @@
-#include "core/gmm_fit.hpp"
+#include "gmm/gmm_fit.hpp"
 
 #include <gtest/gtest.h>
 

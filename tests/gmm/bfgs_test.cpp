@@ -1,4 +1,4 @@
-#include "core/bfgs.hpp"
+#include "gmm/bfgs.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/gmm_fit.hpp"
+#include "gmm/gmm_fit.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/rng.hpp"
-#include "core/simd_exp.hpp"
+#include "gmm/simd_exp.hpp"
 
 namespace regbench {
 namespace {

@@ -1,18 +1,20 @@
-#include "core/gmm_l2.hpp"
+#include "gmm/gmm_l2.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
 
-#include "core/simd_exp.hpp"
+#include "core/math_constants.hpp"
 #include "core/transform.hpp"
+#include "gmm/gmm_common.hpp"
+#include "gmm/simd_exp.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 /// Below this many Gaussian pairs per evaluation one thread is faster (thread start-up
-/// dominates; performance-anchors.md "Threads hurt tiny problems").
+/// dominates; measured: threads hurt tiny problems).
 constexpr double kMinPairsPerThread = 1.0e5;
 
 struct RowSums {
@@ -186,6 +188,40 @@ BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
     return MinimizeBfgs(
         [&cost](const Eigen::VectorXd& theta, Eigen::VectorXd& grad) { return cost(theta, grad); },
         theta0, options);
+}
+
+AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source,
+                                    MixtureFeatures& target,
+                                    double sigma,
+                                    const AnnealedL2Options& options,
+                                    const RefitMixtures& refit) {
+    AnnealedL2Result fit;
+    fit.theta = RigidGmmL2Cost::InitialTheta();
+    double f_prev = 0.0;
+    int outer = 0;
+    for (outer = 1; outer <= options.outer_iterations; ++outer) {
+        if (refit) refit(sigma, source, target);
+        fit.last =
+            MinimizeRigidL2(source, target, sigma, options.gradient, fit.theta, options.bfgs);
+        fit.iterations += fit.last.iterations;
+        fit.theta = fit.last.x;
+        sigma *= options.delta;
+        if (outer > 1 && std::abs(fit.last.f - f_prev) < options.outer_tol) break;
+        f_prev = fit.last.f;
+    }
+    fit.outer_steps = std::min(outer, options.outer_iterations);
+    return fit;
+}
+
+AlignResult AnnealedL2AlignResult(const L2Frame& frame, const AnnealedL2Result& fit) {
+    AlignResult result;
+    result.T_target_source = frame.ToInput(TransformFromTheta(fit.theta));
+    result.iterations = fit.iterations;
+    result.stop_reason = fit.last.stop_reason;
+    result.extra = Convergence{fit.iterations, fit.last.f, fit.last.stop_reason}.ToJson();
+    result.extra["outer_iterations"] = fit.outer_steps;
+    result.extra["evaluations"] = fit.last.evaluations;
+    return result;
 }
 
 }  // namespace regbench

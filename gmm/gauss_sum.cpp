@@ -1,4 +1,4 @@
-#include "core/gauss_sum.hpp"
+#include "gmm/gauss_sum.hpp"
 
 #include <omp.h>
 
@@ -341,96 +341,5 @@ void KernelSums(const BlockedCloud& queries,
 }
 
 double UnderflowRadiusSigmas() { return std::sqrt(2.0 * -kFastExpMinArg); }
-
-GaussSumMode ParseGaussSumMode(const std::string& name, const std::string& what) {
-    if (name == "auto") return GaussSumMode::kAuto;
-    if (name == "dense") return GaussSumMode::kDense;
-    if (name == "truncated") return GaussSumMode::kTruncated;
-    throw std::invalid_argument(what + " must be one of auto, dense, truncated; got '" + name +
-                                "'");
-}
-
-const char* ToString(GaussSumMode mode) {
-    switch (mode) {
-        case GaussSumMode::kAuto:
-            return "auto";
-        case GaussSumMode::kDense:
-            return "dense";
-        case GaussSumMode::kTruncated:
-            return "truncated";
-    }
-    return "auto";
-}
-
-namespace {
-Eigen::Vector3d Centroid(const PointCloud& cloud) {
-    if (cloud.rows() == 0) throw std::invalid_argument("CpdEStep: target cloud is empty");
-    return cloud.colwise().mean().transpose();
-}
-}  // namespace
-
-CpdEStep::CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options)
-    : options_(options),
-      source_(source, Centroid(target)),
-      target_blocked_(target, Centroid(target)) {
-    if (!(options_.truncation_sigmas > 0.0)) {
-        throw std::invalid_argument("CpdEStep: truncation_sigmas must be positive");
-    }
-}
-
-bool CpdEStep::UsesTruncation(double sigma2) const {
-    switch (options_.mode) {
-        case GaussSumMode::kDense:
-            return false;
-        case GaussSumMode::kTruncated:
-            return true;
-        case GaussSumMode::kAuto:
-            break;
-    }
-    const Eigen::Index largest = std::max(source_.size(), target_blocked_.size());
-    const double r = options_.truncation_sigmas * std::sqrt(sigma2);
-    return largest >= options_.truncation_min_points &&
-           r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
-}
-
-void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out) {
-    if (!(c >= 0.0) || !std::isfinite(c)) {
-        throw std::invalid_argument("CpdEStep: outlier constant c must be finite and >= 0");
-    }
-    const bool truncated = UsesTruncation(sigma2);
-    const double cutoff = truncated ? options_.truncation_sigmas * std::sqrt(sigma2)
-                                    : UnderflowRadiusSigmas() * std::sqrt(sigma2);
-    source_.SetTransform(T);
-
-    // Pass 1: den_n = sum_m K_mn at every target point.
-    KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
-    const Eigen::Index n = target_blocked_.size();
-    const Eigen::Index m = source_.size();
-    inv_den_.resize(static_cast<size_t>(n));
-    out.pt1.resize(n);
-    const auto& t_order = target_blocked_.order();
-    for (Eigen::Index k = 0; k < n; ++k) {
-        const double den = pass1_.m0[k] == 0.0 ? kDenFloor : pass1_.m0[k];
-        const double inv = 1.0 / (den + c);
-        inv_den_[static_cast<size_t>(k)] = static_cast<float>(inv);
-        // sum_m K_mn / (den_n + c) = 1 - c / (den_n + c), as probreg (floored den).
-        out.pt1[t_order[static_cast<size_t>(k)]] = den * inv;
-    }
-
-    // Pass 2: p1_m = sum_n K_mn / (den_n + c) and PX_m = sum_n K_mn x_n / (den_n + c).
-    KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
-    out.p1.resize(m);
-    out.px.resize(m, 3);
-    const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
-    const auto& s_order = source_.order();
-    for (Eigen::Index k = 0; k < m; ++k) {
-        const Eigen::Index row = s_order[static_cast<size_t>(k)];
-        out.p1[row] = pass2_.m0[k];
-        out.px.row(row) = pass2_.m1.row(k) + pass2_.m0[k] * origin;  // back to absolute x_n
-    }
-    out.np = out.p1.sum();
-    out.truncated = truncated;
-    out.evaluated_pairs = pass1_.evaluated_pairs + pass2_.evaluated_pairs;
-}
 
 }  // namespace regbench

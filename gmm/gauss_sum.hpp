@@ -1,5 +1,6 @@
 #pragma once
 // Gaussian kernel sums for the GMM-family methods (CPD, GMMReg, FilterReg's exact mode).
+// CPD's fused E-step built on them lives with CPD (baselines/cpd.hpp).
 //
 // The workhorse is KernelSums(queries, points): for every query q_i,
 //   m0_i = sum_j w_j exp(-|q_i - p_j|^2 / 2 sigma^2),   m1_i = sum_j w_j k_ij p_j,
@@ -13,7 +14,7 @@
 //  - Dense (exact) evaluation uses the float underflow radius sqrt(2 * 87) sigma ~ 13.2 sigma:
 //    every pair it drops has k < 1.7e-38, which FastExp returns as 0 anyway, so pruning
 //    never changes the dense result; it only saves time once sigma is small.
-//  - Truncated evaluation uses r = truncation_sigmas * sigma (spec: 4 sigma, a relative
+//  - Truncated evaluation uses r = truncation_sigmas * sigma (4 sigma by default, a relative
 //    kernel value of exp(-8) = 3.4e-4 at the edge).
 //
 // Threading: OpenMP over query leaves with omp_get_max_threads() threads (one thread: no
@@ -23,6 +24,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -38,7 +40,7 @@ constexpr float kFastExpMaxArg = 88.0f;
 /// exp(x) in float: Cody-Waite range reduction x = n ln2 + r (|r| <= ln2 / 2) and Cephes'
 /// degree-6 polynomial for exp(r), then 2^n by exponent-bit arithmetic. Branch-free, so loops
 /// over it vectorise without -ffast-math. Relative error below 3e-7 (~2.5 float ulp) over
-/// [-87, 0], checked on 2e6 points in tests/core/gauss_sum_test.cpp; 0 for x < -87, exp(88) for x
+/// [-87, 0], checked on 2e6 points in tests/gmm/gauss_sum_test.cpp; 0 for x < -87, exp(88) for x
 /// > 88. GCC vectorises loops over it only with -fno-trapping-math in the calling file (as
 /// gauss_sum.cpp is built); prefer KernelSums, which already is.
 inline float FastExp(float x) {
@@ -143,11 +145,12 @@ enum class GaussSumMode {
     kDense,      ///< exact up to float underflow
     kTruncated,  ///< always truncate at truncation_sigmas * sigma
 };
-/// "auto" | "dense" | "truncated"; throws std::invalid_argument naming `what` otherwise.
-GaussSumMode ParseGaussSumMode(const std::string& name, const std::string& what);
-const char* ToString(GaussSumMode mode);
+NLOHMANN_JSON_SERIALIZE_ENUM(GaussSumMode,
+                             {{GaussSumMode::kAuto, "auto"},
+                              {GaussSumMode::kDense, "dense"},
+                              {GaussSumMode::kTruncated, "truncated"}})
 
-/// Switch rule for GaussSumMode::kAuto (spec: probabilistic-baselines.md, CPD cost): truncate
+/// Switch rule for GaussSumMode::kAuto (docs/probabilistic-baselines.md, CPD cost): truncate
 /// when max(M, N) >= truncation_min_points and r = truncation_sigmas * sigma is below
 /// truncation_max_diag_fraction of the target's bounding-box diagonal. sigma^2 starts wide
 /// (sqsum), so early iterations stay dense and only the cheap late ones are truncated.
@@ -156,46 +159,6 @@ struct GaussSumOptions {
     double truncation_sigmas = 4.0;              ///< r = k sigma; exp(-k^2/2) at the edge
     Eigen::Index truncation_min_points = 20000;  ///< auto: below this, always dense
     double truncation_max_diag_fraction = 0.25;  ///< auto: truncate once r < this * diagonal
-};
-
-/// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
-/// clouds' input order, all in double.
-struct CpdPosteriors {
-    Eigen::VectorXd p1;                ///< P 1 (M)
-    Eigen::VectorXd pt1;               ///< P^T 1 (N)
-    PointCloud px;                     ///< P X (M x 3), in the target's input frame
-    double np = 0.0;                   ///< sum(p1)
-    bool truncated = false;            ///< whether the truncated evaluation was used
-    std::int64_t evaluated_pairs = 0;  ///< kernel evaluations in both passes
-};
-
-/// The fused CPD E-step, P_mn = K_mn / (den_n + c), K_mn = exp(-|T(y_m) - x_n|^2 / 2 sigma^2),
-/// den_n = sum_m K_mn (0 becomes kDenFloor), in two passes and without storing P:
-///   pass 1: den_n by kernel sums over the moved source at each target point;
-///   pass 2: p1 and PX by kernel sums over the target, weighted by 1/(den_n + c), at each moved
-///           source point; pt1_n = den_n / (den_n + c) follows without a second sum.
-/// Holds prepared copies of both clouds, so build it once per registration and call Compute
-/// every iteration. Not thread-safe (scratch buffers); Compute itself uses OpenMP.
-class CpdEStep {
-public:
-    /// probreg's floor for an all-zero column: np.finfo(np.float32).eps.
-    static constexpr double kDenFloor = 1.19e-7;
-
-    CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options = {});
-
-    /// One E-step for the source moved by T (a similarity), variance sigma2 > 0 and outlier
-    /// constant c = (2 pi sigma2)^(D/2) w/(1-w) M/N >= 0.
-    void Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out);
-
-    /// True when Compute with this sigma2 would truncate (the options' switch rule).
-    bool UsesTruncation(double sigma2) const;
-
-private:
-    GaussSumOptions options_;
-    BlockedCloud source_;
-    BlockedCloud target_blocked_;
-    KernelSumResult pass1_, pass2_;
-    std::vector<float> inv_den_;  ///< target stored order
 };
 
 }  // namespace regbench
