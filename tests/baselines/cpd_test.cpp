@@ -5,11 +5,11 @@
 
 #include <cmath>
 
-#include "core/gauss_sum.hpp"
 #include "core/metrics.hpp"
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
+#include "gmm/gauss_sum.hpp"
 #include "runners/registry.hpp"
 
 namespace regbench {
@@ -180,13 +180,13 @@ TEST(Cpd, RejectsOutOfRangeParametersByName) {
 
 TEST(Cpd, CompatPresetAndExplicitValues) {
     EXPECT_FALSE(ParseCpdOptions({}).update_scale);
-    EXPECT_EQ(ParseCpdOptions({}).sigma2_formula, "ml");
+    EXPECT_EQ(ParseCpdOptions({}).sigma2_formula, CpdSigma2Formula::kMl);
     const CpdOptions p = ParseCpdOptions({{"compat", "probreg"}});
     EXPECT_TRUE(p.update_scale);
-    EXPECT_EQ(p.sigma2_formula, "probreg");
+    EXPECT_EQ(p.sigma2_formula, CpdSigma2Formula::kProbreg);
     const CpdOptions q = ParseCpdOptions({{"compat", "probreg"}, {"sigma2_formula", "ml"}});
     EXPECT_TRUE(q.update_scale);
-    EXPECT_EQ(q.sigma2_formula, "ml");
+    EXPECT_EQ(q.sigma2_formula, CpdSigma2Formula::kMl);
     const auto info = FindMethod("cpd");
     for (const auto& item : info.defaults.items()) {
         EXPECT_TRUE(info.param_docs.count(item.key())) << "undocumented: " << item.key();
