@@ -11,29 +11,15 @@
 #include <string>
 #include <vector>
 
-#include "protocols/dataset_impl.hpp"
+#include "datasets/dataset_impl.hpp"
+#include "protocols/hdf5_handle.hpp"
 
 namespace regbench::detail {
 namespace fs = std::filesystem;
 
 namespace {
 
-/// Owns one HDF5 identifier.
-class H5Id {
-public:
-    H5Id(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-    ~H5Id() {
-        if (id_ >= 0) close_(id_);
-    }
-    H5Id(const H5Id&) = delete;
-    H5Id& operator=(const H5Id&) = delete;
-    hid_t get() const { return id_; }
-    bool ok() const { return id_ >= 0; }
-
-private:
-    hid_t id_;
-    herr_t (*close_)(hid_t);
-};
+using H5Id = H5Handle;
 
 /// A whole numeric dataset, converted by HDF5 to T.
 template <typename T>

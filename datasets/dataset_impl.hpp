@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "protocols/dataset.hpp"
+#include "datasets/dataset.hpp"
 
 namespace regbench::detail {
 

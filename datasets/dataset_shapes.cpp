@@ -1,9 +1,9 @@
-#include "protocols/dataset_shapes.hpp"
+#include "datasets/dataset_shapes.hpp"
 
 #include <stdexcept>
 #include <utility>
 
-#include "protocols/indoor_dataset.hpp"
+#include "datasets/indoor_dataset.hpp"
 
 namespace regbench {
 

@@ -1,8 +1,8 @@
 #pragma once
-// Glue between datasets (protocols/dataset.hpp) and pair protocols: records -> ShapeSources.
+// Glue between datasets (datasets/dataset.hpp) and pair protocols: records -> ShapeSources.
 #include <vector>
 
-#include "protocols/dataset.hpp"
+#include "datasets/dataset.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/shape_source.hpp"
 

@@ -1,11 +1,11 @@
-#include "protocols/indoor_dataset.hpp"
+#include "datasets/indoor_dataset.hpp"
 
 #include <filesystem>
 #include <stdexcept>
 
 #include "core/rng.hpp"
-#include "protocols/dataset_impl.hpp"
-#include "protocols/indoor_sim.hpp"
+#include "datasets/dataset_impl.hpp"
+#include "datasets/indoor_sim.hpp"
 
 namespace regbench {
 namespace {

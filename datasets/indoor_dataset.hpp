@@ -3,7 +3,7 @@
 #include <string>
 #include <vector>
 
-#include "protocols/dataset.hpp"
+#include "datasets/dataset.hpp"
 #include "protocols/shape_source.hpp"
 
 namespace regbench {

@@ -1,5 +1,5 @@
 // Indoor scan simulation: room assembly, pinhole depth rendering, Kinect noise, view pairs.
-#include "protocols/indoor_sim.hpp"
+#include "datasets/indoor_sim.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -12,15 +12,15 @@
 #include <vector>
 
 #include "core/kd_tree.hpp"
+#include "core/math_constants.hpp"
 #include "core/options.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
+#include "datasets/off_reader.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
 constexpr const char* kName = "indoor";
 /// Views looking closer to vertical than this (|cos| of the angle to world z) are redrawn:
 /// LookAt has no roll-free frame there, and a Kinect held by a person rarely points so.

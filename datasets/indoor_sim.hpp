@@ -4,7 +4,7 @@
 //
 // A room is a closed box (floor, ceiling, four walls) with furniture-like boxes and meshes from
 // the embedded corpus standing on the floor. A Kinect-like pinhole depth camera renders it by
-// ray casting (protocols/ray_caster.hpp, CGAL), then the depth is corrupted with the noise
+// ray casting (datasets/ray_caster.hpp, CGAL), then the depth is corrupted with the noise
 // model of Nguyen, Izadi and Lovell, "Modeling Kinect Sensor Noise for Improved 3D
 // Reconstruction and Tracking", 3DIMPVT 2012, quantised in disparity, and back-projected.
 // Two nearby camera poses give a pair whose overlap comes from visibility.
@@ -26,8 +26,8 @@
 #include <vector>
 
 #include "core/point_cloud.hpp"
+#include "datasets/ray_caster.hpp"
 #include "protocols/mesh.hpp"
-#include "protocols/ray_caster.hpp"
 
 namespace regbench {
 

@@ -1,4 +1,4 @@
-#include "protocols/point_file.hpp"
+#include "datasets/point_file.hpp"
 
 #include <algorithm>
 #include <cctype>

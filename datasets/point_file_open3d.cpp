@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "protocols/point_file.hpp"
+#include "datasets/point_file.hpp"
 
 namespace regbench {
 

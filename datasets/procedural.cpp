@@ -1,4 +1,4 @@
-#include "protocols/procedural.hpp"
+#include "datasets/procedural.hpp"
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -7,12 +7,12 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "core/rng.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kSegments = 48;  ///< samples around every closed curve (longitude, tube section)
 constexpr int kRings = 32;     ///< samples along every open parameter (latitude, profile)
 

@@ -1,5 +1,5 @@
 // CGAL translation unit: AABB tree over triangles, first_intersection per ray.
-#include "protocols/ray_caster.hpp"
+#include "datasets/ray_caster.hpp"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>

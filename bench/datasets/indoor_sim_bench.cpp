@@ -11,7 +11,7 @@
 
 #include "core/kd_tree.hpp"
 #include "core/rng.hpp"
-#include "protocols/indoor_sim.hpp"
+#include "datasets/indoor_sim.hpp"
 #include "protocols/pair_protocols.hpp"
 
 namespace regbench {

@@ -1,4 +1,4 @@
-#include "protocols/dataset.hpp"
+#include "datasets/dataset.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <set>
 #include <string>
 
-#include "tests/protocols/test_files.hpp"
+#include "tests/datasets/test_files.hpp"
 
 namespace regbench {
 namespace {

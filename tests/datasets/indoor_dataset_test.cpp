@@ -1,8 +1,8 @@
-#include "protocols/indoor_dataset.hpp"
+#include "datasets/indoor_dataset.hpp"
 
 #include <gtest/gtest.h>
 
-#include "protocols/dataset_shapes.hpp"
+#include "datasets/dataset_shapes.hpp"
 
 namespace regbench {
 namespace {

@@ -1,4 +1,4 @@
-#include "protocols/indoor_sim.hpp"
+#include "datasets/indoor_sim.hpp"
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -10,14 +10,13 @@
 #include <string>
 
 #include "core/kd_tree.hpp"
+#include "core/math_constants.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
-#include "protocols/ray_caster.hpp"
+#include "datasets/ray_caster.hpp"
 
 namespace regbench {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// A square of side 2 * half_side in the plane z = depth (world frame), two triangles.
 Mesh Quad(double depth, double half_side) {

@@ -1,4 +1,5 @@
-#include "protocols/mesh.hpp"
+// ReadOff, and the mesh operations (protocols/mesh.hpp) on meshes it reads.
+#include "datasets/off_reader.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-#include "protocols/point_file.hpp"
+#include "datasets/point_file.hpp"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
-#include "tests/protocols/test_files.hpp"
+#include "tests/datasets/test_files.hpp"
 
 namespace regbench {
 namespace {

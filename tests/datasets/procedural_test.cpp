@@ -1,4 +1,4 @@
-#include "protocols/procedural.hpp"
+#include "datasets/procedural.hpp"
 
 #include <gtest/gtest.h>
 
