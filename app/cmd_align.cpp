@@ -10,8 +10,9 @@
 #include "app/commands.hpp"
 #include "core/metrics.hpp"
 #include "core/transform.hpp"
+#include "datasets/off_reader.hpp"
+#include "datasets/point_file.hpp"
 #include "protocols/mesh.hpp"
-#include "protocols/point_file.hpp"
 #include "protocols/xyz_io.hpp"
 #include "runners/registry.hpp"
 
