@@ -8,6 +8,7 @@
 
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
+#include "tests/testing/method_params.hpp"
 #include "tests/testing/shapes.hpp"
 
 namespace regbench {
@@ -77,22 +78,14 @@ TEST(GmmReg, PointFeaturesAndScheduleWork) {
 }
 
 TEST(GmmReg, RejectsBadParametersByName) {
-    const auto expect_named = [](const nlohmann::json& p, const std::string& name) {
-        try {
-            CreateMethod("gmmreg", p);
-            ADD_FAILURE() << "accepted " << p.dump();
-        } catch (const std::invalid_argument& e) {
-            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
-        }
-    };
-    expect_named({{"delta", 1.5}}, "delta");
-    expect_named({{"sigma", -1.0}}, "sigma");
-    expect_named({{"gmm", "kmeans"}}, "gmm");
-    expect_named({{"gradient", "double"}}, "gradient");
-    expect_named({{"compat", "matlab"}}, "compat");
-    expect_named({{"n_gmm_components", 0}}, "n_gmm_components");
-    expect_named({{"maxiter", -1}}, "maxiter");
-    expect_named({{"sigma2", 1.0}}, "sigma2");
+    testing::ExpectRejected("gmmreg", {{"delta", 1.5}}, "delta");
+    testing::ExpectRejected("gmmreg", {{"sigma", -1.0}}, "sigma");
+    testing::ExpectRejected("gmmreg", {{"gmm", "kmeans"}}, "gmm");
+    testing::ExpectRejected("gmmreg", {{"gradient", "double"}}, "gradient");
+    testing::ExpectRejected("gmmreg", {{"compat", "matlab"}}, "compat");
+    testing::ExpectRejected("gmmreg", {{"n_gmm_components", 0}}, "n_gmm_components");
+    testing::ExpectRejected("gmmreg", {{"maxiter", -1}}, "maxiter");
+    testing::ExpectRejected("gmmreg", {{"sigma2", 1.0}}, "sigma2");
 }
 
 TEST(GmmReg, ParamsReportResolvedCompatDefaults) {

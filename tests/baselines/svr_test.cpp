@@ -9,6 +9,7 @@
 #include "core/transform.hpp"
 #include "gmm/gmm_common.hpp"
 #include "runners/registry.hpp"
+#include "tests/testing/method_params.hpp"
 #include "tests/testing/shapes.hpp"
 
 namespace regbench {
@@ -104,22 +105,14 @@ TEST(Svr, OuterScheduleRunsInBothModes) {
 }
 
 TEST(Svr, RejectsBadParametersByName) {
-    const auto expect_named = [](const nlohmann::json& p, const std::string& name) {
-        try {
-            CreateMethod("svr", p);
-            ADD_FAILURE() << "accepted " << p.dump();
-        } catch (const std::invalid_argument& e) {
-            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
-        }
-    };
-    expect_named({{"nu", 0.0}}, "nu");
-    expect_named({{"nu", 1.2}}, "nu");
-    expect_named({{"gamma", -1.0}}, "gamma");
-    expect_named({{"delta", 0.0}}, "delta");
-    expect_named({{"svm_tol", 0.0}}, "svm_tol");
-    expect_named({{"gradient", "half"}}, "gradient");
-    expect_named({{"outer_iterations", 0}}, "outer_iterations");
-    expect_named({{"opt_maxiter", 5}}, "opt_maxiter");
+    testing::ExpectRejected("svr", {{"nu", 0.0}}, "nu");
+    testing::ExpectRejected("svr", {{"nu", 1.2}}, "nu");
+    testing::ExpectRejected("svr", {{"gamma", -1.0}}, "gamma");
+    testing::ExpectRejected("svr", {{"delta", 0.0}}, "delta");
+    testing::ExpectRejected("svr", {{"svm_tol", 0.0}}, "svm_tol");
+    testing::ExpectRejected("svr", {{"gradient", "half"}}, "gradient");
+    testing::ExpectRejected("svr", {{"outer_iterations", 0}}, "outer_iterations");
+    testing::ExpectRejected("svr", {{"opt_maxiter", 5}}, "opt_maxiter");
 }
 
 }  // namespace
