@@ -1,7 +1,7 @@
 #pragma once
 // Rigid Coherent Point Drift (Myronenko & Song, TPAMI 2010) as probreg 0.3.7 implements it,
-// with its two deviations from the paper made explicit options (spec:
-// ../shared/specs/probabilistic-baselines.md section 1).
+// with its two deviations from the paper made explicit options (docs/probabilistic-baselines.md,
+// "CPD").
 #include <nlohmann/json.hpp>
 #include <string>
 

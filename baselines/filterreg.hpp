@@ -3,8 +3,8 @@
 // Registration using Gaussian Filter and Twist Parameterization", CVPR 2019), rigid, as
 // probreg 0.3.x runs it (`registration_filterreg`): an E-step that filters the target through
 // a permutohedral lattice built over [T(Y)/sigma; X/sigma] and a weighted Kabsch (pt2pt) or
-// twist Gauss-Newton (pt2pl) M-step. See ../shared/specs/probabilistic-baselines.md sec. 4 and
-// docs/probabilistic-baselines.md ("FilterReg") for what matches probreg and what does not.
+// twist Gauss-Newton (pt2pl) M-step. See docs/probabilistic-baselines.md ("FilterReg") for
+// what matches probreg and what does not.
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>

@@ -1,6 +1,6 @@
 #pragma once
 // Pieces shared by the GMM-family methods (CPD, GMMReg, SVR, FilterReg, DeepGMR, OGMM).
-// Notation as ../shared/specs/probabilistic-baselines.md: source Y (M x D), target X (N x D).
+// Notation as in probreg and the CPD paper: source Y (M x D), target X (N x D).
 #include <nlohmann/json.hpp>
 #include <string>
 

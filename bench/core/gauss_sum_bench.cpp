@@ -1,6 +1,6 @@
 // Micro-benchmarks of the fused CPD E-step (core/gauss_sum.hpp) on one 717 x 717 pair:
-// the "dense E-step floor" of ../shared/specs/performance-anchors.md (~1.8 ms, float
-// polynomial exp, one thread). wide = sigma^2 = sqsum (first iteration, nothing pruned);
+// the project's performance target for a dense E-step (~1.8 ms with float polynomial exp on
+// one thread; docs/probabilistic-baselines.md). wide = sigma^2 = sqsum (first iteration, nothing pruned);
 // narrow = sigma^2 = 1e-3 (a late iteration, kd-leaf pruning active).
 #include <benchmark/benchmark.h>
 #include <omp.h>
