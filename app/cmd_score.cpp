@@ -35,6 +35,9 @@ void AddScoreCommand(CLI::App& app) {
                     "Reject a transform when max|R^T R - I|, |det R - 1| or its bottom row's "
                     "distance from (0,0,0,1) exceeds this")
         ->capture_default_str();
+    cmd->add_flag("--allow-scale", o->allow_scale,
+                  "Accept similarities s R (uniform scale, e.g. CPD with scale): the rotation "
+                  "metrics use R, the row's scale is s");
     cmd->add_option("--threads", o->threads, "Threads the method used (recorded in rows)")
         ->capture_default_str();
     cmd->callback([=] {

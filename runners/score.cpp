@@ -20,17 +20,28 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
            s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-/// Empty when T is rigid within tol; otherwise what is wrong with it.
-std::string RigidProblem(const Transform& T, double tol) {
+/// Empty when T is rigid within tol (a similarity s R with `allow_scale`, s returned in
+/// *scale); otherwise what is wrong with it.
+std::string RigidProblem(const Transform& T, double tol, bool allow_scale, double* scale) {
     if (!T.allFinite()) return "has non-finite entries";
-    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    char buf[200];
+    *scale = 1.0;
+    if (allow_scale) {
+        const double det = R.determinant();
+        if (!(det > 0.0)) {
+            std::snprintf(buf, sizeof(buf), "has det %.6g <= 0 (not a scaled rotation)", det);
+            return buf;
+        }
+        *scale = std::cbrt(det);
+        R /= *scale;
+    }
     const double ortho = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
     const double det = R.determinant();
     const double bottom = (T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff();
-    char buf[200];
     if (ortho > tol) {
-        std::snprintf(buf, sizeof(buf), "is not a rotation: max |R^T R - I| = %.3g > %.3g", ortho,
-                      tol);
+        std::snprintf(buf, sizeof(buf), "is not a rotation%s: max |R^T R - I| = %.3g > %.3g",
+                      allow_scale ? " times a scale" : "", ortho, tol);
         return buf;
     }
     if (std::abs(det - 1.0) > tol) {
@@ -128,7 +139,8 @@ void ParseCsvLine(const std::string& line,
 std::vector<ExternalTransform> ReadTransforms(const std::string& path,
                                               std::size_t num_pairs,
                                               const std::string& method,
-                                              double rigid_tolerance) {
+                                              double rigid_tolerance,
+                                              bool allow_scale) {
     const bool csv = EndsWith(path, ".csv");
     if (!csv && !EndsWith(path, ".jsonl") && !EndsWith(path, ".json")) {
         throw std::runtime_error(path + ": transforms file must end in .jsonl or .csv");
@@ -156,10 +168,12 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path,
         if (!std::isfinite(t.seconds) || t.seconds < 0) {
             throw std::runtime_error(where + ": seconds must be a finite number >= 0");
         }
-        const std::string problem = RigidProblem(t.T, rigid_tolerance);
+        const std::string problem = RigidProblem(t.T, rigid_tolerance, allow_scale, &t.scale);
         if (!problem.empty()) {
-            throw std::runtime_error(where + ": transform of pair " + std::to_string(t.pair) + " " +
-                                     problem + " (scoring needs a rigid transform)");
+            throw std::runtime_error(
+                where + ": transform of pair " + std::to_string(t.pair) + " " + problem +
+                (allow_scale ? ""
+                             : " (scoring needs a rigid transform; --allow-scale accepts s R)"));
         }
         const auto [it, fresh] = seen.emplace(t.pair, where);
         if (!fresh) {
@@ -176,8 +190,8 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     if (o.out_path.empty()) throw std::invalid_argument("score: --out is required");
     if (!o.params.is_object()) throw std::invalid_argument("score: --params must be a JSON object");
     const PairSet set = ReadPairFile(o.pairs_path);  // throws naming the file
-    const std::vector<ExternalTransform> given =
-        ReadTransforms(o.transforms_path, set.pairs.size(), o.method, o.rigid_tolerance);
+    const std::vector<ExternalTransform> given = ReadTransforms(
+        o.transforms_path, set.pairs.size(), o.method, o.rigid_tolerance, o.allow_scale);
     std::vector<const ExternalTransform*> by_pair(set.pairs.size(), nullptr);
     for (const auto& t : given) by_pair[t.pair] = &t;
 
@@ -193,6 +207,7 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
         if (by_pair[k]) {
             result.T_target_source = by_pair[k]->T;
             result.seconds = by_pair[k]->seconds;
+            result.scale = by_pair[k]->scale;
             context.status = Status::kOk;
         } else {
             // Scored as the identity, like a failed run row, and counted as failed by reports.

@@ -23,6 +23,9 @@ struct ScoreOptions {
     std::string out_path;                              ///< result JSONL (written atomically)
     EulerConvention euler = EulerConvention::kZyx;     ///< Euler angles of mae_r / rmse_r
     double rigid_tolerance = kDefaultRigidTolerance;
+    /// Accept similarities s R (uniform scale s > 0, e.g. CPD with scale): checked as R after
+    /// dividing s = cbrt(det) out; the row's `scale` is s and the rotation metrics use R.
+    bool allow_scale = false;
     int threads = 1;  ///< recorded in rows (threads the external method used)
 };
 
@@ -31,6 +34,7 @@ struct ExternalTransform {
     std::size_t pair = 0;
     Transform T = Transform::Identity();  ///< maps the pair's source into its target frame
     double seconds = 0.0;                 ///< 0 when the file gives none
+    double scale = 1.0;                   ///< cbrt(det) of the 3x3 block when scale is allowed
     std::string origin;                   ///< "file:line"
 };
 
@@ -39,11 +43,12 @@ struct ExternalTransform {
 /// file can be rescored) or CSV `pair,t00,...,t23[,seconds]` (first three rows of the 4x4,
 /// row-major; an optional header line starting with "pair"). Throws std::runtime_error naming
 /// file:line for a malformed line, a pair index outside [0, num_pairs), a pair given twice or
-/// a matrix that is not rigid within `rigid_tolerance`.
+/// a matrix that is not rigid (a similarity with `allow_scale`) within `rigid_tolerance`.
 std::vector<ExternalTransform> ReadTransforms(const std::string& path,
                                               std::size_t num_pairs,
                                               const std::string& method,
-                                              double rigid_tolerance);
+                                              double rigid_tolerance,
+                                              bool allow_scale = false);
 
 struct ScoreSummary {
     std::size_t rows = 0;     ///< rows written (one per pair)

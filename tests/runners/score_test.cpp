@@ -172,6 +172,23 @@ TEST_F(ScoreTest, InvalidFilesAreRejectedNamingFileAndLine) {
     ExpectError(Options("t.txt", "m"), "must end in .jsonl or .csv");
 }
 
+TEST_F(ScoreTest, SimilaritiesNeedAllowScale) {
+    // 2 Rz(90): rejected as rigid; with allow_scale the row has scale 2 and the rotation metrics
+    // of Rz(90) itself (computed here by MotionMetrics on the unscaled matrix).
+    Write("sim.csv", "0,0,-2,0,0,2,0,0,0,0,0,2,0\n");
+    ScoreOptions o = Options("sim.csv", "m");
+    ExpectError(o, "--allow-scale accepts s R");
+    o.allow_scale = true;
+    ScoreTransforms(o);
+    const auto rows = ReadResultRows(o.out_path);
+    EXPECT_DOUBLE_EQ(rows[0].scale, 2.0);
+    const PairSet set = ReadPairFile(pairs_);
+    const PairMetrics m = MotionMetrics(
+        set.pairs[0].T_gt, MakeTransform(RotationZyxProductDeg(90, 0, 0), Eigen::Vector3d::Zero()));
+    EXPECT_NEAR(rows[0].metrics.mae_r, m.mae_r, 1e-9);
+    EXPECT_NEAR(rows[0].metrics.rre, m.rre, 1e-6);
+}
+
 TEST_F(ScoreTest, SlightlyNonOrthonormalFloat32OutputIsAccepted) {
     // A rotation printed with 7 significant digits (float32) is off by ~1e-7: within 1e-4.
     Write("f32.csv", "0,0.8660254,-0.5,0,0.1,0.5,0.8660254,0,0,0,0,1,0\n");
