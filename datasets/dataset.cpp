@@ -73,6 +73,9 @@ void RequireSplit(const SplitSpec& split, const std::string& where, bool has_tra
 
 // ---- cgal: data/corpus.json + data/meshes ----
 
+/// Reads corpus.json, checks every entry names an existing mesh and applies the split. It is
+/// one function (a little over 60 lines) because the checks and the split share the parsed
+/// entries and each error names the corpus file and the entry.
 std::unique_ptr<Dataset> OpenCgal(const SplitSpec& split, const DatasetOptions& options) {
     const fs::path dir = DataDir(options);
     const std::string corpus_path = (dir / "corpus.json").string();
