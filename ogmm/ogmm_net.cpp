@@ -202,6 +202,17 @@ torch::Tensor KabschTransform(const torch::Tensor& src, const torch::Tensor& dst
     return torch::cat({torch::cat({R, t}, 2), bottom}, 1);
 }
 
+torch::Tensor SoftMatchTransform(const torch::Tensor& mu_p,
+                                 const torch::Tensor& nu_p,
+                                 const torch::Tensor& mu_q,
+                                 const torch::Tensor& nu_q,
+                                 double temperature) {
+    const auto unit = F::NormalizeFuncOptions().dim(2);
+    const torch::Tensor cos =
+        torch::bmm(F::normalize(nu_p, unit), F::normalize(nu_q, unit).transpose(1, 2));
+    return KabschTransform(mu_p, torch::bmm(torch::softmax(cos / temperature, 2), mu_q));
+}
+
 OgmmNet::OgmmNet(const OgmmConfig& config) : config_(config) {
     ValidateValues(config_);
     const int64_t d = config_.emb_dims;
@@ -298,14 +309,9 @@ NetOutput OgmmNet::Forward(const PairBatch& batch) {
                                            std::min(config_.clusters, q.size(2)), fit);
     const torch::Tensor nu_p = ClusterAverages(gmm_p.gamma, fsp.transpose(1, 2));
     const torch::Tensor nu_q = ClusterAverages(gmm_q.gamma, fsq.transpose(1, 2));
-    // 10: soft matches softmax(cos / T) of cluster features, Kabsch from mu_p to matched mu_q.
-    const torch::Tensor cos =
-        torch::bmm(F::normalize(nu_p, F::NormalizeFuncOptions().dim(2)),
-                   F::normalize(nu_q, F::NormalizeFuncOptions().dim(2)).transpose(1, 2));
-    const torch::Tensor matched =
-        torch::bmm(torch::softmax(cos / config_.match_temperature, 2), gmm_q.mu);
+    // 10: soft matches of the cluster features, Kabsch from mu_p to the matched mu_q.
     NetOutput out;
-    out.T = KabschTransform(gmm_p.mu, matched);
+    out.T = SoftMatchTransform(gmm_p.mu, nu_p, gmm_q.mu, nu_q, config_.match_temperature);
     out.aux = {
         {"overlap_source", op},        {"overlap_target", oq},   {"gamma_source", gmm_p.gamma},
         {"gamma_target", gmm_q.gamma}, {"mu_source", gmm_p.mu},  {"mu_target", gmm_q.mu},

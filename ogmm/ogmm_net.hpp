@@ -85,6 +85,15 @@ OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
 /// negated when det < 0), t = d_mean - R s_mean. Returns T [B, 4, 4]; differentiable.
 torch::Tensor KabschTransform(const torch::Tensor& src, const torch::Tensor& dst);
 
+/// Soft matching of cluster features and the closed-form transform (the code's step 10):
+/// Sm = softmax_j(cos(nu_p_i, nu_q_j) / temperature), y_i = sum_j Sm_ij mu_q_j, then
+/// KabschTransform(mu_p, y). mu [B, J, 3], nu [B, J, C]; returns T [B, 4, 4].
+torch::Tensor SoftMatchTransform(const torch::Tensor& mu_p,
+                                 const torch::Tensor& nu_p,
+                                 const torch::Tensor& mu_q,
+                                 const torch::Tensor& nu_q,
+                                 double temperature);
+
 /// The OGMM network. Forward() stores in NetOutput.aux: overlap_source [B, N],
 /// overlap_target [B, M] (overlap scores in (0, 1), ones with osp off), gamma_source/target
 /// [B, N|M, J], mu_source/target [B, J, 3], pi_source/target [B, J], nu_source/target [B, J, d]

@@ -6,6 +6,8 @@
 #include <limits>
 #include <vector>
 
+#include "tests/ogmm/formula_fixture.hpp"
+
 namespace regbench::ogmm {
 namespace {
 
@@ -169,6 +171,68 @@ TEST_F(LayersTest, AttentionStartsWithQueryKeyValueEqualToMergeAndZeroLastBias) 
         EXPECT_TRUE(torch::equal(params[std::string(p) + ".bias"], params["merge.bias"]));
     }
     EXPECT_EQ(params["mlp.3.bias"].abs().sum().item<float>(), 0.0f);
+}
+
+// ---- Parity with scripts/ogmm_reference.py: an independent PyTorch implementation of the same
+// blocks, formula weights and inputs (tests/ogmm/formula_fixture.hpp). Expected numbers are what
+// that script printed (Debian python3-torch 1.13, float32).
+constexpr double kParityRelTol = 1e-4;
+
+void ExpectSums(const torch::Tensor& y, double sum, double sq_sum) {
+    EXPECT_NEAR(y.sum().item<double>(), sum, kParityRelTol * std::abs(sum));
+    EXPECT_NEAR((y * y).sum().item<double>(), sq_sum, kParityRelTol * std::abs(sq_sum));
+}
+
+void ExpectValues(const torch::Tensor& y, const std::vector<double>& expected) {
+    const torch::Tensor flat = y.contiguous().view({-1}).to(torch::kFloat64);
+    ASSERT_EQ(flat.numel(), static_cast<int64_t>(expected.size()));
+    for (size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_NEAR(flat[static_cast<int64_t>(i)].item<double>(), expected[i], 2e-6) << i;
+    }
+}
+
+TEST_F(LayersTest, DgcnnMatchesThePyTorchReference) {
+    Dgcnn net(64, 20);
+    testing::FormulaFill(*net);
+    const torch::Tensor x = testing::FormulaCloud(2, 40, 0.0).transpose(1, 2).contiguous();
+    torch::NoGradGuard no_grad;
+    net->eval();
+    const torch::Tensor y = net->forward(x);
+    ExpectSums(y, 173.03321838378906, 21.813386917114258);
+    using torch::indexing::Slice;
+    ExpectValues(y.index({0, Slice(0, 4), Slice(0, 3)}),
+                 {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0519533, 0.0340433, 0.035902, 0.0, 0.0, 0.0});
+    ExpectValues(y.index({1, Slice(-3, torch::indexing::None), Slice(-2, torch::indexing::None)}),
+                 {0.0, 0.0, 0.0476427, 0.0, 0.0576919, 0.0});
+    net->train();  // batch statistics instead of the running ones
+    ExpectSums(net->forward(x), 2052.216796875, 2642.792236328125);
+}
+
+TEST_F(LayersTest, AttentionMatchesThePyTorchReference) {
+    AttentionalPropagation att(32, 4);
+    testing::FormulaFill(*att);
+    const torch::Tensor x = torch::sin(0.05 * torch::arange(2 * 32 * 20, torch::kFloat64))
+                                .view({2, 32, 20})
+                                .to(torch::kFloat);
+    const torch::Tensor keys = torch::cos(0.11 * torch::arange(2 * 32 * 7, torch::kFloat64))
+                                   .view({2, 32, 7})
+                                   .to(torch::kFloat);
+    torch::NoGradGuard no_grad;
+    const torch::Tensor y = att->forward(x, keys);
+    ExpectSums(y, 10.244800567626953, 159.75340270996094);
+    using torch::indexing::Slice;
+    ExpectValues(y.index({0, Slice(0, 4), Slice(0, 3)}),
+                 {-0.3567564, -0.3412879, -0.2929187, -0.6821652, -0.6984882, -0.6659223,
+                  -0.0663185, -0.0723371, -0.0642722, -0.5953826, -0.4247956, -0.3159281});
+}
+
+TEST_F(LayersTest, SphericalEncodingMatchesThePyTorchReference) {
+    SphericalEncoding spe(32, 5);
+    testing::FormulaFill(*spe);
+    spe->eval();
+    const torch::Tensor x = testing::FormulaCloud(2, 40, 0.0).transpose(1, 2).contiguous();
+    torch::NoGradGuard no_grad;
+    ExpectSums(spe->forward(x), 110.0683364868164, 46.51270294189453);
 }
 
 }  // namespace
