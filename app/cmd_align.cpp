@@ -10,59 +10,13 @@
 #include "app/commands.hpp"
 #include "core/metrics.hpp"
 #include "core/transform.hpp"
-#include "datasets/off_reader.hpp"
 #include "datasets/point_file.hpp"
-#include "protocols/mesh.hpp"
 #include "protocols/xyz_io.hpp"
+#include "runners/align_clouds.hpp"
 #include "runners/registry.hpp"
 
 namespace regbench::app {
 namespace {
-
-std::string Lower(std::string s) {
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-    return s;
-}
-
-/// Points of a PLY / PCD / XYZ file, or the vertices of an OFF mesh.
-PointCloud ReadCloud(const std::string& path) {
-    if (Lower(std::filesystem::path(path).extension().string()) == ".off") {
-        const Mesh mesh = ReadOff(path);
-        return mesh.vertices;
-    }
-    return ReadPointFile(path);
-}
-
-/// x -> s (x - c) applied to both clouds with one (c, s): the target's centroid and the
-/// reciprocal of the largest distance from it over both clouds, so both fit the unit sphere.
-struct Normalization {
-    Eigen::RowVector3d centre = Eigen::RowVector3d::Zero();
-    double scale = 1.0;
-};
-
-Normalization FitNormalization(const PointCloud& source, const PointCloud& target) {
-    Normalization n;
-    n.centre = target.colwise().mean();
-    const double r = std::max((source.rowwise() - n.centre).rowwise().norm().maxCoeff(),
-                              (target.rowwise() - n.centre).rowwise().norm().maxCoeff());
-    if (r > 0.0) n.scale = 1.0 / r;
-    return n;
-}
-
-PointCloud Normalize(const PointCloud& p, const Normalization& n) {
-    return (p.rowwise() - n.centre) * n.scale;
-}
-
-/// T' registers the normalised clouds: target' = R source' + t'. Back in the files' frame
-/// target = R source + t with t = t' / s - R c + c.
-Transform Denormalize(const Transform& T_norm, const Normalization& n) {
-    const Eigen::Matrix3d R = T_norm.topLeftCorner<3, 3>();
-    const Eigen::Vector3d c = n.centre.transpose();
-    const Eigen::Vector3d t = T_norm.topRightCorner<3, 1>() / n.scale - R * c + c;
-    Transform T = T_norm;
-    T.topRightCorner<3, 1>() = t;
-    return T;
-}
 
 std::string FormatTransform(const Transform& T) {
     std::string out;
@@ -125,17 +79,14 @@ void AddAlignCommand(CLI::App& app) {
             }
         }
         const auto reg = CreateMethod(*method, p);  // validates name and params
-        const PointCloud source = ReadCloud(*src);
-        const PointCloud target = ReadCloud(*tgt);
+        const PointCloud source = ReadCloudFile(*src);
+        const PointCloud target = ReadCloudFile(*tgt);
         const Transform T_gt = gt->empty() ? Transform::Identity() : ReadTransformTxt(*gt);
-        Normalization n;
-        if (*normalize) n = FitNormalization(source, target);
         AlignContext context;
         context.seed = *seed;
         context.threads = *threads;
-        const AlignResult r = reg->Align(*normalize ? Normalize(source, n) : source,
-                                         *normalize ? Normalize(target, n) : target, context);
-        const Transform T = *normalize ? Denormalize(r.T_target_source, n) : r.T_target_source;
+        const AlignResult r = AlignClouds(*reg, source, target, *normalize, context);
+        const Transform& T = r.T_target_source;
         std::cout << FormatTransform(T);
         std::cout << fmt::format("method {} | status {} | {:.4f} s | {} iterations | {}\n",
                                  reg->Name(), ToString(r.status), r.seconds, r.iterations,

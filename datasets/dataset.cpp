@@ -9,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <utility>
@@ -343,6 +344,68 @@ std::unique_ptr<Dataset> OpenPointFiles(const fs::path& path,
         });
 }
 
+enum class LayoutKind { kModelNetH5, kIclNuim, kSevenScenes, kModelNetOff };
+
+struct Layout {
+    LayoutKind kind;
+    fs::path dir;
+};
+
+const char* LayoutName(LayoutKind kind) {
+    switch (kind) {
+        case LayoutKind::kModelNetH5:
+            return "ModelNet40 HDF5";
+        case LayoutKind::kIclNuim:
+            return "ICL-NUIM";
+        case LayoutKind::kSevenScenes:
+            return "7Scenes";
+        case LayoutKind::kModelNetOff:
+            return "ModelNet40 OFF tree";
+    }
+    return "?";
+}
+
+/// The known layout `dir` itself has, if any. The OFF-tree test (class folders holding train/
+/// or test/) is loose, so callers try it last: a data root's `icl_nuim/{train,test}` would pass.
+std::optional<LayoutKind> SpecificLayoutOf(const fs::path& dir) {
+    if (!fs::is_directory(dir)) return std::nullopt;
+    if (detail::LooksLikeModelNetH5Dir(dir.string())) return LayoutKind::kModelNetH5;
+    if (detail::LooksLikeIclNuimDir(dir.string())) return LayoutKind::kIclNuim;
+    if (HasSevenScenesDirs(dir)) return LayoutKind::kSevenScenes;
+    return std::nullopt;
+}
+
+std::optional<LayoutKind> LayoutOf(const fs::path& dir) {
+    if (const auto kind = SpecificLayoutOf(dir)) return kind;
+    if (fs::is_directory(dir) && !ModelNetOffClasses(dir).empty()) return LayoutKind::kModelNetOff;
+    return std::nullopt;
+}
+
+/// The dataset layout of directory `path`: its own, or that of the one subfolder with a usual
+/// name (modelnet40_ply_hdf5_2048, icl_nuim, 7scene, ModelNet40) holding one. A data root
+/// holding several datasets (as the authors lay them out) is refused, listing them, so a
+/// user never gets one picked silently. nullopt: a plain folder of point files.
+std::optional<Layout> DetectLayout(const fs::path& path) {
+    if (const auto own = SpecificLayoutOf(path)) return Layout{*own, path};
+    std::vector<Layout> found;
+    for (const char* sub : {"modelnet40_ply_hdf5_2048", "icl_nuim", "7scene", "ModelNet40"}) {
+        if (const auto kind = LayoutOf(path / sub)) found.push_back({*kind, path / sub});
+    }
+    if (found.size() > 1) {
+        std::string list;
+        for (const Layout& l : found) {
+            list += "\n  " + l.dir.string() + " (" + LayoutName(l.kind) + ")";
+        }
+        throw std::invalid_argument(
+            path.string() + " holds several datasets; pass one of them as --dataset:" + list);
+    }
+    if (found.size() == 1) return found.front();
+    if (fs::is_directory(path) && !ModelNetOffClasses(path).empty()) {
+        return Layout{LayoutKind::kModelNetOff, path};
+    }
+    return std::nullopt;
+}
+
 }  // namespace
 
 std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
@@ -367,26 +430,35 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
     if (!fs::is_directory(path)) {
         throw std::runtime_error(name_or_path + ": not a regular file or directory");
     }
-    // Directory layouts, most specific first; a parent folder of the usual name also works.
-    for (const fs::path& dir : {path, path / "modelnet40_ply_hdf5_2048"}) {
-        if (fs::is_directory(dir) && detail::LooksLikeModelNetH5Dir(dir.string())) {
-            return detail::OpenModelNetH5(dir.string(), spec);
-        }
-    }
-    for (const fs::path& dir : {path, path / "icl_nuim"}) {
-        if (fs::is_directory(dir) && detail::LooksLikeIclNuimDir(dir.string())) {
-            return detail::OpenIclNuim(dir.string(), spec);
-        }
-    }
-    for (const fs::path& dir : {path, path / "7scene"}) {
-        if (fs::is_directory(dir) && HasSevenScenesDirs(dir)) return OpenSevenScenes(dir, spec);
-    }
-    for (const fs::path& dir : {path, path / "ModelNet40"}) {
-        if (fs::is_directory(dir) && !ModelNetOffClasses(dir).empty()) {
-            return OpenModelNetOff(dir, spec, options);
+    const std::optional<Layout> layout = DetectLayout(path);
+    if (layout) {
+        switch (layout->kind) {
+            case LayoutKind::kModelNetH5:
+                return detail::OpenModelNetH5(layout->dir.string(), spec);
+            case LayoutKind::kIclNuim:
+                return detail::OpenIclNuim(layout->dir.string(), spec);
+            case LayoutKind::kSevenScenes:
+                return OpenSevenScenes(layout->dir, spec);
+            case LayoutKind::kModelNetOff:
+                return OpenModelNetOff(layout->dir, spec, options);
         }
     }
     return OpenPointFiles(path, spec, options);
+}
+
+}  // namespace regbench
+
+namespace regbench {
+
+std::string DefaultSplit(const std::string& name_or_path) {
+    const fs::path path(name_or_path);
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return "test";  // named datasets (cgal, procedural, indoor-sim)
+    if (fs::is_regular_file(path)) {
+        const std::string ext = LowerExtension(path);
+        return ext == ".h5" || ext == ".hdf5" ? "test" : "all";
+    }
+    return DetectLayout(path) ? "test" : "all";  // a folder of point files has no splits
 }
 
 }  // namespace regbench

@@ -69,4 +69,9 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
                                      const std::string& split = "all",
                                      const DatasetOptions& options = {});
 
+/// The split `generate` uses when none is given: "all" for a point file or a folder of point
+/// files (they have no splits), "test" otherwise. Throws like OpenDataset for a data root
+/// holding several datasets.
+std::string DefaultSplit(const std::string& name_or_path);
+
 }  // namespace regbench

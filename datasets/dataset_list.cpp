@@ -49,7 +49,7 @@ SplitSpec ParseSplit(const std::string& split) {
 
 bool InOfficialSplit(
     const SplitSpec& split, int label, int num_labels, bool official_test, std::size_t rank) {
-    constexpr std::size_t kValEvery = 5;  // 80/20 train/validation (specs/protocols.md)
+    constexpr std::size_t kValEvery = 5;  // 80/20 train/validation (docs/datasets.md)
     if (split.protocol == "all") return true;
     if (split.protocol == "official") return official_test == (split.part == "test");
     const bool first_half = label < num_labels / 2;

@@ -1,5 +1,7 @@
 #include "datasets/point_file.hpp"
 
+#include "datasets/off_reader.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -75,6 +77,14 @@ PointCloud ReadXyz(const std::string& path, Normals* normals) {
 }
 
 }  // namespace
+
+PointCloud ReadCloudFile(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".off") return ReadOff(path).vertices;
+    return ReadPointFile(path);
+}
 
 PointCloud ReadPointFile(const std::string& path, Normals* normals) {
     if (!std::filesystem::is_regular_file(path)) {

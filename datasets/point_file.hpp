@@ -14,6 +14,10 @@ namespace regbench {
 /// path on a missing, empty, truncated or corrupt file.
 PointCloud ReadPointFile(const std::string& path, Normals* normals = nullptr);
 
+/// Points of a PLY / PCD / XYZ file, or the vertices of an OFF mesh (extension decides; case-
+/// insensitive). Throws naming the path. What `regbench align` reads.
+PointCloud ReadCloudFile(const std::string& path);
+
 /// PLY / PCD through Open3D (point_file_open3d.cpp); used by ReadPointFile.
 PointCloud ReadPointFileOpen3D(const std::string& path, Normals* normals);
 

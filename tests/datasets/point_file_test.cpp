@@ -79,5 +79,16 @@ TEST(ReadPointFile, RejectsTruncatedPlyNamingPath) {
     ExpectThrowsWith([&] { ReadPointFile(garbage); }, garbage);
 }
 
+TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
+    // A hand-written triangle: the three vertices in file order, faces ignored.
+    const auto path = std::filesystem::temp_directory_path() / "regbench_cloud_tri.off";
+    std::ofstream(path) << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    const PointCloud p = ReadCloudFile(path.string());
+    ASSERT_EQ(p.rows(), 3);
+    EXPECT_EQ(p(1, 0), 1.0);
+    EXPECT_EQ(p(2, 1), 1.0);
+    std::filesystem::remove(path);
+}
+
 }  // namespace
 }  // namespace regbench
