@@ -245,6 +245,9 @@ nlohmann::json MakeResultRow(std::size_t pair_index,
     row["threads"] = threads;
     row["shape"] = pair.shape;
     row["category"] = pair.category;
+    // The pair's measured overlap (labelled by the generator), for breakdowns by overlap.
+    row["source_overlap_ratio"] = pair.source_overlap_ratio;
+    row["target_overlap_ratio"] = pair.target_overlap_ratio;
     const PairMetrics m =
         ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target);
     row["metrics"] = {
