@@ -12,5 +12,6 @@ void AddInspectCommand(CLI::App& app);
 void AddExportCommand(CLI::App& app);
 void AddImportCommand(CLI::App& app);
 void AddCompareCommand(CLI::App& app);
+void AddReproduceCommand(CLI::App& app);
 
 }  // namespace regbench::app

@@ -279,7 +279,7 @@ std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int m
         std::string d;
         for (Eigen::Index i = 0; i < c.rows(); i += step) {
             // Tiny squares as one path: far smaller than one <circle> per point.
-            d += fmt::format("M{:.1f} {:.1f}h1.6v1.6h-1.6z", px(c(i, 0)), size - px(c(i, 1)));
+            d += fmt::format("M{:.0f} {:.0f}h2v2h-2z", px(c(i, 0)), size - px(c(i, 1)));
         }
         s += fmt::format("<path d=\"{}\" fill=\"{}\"/>", d, colour);
     };

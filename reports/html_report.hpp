@@ -27,8 +27,8 @@ struct HtmlReportOptions {
     std::vector<std::string> intro;  ///< paragraphs under the title (command, machine, ...)
     std::vector<Table> tables;       ///< the paper's tables, shown first
     std::vector<HtmlSection> sections;
-    int gallery_per_method = 3;  ///< worst pairs drawn per method
-    int gallery_points = 400;    ///< points drawn per cloud (evenly subsampled)
+    int gallery_per_method = 2;  ///< worst pairs drawn per method
+    int gallery_points = 150;    ///< points drawn per cloud (evenly subsampled)
     double cdf_max_deg = 45.0;   ///< x range of the error CDF
 };
 

@@ -233,7 +233,7 @@ Table BuildPaperTable(const PaperTableSpec& spec,
         }
     }
     t.caption = fmt::format(
-        "{} Ours: {}. Paper: {} as published (their pairs, their machine). Measured cells are "
+        "{}. Ours: {}. Paper: {} as published (their pairs, their machine). Measured cells are "
         "mean ± 95% bootstrap half-width; '-' = not run or not in the paper.",
         pt.value("caption", std::string()), ours.empty() ? "no result rows" : ours,
         spec.paper_data);

@@ -12,7 +12,7 @@ PACKAGES=(
   libfmt-dev libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
-  chromium
+  chromium zlib1g-dev
 )
 if [ "${1:-}" = "--reference" ]; then
   PACKAGES+=(
