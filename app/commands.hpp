@@ -13,5 +13,7 @@ void AddExportCommand(CLI::App& app);
 void AddImportCommand(CLI::App& app);
 void AddCompareCommand(CLI::App& app);
 void AddReproduceCommand(CLI::App& app);
+void AddScoreCommand(CLI::App& app);
+void AddAlignCommand(CLI::App& app);
 
 }  // namespace regbench::app

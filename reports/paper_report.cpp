@@ -7,8 +7,6 @@
 #include <set>
 #include <stdexcept>
 
-#include "protocols/pair_file.hpp"
-#include "protocols/pair_summary.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
@@ -311,27 +309,6 @@ std::string CpuModel() {
         }
     }
     return "unknown CPU";
-}
-
-Provenance ProvenanceOfPairFile(const std::string& path) {
-    const PairSet set = ReadPairFile(path);
-    const auto& pv = set.provenance;
-    Provenance p;
-    p.pairs_file =
-        path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
-    p.dataset = pv.value("dataset", std::string("unknown"));
-    p.split = pv.value("split", std::string());
-    p.protocol = pv.value("protocol", std::string("unknown"));
-    const auto params = pv.value("params", nlohmann::json::object());
-    p.pairing = pv.value("pairing", params.value("pairing", std::string()));
-    p.seed = pv.value("seed", nlohmann::json());
-    p.points = params.value("points", 0);
-    p.keep = params.value("keep", 0.0);
-    p.version = pv.value("regbench_version", std::string()) +
-                (pv.contains("git_sha") ? "+" + pv["git_sha"].get<std::string>() : "");
-    if (pv.contains("pairs_hash") && pv["pairs_hash"].is_string()) p.pairs_hash = pv["pairs_hash"];
-    p.gt_ccd_floor = SummarizePairSet(set).gt_ccd_mean;
-    return p;
 }
 
 }  // namespace regbench

@@ -72,8 +72,4 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets,
 /// The CPU model from /proc/cpuinfo ("unknown CPU" when unreadable).
 std::string CpuModel();
 
-/// Provenance of a pair file as written by `regbench generate` (dataset, split, protocol,
-/// pairing, seed, points, keep, version) plus its ground-truth CCD floor.
-Provenance ProvenanceOfPairFile(const std::string& path);
-
 }  // namespace regbench

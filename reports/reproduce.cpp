@@ -13,6 +13,8 @@
 #include "protocols/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
+#include "protocols/pair_hash.hpp"
+#include "protocols/pair_summary.hpp"
 #include "reports/breakdown.hpp"
 #include "reports/html_report.hpp"
 #include "reports/paper_report.hpp"
@@ -191,6 +193,27 @@ std::string Join(const std::vector<Table>& tables, std::string (*fn)(const Table
 }
 
 }  // namespace
+
+Provenance ProvenanceOfPairFile(const std::string& path) {
+    const PairSet set = ReadPairFile(path);
+    const auto& pv = set.provenance;
+    Provenance p;
+    p.pairs_file =
+        path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+    p.dataset = pv.value("dataset", std::string("unknown"));
+    p.split = pv.value("split", std::string());
+    p.protocol = pv.value("protocol", std::string("unknown"));
+    const auto params = pv.value("params", nlohmann::json::object());
+    p.pairing = pv.value("pairing", params.value("pairing", std::string()));
+    p.seed = pv.value("seed", nlohmann::json());
+    p.points = params.value("points", 0);
+    p.keep = params.value("keep", 0.0);
+    p.version = pv.value("regbench_version", std::string()) +
+                (pv.contains("git_sha") ? "+" + pv["git_sha"].get<std::string>() : "");
+    p.pairs_hash = PairSetContentHash(set);  // what the runner records in every row
+    p.gt_ccd_floor = SummarizePairSet(set).gt_ccd_mean;
+    return p;
+}
 
 std::vector<std::string> ReproducibleTables() {
     std::vector<std::string> ids;

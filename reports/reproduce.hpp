@@ -33,6 +33,12 @@ struct ReproduceSummary {
     std::size_t rows_run = 0;         ///< method calls made by this invocation (resume skips)
 };
 
+struct Provenance;
+
+/// Provenance of a pair file as written by `regbench generate` (dataset, split, protocol,
+/// pairing, seed, points, keep, version, content hash) plus its ground-truth CCD floor.
+Provenance ProvenanceOfPairFile(const std::string& path);
+
 /// Table ids `reproduce` knows (paper order).
 std::vector<std::string> ReproducibleTables();
 

@@ -11,9 +11,10 @@ std::string RowPairFileName(const nlohmann::json& row) {
 
 std::string RowPairFileId(const nlohmann::json& row) {
     if (row.contains("data") && row["data"].is_object()) {
-        for (const char* key : {"pairs_hash", "pairs_sha256", "hash"}) {
+        for (const char* key : {"content_hash", "pairs_hash", "hash"}) {
             const auto it = row["data"].find(key);
-            if (it != row["data"].end() && it->is_string()) return it->get<std::string>();
+            if (it != row["data"].end() && it->is_string() && !it->get<std::string>().empty())
+                return it->get<std::string>();
         }
     }
     return "file:" + RowPairFileName(row);

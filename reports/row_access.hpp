@@ -11,7 +11,7 @@ namespace regbench {
 std::string RowPairFileName(const nlohmann::json& row);
 
 /// Identity of the pair file a row was measured on: its content hash when the row records one
-/// (`data.pairs_hash` / `data.pairs_sha256` / `data.hash`), else "file:<name>".
+/// (`data.content_hash`, written by `run` and `score`), else "file:<name>".
 std::string RowPairFileId(const nlohmann::json& row);
 
 /// A metric of the row, or nullopt when missing, null or not finite.
