@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
     regbench::app::AddInspectCommand(app);
     regbench::app::AddExportCommand(app);
     regbench::app::AddImportCommand(app);
+    regbench::app::AddCompareCommand(app);
+    regbench::app::AddReproduceCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

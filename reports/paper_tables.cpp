@@ -12,8 +12,17 @@ nlohmann::json LoadPaperTables(const std::string& path) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open the paper's tables");
     try {
-        nlohmann::json j = nlohmann::json::parse(in);
+        // Parsed order-preserving once to record each table's row order ("row_order"): the
+        // plain json type sorts object keys, and tables must list rows as the paper does.
+        const nlohmann::ordered_json ordered = nlohmann::ordered_json::parse(in);
+        nlohmann::json j = nlohmann::json::parse(ordered.dump());
         if (!j.contains("tables")) throw std::runtime_error("no 'tables' key");
+        for (const auto& t : ordered.at("tables").items()) {
+            if (!t.value().contains("rows")) continue;
+            std::vector<std::string> order;
+            for (const auto& r : t.value().at("rows").items()) order.push_back(r.key());
+            j["tables"][t.key()]["row_order"] = order;
+        }
         return j;
     } catch (const std::exception& e) {
         throw std::runtime_error(path + ": malformed paper tables: " + e.what());

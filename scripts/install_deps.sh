@@ -2,7 +2,8 @@
 # Installs the Debian 12 packages regbench needs. Idempotent: installs only what is missing.
 # --reference also installs what scripts/probreg_reference.py needs to run probreg (Python
 # modules for /usr/bin/python3 and pybind11 to build probreg's extensions; see
-# docs/probreg-equivalence.md). The C++ build and tests do not need them.
+# docs/probreg-equivalence.md). The C++ build and tests do not need them. chromium renders the
+# HTML report headless in its test (docs/reports.md).
 set -euo pipefail
 
 PACKAGES=(
@@ -11,6 +12,7 @@ PACKAGES=(
   libfmt-dev libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
+  chromium zlib1g-dev
 )
 if [ "${1:-}" = "--reference" ]; then
   PACKAGES+=(

@@ -1,0 +1,62 @@
+// `regbench compare BASE.jsonl NEW.jsonl`: the accuracy regression gate (exit 1 on a
+// significant worsening beyond tolerance).
+#include <fstream>
+#include <iostream>
+
+#include "app/commands.hpp"
+#include "reports/compare.hpp"
+#include "runners/runner.hpp"
+
+namespace regbench::app {
+
+namespace {
+
+/// Thrown to end with exit status 1 after printing the verdict (not an input error).
+struct RegressionFound : std::runtime_error {
+    RegressionFound() : std::runtime_error("a method got significantly worse beyond tolerance") {}
+};
+
+}  // namespace
+
+void AddCompareCommand(CLI::App& app) {
+    auto* cmd = app.add_subcommand(
+        "compare",
+        "Paired test of two result files on the same pairs; exit 1 when a method got "
+        "significantly worse beyond --tolerance");
+    auto base = std::make_shared<std::string>();
+    auto candidate = std::make_shared<std::string>();
+    auto tolerance = std::make_shared<std::string>("0");
+    auto metrics = std::make_shared<std::vector<std::string>>(CompareOptions{}.metrics);
+    auto json_out = std::make_shared<std::string>();
+    auto o = std::make_shared<CompareOptions>();
+    cmd->add_option("base", *base, "Baseline JSONL results")->required();
+    cmd->add_option("new", *candidate, "Candidate JSONL results (same pair file)")->required();
+    cmd->add_option("--tolerance", *tolerance,
+                    "Allowed increase of a metric's mean before a significant worsening fails: "
+                    "a number for every metric or METRIC=VALUE,... (metric units)")
+        ->capture_default_str();
+    cmd->add_option("--metrics", *metrics, "Metrics to test (lower is better)")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--alpha", o->alpha, "Significance level of the Wilcoxon test")
+        ->capture_default_str();
+    cmd->add_option("--bootstrap", o->bootstrap_samples, "Paired-bootstrap resamples")
+        ->capture_default_str();
+    cmd->add_option("--seed", o->seed, "Bootstrap seed")->capture_default_str();
+    cmd->add_option("--json", *json_out, "Also write every comparison as JSON to this file");
+    cmd->callback([=] {
+        ParseTolerance(*tolerance, o.get());
+        o->metrics = *metrics;
+        const auto result =
+            CompareResults(ReadJsonl(*base), ReadJsonl(*candidate), *o, *base, *candidate);
+        std::cout << FormatCompareMarkdown(result, *o);
+        if (!json_out->empty()) {
+            std::ofstream f(*json_out);
+            f << CompareToJson(result, *o).dump(2) << "\n";
+            if (!f) throw std::runtime_error(*json_out + ": cannot write");
+        }
+        if (result.Regressed()) throw RegressionFound();
+    });
+}
+
+}  // namespace regbench::app

@@ -1,0 +1,220 @@
+#include "reports/breakdown.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "reports/row_access.hpp"
+#include "reports/statistics.hpp"
+
+namespace regbench {
+namespace {
+
+std::vector<const nlohmann::json*> RowsOf(const std::vector<nlohmann::json>& rows,
+                                          const std::string& method) {
+    std::vector<const nlohmann::json*> out;
+    for (const auto& r : rows) {
+        if (r.value("method", std::string()) == method) out.push_back(&r);
+    }
+    return out;
+}
+
+Cell Value(double v, std::size_t pairs) {
+    Cell c;
+    c.value = v;
+    c.pairs = pairs;
+    return c;
+}
+
+std::optional<double> MinOverlap(const nlohmann::json& r) {
+    const auto s = RowOverlap(r, "source");
+    const auto t = RowOverlap(r, "target");
+    if (!s || !t) return std::nullopt;
+    return std::min(*s, *t);
+}
+
+}  // namespace
+
+std::vector<std::string> MethodOrder(const std::vector<nlohmann::json>& rows) {
+    std::vector<std::string> order;
+    std::set<std::string> seen;
+    for (const auto& r : rows) {
+        const std::string m = r.value("method", std::string("?"));
+        if (seen.insert(m).second) order.push_back(m);
+    }
+    return order;
+}
+
+Table DistributionTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+    Table t;
+    t.id = "distribution";
+    t.title = "Per-method distribution of every metric";
+    t.caption = fmt::format(
+        "mean ± half-width of the 95% percentile-bootstrap CI ({} resamples, seed {}), "
+        "median and sample std over pairs with a finite value",
+        o.bootstrap_samples, o.seed);
+    t.columns.push_back({"pairs", "pairs", CellSource::kMeasured, Better::kNone, 0});
+    for (const auto& m : o.metrics) {
+        t.columns.push_back({m + ".mean", m + " mean", CellSource::kMeasured, Better::kLower, 4});
+        t.columns.push_back(
+            {m + ".median", m + " median", CellSource::kMeasured, Better::kLower, 4});
+        t.columns.push_back({m + ".std", m + " std", CellSource::kMeasured, Better::kNone, 4});
+    }
+    for (const auto& method : MethodOrder(rows)) {
+        const auto group = RowsOf(rows, method);
+        TableRow row{method, {Value(static_cast<double>(group.size()), group.size())}};
+        for (const auto& m : o.metrics) {
+            std::vector<double> v;
+            for (const auto* r : group) {
+                if (const auto x = RowMetric(*r, m)) v.push_back(*x);
+            }
+            const BootstrapCi ci =
+                BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
+            Cell mean = Value(ci.mean, v.size());
+            if (v.size() >= 2) mean.half_width = 0.5 * (ci.hi - ci.lo);
+            row.cells.push_back(mean);
+            row.cells.push_back(Value(SampleMedian(v), v.size()));
+            row.cells.push_back(Value(SampleStd(v), v.size()));
+        }
+        t.rows.push_back(row);
+    }
+    return t;
+}
+
+Table StatusTable(const std::vector<nlohmann::json>& rows) {
+    Table t;
+    t.id = "status";
+    t.title = "Calls per status";
+    t.caption =
+        "ok / failed (the method reported failure) / timeout / crashed (isolated runs) / other; "
+        "null metrics: rows whose metrics are missing or not finite, counted as failures";
+    const std::vector<std::string> statuses = {"ok", "failed", "timeout", "crashed", "other"};
+    for (const auto& s : statuses) {
+        t.columns.push_back({s, s, CellSource::kMeasured, Better::kNone, 0});
+    }
+    t.columns.push_back({"null_metrics", "null metrics", CellSource::kMeasured, Better::kNone, 0});
+    for (const auto& method : MethodOrder(rows)) {
+        const auto group = RowsOf(rows, method);
+        std::map<std::string, std::size_t> count;
+        std::size_t null_metrics = 0;
+        for (const auto* r : group) {
+            std::string s = RowStatus(*r);
+            if (std::find(statuses.begin(), statuses.end(), s) == statuses.end()) s = "other";
+            ++count[s];
+            if (!RowMetric(*r, "mae_r") || !RowMetric(*r, "mae_t")) ++null_metrics;
+        }
+        TableRow row{method, {}};
+        for (const auto& s : statuses) {
+            row.cells.push_back(Value(static_cast<double>(count[s]), group.size()));
+        }
+        row.cells.push_back(Value(static_cast<double>(null_metrics), group.size()));
+        t.rows.push_back(row);
+    }
+    return t;
+}
+
+Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+    Table t;
+    t.id = "recall";
+    t.title = "Recall at several thresholds";
+    t.caption =
+        "recall@(r, t): fraction of pairs with mae_r < r degrees and mae_t < t; pairs with null "
+        "metrics count as misses";
+    for (const auto& [r, tt] : o.recall) {
+        t.columns.push_back({fmt::format("recall@({:g},{:g})", r, tt),
+                             fmt::format("@({:g}°, {:g})", r, tt), CellSource::kMeasured,
+                             Better::kHigher, 3});
+    }
+    for (const auto& method : MethodOrder(rows)) {
+        const auto group = RowsOf(rows, method);
+        TableRow row{method, {}};
+        for (const auto& [r, tt] : o.recall) {
+            std::size_t hit = 0;
+            for (const auto* x : group) {
+                const auto er = RowMetric(*x, "mae_r");
+                const auto et = RowMetric(*x, "mae_t");
+                if (er && et && *er < r && *et < tt) ++hit;
+            }
+            row.cells.push_back(
+                Value(group.empty() ? std::nan("") : static_cast<double>(hit) / group.size(),
+                      group.size()));
+        }
+        t.rows.push_back(row);
+    }
+    return t;
+}
+
+Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+    Table t;
+    t.id = "category";
+    t.title = "Mean " + o.key_metric + " per category";
+    t.caption = "shape categories of the pairs; each cell averages the pairs of that category";
+    std::set<std::string> categories;
+    for (const auto& r : rows) categories.insert(r.value("category", std::string("?")));
+    for (const auto& c : categories) {
+        t.columns.push_back({c, c, CellSource::kMeasured, Better::kLower, 3});
+    }
+    for (const auto& method : MethodOrder(rows)) {
+        std::map<std::string, std::vector<double>> by;
+        for (const auto* r : RowsOf(rows, method)) {
+            if (const auto x = RowMetric(*r, o.key_metric)) {
+                by[r->value("category", std::string("?"))].push_back(*x);
+            }
+        }
+        TableRow row{method, {}};
+        for (const auto& c : categories)
+            row.cells.push_back(Value(SampleMean(by[c]), by[c].size()));
+        t.rows.push_back(row);
+    }
+    return t;
+}
+
+Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+    Table t;
+    t.id = "overlap";
+    t.title = "Mean " + o.key_metric + " by measured overlap";
+    t.caption =
+        "bins of the pair's measured overlap, min(source ratio, target ratio), as the pair file "
+        "labels it; each cell averages the pairs in the bin (n in the JSON/CSV `pairs` field)";
+    for (std::size_t b = 0; b + 1 < o.overlap_edges.size(); ++b) {
+        const double lo = o.overlap_edges[b];
+        const double hi = std::min(1.0, o.overlap_edges[b + 1]);
+        t.columns.push_back({fmt::format("overlap[{:g},{:g})", lo, hi),
+                             fmt::format("[{:.0f}%, {:.0f}%{}", 100 * lo, 100 * hi,
+                                         b + 2 == o.overlap_edges.size() ? "]" : ")"),
+                             CellSource::kMeasured, Better::kLower, 3});
+    }
+    std::size_t missing = 0;
+    for (const auto& method : MethodOrder(rows)) {
+        std::vector<std::vector<double>> bins(t.columns.size());
+        for (const auto* r : RowsOf(rows, method)) {
+            const auto ov = MinOverlap(*r);
+            const auto x = RowMetric(*r, o.key_metric);
+            if (!ov) {
+                ++missing;
+                continue;
+            }
+            if (!x) continue;
+            for (std::size_t b = 0; b < bins.size(); ++b) {
+                if (*ov >= o.overlap_edges[b] && *ov < o.overlap_edges[b + 1]) {
+                    bins[b].push_back(*x);
+                    break;
+                }
+            }
+        }
+        TableRow row{method, {}};
+        for (const auto& v : bins) row.cells.push_back(Value(SampleMean(v), v.size()));
+        t.rows.push_back(row);
+    }
+    if (missing > 0) {
+        t.notes.push_back(fmt::format(
+            "{} rows carry no overlap ratios (written before rows recorded them) and are left "
+            "out.",
+            missing));
+    }
+    return t;
+}
+
+}  // namespace regbench

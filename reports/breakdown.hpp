@@ -1,0 +1,45 @@
+#pragma once
+// Beyond means: per-method distributions, failure counts, recall curves, per-category and
+// per-overlap tables of one result set, as report tables (reports/table.hpp).
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "reports/table.hpp"
+
+namespace regbench {
+
+struct BreakdownOptions {
+    std::vector<std::string> metrics = {"mae_r", "mae_t", "ccd", "rre", "rte"};  ///< summarised
+    std::string key_metric = "mae_r";  ///< used by the category and overlap tables
+    /// recall@(r, t) = fraction of pairs with mae_r < r [deg] and mae_t < t.
+    std::vector<std::pair<double, double>> recall = {{1.0, 0.01}, {1.0, 0.1},  {2.0, 0.05},
+                                                     {5.0, 0.1},  {10.0, 0.1}, {20.0, 0.2}};
+    /// Bin edges of the pair's measured overlap, min(source ratio, target ratio).
+    std::vector<double> overlap_edges = {0.0, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0001};
+    int bootstrap_samples = 1000;
+    std::uint64_t seed = 20230103;  ///< bootstrap seed; streams derive from method and metric
+};
+
+/// Methods in first-seen order.
+std::vector<std::string> MethodOrder(const std::vector<nlohmann::json>& rows);
+
+/// Mean ± 95% bootstrap half-width, median and std of every metric, per method.
+Table DistributionTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+
+/// Calls per status (ok, failed, timeout, crashed, other) plus rows whose metrics are missing
+/// or not finite ("null metrics", counted as failures of the metric).
+Table StatusTable(const std::vector<nlohmann::json>& rows);
+
+/// recall@(r, t) for every threshold pair of the options.
+Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+
+/// Mean key metric per method and shape category (columns sorted by name).
+Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+
+/// Mean key metric per method and bin of measured overlap (min of the two ratios); rows
+/// without overlap ratios are left out and a note says how many.
+Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+
+}  // namespace regbench

@@ -1,0 +1,356 @@
+#include "reports/html_report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "reports/breakdown.hpp"
+#include "reports/row_access.hpp"
+#include "reports/statistics.hpp"
+
+namespace regbench {
+namespace {
+
+// A colour-blind-friendly palette (Okabe-Ito), cycled over methods.
+const std::vector<std::string> kPalette = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                           "#E69F00", "#56B4E9", "#000000", "#F0E442",
+                                           "#999999", "#882255", "#44AA99", "#117733"};
+
+std::string Escape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        switch (c) {
+            case '&':
+                out += "&amp;";
+                break;
+            case '<':
+                out += "&lt;";
+                break;
+            case '>':
+                out += "&gt;";
+                break;
+            case '"':
+                out += "&quot;";
+                break;
+            default:
+                out += c;
+        }
+    }
+    return out;
+}
+
+std::string Colour(std::size_t i) { return kPalette[i % kPalette.size()]; }
+
+/// A plot frame: maps data coordinates into a w x h SVG with margins, draws axes and ticks.
+struct Plot {
+    double x0, x1, y0, y1;
+    bool log_x = false;
+    int w = 520, h = 340, left = 56, right = 130, top = 20, bottom = 44;
+
+    double X(double x) const {
+        const double a = log_x ? std::log10(x0) : x0, b = log_x ? std::log10(x1) : x1;
+        const double v = log_x ? std::log10(std::max(x, 1e-12)) : x;
+        return left + (v - a) / (b - a) * (w - left - right);
+    }
+    double Y(double y) const { return h - bottom - (y - y0) / (y1 - y0) * (h - top - bottom); }
+
+    std::string Open(const std::string& xlabel, const std::string& ylabel) const {
+        std::string s = fmt::format(
+            "<svg width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" role=\"img\">"
+            "<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#fff\"/>",
+            w, h, w, h, w, h);
+        s += fmt::format(
+            "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#333\"/>"
+            "<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{3}\" stroke=\"#333\"/>",
+            left, h - bottom, w - right, top);
+        for (int i = 0; i <= 4; ++i) {
+            double xv =
+                log_x ? std::pow(10.0, std::log10(x0) + i * (std::log10(x1) - std::log10(x0)) / 4)
+                      : x0 + i * (x1 - x0) / 4;
+            const double yv = y0 + i * (y1 - y0) / 4;
+            s += fmt::format(
+                "<text x=\"{:.1f}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{:.3g}</text>",
+                X(xv), h - bottom + 15, xv);
+            s += fmt::format(
+                "<text x=\"{}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{:.3g}</text>"
+                "<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#eee\"/>",
+                left - 4, Y(yv) + 4, yv, left + 1, Y(yv), w - right, Y(yv));
+        }
+        s +=
+            fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"12\" text-anchor=\"middle\">{}</text>",
+                        (left + w - right) / 2, h - 8, Escape(xlabel));
+        s += fmt::format(
+            "<text x=\"14\" y=\"{}\" font-size=\"12\" text-anchor=\"middle\" "
+            "transform=\"rotate(-90 14 {})\">{}</text>",
+            (top + h - bottom) / 2, (top + h - bottom) / 2, Escape(ylabel));
+        return s;
+    }
+
+    std::string Legend(const std::vector<std::string>& names) const {
+        std::string s;
+        for (std::size_t i = 0; i < names.size(); ++i) {
+            const int y = top + 14 * static_cast<int>(i) + 6;
+            s += fmt::format(
+                "<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>"
+                "<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>",
+                w - right + 10, y - 8, Colour(i), w - right + 24, y + 1, Escape(names[i]));
+        }
+        return s;
+    }
+};
+
+std::vector<double> MetricOf(const std::vector<nlohmann::json>& rows,
+                             const std::string& method,
+                             const std::string& metric) {
+    std::vector<double> v;
+    for (const auto& r : rows) {
+        if (r.value("method", std::string()) != method) continue;
+        // Null metrics count as failures: an infinite error keeps them in the CDF's denominator.
+        v.push_back(RowMetric(r, metric).value_or(std::numeric_limits<double>::infinity()));
+    }
+    return v;
+}
+
+Transform RowTransform(const nlohmann::json& row) {
+    Transform T = Transform::Identity();
+    if (!row.contains("transform") || !row["transform"].is_array()) return T;
+    const auto& m = row["transform"];
+    for (int i = 0; i < 4 && i < static_cast<int>(m.size()); ++i) {
+        for (int j = 0; j < 4 && j < static_cast<int>(m[i].size()); ++j) {
+            if (m[i][j].is_number()) T(i, j) = m[i][j].get<double>();
+        }
+    }
+    return T;
+}
+
+}  // namespace
+
+std::string TableToHtml(const Table& t) {
+    std::string s = "<h3>" + Escape(t.title) + "</h3>\n";
+    if (!t.caption.empty()) s += "<p class=\"cap\">" + Escape(t.caption) + "</p>\n";
+    s += "<table><tr><th>" + Escape(t.row_header) + "</th>";
+    for (const auto& c : t.columns) {
+        s += std::string(c.source == CellSource::kPaper ? "<th class=\"paper\">" : "<th>") +
+             Escape(c.header) + "</th>";
+    }
+    s += "</tr>\n";
+    std::vector<int> best(t.columns.size());
+    for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        s += "<tr><td>" + Escape(t.rows[r].label) + "</td>";
+        for (std::size_t c = 0; c < t.columns.size(); ++c) {
+            const Cell& cell = t.rows[r].cells[c];
+            std::string text = cell.text;
+            if (text.empty()) {
+                text = cell.HasValue() ? fmt::format("{:.{}f}", cell.value, t.columns[c].decimals)
+                                       : "-";
+                if (cell.HasValue() && std::isfinite(cell.half_width)) {
+                    text += fmt::format(" ± {:.{}f}", cell.half_width, t.columns[c].decimals);
+                }
+            }
+            text = Escape(text);
+            if (best[c] == static_cast<int>(r)) text = "<b>" + text + "</b>";
+            s += std::string(t.columns[c].source == CellSource::kPaper ? "<td class=\"paper\">"
+                                                                       : "<td>") +
+                 text + "</td>";
+        }
+        s += "</tr>\n";
+    }
+    s += "</table>\n";
+    for (const auto& n : t.notes) s += "<p class=\"note\">" + Escape(n) + "</p>\n";
+    return s;
+}
+
+std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg) {
+    Plot p{0.0, max_deg, 0.0, 1.0};
+    const auto methods = MethodOrder(rows);
+    std::string s = p.Open("MAE(R) threshold [deg]", "fraction of pairs below");
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+        std::vector<double> v = MetricOf(rows, methods[i], "mae_r");
+        std::sort(v.begin(), v.end());
+        // A step curve: after the k-th smallest error the fraction is k / n.
+        std::string pts = fmt::format("{:.1f},{:.1f}", p.X(0), p.Y(0));
+        double frac = 0.0;
+        for (std::size_t k = 0; k < v.size() && v[k] <= max_deg; ++k) {
+            pts += fmt::format(" {:.1f},{:.1f}", p.X(v[k]), p.Y(frac));
+            frac = static_cast<double>(k + 1) / v.size();
+            pts += fmt::format(" {:.1f},{:.1f}", p.X(v[k]), p.Y(frac));
+        }
+        pts += fmt::format(" {:.1f},{:.1f}", p.X(max_deg), p.Y(frac));
+        s += fmt::format(
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"/>", pts,
+            Colour(i));
+    }
+    return s + p.Legend(methods) + "</svg>";
+}
+
+std::string ErrorVsOverlapSvg(const std::vector<nlohmann::json>& rows) {
+    const auto methods = MethodOrder(rows);
+    double ymax = 1.0;
+    for (const auto& r : rows) {
+        if (const auto e = RowMetric(r, "mae_r")) ymax = std::max(ymax, *e);
+    }
+    Plot p{0.0, 1.0, 0.0, ymax * 1.05};
+    std::string s = p.Open("measured overlap, min(source, target)", "MAE(R) [deg]");
+    std::size_t drawn = 0;
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+        for (const auto& r : rows) {
+            if (r.value("method", std::string()) != methods[i]) continue;
+            const auto so = RowOverlap(r, "source");
+            const auto to = RowOverlap(r, "target");
+            const auto e = RowMetric(r, "mae_r");
+            if (!so || !to || !e) continue;
+            ++drawn;
+            s += fmt::format(
+                "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.2\" fill=\"{}\" "
+                "fill-opacity=\"0.6\"/>",
+                p.X(std::min(*so, *to)), p.Y(*e), Colour(i));
+        }
+    }
+    if (drawn == 0) {
+        s += fmt::format(
+            "<text x=\"{}\" y=\"{}\" font-size=\"12\" text-anchor=\"middle\">rows "
+            "carry no overlap ratios</text>",
+            p.w / 2, p.h / 2);
+    }
+    return s + p.Legend(methods) + "</svg>";
+}
+
+std::string TimeVsAccuracySvg(const std::vector<nlohmann::json>& rows) {
+    const auto methods = MethodOrder(rows);
+    std::vector<double> t(methods.size()), e(methods.size());
+    double tmin = 1e300, tmax = 0.0, emax = 1.0;
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+        std::vector<double> secs, err;
+        for (const auto& r : rows) {
+            if (r.value("method", std::string()) != methods[i]) continue;
+            secs.push_back(std::max(r.value("seconds", 0.0), 1e-6));
+            if (const auto x = RowMetric(r, "mae_r")) err.push_back(*x);
+        }
+        t[i] = SampleMedian(secs);
+        e[i] = SampleMean(err);
+        if (std::isfinite(t[i])) {
+            tmin = std::min(tmin, t[i]);
+            tmax = std::max(tmax, t[i]);
+        }
+        if (std::isfinite(e[i])) emax = std::max(emax, e[i]);
+    }
+    if (!(tmax > 0.0)) tmin = 1e-4, tmax = 1.0;
+    Plot p{std::pow(10.0, std::floor(std::log10(tmin))),
+           std::pow(10.0, std::ceil(std::log10(tmax)) + (tmin == tmax ? 1 : 0)), 0.0, emax * 1.1};
+    p.log_x = true;
+    std::string s = p.Open("median seconds per pair (log)", "mean MAE(R) [deg]");
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+        if (!std::isfinite(t[i]) || !std::isfinite(e[i])) continue;
+        s += fmt::format(
+            "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4\" fill=\"{}\"/><text x=\"{:.1f}\" "
+            "y=\"{:.1f}\" font-size=\"11\">{}</text>",
+            p.X(t[i]), p.Y(e[i]), Colour(i), p.X(t[i]) + 6, p.Y(e[i]) - 4, Escape(methods[i]));
+    }
+    return s + p.Legend(methods) + "</svg>";
+}
+
+std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int max_points) {
+    const int size = 220;
+    PointCloud aligned(pair.source.rows(), 3);
+    for (Eigen::Index i = 0; i < pair.source.rows(); ++i) {
+        aligned.row(i) = (estimate.topLeftCorner<3, 3>() * pair.source.row(i).transpose() +
+                          estimate.topRightCorner<3, 1>())
+                             .transpose();
+    }
+    // One square frame around target, source and aligned source (x-y projection).
+    double lo = 1e300, hi = -1e300;
+    for (const PointCloud* c :
+         {&pair.target, &pair.source, static_cast<const PointCloud*>(&aligned)}) {
+        if (c->rows() == 0) continue;
+        lo = std::min({lo, c->col(0).minCoeff(), c->col(1).minCoeff()});
+        hi = std::max({hi, c->col(0).maxCoeff(), c->col(1).maxCoeff()});
+    }
+    if (!(hi > lo)) lo = -1, hi = 1;
+    const auto px = [&](double v) { return 6 + (v - lo) / (hi - lo) * (size - 12); };
+    std::string s = fmt::format(
+        "<svg width=\"{0}\" height=\"{0}\" viewBox=\"0 0 {0} {0}\" role=\"img\"><rect x=\"0\" "
+        "y=\"0\" width=\"{0}\" height=\"{0}\" fill=\"#fff\" stroke=\"#ccc\"/>",
+        size);
+    const auto draw = [&](const PointCloud& c, const char* colour) {
+        const Eigen::Index step = std::max<Eigen::Index>(1, c.rows() / std::max(1, max_points));
+        std::string d;
+        for (Eigen::Index i = 0; i < c.rows(); i += step) {
+            // Tiny squares as one path: far smaller than one <circle> per point.
+            d += fmt::format("M{:.0f} {:.0f}h2v2h-2z", px(c(i, 0)), size - px(c(i, 1)));
+        }
+        s += fmt::format("<path d=\"{}\" fill=\"{}\"/>", d, colour);
+    };
+    draw(pair.target, "#888888");
+    draw(pair.source, "#D55E00");
+    draw(aligned, "#009E73");
+    return s + "</svg>";
+}
+
+std::string RenderHtmlReport(const HtmlReportOptions& o) {
+    std::string s =
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
+        Escape(o.title) +
+        "</title>\n<style>body{font-family:sans-serif;margin:24px;max-width:1400px;color:#222}"
+        "table{border-collapse:collapse;margin:8px 0 4px 0;font-size:13px}"
+        "td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}"
+        "td:first-child,th:first-child{text-align:left}th{background:#f2f2f2}"
+        ".paper{color:#777}.cap,.note{font-size:12px;color:#444;max-width:1100px}"
+        ".plots{display:flex;flex-wrap:wrap;gap:12px}.gal{display:flex;flex-wrap:wrap;gap:8px}"
+        "figure{margin:0;font-size:11px}h2{border-bottom:2px solid #ddd;margin-top:32px}"
+        "</style></head><body>\n<h1>" +
+        Escape(o.title) + "</h1>\n";
+    for (const auto& p : o.intro) s += "<p>" + Escape(p) + "</p>\n";
+    if (!o.tables.empty()) {
+        s += "<h2>The paper's tables</h2>\n<p class=\"note\">Grey columns: the paper's numbers "
+             "as published; the others measured here. Bold: best measured cell of a column."
+             "</p>\n";
+        for (const auto& t : o.tables) s += TableToHtml(t);
+    }
+    for (const auto& sec : o.sections) {
+        s += "<h2>" + Escape(sec.title) + "</h2>\n";
+        if (!sec.description.empty()) s += "<p class=\"cap\">" + Escape(sec.description) + "</p>\n";
+        s += "<div class=\"plots\"><figure>" + ErrorCdfSvg(sec.rows, o.cdf_max_deg) +
+             "<figcaption>Error CDF: fraction of pairs with MAE(R) below x</figcaption></figure>"
+             "<figure>" +
+             ErrorVsOverlapSvg(sec.rows) +
+             "<figcaption>MAE(R) vs the pair's measured overlap</figcaption></figure><figure>" +
+             TimeVsAccuracySvg(sec.rows) +
+             "<figcaption>Accuracy vs time (median seconds per pair, one thread)</figcaption>"
+             "</figure></div>\n";
+        for (const auto& t : sec.tables) s += TableToHtml(t);
+        if (!sec.pair_lookup) continue;
+        s += "<h3>Worst pairs per method</h3><p class=\"note\">x-y projection; grey target, "
+             "red source (its own frame), green source under the method's estimate.</p>\n";
+        for (const auto& method : MethodOrder(sec.rows)) {
+            std::vector<const nlohmann::json*> mine;
+            for (const auto& r : sec.rows) {
+                if (r.value("method", std::string()) == method) mine.push_back(&r);
+            }
+            const auto err = [](const nlohmann::json* r) {
+                return RowMetric(*r, "mae_r").value_or(std::numeric_limits<double>::infinity());
+            };
+            std::stable_sort(mine.begin(), mine.end(),
+                             [&](auto* a, auto* b) { return err(a) > err(b); });
+            s += "<h4>" + Escape(method) + "</h4><div class=\"gal\">";
+            for (int k = 0; k < o.gallery_per_method && k < static_cast<int>(mine.size()); ++k) {
+                const Pair* pair = sec.pair_lookup(*mine[k]);
+                if (pair == nullptr) continue;
+                s += "<figure>" +
+                     PairProjectionSvg(*pair, RowTransform(*mine[k]), o.gallery_points) +
+                     fmt::format(
+                         "<figcaption>pair {} ({}), MAE(R) {:.2f}°, {}</figcaption></figure>",
+                         mine[k]->value("pair", -1),
+                         Escape(mine[k]->value("shape", std::string("?"))), err(mine[k]),
+                         Escape(RowStatus(*mine[k])));
+            }
+            s += "</div>\n";
+        }
+    }
+    s += "</body></html>\n";
+    return s;
+}
+
+}  // namespace regbench

@@ -1,0 +1,53 @@
+#pragma once
+// One self-contained HTML report: tables, inline SVG plots, no script, no network.
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "protocols/pair.hpp"
+#include "reports/table.hpp"
+
+namespace regbench {
+
+/// The pair a result row was measured on, or nullptr when its pair file is not at hand.
+using PairLookup = std::function<const Pair*(const nlohmann::json& row)>;
+
+/// One result set (one pair file): its plots and tables.
+struct HtmlSection {
+    std::string title;  ///< e.g. "Tab. 1 same-category: partial, cgal test"
+    std::string description;
+    std::vector<nlohmann::json> rows;
+    std::vector<Table> tables;
+    PairLookup pair_lookup;  ///< for the gallery; empty: no gallery
+};
+
+struct HtmlReportOptions {
+    std::string title = "regbench report";
+    std::vector<std::string> intro;  ///< paragraphs under the title (command, machine, ...)
+    std::vector<Table> tables;       ///< the paper's tables, shown first
+    std::vector<HtmlSection> sections;
+    int gallery_per_method = 2;  ///< worst pairs drawn per method
+    int gallery_points = 150;    ///< points drawn per cloud (evenly subsampled)
+    double cdf_max_deg = 45.0;   ///< x range of the error CDF
+};
+
+/// The whole page; every character of it is produced here (no external resource).
+std::string RenderHtmlReport(const HtmlReportOptions& options);
+
+/// A table as an HTML <table> (best cell per column bold, paper cells in grey).
+std::string TableToHtml(const Table& t);
+
+/// Error CDF: fraction of pairs with mae_r below x, one curve per method (inline <svg>).
+std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg);
+
+/// mae_r against the pair's measured overlap (min of both ratios), one colour per method.
+std::string ErrorVsOverlapSvg(const std::vector<nlohmann::json>& rows);
+
+/// Mean mae_r against median seconds per pair (log axis), one labelled point per method.
+std::string TimeVsAccuracySvg(const std::vector<nlohmann::json>& rows);
+
+/// One pair drawn as an x-y projection: target (grey), source (red), aligned source (green).
+std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int max_points);
+
+}  // namespace regbench

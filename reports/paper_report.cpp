@@ -1,0 +1,314 @@
+#include "reports/paper_report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <set>
+#include <stdexcept>
+
+#include "reports/paper_tables.hpp"
+#include "reports/row_access.hpp"
+#include "reports/statistics.hpp"
+
+namespace regbench {
+namespace {
+
+const std::vector<std::string> kMetrics = {"mae_r", "mae_t", "ccd"};
+
+std::string MetricHeader(const std::string& m) {
+    if (m == "mae_r") return "MAE(R)";
+    if (m == "mae_t") return "MAE(t)";
+    if (m == "ccd") return "CCD";
+    return m;
+}
+
+/// The paper's row name of a result row: the set's label, else the paper's method name.
+std::string PaperRowOf(const nlohmann::json& row, const ResultSet& set) {
+    if (!set.row_label.empty()) return set.row_label;
+    const std::string method = row.value("method", std::string("?"));
+    return PaperRowName(method).value_or(method);
+}
+
+/// "dataset `cgal` (split test, protocol partial, pairing independent, 100 pairs, seed 1)".
+std::string DescribeSet(const ResultSet& s) {
+    const Provenance& p = s.provenance;
+    std::set<long long> pairs;
+    for (const auto& r : s.rows) pairs.insert(r.value("pair", -1LL));
+    std::string d = fmt::format(
+        "{}{}: dataset `{}` (split {}, protocol {}, pairing {}, {} pairs, "
+        "seed {}, file {})",
+        s.group.empty() ? "ours" : s.group, s.row_label.empty() ? "" : " / " + s.row_label,
+        p.dataset, p.split.empty() ? "-" : p.split, p.protocol, p.pairing.empty() ? "-" : p.pairing,
+        pairs.size(), p.seed.is_null() ? std::string("-") : p.seed.dump(), p.pairs_file);
+    if (!p.fallback.empty()) d += " [" + p.fallback + "]";
+    return d;
+}
+
+}  // namespace
+
+const std::vector<PaperTableSpec>& PaperTableSpecs() {
+    static const std::vector<PaperTableSpec> kSpecs = {
+        {"table1_modelnet_partial",
+         "Tab. 1: partial-to-partial registration",
+         {"same_category", "cross_category"},
+         kMetrics,
+         true,
+         "ModelNet40"},
+        {"table2_modelnet_noise_density",
+         "Tab. 2: jitter noise and density variation",
+         {"jitter", "density"},
+         kMetrics,
+         true,
+         "ModelNet40"},
+        {"table3_indoor",
+         "Tab. 3: indoor scenes",
+         {"7scenes", "icl_nuim"},
+         kMetrics,
+         true,
+         "7Scenes and ICL-NUIM"},
+        {"table4_ablation_components",
+         "Tab. 4: OGMM component ablation",
+         {""},
+         kMetrics,
+         false,
+         "ModelNet40 same-category partial"},
+        {"table5_ablation_losses",
+         "Tab. 5: OGMM loss ablation",
+         {""},
+         kMetrics,
+         false,
+         "ModelNet40 same-category partial"},
+        {"supp_overlap_ratio",
+         "Supp.: overlap ratio",
+         {"30%", "40%", "50%", "60%", "70%"},
+         kMetrics,
+         true,
+         "noisy ModelNet40"},
+        {"supp_cluster_count",
+         "Supp.: number of GMM components",
+         {"8", "16", "32", "48", "64"},
+         kMetrics,
+         true,
+         "noisy ModelNet40, 50% overlap"},
+        {"supp_complete",
+         "Supp.: complete-to-complete and complete-to-partial",
+         {"c2c", "c2p"},
+         kMetrics,
+         true,
+         "noisy ModelNet40"},
+    };
+    return kSpecs;
+}
+
+const PaperTableSpec& FindPaperTableSpec(const std::string& id) {
+    std::string known;
+    for (const auto& s : PaperTableSpecs()) {
+        if (s.id == id) return s;
+        known += (known.empty() ? "" : ", ") + s.id;
+    }
+    throw std::invalid_argument("unknown paper table '" + id + "' (known: " + known +
+                                ", table6_inference_time)");
+}
+
+double PaperCell(const nlohmann::json& paper,
+                 const std::string& table,
+                 const std::string& paper_row,
+                 const std::string& group,
+                 const std::string& metric) {
+    const auto& tables = paper.at("tables");
+    if (!tables.contains(table)) return std::nan("");
+    const auto& t = tables.at(table);
+    const auto& columns = t.at("columns");
+    const auto& rows = t.at("rows");
+    const auto column = [&](const std::string& name) -> int {
+        for (std::size_t i = 0; i < columns.size(); ++i) {
+            if (columns[i].get<std::string>() == name) return static_cast<int>(i);
+        }
+        return -1;
+    };
+    // Sweep tables list metrics as rows and groups as columns, for OGMM only.
+    if (rows.contains(metric) && !group.empty() && column(group) >= 0) {
+        if (paper_row != "OGMM") return std::nan("");
+        return rows.at(metric).at(static_cast<std::size_t>(column(group))).get<double>();
+    }
+    const int c = column(group.empty() ? metric : group + "." + metric);
+    if (c < 0 || !rows.contains(paper_row)) return std::nan("");
+    return rows.at(paper_row).at(static_cast<std::size_t>(c)).get<double>();
+}
+
+Table BuildPaperTable(const PaperTableSpec& spec,
+                      const std::vector<ResultSet>& sets,
+                      const nlohmann::json& paper,
+                      const PaperTableOptions& o) {
+    Table t;
+    t.id = spec.id;
+    t.title = spec.title;
+    t.row_header = spec.rows_are_methods ? "method" : "variant";
+    // Row order: the paper's (for sweep tables: OGMM), then measured rows the paper lacks.
+    std::vector<std::string> order;
+    const auto& pt = paper.at("tables").value(spec.id, nlohmann::json::object());
+    const bool sweep = pt.contains("rows") && pt["rows"].contains("mae_r");
+    if (sweep) {
+        order.push_back("OGMM");
+    } else if (pt.contains("row_order")) {  // recorded by LoadPaperTables in the paper's order
+        order = pt["row_order"].get<std::vector<std::string>>();
+    } else if (pt.contains("rows")) {
+        for (const auto& r : pt["rows"].items()) order.push_back(r.key());
+    }
+    for (const auto& s : sets) {
+        for (const auto& r : s.rows) {
+            const std::string label = PaperRowOf(r, s);
+            if (std::find(order.begin(), order.end(), label) == order.end()) order.push_back(label);
+        }
+    }
+    for (const auto& g : spec.groups) {
+        for (const auto& m : spec.metrics) {
+            const std::string key = g.empty() ? m : g + "." + m;
+            const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
+            t.columns.push_back({key, head, CellSource::kMeasured, Better::kLower, 4});
+            t.columns.push_back(
+                {"paper:" + key, "paper " + head, CellSource::kPaper, Better::kNone, 4});
+        }
+    }
+    // Reasons for rows that could not be measured, keyed by paper row name.
+    std::map<std::string, std::string> reasons;
+    for (const auto& [method, why] : o.unavailable)
+        reasons[PaperRowName(method).value_or(method)] = why;
+    for (const auto& label : order) {
+        TableRow row{label, {}};
+        for (const auto& g : spec.groups) {
+            const ResultSet* set = nullptr;
+            for (const auto& s : sets) {
+                if (s.group != g) continue;
+                for (const auto& r : s.rows) {
+                    if (PaperRowOf(r, s) == label) set = &s;
+                }
+            }
+            for (const auto& m : spec.metrics) {
+                Cell measured;
+                if (set != nullptr) {
+                    std::vector<double> v;
+                    std::size_t n = 0;
+                    for (const auto& r : set->rows) {
+                        if (PaperRowOf(r, *set) != label) continue;
+                        ++n;
+                        // Null metrics are failures: they keep the pair count honest but no
+                        // number can stand in for them, so the cell says how many.
+                        if (const auto x = RowMetric(r, m)) v.push_back(*x);
+                    }
+                    const BootstrapCi ci =
+                        BootstrapMean(v, o.bootstrap_samples, o.seed,
+                                      StreamId(spec.id + "/" + g + "/" + label + "/" + m));
+                    measured.value = ci.mean;
+                    if (v.size() >= 2) measured.half_width = 0.5 * (ci.hi - ci.lo);
+                    measured.pairs = n;
+                    if (v.size() < n) {
+                        measured.text = fmt::format("{:.4f} ({} null)", ci.mean, n - v.size());
+                    }
+                } else if (reasons.count(label)) {
+                    measured.text = reasons[label];
+                }
+                row.cells.push_back(measured);
+                Cell p;
+                p.source = CellSource::kPaper;
+                p.value = PaperCell(paper, spec.id, label, g, m);
+                row.cells.push_back(p);
+            }
+        }
+        t.rows.push_back(row);
+    }
+    std::string ours;
+    for (const auto& s : sets) {
+        ours += (ours.empty() ? "" : "; ") + DescribeSet(s);
+        t.provenance.push_back(s.provenance);
+        t.provenance.back().group = s.group;
+        if (std::isfinite(s.provenance.gt_ccd_floor)) {
+            t.notes.push_back(fmt::format(
+                "Ground-truth CCD floor{}: {:.4f} (CCD of the true "
+                "transform on these pairs; no method can go below it)",
+                s.group.empty() ? "" : " (" + s.group + ")", s.provenance.gt_ccd_floor));
+        }
+    }
+    t.caption = fmt::format(
+        "{}. Ours: {}. Paper: {} as published (their pairs, their machine). Measured cells are "
+        "mean ± 95% bootstrap half-width; '-' = not run or not in the paper.",
+        pt.value("caption", std::string()), ours.empty() ? "no result rows" : ours,
+        spec.paper_data);
+    return t;
+}
+
+Table BuildTimingTable(const std::vector<ResultSet>& sets,
+                       const nlohmann::json& paper,
+                       const std::string& cpu_model,
+                       const std::string& blas) {
+    Table t;
+    t.id = "table6_inference_time";
+    t.title = "Tab. 6: time per pair";
+    t.columns = {{"mean_seconds", "mean s", CellSource::kMeasured, Better::kLower, 4},
+                 {"median_seconds", "median s", CellSource::kMeasured, Better::kLower, 4},
+                 {"points", "points", CellSource::kMeasured, Better::kNone, 0},
+                 {"threads", "threads", CellSource::kMeasured, Better::kNone, 0},
+                 {"paper:seconds", "paper s", CellSource::kPaper, Better::kNone, 3}};
+    const auto& rows = paper.at("tables").at("table6_inference_time").at("rows");
+    std::vector<std::string> order;
+    std::map<std::string, std::vector<double>> secs;
+    std::map<std::string, int> threads;
+    std::map<std::string, const ResultSet*> set_of;
+    for (const auto& s : sets) {
+        for (const auto& r : s.rows) {
+            const std::string m = r.value("method", std::string("?"));
+            if (!secs.count(m)) order.push_back(m);
+            if (RowStatus(r) == "ok")
+                secs[m].push_back(r.value("seconds", 0.0));
+            else
+                secs[m];
+            threads[m] = r.value("threads", 1);
+            set_of[m] = &s;
+        }
+    }
+    for (const auto& m : order) {
+        TableRow row{m, {}};
+        Cell mean, median, points, th, p;
+        mean.value = SampleMean(secs[m]);
+        median.value = SampleMedian(secs[m]);
+        mean.pairs = median.pairs = secs[m].size();
+        points.value = set_of[m]->provenance.points;
+        th.value = threads[m];
+        p.source = CellSource::kPaper;
+        const std::string name = PaperRowName(m).value_or(m);
+        if (rows.contains(name)) {
+            p.value = rows[name].at(0).get<double>();
+        } else if (name == "OGMM" && rows.contains("OGMM_clustered_attention")) {
+            p.value = rows["OGMM_clustered_attention"].at(0).get<double>();
+        }
+        row.cells = {mean, median, points, th, p};
+        t.rows.push_back(row);
+    }
+    for (const auto& s : sets) t.provenance.push_back(s.provenance);
+    t.caption = fmt::format(
+        "Seconds of the method's own call per pair (successful calls; the harness's loading, "
+        "metrics and I/O excluded), one call at a time per core. Ours: CPU {}, BLAS {}, "
+        "CPU only (no GPU rows measured). Paper: {}",
+        cpu_model, blas,
+        paper.at("tables").at("table6_inference_time").value("caption", std::string()));
+    return t;
+}
+
+std::string CpuModel() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            const auto colon = line.find(':');
+            if (colon != std::string::npos) {
+                std::string v = line.substr(colon + 1);
+                v.erase(0, v.find_first_not_of(' '));
+                return v;
+            }
+        }
+    }
+    return "unknown CPU";
+}
+
+}  // namespace regbench

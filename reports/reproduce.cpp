@@ -1,0 +1,369 @@
+#include "reports/reproduce.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <ostream>
+#include <set>
+
+#include "datasets/dataset_shapes.hpp"
+#include "protocols/generate.hpp"
+#include "protocols/pair_file.hpp"
+#include "protocols/pair_hash.hpp"
+#include "protocols/pair_summary.hpp"
+#include "reports/breakdown.hpp"
+#include "reports/html_report.hpp"
+#include "reports/paper_report.hpp"
+#include "reports/paper_tables.hpp"
+#include "runners/registry.hpp"
+#include "runners/runner.hpp"
+
+#ifndef REGBENCH_VERSION
+#define REGBENCH_VERSION "unknown"
+#endif
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// One pair file and its results: fills one column group of one paper table.
+struct Experiment {
+    std::string id;     ///< file stem, e.g. "tab1_same"
+    std::string table;  ///< paper table id
+    std::string group;  ///< column group ("" for none)
+    std::string protocol;
+    std::string dataset;  ///< name or path
+    std::string split;
+    std::string fallback;  ///< non-empty when standing in for the paper's dataset
+    std::size_t pairs = 0;
+    std::uint64_t seed = 1;
+    bool sweep = false;  ///< overlap-sweep: rows split into groups by pair % levels
+};
+
+const std::vector<std::string> kSweepGroups = {"30%", "40%", "50%", "60%", "70%"};
+
+/// Learned methods whose rows say "not trained" when they cannot be created.
+const std::set<std::string> kLearned = {"ogmm", "deepgmr"};
+
+bool Wanted(const std::vector<std::string>& wanted, const std::string& table) {
+    if (wanted.empty()) return true;
+    for (const auto& w : wanted) {
+        if (table.rfind(w, 0) == 0) return true;
+    }
+    return false;
+}
+
+std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
+    const std::size_t n = o.pairs > 0 ? o.pairs : (o.quick ? 10 : 1000);
+    const bool mn = !o.modelnet40.empty();
+    const std::string objects = mn ? o.modelnet40 : "cgal";
+    const std::string object_fallback = mn ? "" : "embedded CGAL mesh corpus instead of ModelNet40";
+    const auto obj = [&](std::string id, std::string table, std::string group, std::string protocol,
+                         std::string split, std::size_t pairs) {
+        return Experiment{id,    table,           group, protocol, objects,
+                          split, object_fallback, pairs, o.seed,   false};
+    };
+    std::vector<Experiment> all = {
+        obj("tab1_same", "table1_modelnet_partial", "same_category", "partial",
+            "same_category/test", n),
+        obj("tab1_cross", "table1_modelnet_partial", "cross_category", "partial",
+            "cross_category/test", n),
+        obj("tab2_jitter", "table2_modelnet_noise_density", "jitter", "jitter",
+            "same_category/test", n),
+        obj("tab2_density", "table2_modelnet_noise_density", "density", "density",
+            "same_category/test", n),
+    };
+    // Indoor scenes: real data when given, else the indoor simulation (different seeds so
+    // the two columns are not the same pairs).
+    const std::size_t n_indoor = std::max<std::size_t>(4, n / 2);
+    all.push_back({"tab3_7scenes", "table3_indoor", "7scenes", "indoor",
+                   o.sevenscenes.empty() ? "indoor-sim" : o.sevenscenes, "test",
+                   o.sevenscenes.empty() ? "simulated indoor scans instead of 7Scenes" : "",
+                   n_indoor, o.seed, false});
+    all.push_back({"tab3_icl_nuim", "table3_indoor", "icl_nuim", "indoor",
+                   o.icl_nuim.empty() ? "indoor-sim" : o.icl_nuim, "test",
+                   o.icl_nuim.empty() ? "simulated indoor scans instead of ICL-NUIM" : "", n_indoor,
+                   o.seed + 1, false});
+    Experiment sweep = obj("supp_overlap", "supp_overlap_ratio", "", "overlap-sweep",
+                           "same_category/test", n * kSweepGroups.size() / 2);
+    sweep.sweep = true;
+    all.push_back(sweep);
+    all.push_back(obj("supp_c2c", "supp_complete", "c2c", "complete", "same_category/test", n));
+    all.push_back(
+        obj("supp_c2p", "supp_complete", "c2p", "complete-to-partial", "same_category/test", n));
+    std::vector<Experiment> out;
+    for (const auto& e : all) {
+        // Tab. 6 times the Tab. 1 same-category runs.
+        if (Wanted(o.tables, e.table) ||
+            (e.id == "tab1_same" && Wanted(o.tables, "table6_inference_time"))) {
+            out.push_back(e);
+        }
+    }
+    return out;
+}
+
+/// Writes `text` to `path` atomically (temporary file, then rename).
+void WriteText(const fs::path& path, const std::string& text) {
+    const fs::path tmp = path.string() + ".tmp";
+    {
+        std::ofstream f(tmp);
+        f << text;
+        if (!f) throw std::runtime_error(tmp.string() + ": cannot write");
+    }
+    fs::rename(tmp, path);
+}
+
+/// Methods to run, and the reasons the wanted ones that cannot run are left out.
+std::vector<MethodSpec> ChooseMethods(const ReproduceOptions& o,
+                                      std::map<std::string, std::string>* unavailable,
+                                      std::ostream& log) {
+    std::vector<std::string> names = o.methods;
+    if (names.empty()) {
+        for (const auto& m : AllMethods()) names.push_back(m.name);
+    }
+    std::vector<MethodSpec> specs;
+    for (const auto& name : names) {
+        try {
+            CreateMethod(name, nlohmann::json::object());  // checkpoints load here
+            specs.push_back({name, FindMethod(name).defaults});
+        } catch (const std::exception& e) {
+            if (!o.methods.empty() && !kLearned.count(name)) throw;
+            (*unavailable)[name] = "not trained";
+            log << "reproduce: " << name << " left out (not trained: " << e.what() << ")\n";
+        }
+    }
+    for (const auto& learned : kLearned) {
+        bool registered = false;
+        for (const auto& m : AllMethods()) registered |= m.name == learned;
+        if (!registered && !unavailable->count(learned)) {
+            (*unavailable)[learned] = "not trained";
+            log << "reproduce: " << learned << " is not registered in this build: not trained\n";
+        }
+    }
+    if (specs.empty()) throw std::runtime_error("reproduce: no method can run");
+    return specs;
+}
+
+/// Generates the pair file unless a previous invocation did.
+bool EnsurePairs(const Experiment& e,
+                 const fs::path& path,
+                 const ReproduceOptions& o,
+                 std::ostream& log) {
+    if (fs::exists(path)) return false;
+    GenerateRequest request;
+    request.dataset = e.dataset;
+    request.split = e.split;
+    request.num_pairs = e.pairs;
+    request.seed = e.seed;
+    request.options = DefaultProtocolOptions(ParseProtocol(e.protocol));
+    request.out = path.string();
+    request.extra_provenance = {{"regbench_version", REGBENCH_VERSION},
+                                {"reproduce_experiment", e.id}};
+    if (!e.fallback.empty()) request.extra_provenance["fallback"] = e.fallback;
+    DatasetOptions dataset_options;
+    dataset_options.data_dir = o.data_dir;
+    log << fmt::format("reproduce: {}: generating {} {} pairs from {} ({})\n", e.id, e.pairs,
+                       e.protocol, e.dataset, e.split);
+    GenerateToFile(request, DatasetShapeLoader(dataset_options));
+    return true;
+}
+
+/// Splits a sweep's rows into its levels (pair k has level k % levels).
+std::vector<ResultSet> SweepSets(const std::vector<nlohmann::json>& rows, const Provenance& p) {
+    std::vector<ResultSet> sets;
+    for (std::size_t l = 0; l < kSweepGroups.size(); ++l) {
+        ResultSet s{kSweepGroups[l], {}, p, ""};
+        for (const auto& r : rows) {
+            if (r.value("pair", 0UL) % kSweepGroups.size() == l) s.rows.push_back(r);
+        }
+        sets.push_back(s);
+    }
+    return sets;
+}
+
+std::string Join(const std::vector<Table>& tables, std::string (*fn)(const Table&)) {
+    std::string s;
+    for (const auto& t : tables) s += fn(t) + "\n";
+    return s;
+}
+
+}  // namespace
+
+Provenance ProvenanceOfPairFile(const std::string& path) {
+    const PairSet set = ReadPairFile(path);
+    const auto& pv = set.provenance;
+    Provenance p;
+    p.pairs_file =
+        path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+    p.dataset = pv.value("dataset", std::string("unknown"));
+    p.split = pv.value("split", std::string());
+    p.protocol = pv.value("protocol", std::string("unknown"));
+    const auto params = pv.value("params", nlohmann::json::object());
+    p.pairing = pv.value("pairing", params.value("pairing", std::string()));
+    p.seed = pv.value("seed", nlohmann::json());
+    p.points = params.value("points", 0);
+    p.keep = params.value("keep", 0.0);
+    p.version = pv.value("regbench_version", std::string()) +
+                (pv.contains("git_sha") ? "+" + pv["git_sha"].get<std::string>() : "");
+    p.pairs_hash = PairSetContentHash(set);  // what the runner records in every row
+    p.gt_ccd_floor = SummarizePairSet(set).gt_ccd_mean;
+    return p;
+}
+
+std::vector<std::string> ReproducibleTables() {
+    std::vector<std::string> ids;
+    for (const auto& s : PaperTableSpecs()) ids.push_back(s.id);
+    ids.insert(ids.begin() + 5, "table6_inference_time");
+    return ids;
+}
+
+ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
+    const auto start = std::chrono::steady_clock::now();
+    for (const auto& t : o.tables) {
+        bool known = false;
+        for (const auto& id : ReproducibleTables()) known |= id.rfind(t, 0) == 0;
+        if (!known) {
+            std::string list;
+            for (const auto& id : ReproducibleTables()) list += (list.empty() ? "" : ", ") + id;
+            throw std::invalid_argument("--tables: '" + t + "' names no table (" + list + ")");
+        }
+    }
+    for (const auto& [flag, path] :
+         {std::pair<const char*, std::string>{"--modelnet40", o.modelnet40},
+          {"--7scenes", o.sevenscenes},
+          {"--icl-nuim", o.icl_nuim}}) {
+        if (!path.empty() && !fs::exists(path)) {
+            throw std::invalid_argument(std::string(flag) + " " + path +
+                                        ": no such file or folder");
+        }
+    }
+    ReproduceSummary summary;
+    const fs::path out = fs::absolute(o.out_dir);
+    fs::create_directories(out / "pairs");
+    fs::create_directories(out / "results");
+    summary.out_dir = out.string();
+    std::map<std::string, std::string> unavailable;
+    const auto methods = ChooseMethods(o, &unavailable, log);
+    const auto experiments = PlanExperiments(o);
+    summary.experiments = experiments.size();
+
+    // Generate and run every experiment; each step is skipped or resumed when done before.
+    std::map<std::string, std::vector<nlohmann::json>> rows_of;
+    std::map<std::string, Provenance> provenance_of;
+    std::map<std::string, PairSet> pairs_of;
+    for (const auto& e : experiments) {
+        const fs::path pairs = out / "pairs" / (e.id + ".h5");
+        const fs::path results = out / "results" / (e.id + ".jsonl");
+        summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
+        RunOptions run;
+        run.pairs_path = pairs.string();
+        run.methods = methods;
+        run.out_path = results.string();
+        run.jobs = o.jobs;
+        run.resume = true;  // keeps finished rows of a previous invocation
+        run.timeout_seconds = o.timeout_seconds;
+        run.progress = o.progress;
+        log << "reproduce: " << e.id << ": running " << methods.size() << " methods\n";
+        summary.rows_run += RunBenchmark(run).rows_written;
+        rows_of[e.id] = ReadJsonl(results.string());
+        provenance_of[e.id] = ProvenanceOfPairFile(pairs.string());
+        provenance_of[e.id].fallback = e.fallback;
+        pairs_of[e.id] = ReadPairFile(pairs.string());
+    }
+
+    // The paper's tables.
+    const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
+    PaperTableOptions table_options;
+    table_options.unavailable = unavailable;
+    std::vector<Table> tables;
+    for (const auto& spec : PaperTableSpecs()) {
+        if (!Wanted(o.tables, spec.id)) continue;
+        std::vector<ResultSet> sets;
+        for (const auto& e : experiments) {
+            if (e.table != spec.id) continue;
+            if (e.sweep) {
+                for (auto& s : SweepSets(rows_of[e.id], provenance_of[e.id])) sets.push_back(s);
+            } else {
+                sets.push_back({e.group, rows_of[e.id], provenance_of[e.id], ""});
+            }
+        }
+        PaperTableOptions to = table_options;
+        if (!spec.rows_are_methods) {
+            // Ablation variants need their own checkpoints, which regbench does not ship.
+            for (const auto& row :
+                 paper["tables"][spec.id].value("row_order", std::vector<std::string>{}))
+                to.unavailable[row] = "not trained";
+        }
+        tables.push_back(BuildPaperTable(spec, sets, paper, to));
+        if (sets.empty()) {
+            tables.back().notes.push_back(
+                "No regbench run fills this table: OGMM (and its variants) are not trained in "
+                "this build; the paper's numbers are shown for reference.");
+        }
+        if (spec.id == "table5_ablation_losses" && Wanted(o.tables, "table6_inference_time") &&
+            rows_of.count("tab1_same")) {
+            tables.push_back(BuildTimingTable(
+                {{"", rows_of["tab1_same"], provenance_of["tab1_same"], ""}}, paper, CpuModel(),
+                "none (Eigen's own kernels; the classical methods link no BLAS)"));
+        }
+    }
+    const std::string intro = fmt::format(
+        "regbench {} reproduce{}: {} experiments, seed {}, {} jobs, per-call timeout {} s, "
+        "one thread per call; CPU {}.",
+        REGBENCH_VERSION, o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
+        o.timeout_seconds, CpuModel());
+    WriteText(out / "tables.md", "# regbench: the OGMM paper's tables\n\n" + intro + "\n\n" +
+                                     Join(tables, TableToMarkdown));
+    WriteText(out / "tables.tex",
+              "% " + intro + "\n% needs \\usepackage{booktabs}\n" + Join(tables, TableToLatex));
+    WriteText(out / "tables.csv", TablesToCsv(tables));
+    WriteText(out / "tables.json", TablesToJson(tables).dump(1) + "\n");
+
+    // Breakdowns and the HTML report, one section per experiment.
+    HtmlReportOptions html;
+    html.title = "regbench: reproducing the OGMM paper";
+    html.intro = {intro,
+                  "Every table's caption names the data each side came from. "
+                  "Results: results/*.jsonl; pairs: pairs/*.h5 (this folder)."};
+    html.tables = tables;
+    std::string breakdowns = "# regbench: breakdowns per experiment\n\n";
+    BreakdownOptions bo;
+    for (const auto& e : experiments) {
+        const auto& rows = rows_of[e.id];
+        const Provenance& p = provenance_of[e.id];
+        HtmlSection sec;
+        sec.title = fmt::format("{}: {} on {} ({})", e.id, e.protocol, p.dataset, e.split);
+        sec.description = fmt::format(
+            "{} pairs, pairing {}, seed {}, {} points, keep {:g}{}; ground-truth CCD floor "
+            "{:.4f}.",
+            pairs_of[e.id].pairs.size(), p.pairing, p.seed.dump(), p.points, p.keep,
+            e.fallback.empty() ? "" : "; " + e.fallback, p.gt_ccd_floor);
+        sec.rows = rows;
+        sec.tables = {DistributionTable(rows, bo), StatusTable(rows), RecallTable(rows, bo),
+                      CategoryTable(rows, bo), OverlapTable(rows, bo)};
+        const PairSet* set = &pairs_of[e.id];
+        sec.pair_lookup = [set](const nlohmann::json& row) -> const Pair* {
+            const auto k = row.value("pair", static_cast<std::size_t>(-1));
+            return k < set->pairs.size() ? &set->pairs[k] : nullptr;
+        };
+        breakdowns += "## " + sec.title + "\n\n" + sec.description + "\n\n" +
+                      Join(sec.tables, TableToMarkdown);
+        html.sections.push_back(sec);
+    }
+    WriteText(out / "breakdowns.md", breakdowns);
+    WriteText(out / "report.html", RenderHtmlReport(html));
+    summary.markdown_path = (out / "tables.md").string();
+    summary.html_path = (out / "report.html").string();
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    log << fmt::format("reproduce: done in {:.0f} s ({} pair files generated, {} calls run)\n",
+                       secs, summary.pairs_generated, summary.rows_run);
+    return summary;
+}
+
+}  // namespace regbench

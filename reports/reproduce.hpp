@@ -1,0 +1,49 @@
+#pragma once
+// `regbench reproduce`: generate the pairs of every paper table, run the methods on them
+// (isolated, resumable) and write every report into one folder.
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace regbench {
+
+struct ReproduceOptions {
+    bool quick = false;               ///< few pairs per table (a smoke run of every table)
+    std::vector<std::string> tables;  ///< table ids or prefixes ("table1", "supp"); empty: all
+    std::string modelnet40;           ///< ModelNet40 root (OFF tree or HDF5); empty: fallback
+    std::string sevenscenes;          ///< 7Scenes root; empty: simulated indoor scans
+    std::string icl_nuim;             ///< ICL-NUIM root; empty: simulated indoor scans
+    std::string out_dir = "out/reproduce";
+    std::string data_dir;              ///< where the embedded corpus lives (default: ./data)
+    int jobs = 1;                      ///< pairs in parallel
+    double timeout_seconds = 120.0;    ///< per call, in a child process (0: in-process)
+    std::size_t pairs = 0;             ///< pairs per experiment; 0: 16 with --quick, else 1000
+    std::uint64_t seed = 1;            ///< benchmark seed of every pair file
+    std::vector<std::string> methods;  ///< empty: every registered method that can be created
+    bool progress = true;              ///< progress lines on stderr
+};
+
+struct ReproduceSummary {
+    std::string out_dir;
+    std::string html_path;
+    std::string markdown_path;
+    std::size_t experiments = 0;
+    std::size_t pairs_generated = 0;  ///< pair files written by this invocation
+    std::size_t rows_run = 0;         ///< method calls made by this invocation (resume skips)
+};
+
+struct Provenance;
+
+/// Provenance of a pair file as written by `regbench generate` (dataset, split, protocol,
+/// pairing, seed, points, keep, version, content hash) plus its ground-truth CCD floor.
+Provenance ProvenanceOfPairFile(const std::string& path);
+
+/// Table ids `reproduce` knows (paper order).
+std::vector<std::string> ReproducibleTables();
+
+/// Runs everything; progress and decisions go to `log`. Throws std::runtime_error naming the
+/// input on bad options or data.
+ReproduceSummary Reproduce(const ReproduceOptions& options, std::ostream& log);
+
+}  // namespace regbench

@@ -1,0 +1,60 @@
+#pragma once
+// Small, dependency-free statistics for the reports: location, spread, seeded bootstrap CIs
+// and the Wilcoxon signed-rank test used by `regbench compare`.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace regbench {
+
+/// Mean; NaN for an empty sample.
+double SampleMean(const std::vector<double>& v);
+
+/// Median (mean of the two middle values for an even count); NaN for an empty sample.
+double SampleMedian(std::vector<double> v);
+
+/// Sample standard deviation (n - 1 denominator, as numpy's std(ddof=1)); 0 below two values.
+double SampleStd(const std::vector<double>& v);
+
+/// A mean with a two-sided percentile-bootstrap confidence interval.
+struct BootstrapCi {
+    double mean = 0.0;
+    double lo = 0.0;
+    double hi = 0.0;
+};
+
+/// Percentile bootstrap (Efron) of the mean: `samples` resamples with replacement drawn from
+/// the stream (seed, stream); [lo, hi] holds the central `level` mass. The stream should be
+/// derived from what is being estimated (StreamId), not from the position in a table, so a CI
+/// does not change when rows are reordered.
+BootstrapCi BootstrapMean(const std::vector<double>& v,
+                          int samples,
+                          std::uint64_t seed,
+                          std::uint64_t stream,
+                          double level = 0.95);
+
+/// A stable 64-bit stream id for a label such as "cpd/mae_r" (FNV-1a), independent of order.
+std::uint64_t StreamId(const std::string& label);
+
+/// Which distribution the Wilcoxon p-value was taken from.
+enum class WilcoxonMethod {
+    kExact,   ///< exact null distribution of the positive rank sum (n <= 50, no ties)
+    kNormal,  ///< normal approximation with tie correction, no continuity correction
+};
+
+struct WilcoxonResult {
+    std::size_t n = 0;       ///< non-zero differences used
+    double statistic = 0.0;  ///< min(R+, R-), as scipy.stats.wilcoxon's two-sided statistic
+    double p_value = 1.0;    ///< two-sided; 1 when every difference is zero
+    WilcoxonMethod method = WilcoxonMethod::kExact;
+};
+
+/// Two-sided Wilcoxon signed-rank test of paired differences `d` against a zero median.
+/// Zero differences are dropped (Wilcoxon's convention, scipy's zero_method="wilcox");
+/// tied |d| get average ranks. The exact null distribution is used when at most 50 non-zero
+/// differences remain and none of their magnitudes tie, else the normal approximation with
+/// the tie-corrected variance (scipy.stats.wilcoxon with method="exact" / "approx"; scipy's
+/// "auto" keeps the exact table even with ties, which then is only approximate).
+WilcoxonResult WilcoxonSignedRank(const std::vector<double>& d);
+
+}  // namespace regbench

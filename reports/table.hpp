@@ -1,0 +1,87 @@
+#pragma once
+// Report tables as data: rows of cells with the provenance of what was measured, written to
+// Markdown, LaTeX (booktabs), CSV and JSON by reports/table_writers.cpp.
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace regbench {
+
+/// Where a cell's number came from.
+enum class CellSource {
+    kLabel,     ///< a row label or free text, not a number
+    kMeasured,  ///< computed from regbench result rows
+    kPaper,     ///< transcribed from the paper (data/paper/ogmm_wacv2023_tables.json)
+};
+
+struct Cell {
+    double value = std::nan("");       ///< NaN: empty cell ("-") unless `text` is set
+    double half_width = std::nan("");  ///< 95% CI half-width, shown as value ± half_width
+    std::string text;                  ///< overrides the number (e.g. "not trained")
+    CellSource source = CellSource::kMeasured;
+    std::size_t pairs = 0;  ///< rows the number was computed from (measured cells)
+    bool HasValue() const { return std::isfinite(value); }
+};
+
+/// Which way is better, for bolding the best cell of a column.
+enum class Better { kNone, kLower, kHigher };
+
+struct Column {
+    std::string key;  ///< machine name, e.g. "same_category.mae_r" or "paper:same_category.mae_r"
+    std::string header;  ///< shown name, e.g. "MAE(R) same"
+    CellSource source = CellSource::kMeasured;
+    Better better = Better::kLower;
+    int decimals = 4;
+};
+
+/// Where a table's measured numbers came from: one entry per result set used.
+struct Provenance {
+    std::string group;       ///< the column group these rows fill ("same_category", "" for all)
+    std::string pairs_file;  ///< pair file name
+    std::string pairs_hash;  ///< its content hash when the rows record one
+    std::string dataset, split, protocol, pairing;
+    nlohmann::json seed;   ///< number or null
+    int points = 0;        ///< points per cloud before cropping (0: unknown)
+    double keep = 0.0;     ///< crop fraction (0: unknown / none)
+    std::string version;   ///< regbench version / git sha that wrote the pair file
+    std::string fallback;  ///< non-empty when the paper's dataset was replaced, and by what
+    double gt_ccd_floor = std::nan("");  ///< mean CCD of the ground-truth alignment
+};
+
+struct TableRow {
+    std::string label;        ///< method (or parameter value for the supplementary tables)
+    std::vector<Cell> cells;  ///< one per column
+};
+
+struct Table {
+    std::string id;       ///< e.g. "table1_modelnet_partial"
+    std::string title;    ///< e.g. "Tab. 1: partial-to-partial"
+    std::string caption;  ///< names the data each side came from and the pairing
+    std::string row_header = "method";
+    std::vector<Column> columns;
+    std::vector<TableRow> rows;
+    std::vector<Provenance> provenance;
+    std::vector<std::string> notes;  ///< extra lines printed under the table
+};
+
+/// Markdown: title, caption, pipe table (measured ± half-width), notes.
+std::string TableToMarkdown(const Table& t);
+
+/// LaTeX table environment with booktabs rules; the best measured cell of each column with a
+/// `better` direction is bold, CIs as "mean $\pm$ half-width"; caption escaped.
+std::string TableToLatex(const Table& t);
+
+/// CSV, one line per (table, row, column) with the provenance fields, header included.
+std::string TablesToCsv(const std::vector<Table>& tables);
+
+/// JSON array with one object per (table, row, column) and structured provenance.
+nlohmann::json TablesToJson(const std::vector<Table>& tables);
+
+/// Parses TablesToCsv output back into flat records (for round-trip checks and tools).
+std::vector<std::vector<std::string>> ParseCsv(const std::string& text);
+
+/// Index of the best cell of column `c` among rows (by value), or -1.
+int BestRow(const Table& t, std::size_t c);
+
+}  // namespace regbench

@@ -1,0 +1,271 @@
+#include <fmt/format.h>
+
+#include <sstream>
+
+#include "reports/table.hpp"
+
+namespace regbench {
+namespace {
+
+const char* SourceName(CellSource s) {
+    switch (s) {
+        case CellSource::kLabel:
+            return "label";
+        case CellSource::kMeasured:
+            return "measured";
+        case CellSource::kPaper:
+            return "paper";
+    }
+    return "?";
+}
+
+/// A cell's number as text with `decimals`, "-" when empty.
+std::string Number(const Cell& c, int decimals) {
+    if (!c.text.empty()) return c.text;
+    if (!c.HasValue()) return "-";
+    return fmt::format("{:.{}f}", c.value, decimals);
+}
+
+std::string CellText(const Cell& c, int decimals, const char* pm) {
+    std::string s = Number(c, decimals);
+    if (c.text.empty() && c.HasValue() && std::isfinite(c.half_width)) {
+        s += fmt::format("{}{:.{}f}", pm, c.half_width, decimals);
+    }
+    return s;
+}
+
+/// The provenance entry a column's cells came from: the one whose group prefixes the key.
+const Provenance* ProvenanceFor(const Table& t, const Column& col) {
+    if (col.source != CellSource::kMeasured) return nullptr;
+    const std::string group = col.key.substr(0, col.key.find('.'));
+    for (const auto& p : t.provenance) {
+        if (!p.group.empty() && p.group == group) return &p;
+    }
+    return t.provenance.size() == 1 ? &t.provenance.front() : nullptr;
+}
+
+std::string LatexEscape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        switch (c) {
+            case '_':
+            case '%':
+            case '&':
+            case '#':
+            case '$':
+            case '{':
+            case '}':
+                out += '\\';
+                out += c;
+                break;
+            case '~':
+                out += "\\textasciitilde{}";
+                break;
+            case '^':
+                out += "\\textasciicircum{}";
+                break;
+            case '\\':
+                out += "\\textbackslash{}";
+                break;
+            default:
+                out += c;
+        }
+    }
+    return out;
+}
+
+std::string CsvField(const std::string& s) {
+    if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
+std::string Num(double v) { return std::isfinite(v) ? fmt::format("{:.10g}", v) : ""; }
+
+const std::vector<std::string> kCsvHeader = {
+    "table",       "row",        "column",           "header",
+    "source",      "value",      "ci95_half_width",  "text",
+    "pairs",       "pairs_file", "pairs_hash",       "dataset",
+    "split",       "protocol",   "pairing",          "seed",
+    "points",      "keep",       "regbench_version", "fallback",
+    "gt_ccd_floor"};
+
+}  // namespace
+
+int BestRow(const Table& t, std::size_t c) {
+    const Column& col = t.columns.at(c);
+    if (col.better == Better::kNone || col.source != CellSource::kMeasured) return -1;
+    int best = -1;
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        const Cell& cell = t.rows[r].cells.at(c);
+        if (!cell.HasValue() || !cell.text.empty()) continue;
+        const double v = cell.value;
+        if (best < 0) {
+            best = static_cast<int>(r);
+            continue;
+        }
+        const double b = t.rows[static_cast<std::size_t>(best)].cells[c].value;
+        if ((col.better == Better::kLower && v < b) || (col.better == Better::kHigher && v > b)) {
+            best = static_cast<int>(r);
+        }
+    }
+    return best;
+}
+
+std::string TableToMarkdown(const Table& t) {
+    std::string out = "### " + t.title + "\n\n";
+    if (!t.caption.empty()) out += t.caption + "\n\n";
+    out += "| " + t.row_header + " |";
+    std::string rule = "|---|";
+    for (const auto& c : t.columns) {
+        out += " " + c.header + " |";
+        rule += "---:|";
+    }
+    out += "\n" + rule + "\n";
+    std::vector<int> best(t.columns.size());
+    for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        out += "| " + t.rows[r].label + " |";
+        for (std::size_t c = 0; c < t.columns.size(); ++c) {
+            std::string s = CellText(t.rows[r].cells[c], t.columns[c].decimals, " ± ");
+            if (best[c] == static_cast<int>(r)) s = "**" + s + "**";
+            out += " " + s + " |";
+        }
+        out += "\n";
+    }
+    for (const auto& n : t.notes) out += "\n" + n + "\n";
+    return out;
+}
+
+std::string TableToLatex(const Table& t) {
+    std::string out = "\\begin{table}[t]\n\\centering\n\\small\n\\begin{tabular}{l";
+    for (std::size_t c = 0; c < t.columns.size(); ++c) out += "r";
+    out += "}\n\\toprule\n" + LatexEscape(t.row_header);
+    for (const auto& c : t.columns) out += " & " + LatexEscape(c.header);
+    out += " \\\\\n\\midrule\n";
+    std::vector<int> best(t.columns.size());
+    for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        out += LatexEscape(t.rows[r].label);
+        for (std::size_t c = 0; c < t.columns.size(); ++c) {
+            const Cell& cell = t.rows[r].cells[c];
+            std::string s = cell.text.empty() ? CellText(cell, t.columns[c].decimals, " $\\pm$ ")
+                                              : LatexEscape(cell.text);
+            if (best[c] == static_cast<int>(r)) s = "\\textbf{" + s + "}";
+            out += " & " + s;
+        }
+        out += " \\\\\n";
+    }
+    out += "\\bottomrule\n\\end{tabular}\n";
+    out += "\\caption{" + LatexEscape(t.title + ". " + t.caption) + "}\n";
+    out += "\\label{tab:" + LatexEscape(t.id) + "}\n\\end{table}\n";
+    return out;
+}
+
+std::string TablesToCsv(const std::vector<Table>& tables) {
+    std::string out;
+    for (std::size_t i = 0; i < kCsvHeader.size(); ++i) out += (i ? "," : "") + kCsvHeader[i];
+    out += "\n";
+    for (const auto& row : TablesToJson(tables)) {
+        std::string line;
+        for (std::size_t i = 0; i < kCsvHeader.size(); ++i) {
+            const auto& v = row.at(kCsvHeader[i]);
+            std::string s;
+            if (v.is_string()) {
+                s = v.get<std::string>();
+            } else if (v.is_number_float()) {
+                s = Num(v.get<double>());
+            } else if (!v.is_null()) {
+                s = v.dump();
+            }
+            line += (i ? "," : "") + CsvField(s);
+        }
+        out += line + "\n";
+    }
+    return out;
+}
+
+nlohmann::json TablesToJson(const std::vector<Table>& tables) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& t : tables) {
+        for (const auto& row : t.rows) {
+            for (std::size_t c = 0; c < t.columns.size(); ++c) {
+                const Column& col = t.columns[c];
+                const Cell& cell = row.cells.at(c);
+                const Provenance* p = ProvenanceFor(t, col);
+                const auto num = [](double v) -> nlohmann::json {
+                    return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+                };
+                nlohmann::json rec = {
+                    {"table", t.id},
+                    {"row", row.label},
+                    {"column", col.key},
+                    {"header", col.header},
+                    {"source", SourceName(col.source)},
+                    {"value", num(cell.value)},
+                    {"ci95_half_width", num(cell.half_width)},
+                    {"text", cell.text},
+                    {"pairs", cell.pairs},
+                    {"pairs_file", p ? p->pairs_file : ""},
+                    {"pairs_hash", p ? p->pairs_hash : ""},
+                    {"dataset", p ? p->dataset : ""},
+                    {"split", p ? p->split : ""},
+                    {"protocol", p ? p->protocol : ""},
+                    {"pairing", p ? p->pairing : ""},
+                    {"seed", p ? p->seed : nlohmann::json()},
+                    {"points", p ? p->points : 0},
+                    {"keep", p ? num(p->keep) : nlohmann::json()},
+                    {"regbench_version", p ? p->version : ""},
+                    {"fallback", p ? p->fallback : ""},
+                    {"gt_ccd_floor", p ? num(p->gt_ccd_floor) : nlohmann::json()}};
+                out.push_back(rec);
+            }
+        }
+    }
+    return out;
+}
+
+std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
+    std::vector<std::vector<std::string>> records;
+    std::vector<std::string> fields;
+    std::string field;
+    bool quoted = false, any = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (quoted) {
+            if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+                field += '"';
+                ++i;
+            } else if (c == '"') {
+                quoted = false;
+            } else {
+                field += c;
+            }
+            continue;
+        }
+        if (c == '"') {
+            quoted = true;
+            any = true;
+        } else if (c == ',') {
+            fields.push_back(field);
+            field.clear();
+        } else if (c == '\n') {
+            fields.push_back(field);
+            records.push_back(fields);
+            fields.clear();
+            field.clear();
+            any = false;
+        } else if (c != '\r') {
+            field += c;
+            any = true;
+        }
+    }
+    if (any || !fields.empty()) {
+        fields.push_back(field);
+        records.push_back(fields);
+    }
+    return records;
+}
+
+}  // namespace regbench

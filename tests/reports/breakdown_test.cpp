@@ -1,0 +1,97 @@
+#include "reports/breakdown.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace regbench {
+namespace {
+
+nlohmann::json Row(const std::string& method,
+                   double mae_r,
+                   double mae_t,
+                   const std::string& category,
+                   double overlap,
+                   const std::string& status = "ok") {
+    return {{"method", method},
+            {"status", status},
+            {"category", category},
+            {"source_overlap_ratio", overlap},
+            {"target_overlap_ratio", overlap + 0.05},
+            {"metrics",
+             {{"mae_r", mae_r},
+              {"mae_t", mae_t},
+              {"ccd", 0.05},
+              {"rre", 2 * mae_r},
+              {"rte", 2 * mae_t}}}};
+}
+
+std::vector<nlohmann::json> Rows() {
+    return {Row("a", 0.5, 0.005, "chair", 0.55), Row("a", 3.0, 0.02, "chair", 0.75),
+            Row("a", 8.0, 0.5, "plane", 0.75, "failed"), Row("a", 12.0, 0.05, "plane", 0.95),
+            Row("b", 1.5, 0.2, "chair", 0.55, "timeout")};
+}
+
+std::size_t Col(const Table& t, const std::string& key) {
+    for (std::size_t i = 0; i < t.columns.size(); ++i) {
+        if (t.columns[i].key == key) return i;
+    }
+    ADD_FAILURE() << "no column " << key;
+    return 0;
+}
+
+TEST(Breakdown, DistributionByHand) {
+    const Table t = DistributionTable(Rows(), BreakdownOptions{});
+    ASSERT_EQ(t.rows.size(), 2u);
+    const auto& a = t.rows[0].cells;
+    // mae_r of a: 0.5, 3, 8, 12 -> mean 5.875, median 5.5, np.std(ddof=1) = 5.137687547266117
+    EXPECT_DOUBLE_EQ(a[Col(t, "pairs")].value, 4.0);
+    EXPECT_DOUBLE_EQ(a[Col(t, "mae_r.mean")].value, 5.875);
+    EXPECT_DOUBLE_EQ(a[Col(t, "mae_r.median")].value, 5.5);
+    EXPECT_NEAR(a[Col(t, "mae_r.std")].value, 5.137687547266117, 1e-12);
+    EXPECT_GT(a[Col(t, "mae_r.mean")].half_width, 0.0);
+}
+
+TEST(Breakdown, StatusCountsAndNullMetrics) {
+    auto rows = Rows();
+    rows.push_back({{"method", "b"}, {"status", "crashed"}, {"metrics", {{"mae_r", nullptr}}}});
+    const Table t = StatusTable(rows);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "ok")].value, 3.0);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "failed")].value, 1.0);
+    EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "timeout")].value, 1.0);
+    EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "crashed")].value, 1.0);
+    EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "null_metrics")].value, 1.0);
+}
+
+TEST(Breakdown, RecallByHand) {
+    BreakdownOptions o;
+    o.recall = {{1.0, 0.01}, {5.0, 0.1}};
+    const Table t = RecallTable(Rows(), o);
+    // a: (0.5, 0.005) passes both; (3, 0.02) passes (5, 0.1) only -> 1/4 and 2/4.
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[0].value, 0.25);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 0.5);
+    EXPECT_DOUBLE_EQ(t.rows[1].cells[1].value, 0.0);  // b: mae_t 0.2
+}
+
+TEST(Breakdown, PerCategoryMeans) {
+    const Table t = CategoryTable(Rows(), BreakdownOptions{});
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "chair")].value, 1.75);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "plane")].value, 10.0);
+    EXPECT_FALSE(t.rows[1].cells[Col(t, "plane")].HasValue());
+}
+
+TEST(Breakdown, BinsByMeasuredOverlap) {
+    BreakdownOptions o;
+    o.overlap_edges = {0.0, 0.6, 0.8, 1.0001};
+    const Table t = OverlapTable(Rows(), o);
+    ASSERT_EQ(t.columns.size(), 3u);
+    // min(src, src + 0.05) = src: 0.55 -> bin 0, 0.75 x2 -> bin 1, 0.95 -> bin 2.
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[0].value, 0.5);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 5.5);
+    EXPECT_EQ(t.rows[0].cells[1].pairs, 2u);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[2].value, 12.0);
+    EXPECT_TRUE(t.notes.empty());
+}
+
+}  // namespace
+}  // namespace regbench

@@ -1,0 +1,205 @@
+#include "reports/html_report.hpp"
+
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "reports/breakdown.hpp"
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A small pair: a ring of points and its copy shifted by 0.3 along x.
+Pair RingPair() {
+    Pair p;
+    p.source.resize(200, 3);
+    for (int i = 0; i < 200; ++i) {
+        const double a = 2 * M_PI * i / 200.0;
+        p.source.row(i) << std::cos(a), 0.5 * std::sin(a), 0.1 * std::sin(3 * a);
+    }
+    p.target = p.source;
+    p.target.col(0).array() += 0.3;
+    p.T_gt(0, 3) = 0.3;
+    return p;
+}
+
+std::vector<nlohmann::json> Rows() {
+    std::vector<nlohmann::json> rows;
+    for (int k = 0; k < 30; ++k) {
+        for (const std::string m : {"icp", "cpd", "svr"}) {
+            const double e = (m == "icp" ? 10.0 : m == "cpd" ? 3.0 : 6.0) + std::fmod(k * 1.7, 5.0);
+            rows.push_back(
+                {{"pair", k},
+                 {"method", m},
+                 {"status", "ok"},
+                 {"shape", "ring"},
+                 {"category", k % 2 ? "a" : "b"},
+                 {"seconds", m == "cpd" ? 0.05 : 0.005},
+                 {"source_overlap_ratio", 0.5 + 0.015 * k},
+                 {"target_overlap_ratio", 0.55 + 0.01 * k},
+                 {"transform",
+                  {{1, 0, 0, 0.1 * (k % 3)}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}},
+                 {"metrics",
+                  {{"mae_r", e}, {"mae_t", e / 100}, {"ccd", 0.05}, {"rre", e}, {"rte", e / 50}}}});
+        }
+    }
+    return rows;
+}
+
+std::string Render() {
+    static const Pair pair = RingPair();
+    HtmlReportOptions o;
+    o.title = "test report";
+    o.intro = {"made by html_report_test"};
+    HtmlSection s;
+    s.title = "ring pairs";
+    s.rows = Rows();
+    s.tables = {DistributionTable(s.rows, BreakdownOptions{}),
+                RecallTable(s.rows, BreakdownOptions{})};
+    s.pair_lookup = [](const nlohmann::json&) { return &pair; };
+    o.sections = {s};
+    return RenderHtmlReport(o);
+}
+
+TEST(HtmlReport, IsSelfContained) {
+    const std::string html = Render();
+    // No network: no URL scheme at all, no scripts, no external resources or fonts.
+    EXPECT_EQ(html.find("http"), std::string::npos);
+    EXPECT_EQ(html.find("//"), std::string::npos);
+    EXPECT_EQ(html.find("<script"), std::string::npos);
+    EXPECT_EQ(html.find("src="), std::string::npos);
+    EXPECT_EQ(html.find("url("), std::string::npos);
+    EXPECT_EQ(html.find("@import"), std::string::npos);
+    // Plots and gallery are inline SVG: 3 plots + 3 methods x 2 worst pairs.
+    std::size_t svgs = 0;
+    for (auto p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) ++svgs;
+    EXPECT_EQ(svgs, 3u + 6u);
+    EXPECT_NE(html.find("Worst pairs per method"), std::string::npos);
+    EXPECT_NE(html.find("<table>"), std::string::npos);
+}
+
+/// Decoded 8-bit RGB(A) PNG (the only kind Chromium writes for screenshots).
+struct Image {
+    int width = 0, height = 0, channels = 0;
+    std::vector<unsigned char> pixels;
+};
+
+std::uint32_t BigEndian(const unsigned char* p) {
+    return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) |
+           p[3];
+}
+
+/// A minimal PNG reader (PNG spec, sections 5, 9 and 11): chunks, zlib-inflated IDAT, the five
+/// scanline filters. Non-interlaced 8-bit truecolour only; throws otherwise.
+Image DecodePng(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), {});
+    const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
+    if (b.size() < 8 || !std::equal(sig, sig + 8, b.begin())) throw std::runtime_error("not a PNG");
+    Image img;
+    std::vector<unsigned char> idat;
+    for (std::size_t at = 8; at + 8 <= b.size();) {
+        const std::uint32_t len = BigEndian(&b[at]);
+        const std::string type(b.begin() + at + 4, b.begin() + at + 8);
+        const unsigned char* data = &b[at + 8];
+        if (type == "IHDR") {
+            img.width = static_cast<int>(BigEndian(data));
+            img.height = static_cast<int>(BigEndian(data + 4));
+            if (data[8] != 8 || (data[9] != 2 && data[9] != 6) || data[12] != 0)
+                throw std::runtime_error("unsupported PNG format");
+            img.channels = data[9] == 6 ? 4 : 3;
+        } else if (type == "IDAT") {
+            idat.insert(idat.end(), data, data + len);
+        }
+        at += 12 + len;
+    }
+    const std::size_t stride = static_cast<std::size_t>(img.width) * img.channels;
+    std::vector<unsigned char> raw((stride + 1) * img.height);
+    uLongf raw_size = raw.size();
+    if (uncompress(raw.data(), &raw_size, idat.data(), idat.size()) != Z_OK ||
+        raw_size != raw.size())
+        throw std::runtime_error("bad IDAT");
+    img.pixels.resize(stride * img.height);
+    const int bpp = img.channels;
+    for (int y = 0; y < img.height; ++y) {
+        const unsigned char filter = raw[y * (stride + 1)];
+        const unsigned char* src = &raw[y * (stride + 1) + 1];
+        unsigned char* out = &img.pixels[y * stride];
+        const unsigned char* up = y > 0 ? &img.pixels[(y - 1) * stride] : nullptr;
+        for (std::size_t x = 0; x < stride; ++x) {
+            const int a = x >= static_cast<std::size_t>(bpp) ? out[x - bpp] : 0;
+            const int u = up ? up[x] : 0;
+            const int c = (up && x >= static_cast<std::size_t>(bpp)) ? up[x - bpp] : 0;
+            int pred = 0;
+            switch (filter) {
+                case 0:
+                    pred = 0;
+                    break;
+                case 1:
+                    pred = a;
+                    break;
+                case 2:
+                    pred = u;
+                    break;
+                case 3:
+                    pred = (a + u) / 2;
+                    break;
+                case 4: {
+                    const int p = a + u - c, pa = std::abs(p - a), pb = std::abs(p - u),
+                              pc = std::abs(p - c);
+                    pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? u : c);
+                    break;
+                }
+                default:
+                    throw std::runtime_error("bad filter");
+            }
+            out[x] = static_cast<unsigned char>(src[x] + pred);
+        }
+    }
+    return img;
+}
+
+TEST(HtmlReport, RendersInHeadlessChromium) {
+    const fs::path dir =
+        fs::temp_directory_path() / ("regbench_html_" + std::to_string(::getpid()));
+    fs::create_directories(dir / "profile");
+    const fs::path html = dir / "report.html";
+    const fs::path png = dir / "shot.png";
+    std::ofstream(html) << Render();
+    // Debian's chromium (scripts/install_deps.sh); everything that could reach the network off.
+    const std::string cmd =
+        "timeout 180 chromium --headless --no-sandbox --disable-gpu "
+        "--disable-background-networking --disable-component-update --disable-sync "
+        "--no-first-run --user-data-dir=" +
+        (dir / "profile").string() + " --screenshot=" + png.string() +
+        " --window-size=1200,1600 file://" + html.string() + " > " +
+        (dir / "chromium.log").string() + " 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << "chromium failed; see " << dir / "chromium.log";
+    const Image img = DecodePng(png.string());
+    EXPECT_EQ(img.width, 1200);
+    EXPECT_EQ(img.height, 1600);
+    // Not blank: a good share of non-white pixels and the plot palette's colours.
+    std::size_t ink = 0;
+    std::set<std::uint32_t> colours;
+    for (std::size_t i = 0; i + 2 < img.pixels.size(); i += img.channels) {
+        const unsigned char r = img.pixels[i], g = img.pixels[i + 1], b = img.pixels[i + 2];
+        if (r < 240 || g < 240 || b < 240) ++ink;
+        colours.insert((r << 16) | (g << 8) | b);
+    }
+    const double ink_fraction = static_cast<double>(ink) / (img.width * img.height);
+    EXPECT_GT(ink_fraction, 0.01);
+    EXPECT_GT(colours.size(), 20u);
+    // The Okabe-Ito blue (#0072B2) of the first method's curve is on screen.
+    EXPECT_TRUE(colours.count(0x0072B2)) << colours.size() << " colours";
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace regbench

@@ -1,0 +1,199 @@
+#include "reports/paper_report.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "reports/paper_tables.hpp"
+
+namespace regbench {
+namespace {
+
+nlohmann::json Row(int pair, const std::string& method, double mae_r, double seconds = 0.1) {
+    return {{"pair", pair},
+            {"method", method},
+            {"status", "ok"},
+            {"seconds", seconds},
+            {"threads", 1},
+            {"metrics", {{"mae_r", mae_r}, {"mae_t", mae_r / 100}, {"ccd", 0.05 + mae_r / 1000}}}};
+}
+
+Provenance Prov(const std::string& file) {
+    Provenance p;
+    p.pairs_file = file;
+    p.pairs_hash = "abc123";
+    p.dataset = "cgal";
+    p.split = "test";
+    p.protocol = "partial";
+    p.pairing = "independent";
+    p.seed = 1;
+    p.points = 1024;
+    p.keep = 0.7;
+    p.version = "0.1.0";
+    p.fallback = "embedded corpus instead of ModelNet40";
+    p.gt_ccd_floor = 0.1041;
+    return p;
+}
+
+/// Tab. 1 from two small synthetic result sets: cpd and icp on "same", cpd on "cross".
+Table Tab1() {
+    ResultSet same{"same_category",
+                   {Row(0, "cpd", 1.0), Row(1, "cpd", 2.0), Row(2, "cpd", 6.0), Row(0, "icp", 4.0),
+                    Row(1, "icp", 5.0), Row(2, "icp", 9.0), Row(0, "gicp", 3.0)},
+                   Prov("same.h5"),
+                   ""};
+    ResultSet cross{
+        "cross_category", {Row(0, "cpd", 10.0), Row(1, "cpd", 20.0)}, Prov("cross.h5"), ""};
+    PaperTableOptions o;
+    o.unavailable = {{"ogmm", "not trained"}};
+    return BuildPaperTable(FindPaperTableSpec("table1_modelnet_partial"), {same, cross},
+                           LoadPaperTables(DefaultPaperTablesPath()), o);
+}
+
+const TableRow& RowNamed(const Table& t, const std::string& label) {
+    for (const auto& r : t.rows) {
+        if (r.label == label) return r;
+    }
+    throw std::runtime_error("no row " + label);
+}
+
+std::size_t Col(const Table& t, const std::string& key) {
+    for (std::size_t i = 0; i < t.columns.size(); ++i) {
+        if (t.columns[i].key == key) return i;
+    }
+    throw std::runtime_error("no column " + key);
+}
+
+TEST(PaperReport, Tab1MeansArePlainAveragesAndPaperCellsAreTheJsonNumbers) {
+    const Table t = Tab1();
+    // Rows in the paper's order (ICP first, OGMM last), then measured-only methods.
+    ASSERT_GE(t.rows.size(), 13u);
+    EXPECT_EQ(t.rows.front().label, "ICP");
+    EXPECT_EQ(t.rows[11].label, "OGMM");
+    EXPECT_EQ(t.rows[12].label, "gicp");
+    // Hand: cpd same mae_r (1 + 2 + 6) / 3 = 3; cross (10 + 20) / 2 = 15; icp same 6.
+    const auto& cpd = RowNamed(t, "CPD").cells;
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "same_category.mae_r")].value, 3.0);
+    EXPECT_EQ(cpd[Col(t, "same_category.mae_r")].pairs, 3u);
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "cross_category.mae_r")].value, 15.0);
+    EXPECT_NEAR(cpd[Col(t, "same_category.mae_t")].value, 0.03, 1e-15);
+    EXPECT_DOUBLE_EQ(RowNamed(t, "ICP").cells[Col(t, "same_category.mae_r")].value, 6.0);
+    // Paper cells, transcribed in data/paper/ogmm_wacv2023_tables.json: CPD same 11.033 /
+    // 0.1139 / 0.1110, cross 12.681; ICP same 10.333; RGM (not implemented) 0.8211.
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:same_category.mae_r")].value, 11.033);
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:same_category.mae_t")].value, 0.1139);
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:same_category.ccd")].value, 0.1110);
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:cross_category.mae_r")].value, 12.681);
+    const auto& rgm = RowNamed(t, "RGM").cells;
+    EXPECT_DOUBLE_EQ(rgm[Col(t, "paper:same_category.mae_r")].value, 0.8211);
+    EXPECT_FALSE(rgm[Col(t, "same_category.mae_r")].HasValue());
+    EXPECT_EQ(RowNamed(t, "OGMM").cells[Col(t, "same_category.mae_r")].text, "not trained");
+    EXPECT_FALSE(RowNamed(t, "gicp").cells[Col(t, "paper:same_category.mae_r")].HasValue());
+    // Caption names both sides' data and the pairing; notes carry the CCD floor.
+    EXPECT_NE(t.caption.find("dataset `cgal`"), std::string::npos) << t.caption;
+    EXPECT_NE(t.caption.find("pairing independent"), std::string::npos);
+    EXPECT_NE(t.caption.find("ModelNet40 as published"), std::string::npos);
+    EXPECT_NE(t.caption.find("embedded corpus instead of ModelNet40"), std::string::npos);
+    ASSERT_EQ(t.notes.size(), 2u);
+    EXPECT_NE(t.notes[0].find("0.1041"), std::string::npos);
+}
+
+TEST(PaperReport, SweepTableReadsTransposedPaperCells) {
+    // supp_overlap_ratio lists metrics as rows: OGMM 30% mae_r 5.6462, 70% ccd 0.0645.
+    const auto paper = LoadPaperTables(DefaultPaperTablesPath());
+    EXPECT_DOUBLE_EQ(PaperCell(paper, "supp_overlap_ratio", "OGMM", "30%", "mae_r"), 5.6462);
+    EXPECT_DOUBLE_EQ(PaperCell(paper, "supp_overlap_ratio", "OGMM", "70%", "ccd"), 0.0645);
+    EXPECT_TRUE(std::isnan(PaperCell(paper, "supp_overlap_ratio", "CPD", "30%", "mae_r")));
+    // Ablation tables: rows are variants, no groups.
+    EXPECT_DOUBLE_EQ(PaperCell(paper, "table4_ablation_components", "no_OSP", "", "mae_r"), 6.7087);
+}
+
+TEST(PaperReport, LatexIsBalancedBooktabsWithTheBestCellBold) {
+    const std::string tex = TableToLatex(Tab1());
+    const auto count = [&](const std::string& s) {
+        std::size_t n = 0;
+        for (auto p = tex.find(s); p != std::string::npos; p = tex.find(s, p + 1)) ++n;
+        return n;
+    };
+    EXPECT_EQ(count("\\begin{tabular}"), 1u);
+    EXPECT_EQ(count("\\end{tabular}"), 1u);
+    EXPECT_EQ(count("\\toprule"), 1u);
+    EXPECT_EQ(count("\\midrule"), 1u);
+    EXPECT_EQ(count("\\bottomrule"), 1u);
+    std::size_t open = 0, close = 0;
+    for (char c : tex) {
+        open += c == '{';
+        close += c == '}';
+    }
+    EXPECT_EQ(open, close);
+    // Every body line has one cell per column: label + 12 columns = 12 '&'.
+    const std::size_t body = tex.find("\\midrule\n") + 9;
+    const std::string first = tex.substr(body, tex.find('\n', body) - body);
+    EXPECT_EQ(std::count(first.begin(), first.end(), '&'), 12) << first;
+    // Best (lowest) measured same-category MAE(R) is CPD's 3.0000 with its CI.
+    EXPECT_NE(tex.find("\\textbf{3.0000 $\\pm$"), std::string::npos) << tex;
+    EXPECT_NE(tex.find("not trained"), std::string::npos);
+    EXPECT_NE(tex.find("\\caption{"), std::string::npos);
+}
+
+TEST(PaperReport, CsvAndJsonRoundTripWithProvenance) {
+    const Table t = Tab1();
+    const nlohmann::json j = TablesToJson({t});
+    ASSERT_EQ(j.size(), t.rows.size() * t.columns.size());
+    const auto records = ParseCsv(TablesToCsv({t}));
+    ASSERT_EQ(records.size(), j.size() + 1);
+    const auto& header = records.front();
+    const auto field = [&](const std::vector<std::string>& rec, const std::string& name) {
+        const auto it = std::find(header.begin(), header.end(), name);
+        return rec.at(static_cast<std::size_t>(it - header.begin()));
+    };
+    bool checked = false;
+    for (std::size_t i = 1; i < records.size(); ++i) {
+        const auto& rec = records[i];
+        const auto& js = j[i - 1];
+        EXPECT_EQ(field(rec, "row"), js["row"].get<std::string>());
+        EXPECT_EQ(field(rec, "column"), js["column"].get<std::string>());
+        if (js["value"].is_number()) {
+            EXPECT_DOUBLE_EQ(std::stod(field(rec, "value")), js["value"].get<double>());
+        }
+        if (js["row"] == "CPD" && js["column"] == "cross_category.mae_r") {
+            checked = true;
+            EXPECT_EQ(field(rec, "pairs_file"), "cross.h5");
+            EXPECT_EQ(js["pairs_hash"], "abc123");
+            EXPECT_EQ(js["dataset"], "cgal");
+            EXPECT_EQ(js["split"], "test");
+            EXPECT_EQ(js["protocol"], "partial");
+            EXPECT_EQ(js["pairing"], "independent");
+            EXPECT_EQ(js["seed"], 1);
+            EXPECT_EQ(js["points"], 1024);
+            EXPECT_DOUBLE_EQ(js["keep"].get<double>(), 0.7);
+            EXPECT_EQ(js["regbench_version"], "0.1.0");
+            EXPECT_EQ(field(rec, "source"), "measured");
+            EXPECT_DOUBLE_EQ(std::stod(field(rec, "value")), 15.0);
+        }
+        if (js["row"] == "CPD" && js["column"] == "paper:cross_category.mae_r") {
+            EXPECT_EQ(js["source"], "paper");
+            EXPECT_EQ(js["pairs_file"], "");
+        }
+    }
+    EXPECT_TRUE(checked);
+}
+
+TEST(PaperReport, TimingTableMeanAndMedianByHand) {
+    ResultSet s{"",
+                {Row(0, "cpd", 1, 0.1), Row(1, "cpd", 1, 0.2), Row(2, "cpd", 1, 0.6)},
+                Prov("same.h5"),
+                ""};
+    const Table t =
+        BuildTimingTable({s}, LoadPaperTables(DefaultPaperTablesPath()), "Test CPU", "OpenBLAS");
+    ASSERT_EQ(t.rows.size(), 1u);
+    EXPECT_NEAR(t.rows[0].cells[Col(t, "mean_seconds")].value, 0.3, 1e-15);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "median_seconds")].value, 0.2);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "points")].value, 1024);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "paper:seconds")].value, 4.347);  // Tab. 6 CPD
+    EXPECT_NE(t.caption.find("Test CPU"), std::string::npos);
+    EXPECT_NE(t.caption.find("OpenBLAS"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace regbench
