@@ -12,14 +12,17 @@
 #include <vector>
 
 #include "app/commands.hpp"
+#ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
 #include "protocols/dataset_shapes.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_protocols.hpp"
+#endif
 
 namespace regbench::app {
+#ifdef REGBENCH_HAVE_LEARNED
 namespace {
 
 struct TrainArgs {
@@ -291,5 +294,12 @@ void AddTrainCommand(CLI::App& app) {
     cmd->add_option("--data-dir", a->data_dir, "Data directory for named datasets");
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
+
+#else
+void AddTrainCommand(CLI::App& app) {
+    app.add_subcommand("train", "Train a learned network (not in this build: needs LibTorch)")
+        ->callback([] { throw std::runtime_error("train: this build has no LibTorch (ogmm/)"); });
+}
+#endif
 
 }  // namespace regbench::app

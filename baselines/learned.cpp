@@ -212,13 +212,4 @@ MethodInfo DeepGmrNoIcpMethodInfo() {
     return MakeInfo("deepgmr-noicp", "deepgmr", false,
                     "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
 }
-MethodInfo DeepGmrOrigMethodInfo() {
-    return MakeInfo("deepgmr-orig", "deepgmr-orig", true,
-                    "DeepGMR, original code (PointNet on RRI features) + Open3D ICP refinement");
-}
-MethodInfo DeepGmrOrigNoIcpMethodInfo() {
-    return MakeInfo("deepgmr-orig-noicp", "deepgmr-orig", false,
-                    "DeepGMR, original code (PointNet on RRI features), network alone");
-}
-
 }  // namespace regbench

@@ -7,13 +7,12 @@
 
 namespace regbench {
 
-/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`, `deepgmr-orig`, `deepgmr-orig-noicp`.
+/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`. Any checkpoint runs under any of them (the
+/// checkpoint names its model), e.g. `deepgmr` with checkpoint = a deepgmr-orig run.
 MethodInfo OgmmMethodInfo();
 MethodInfo OgmmNoIcpMethodInfo();
 MethodInfo DeepGmrMethodInfo();
 MethodInfo DeepGmrNoIcpMethodInfo();
-MethodInfo DeepGmrOrigMethodInfo();
-MethodInfo DeepGmrOrigNoIcpMethodInfo();
 
 /// Directory of the shipped checkpoint `name` (e.g. "ogmm"): $REGBENCH_MODELS/<name> when that
 /// variable is set, else <source dir baked in at build time>/data/models/<name>.

@@ -25,7 +25,6 @@ const std::vector<MethodInfo>& AllMethods() {
         SvrMethodInfo(),      FilterRegMethodInfo(),
 #ifdef REGBENCH_HAVE_LEARNED
         OgmmMethodInfo(),     OgmmNoIcpMethodInfo(), DeepGmrMethodInfo(), DeepGmrNoIcpMethodInfo(),
-        DeepGmrOrigMethodInfo(), DeepGmrOrigNoIcpMethodInfo(),
 #endif
     };
     return methods;
