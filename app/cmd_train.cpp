@@ -114,7 +114,8 @@ ogmm::TrainData MakeData(const TrainArgs& a) {
                                         " leaves no training or no validation pair");
         }
         const std::size_t n_train = n - n_val;  // the last n_val pairs validate
-        for (std::size_t i = n_train; i < n; ++i) data.validation.push_back(ToSample(set->pairs[i]));
+        for (std::size_t i = n_train; i < n; ++i)
+            data.validation.push_back(ToSample(set->pairs[i]));
         data.train_pair = [set, n_train](std::uint64_t k) {
             return ToSample(set->pairs[k % n_train]);
         };
@@ -163,9 +164,11 @@ nlohmann::json ReadJsonFile(const std::string& path) {
 }
 
 /// Named config + --config file + the command-line recipe flags.
-nlohmann::json BuildConfig(const TrainArgs& a, const std::string& model, const nlohmann::json& extra) {
-    nlohmann::json overrides = a.config_file.empty() ? nlohmann::json::object()
-                                                     : ReadJsonFile(a.config_file);
+nlohmann::json BuildConfig(const TrainArgs& a,
+                           const std::string& model,
+                           const nlohmann::json& extra) {
+    nlohmann::json overrides =
+        a.config_file.empty() ? nlohmann::json::object() : ReadJsonFile(a.config_file);
     overrides.merge_patch(extra);
     nlohmann::json config = ogmm::ResolveConfig(model, overrides);
     if (a.batch > 0) config["train"]["batch"] = a.batch;
@@ -187,9 +190,12 @@ std::vector<std::pair<std::string, nlohmann::json>> AblationVariants(const std::
         std::vector<std::pair<std::string, nlohmann::json>> v;
         for (const auto& [name, gr, cl, os] :
              std::vector<std::tuple<std::string, bool, bool, bool>>{
-                 {"GR", true, false, false},     {"CL", false, true, false},
-                 {"OS", false, false, true},     {"GR+CL", true, true, false},
-                 {"CL+OS", false, true, true},   {"GR+OS", true, false, true},
+                 {"GR", true, false, false},
+                 {"CL", false, true, false},
+                 {"OS", false, false, true},
+                 {"GR+CL", true, true, false},
+                 {"CL+OS", false, true, true},
+                 {"GR+OS", true, false, true},
                  {"GR+CL+OS", true, true, true}}) {
             v.push_back({name,
                          {{"w_pose", gr ? 10.0 : 0.0},
@@ -237,8 +243,9 @@ void RunOne(const TrainArgs& a,
 
 void Run(const TrainArgs& a, const std::string& command_line) {
     if (a.ablation.empty() && a.model.empty()) {
-        throw std::invalid_argument("train: --model is required (known: deepgmr, deepgmr-small, "
-                                    "deepgmr-orig, deepgmr-orig-xyz, ogmm, ogmm-small, ogmm-tiny)");
+        throw std::invalid_argument(
+            "train: --model is required (known: deepgmr, deepgmr-small, "
+            "deepgmr-orig, deepgmr-orig-xyz, ogmm, ogmm-small, ogmm-tiny)");
     }
     const ogmm::TrainData data = MakeData(a);
     if (a.ablation.empty()) {

@@ -39,9 +39,8 @@ Transform IcpRefine(const PointCloud& source,
          {"relative_rmse", options.relative_rmse}});
     // Open3D's RegistrationICP from `initial` first moves the source by it; doing that here and
     // starting from the identity is the same computation.
-    const PointCloud moved =
-        ((source * initial.topLeftCorner<3, 3>().transpose()).rowwise() +
-         initial.topRightCorner<3, 1>().transpose());
+    const PointCloud moved = ((source * initial.topLeftCorner<3, 3>().transpose()).rowwise() +
+                              initial.topRightCorner<3, 1>().transpose());
     const AlignResult r = icp->Align(moved, target);
     if (details != nullptr) *details = r;
     if (r.status != AlignStatus::kOk) return initial;
@@ -56,7 +55,8 @@ struct LearnedOptions {
     double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius (icp variants)
     int icp_max_iterations = 30;                    ///< ICP iterations (icp variants)
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedOptions, checkpoint,
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedOptions,
+                                                checkpoint,
                                                 icp_max_correspondence_distance,
                                                 icp_max_iterations)
 
@@ -77,8 +77,8 @@ class LearnedMethod final : public RegistrationMethod {
 public:
     LearnedMethod(std::string name, std::string model_dir, bool icp, LearnedOptions options)
         : name_(std::move(name)), icp_(icp), options_(std::move(options)) {
-        checkpoint_ = options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir)
-                                                  : options_.checkpoint;
+        checkpoint_ =
+            options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
     }
     std::string Name() const override { return name_; }
     nlohmann::json Params() const override {
@@ -181,10 +181,12 @@ MethodInfo MakeInfo(const std::string& name,
         d.erase("icp_max_iterations");
     }
     info.defaults = d;
-    info.create = [name, model_dir, icp](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
+    info.create = [name, model_dir,
+                   icp](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
         if (!icp && j.is_object() &&
             (j.contains("icp_max_correspondence_distance") || j.contains("icp_max_iterations"))) {
-            throw std::invalid_argument(name + ": no ICP in this variant; drop the icp_* parameters");
+            throw std::invalid_argument(name +
+                                        ": no ICP in this variant; drop the icp_* parameters");
         }
         const auto o = ParseOptions<LearnedOptions>(j, name);
         Require(o.icp_max_correspondence_distance > 0, name, "icp_max_correspondence_distance",

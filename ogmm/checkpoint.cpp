@@ -63,8 +63,8 @@ nlohmann::json ReadCheckpointJson(const std::string& dir) {
     try {
         in >> j;
     } catch (const std::exception& e) {
-        throw std::runtime_error("checkpoint file " + path.string() + " is not valid JSON: " +
-                                 e.what());
+        throw std::runtime_error("checkpoint file " + path.string() +
+                                 " is not valid JSON: " + e.what());
     }
     if (!j.is_object() || j.value("format", "") != kFormat || !j.contains("model_config")) {
         throw std::runtime_error("checkpoint file " + path.string() +
@@ -89,8 +89,9 @@ nlohmann::json LoadCheckpoint(const std::string& dir,
         archive.load_from(weights.string());
         net.load(archive);
     } catch (const c10::Error& e) {
-        throw std::runtime_error("checkpoint weights " + weights.string() +
-                                 " are corrupt or do not fit the model: " + e.what_without_backtrace());
+        throw std::runtime_error(
+            "checkpoint weights " + weights.string() +
+            " are corrupt or do not fit the model: " + e.what_without_backtrace());
     }
     if (optimizer != nullptr) {
         const fs::path opt = fs::path(dir) / kOptimizerFile;

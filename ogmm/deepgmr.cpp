@@ -11,9 +11,12 @@ using torch::indexing::Slice;
 
 std::string ToString(DeepGmrFeatures f) {
     switch (f) {
-        case DeepGmrFeatures::kRri: return "rri";
-        case DeepGmrFeatures::kXyz: return "xyz";
-        case DeepGmrFeatures::kDgcnn: return "dgcnn";
+        case DeepGmrFeatures::kRri:
+            return "rri";
+        case DeepGmrFeatures::kXyz:
+            return "xyz";
+        case DeepGmrFeatures::kDgcnn:
+            return "dgcnn";
     }
     return "?";
 }
@@ -38,11 +41,14 @@ DeepGmrLoss ParseLoss(const std::string& s) {
 class CbrImpl : public torch::nn::Module {
 public:
     CbrImpl(int in, int out) {
-        conv_ = register_module("0", torch::nn::Conv1d(torch::nn::Conv1dOptions(in, out, 1).bias(false)));
-        bn_ = register_module(
-            "1", torch::nn::BatchNorm1d(torch::nn::BatchNorm1dOptions(out).eps(1e-5).momentum(0.1)));
+        conv_ = register_module(
+            "0", torch::nn::Conv1d(torch::nn::Conv1dOptions(in, out, 1).bias(false)));
+        bn_ = register_module("1", torch::nn::BatchNorm1d(
+                                       torch::nn::BatchNorm1dOptions(out).eps(1e-5).momentum(0.1)));
     }
-    torch::Tensor forward(const torch::Tensor& x) { return torch::relu(bn_->forward(conv_->forward(x))); }
+    torch::Tensor forward(const torch::Tensor& x) {
+        return torch::relu(bn_->forward(conv_->forward(x)));
+    }
 
 private:
     torch::nn::Conv1d conv_{nullptr};
@@ -50,29 +56,27 @@ private:
 };
 TORCH_MODULE(Cbr);
 
-torch::Tensor Rotation(const torch::Tensor& T) { return T.index({Slice(), Slice(0, 3), Slice(0, 3)}); }
+torch::Tensor Rotation(const torch::Tensor& T) {
+    return T.index({Slice(), Slice(0, 3), Slice(0, 3)});
+}
 torch::Tensor Translation(const torch::Tensor& T) { return T.index({Slice(), Slice(0, 3), 3}); }
 
 }  // namespace
 
 nlohmann::json ToJson(const DeepGmrConfig& c) {
-    return {{"arch", "deepgmr"},
-            {"name", c.name},
-            {"features", ToString(c.features)},
-            {"clusters", c.clusters},
-            {"rri_k", c.rri_k},
-            {"rri_variant", ToString(c.rri_variant)},
-            {"emb_dims", c.emb_dims},
-            {"dgcnn_k", c.dgcnn_k},
-            {"head_hidden", c.head_hidden},
-            {"loss", ToString(c.loss)}};
+    return {
+        {"arch", "deepgmr"},       {"name", c.name},       {"features", ToString(c.features)},
+        {"clusters", c.clusters},  {"rri_k", c.rri_k},     {"rri_variant", ToString(c.rri_variant)},
+        {"emb_dims", c.emb_dims},  {"dgcnn_k", c.dgcnn_k}, {"head_hidden", c.head_hidden},
+        {"loss", ToString(c.loss)}};
 }
 
 DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
     DeepGmrConfig c;
     for (const auto& [key, value] : j.items()) {
         if (key == "arch") {
-            if (value != "deepgmr") throw std::invalid_argument("deepgmr config: arch is " + value.dump());
+            if (value != "deepgmr")
+                throw std::invalid_argument("deepgmr config: arch is " + value.dump());
         } else if (key == "name") {
             c.name = value.get<std::string>();
         } else if (key == "features") {
@@ -96,8 +100,10 @@ DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
         }
     }
     if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1) {
-        throw std::invalid_argument("deepgmr config: clusters, rri_k, emb_dims, dgcnn_k, head_hidden "
-                                    "must be positive (rri_k >= 2): " + ToJson(c).dump());
+        throw std::invalid_argument(
+            "deepgmr config: clusters, rri_k, emb_dims, dgcnn_k, head_hidden "
+            "must be positive (rri_k >= 2): " +
+            ToJson(c).dump());
     }
     return c;
 }
@@ -130,7 +136,7 @@ torch::Tensor DeepGmrNet::Assign(const torch::Tensor& xyz) {
         } else {
             input = (xyz - xyz.mean(1, true)).transpose(1, 2).contiguous();
         }
-        const torch::Tensor local = encoder_->forward(input);                    // [B, 1024, N]
+        const torch::Tensor local = encoder_->forward(input);  // [B, 1024, N]
         const torch::Tensor global = std::get<0>(local.max(2, true)).expand_as(local);
         logits = decoder_->forward(torch::cat({local, global}, 1));
     }

@@ -28,15 +28,15 @@ enum class DeepGmrLoss {
 };
 
 struct DeepGmrConfig {
-    std::string name = "deepgmr-orig";               ///< zoo name it came from
+    std::string name = "deepgmr-orig";                 ///< zoo name it came from
     DeepGmrFeatures features = DeepGmrFeatures::kRri;  ///< encoder input / kind
-    int clusters = 16;                                ///< J, mixture components
-    int rri_k = 20;                                   ///< RRI neighbours (kRri)
+    int clusters = 16;                                 ///< J, mixture components
+    int rri_k = 20;                                    ///< RRI neighbours (kRri)
     RriVariant rri_variant = RriVariant::kCuda;        ///< phi orientation (kRri)
-    int emb_dims = 512;     ///< DGCNN feature width (kDgcnn)
-    int dgcnn_k = 20;       ///< DGCNN neighbours, self included (kDgcnn)
-    int head_hidden = 256;  ///< CONV3 head hidden width (kDgcnn)
-    DeepGmrLoss loss = DeepGmrLoss::kTransform;  ///< training loss
+    int emb_dims = 512;                                ///< DGCNN feature width (kDgcnn)
+    int dgcnn_k = 20;                                  ///< DGCNN neighbours, self included (kDgcnn)
+    int head_hidden = 256;                             ///< CONV3 head hidden width (kDgcnn)
+    DeepGmrLoss loss = DeepGmrLoss::kTransform;        ///< training loss
 };
 
 /// {"arch": "deepgmr", "name", "features", "clusters", ...}; every field always present.
@@ -60,8 +60,8 @@ private:
     DeepGmrConfig config_;
     torch::nn::Sequential encoder_{nullptr};  // PointNet local features (kRri, kXyz)
     torch::nn::Sequential decoder_{nullptr};  // PointNet segmentation head (kRri, kXyz)
-    Dgcnn dgcnn_{nullptr};  // OGMM's static DGCNN (kDgcnn)
-    Conv3 head_{nullptr};   // CONV3 emb -> J (kDgcnn)
+    Dgcnn dgcnn_{nullptr};                    // OGMM's static DGCNN (kDgcnn)
+    Conv3 head_{nullptr};                     // CONV3 emb -> J (kDgcnn)
 };
 
 }  // namespace regbench::ogmm

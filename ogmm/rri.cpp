@@ -68,7 +68,7 @@ Eigen::MatrixXd RriFeatures(const PointCloud& cloud, int k, RriVariant variant) 
     const PointCloud centred = cloud.rowwise() - cloud.colwise().mean();
     const KdTree tree(centred);
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows(centred.rows(),
-                                                                                 4 * k);
+                                                                                4 * k);
     std::vector<Eigen::Index> idx;
     std::vector<double> d2;
     std::vector<Eigen::Vector3d> nbrs(k);

@@ -32,21 +32,34 @@ nlohmann::json ToJson(const TrainConfig& c) {
 TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
     TrainConfig c;
     for (const auto& [key, v] : j.items()) {
-        if (key == "lr") c.lr = v.get<double>();
-        else if (key == "weight_decay") c.weight_decay = v.get<double>();
-        else if (key == "batch") c.batch = v.get<int>();
-        else if (key == "epochs") c.epochs = v.get<int>();
-        else if (key == "pairs_per_epoch") c.pairs_per_epoch = v.get<int>();
-        else if (key == "schedule") c.schedule = v.get<std::string>();
-        else if (key == "milestones") c.milestones = v.get<std::vector<double>>();
-        else if (key == "lr_gamma") c.lr_gamma = v.get<double>();
-        else if (key == "plateau_patience") c.plateau_patience = v.get<int>();
-        else if (key == "min_lr") c.min_lr = v.get<double>();
-        else throw std::invalid_argument("train config: unknown key '" + key + "'");
+        if (key == "lr")
+            c.lr = v.get<double>();
+        else if (key == "weight_decay")
+            c.weight_decay = v.get<double>();
+        else if (key == "batch")
+            c.batch = v.get<int>();
+        else if (key == "epochs")
+            c.epochs = v.get<int>();
+        else if (key == "pairs_per_epoch")
+            c.pairs_per_epoch = v.get<int>();
+        else if (key == "schedule")
+            c.schedule = v.get<std::string>();
+        else if (key == "milestones")
+            c.milestones = v.get<std::vector<double>>();
+        else if (key == "lr_gamma")
+            c.lr_gamma = v.get<double>();
+        else if (key == "plateau_patience")
+            c.plateau_patience = v.get<int>();
+        else if (key == "min_lr")
+            c.min_lr = v.get<double>();
+        else
+            throw std::invalid_argument("train config: unknown key '" + key + "'");
     }
     if (c.lr <= 0 || c.batch < 1 || c.epochs < 1 || c.pairs_per_epoch < c.batch) {
-        throw std::invalid_argument("train config: need lr > 0, batch >= 1, epochs >= 1 and "
-                                    "pairs_per_epoch >= batch: " + ToJson(c).dump());
+        throw std::invalid_argument(
+            "train config: need lr > 0, batch >= 1, epochs >= 1 and "
+            "pairs_per_epoch >= batch: " +
+            ToJson(c).dump());
     }
     if (c.schedule != "multistep" && c.schedule != "plateau" && c.schedule != "constant") {
         throw std::invalid_argument("train config: unknown schedule '" + c.schedule +
@@ -56,12 +69,18 @@ TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
 }
 
 nlohmann::json ToJson(const EpochMetrics& m) {
-    return {{"epoch", m.epoch},       {"step", m.step},
-            {"lr", m.lr},             {"train_loss", m.train_loss},
-            {"val_loss", m.val_loss}, {"mae_r", m.mae_r},
-            {"mae_t", m.mae_t},       {"ccd", m.ccd},
-            {"mae_r_icp", m.mae_r_refined}, {"mae_t_icp", m.mae_t_refined},
-            {"ccd_icp", m.ccd_refined},     {"identity_mae_r", m.identity_mae_r},
+    return {{"epoch", m.epoch},
+            {"step", m.step},
+            {"lr", m.lr},
+            {"train_loss", m.train_loss},
+            {"val_loss", m.val_loss},
+            {"mae_r", m.mae_r},
+            {"mae_t", m.mae_t},
+            {"ccd", m.ccd},
+            {"mae_r_icp", m.mae_r_refined},
+            {"mae_t_icp", m.mae_t_refined},
+            {"ccd_icp", m.ccd_refined},
+            {"identity_mae_r", m.identity_mae_r},
             {"seconds", m.seconds}};
 }
 
@@ -70,7 +89,8 @@ PairBatch Collate(const std::vector<TrainSample>& samples, const torch::Device& 
     const auto n = samples[0].source.rows();
     const auto m = samples[0].target.rows();
     const auto b = static_cast<int64_t>(samples.size());
-    const bool overlap = samples[0].source_overlap.size() == n && samples[0].target_overlap.size() == m;
+    const bool overlap =
+        samples[0].source_overlap.size() == n && samples[0].target_overlap.size() == m;
     torch::Tensor src = torch::empty({b, n, 3}, torch::kDouble);
     torch::Tensor tgt = torch::empty({b, m, 3}, torch::kDouble);
     torch::Tensor T = torch::empty({b, 4, 4}, torch::kDouble);
@@ -89,8 +109,10 @@ PairBatch Collate(const std::vector<TrainSample>& samples, const torch::Device& 
         const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> Tr = s.T_gt;
         std::copy(Tr.data(), Tr.data() + 16, T[i].data_ptr<double>());
         if (overlap) {
-            std::copy(s.source_overlap.data(), s.source_overlap.data() + n, so[i].data_ptr<double>());
-            std::copy(s.target_overlap.data(), s.target_overlap.data() + m, to[i].data_ptr<double>());
+            std::copy(s.source_overlap.data(), s.source_overlap.data() + n,
+                      so[i].data_ptr<double>());
+            std::copy(s.target_overlap.data(), s.target_overlap.data() + m,
+                      to[i].data_ptr<double>());
         }
     }
     PairBatch batch;
@@ -194,14 +216,15 @@ struct TrainerState {
 };
 
 nlohmann::json ToJson(const TrainerState& s) {
-    return {{"step", s.step},
-            {"elapsed_seconds", s.elapsed},
-            {"best_mae_r", std::isfinite(s.best_mae_r) ? nlohmann::json(s.best_mae_r) : nullptr},
-            {"plateau_best", std::isfinite(s.plateau_best) ? nlohmann::json(s.plateau_best) : nullptr},
-            {"plateau_bad", s.plateau_bad},
-            {"plateau_scale", s.plateau_scale},
-            {"epoch_loss_sum", s.epoch_loss_sum},
-            {"epoch_loss_steps", s.epoch_loss_steps}};
+    return {
+        {"step", s.step},
+        {"elapsed_seconds", s.elapsed},
+        {"best_mae_r", std::isfinite(s.best_mae_r) ? nlohmann::json(s.best_mae_r) : nullptr},
+        {"plateau_best", std::isfinite(s.plateau_best) ? nlohmann::json(s.plateau_best) : nullptr},
+        {"plateau_bad", s.plateau_bad},
+        {"plateau_scale", s.plateau_scale},
+        {"epoch_loss_sum", s.epoch_loss_sum},
+        {"epoch_loss_steps", s.epoch_loss_steps}};
 }
 
 TrainerState TrainerStateFromJson(const nlohmann::json& j) {
@@ -274,15 +297,17 @@ std::vector<Transform> Predict(RegistrationNet& net,
     std::vector<Transform> out;
     for (std::size_t start = 0; start < samples.size(); start += batch) {
         const std::size_t end = std::min(samples.size(), start + batch);
-        const PairBatch b =
-            Collate(std::vector<TrainSample>(samples.begin() + start, samples.begin() + end), device);
+        const PairBatch b = Collate(
+            std::vector<TrainSample>(samples.begin() + start, samples.begin() + end), device);
         const NetOutput o = net.Forward(b);
         for (int64_t i = 0; i < o.T.size(0); ++i) out.push_back(ToTransform(o.T[i]));
     }
     return out;
 }
 
-TrainSummary Train(const nlohmann::json& config, const TrainData& data, const TrainOptions& options) {
+TrainSummary Train(const nlohmann::json& config,
+                   const TrainData& data,
+                   const TrainOptions& options) {
     std::ostream& log = options.log != nullptr ? *options.log : std::cerr;
     if (!data.train_pair) throw std::invalid_argument("Train: no training data source");
     if (options.out_dir.empty()) throw std::invalid_argument("Train: no output directory");
@@ -335,8 +360,7 @@ TrainSummary Train(const nlohmann::json& config, const TrainData& data, const Tr
     const auto session_start = Clock::now();
     const double elapsed_before = state.elapsed;
     const auto elapsed = [&] {
-        return elapsed_before +
-               std::chrono::duration<double>(Clock::now() - session_start).count();
+        return elapsed_before + std::chrono::duration<double>(Clock::now() - session_start).count();
     };
     TrainSummary summary;
     double last_validation_seconds = 0.0;
@@ -361,13 +385,14 @@ TrainSummary Train(const nlohmann::json& config, const TrainData& data, const Tr
     // Validation + checkpoints; called at the end of every epoch and when the run stops early.
     const auto end_epoch = [&] {
         const auto t0 = Clock::now();
-        EpochMetrics m = Validate(*net, data.validation, val_batch, device, options.refine,
-                                  options.seed);
+        EpochMetrics m =
+            Validate(*net, data.validation, val_batch, device, options.refine, options.seed);
         last_validation_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
         m.epoch = static_cast<int>((state.step + steps_per_epoch - 1) / steps_per_epoch);
         m.step = state.step;
         m.lr = LearningRate(tc, state, static_cast<double>(state.step) / total_steps);
-        m.train_loss = state.epoch_loss_steps > 0 ? state.epoch_loss_sum / state.epoch_loss_steps : 0;
+        m.train_loss =
+            state.epoch_loss_steps > 0 ? state.epoch_loss_sum / state.epoch_loss_steps : 0;
         m.seconds = elapsed();
         state.epoch_loss_sum = 0;
         state.epoch_loss_steps = 0;
@@ -385,7 +410,8 @@ TrainSummary Train(const nlohmann::json& config, const TrainData& data, const Tr
         log << "train: validation epoch " << m.epoch << " step " << m.step << ": loss "
             << m.val_loss << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r
             << "), mae_t " << m.mae_t << ", ccd " << m.ccd;
-        if (options.refine) log << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
+        if (options.refine)
+            log << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
         log << "\n";
         const bool is_best = !data.validation.empty() && m.mae_r < state.best_mae_r;
         if (is_best) state.best_mae_r = m.mae_r;
@@ -400,16 +426,17 @@ TrainSummary Train(const nlohmann::json& config, const TrainData& data, const Tr
             summary.budget_exhausted = true;
             break;
         }
-        const double progress = budget > 0 ? std::max(static_cast<double>(state.step) / total_steps,
-                                                      elapsed() / budget)
-                                           : static_cast<double>(state.step) / total_steps;
+        const double progress =
+            budget > 0 ? std::max(static_cast<double>(state.step) / total_steps, elapsed() / budget)
+                       : static_cast<double>(state.step) / total_steps;
         const double lr = LearningRate(tc, state, progress);
         SetLearningRate(opt, lr);
         const auto t0 = Clock::now();
         std::vector<TrainSample> samples;
         samples.reserve(tc.batch);
         for (int i = 0; i < tc.batch; ++i) {
-            samples.push_back(data.train_pair(static_cast<std::uint64_t>(state.step) * tc.batch + i));
+            samples.push_back(
+                data.train_pair(static_cast<std::uint64_t>(state.step) * tc.batch + i));
         }
         const PairBatch batch = Collate(samples, device);
         SeedTorch(options.seed, static_cast<std::uint64_t>(state.step));
@@ -441,7 +468,8 @@ TrainSummary Train(const nlohmann::json& config, const TrainData& data, const Tr
             if (budget > 0) eta = std::min(eta, std::max(0.0, budget - elapsed()));
             log << "train: epoch " << (state.step - 1) / steps_per_epoch + 1 << "/" << tc.epochs
                 << " step " << state.step << "/" << total_steps << " lr " << lr;
-            for (const auto& [name, value] : terms) log << " " << name << " " << value.item<double>();
+            for (const auto& [name, value] : terms)
+                log << " " << name << " " << value.item<double>();
             log << " | " << std::fixed << std::setprecision(2) << rate << " pairs/s, ETA "
                 << FormatSeconds(eta) << std::defaultfloat << std::setprecision(6) << "\n";
             log.flush();

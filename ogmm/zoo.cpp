@@ -13,9 +13,9 @@ namespace {
 
 /// Training recipe of the original DeepGMR (Adam 1e-3, plateau halving, batch 32, 100 epochs).
 nlohmann::json OriginalDeepGmrRecipe() {
-    return {{"lr", 1e-3},         {"weight_decay", 0.0}, {"batch", 32},
-            {"epochs", 100},      {"pairs_per_epoch", 4096}, {"schedule", "plateau"},
-            {"lr_gamma", 0.5},    {"plateau_patience", 10},  {"min_lr", 1e-6}};
+    return {{"lr", 1e-3},      {"weight_decay", 0.0},     {"batch", 32},
+            {"epochs", 100},   {"pairs_per_epoch", 4096}, {"schedule", "plateau"},
+            {"lr_gamma", 0.5}, {"plateau_patience", 10},  {"min_lr", 1e-6}};
 }
 
 /// The OGMM authors' recipe (their DeepGMR baseline shares it): Adam 1e-4 with weight decay
@@ -69,7 +69,7 @@ nlohmann::json DeepGmrNamed(const std::string& name) {
 }  // namespace
 
 std::vector<std::string> ModelNames() {
-    return {"ogmm",    "ogmm-small",    "ogmm-tiny",    "deepgmr",
+    return {"ogmm",          "ogmm-small",   "ogmm-tiny",       "deepgmr",
             "deepgmr-small", "deepgmr-orig", "deepgmr-orig-xyz"};
 }
 

@@ -19,8 +19,8 @@ nlohmann::json NamedConfig(const std::string& name);
 /// Builds a network from a full configuration (its "train" object, if any, is ignored).
 std::shared_ptr<RegistrationNet> MakeNetFromConfig(const nlohmann::json& config);
 /// NamedConfig(name) with `overrides` merged in (JSON merge patch), built.
-std::shared_ptr<RegistrationNet> MakeNet(const std::string& name,
-                                         const nlohmann::json& overrides = nlohmann::json::object());
+std::shared_ptr<RegistrationNet> MakeNet(
+    const std::string& name, const nlohmann::json& overrides = nlohmann::json::object());
 /// NamedConfig(name) merge-patched with `overrides` (what MakeNet builds).
 nlohmann::json ResolveConfig(const std::string& name, const nlohmann::json& overrides);
 

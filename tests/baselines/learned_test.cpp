@@ -28,7 +28,8 @@ TEST(Learned, MissingCheckpointFailsThePairWithItsPath) {
 
 TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
     torch::set_num_threads(1);
-    const fs::path dir = fs::temp_directory_path() / ("regbench_learned_" + std::to_string(::getpid()));
+    const fs::path dir =
+        fs::temp_directory_path() / ("regbench_learned_" + std::to_string(::getpid()));
     torch::manual_seed(3);
     auto net = ogmm::MakeNet("deepgmr-small");
     ogmm::SaveCheckpoint(dir.string(), *net, {{"model", "deepgmr-small"}});
@@ -53,7 +54,8 @@ TEST(Learned, IcpRefineStartsFromTheGivenEstimate) {
     // Same points in both clouds; ICP from an estimate 3 degrees off converges onto the truth,
     // which it could not from an estimate composed the wrong way round.
     const auto pair = testing::CleanCompletePair(60.0);
-    const Transform off = MakeTransform(RotationFromAxisAngle({0, 0, 1}, 3.0 * M_PI / 180), {0.01, 0, 0});
+    const Transform off =
+        MakeTransform(RotationFromAxisAngle({0, 0, 1}, 3.0 * M_PI / 180), {0.01, 0, 0});
     const Transform init = off * pair.T_gt;
     const Transform refined = IcpRefine(pair.source, pair.target, init);
     EXPECT_LT(testing::RreDeg(pair, refined), 0.05);

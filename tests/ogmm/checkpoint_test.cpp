@@ -12,8 +12,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("regbench_ckpt_" + name + "_" +
-                                                    std::to_string(::getpid()));
+    const fs::path d =
+        fs::temp_directory_path() / ("regbench_ckpt_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -46,10 +46,12 @@ TEST(Checkpoint, RoundTripIsBitExact) {
     const auto pa = a->named_parameters();
     const auto pb = b->named_parameters();
     ASSERT_EQ(pa.size(), pb.size());
-    for (const auto& item : pa) EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
+    for (const auto& item : pa)
+        EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
     const auto ba = a->named_buffers();
     const auto bb = b->named_buffers();
-    for (const auto& item : ba) EXPECT_TRUE(torch::equal(item.value(), bb[item.key()])) << item.key();
+    for (const auto& item : ba)
+        EXPECT_TRUE(torch::equal(item.value(), bb[item.key()])) << item.key();
     // A fresh net from the checkpoint alone gives the same net.
     auto c = LoadNetFromCheckpoint((dir / "ck").string());
     for (const auto& item : c->named_parameters()) {

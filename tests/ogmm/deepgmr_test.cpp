@@ -45,23 +45,23 @@ TEST_P(DeepGmrShapes, ForwardShapesAndNormalisationAtPaperSizes) {
             EXPECT_LT((gamma.sum(2) - 1).abs().max().item<float>(), 1e-4);
             EXPECT_LT((out.aux.at("pi_target").sum(1) - 1).abs().max().item<float>(), 1e-4);
             // A rotation block with det +1 (the closed form's reflection guard).
-            const torch::Tensor R = out.T.index({torch::indexing::Slice(),
-                                                 torch::indexing::Slice(0, 3),
-                                                 torch::indexing::Slice(0, 3)});
+            const torch::Tensor R =
+                out.T.index({torch::indexing::Slice(), torch::indexing::Slice(0, 3),
+                             torch::indexing::Slice(0, 3)});
             EXPECT_LT((torch::det(R) - 1).abs().max().item<float>(), 1e-4);
         }
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllConfigs,
-                         DeepGmrShapes,
-                         ::testing::Values("deepgmr", "deepgmr-small", "deepgmr-orig",
-                                           "deepgmr-orig-xyz"),
-                         [](const auto& info) {
-                             std::string s = info.param;
-                             for (char& c : s) c = c == '-' ? '_' : c;
-                             return s;
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    AllConfigs,
+    DeepGmrShapes,
+    ::testing::Values("deepgmr", "deepgmr-small", "deepgmr-orig", "deepgmr-orig-xyz"),
+    [](const auto& info) {
+        std::string s = info.param;
+        for (char& c : s) c = c == '-' ? '_' : c;
+        return s;
+    });
 
 TEST(DeepGmr, ClosedFormRecoversAKnownMotionWithUnequalWeightsAndVariances) {
     // Hand-made mixtures: 8 source means, target means = R mu + t exactly, uneven pi and
@@ -74,8 +74,8 @@ TEST(DeepGmr, ClosedFormRecoversAKnownMotionWithUnequalWeightsAndVariances) {
     for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c) Rt[r][c] = R(r, c);
     }
-    const auto mu_t = torch::matmul(mu_s, Rt.t()) + torch::tensor({t.x(), t.y(), t.z()},
-                                                                   torch::kFloat64);
+    const auto mu_t =
+        torch::matmul(mu_s, Rt.t()) + torch::tensor({t.x(), t.y(), t.z()}, torch::kFloat64);
     auto pi = torch::rand({1, 8}, torch::kFloat64) + 0.1;
     pi = pi / pi.sum();
     const auto sigma_t = torch::rand({1, 8}, torch::kFloat64) + 0.05;

@@ -26,16 +26,17 @@ inline PointCloud KeepAlong(const PointCloud& c, const Eigen::Vector3d& dir, Eig
 }
 
 /// Pair `index` of stream `seed`: `points` sampled, each cloud keeps 70% of them.
-inline TrainSample SyntheticPair(std::uint64_t seed, std::uint64_t index, Eigen::Index points,
+inline TrainSample SyntheticPair(std::uint64_t seed,
+                                 std::uint64_t index,
+                                 Eigen::Index points,
                                  double max_deg = 45.0) {
     std::mt19937_64 rng = MakePairRng(seed, index);
     const PointCloud shape = BumpyEllipsoidSurface(rng, points);
     const auto keep = static_cast<Eigen::Index>(0.7 * static_cast<double>(points) + 0.5);
     const PointCloud a = KeepAlong(shape, RandomDirection(rng), keep);
     const PointCloud b = KeepAlong(shape, RandomDirection(rng), keep);
-    const Eigen::Matrix3d R = RotationXyzProductDeg(UniformReal(rng, 0, max_deg),
-                                                   UniformReal(rng, 0, max_deg),
-                                                   UniformReal(rng, 0, max_deg));
+    const Eigen::Matrix3d R = RotationXyzProductDeg(
+        UniformReal(rng, 0, max_deg), UniformReal(rng, 0, max_deg), UniformReal(rng, 0, max_deg));
     const Eigen::Vector3d t(UniformReal(rng, -0.5, 0.5), UniformReal(rng, -0.5, 0.5),
                             UniformReal(rng, -0.5, 0.5));
     const Transform motion = MakeTransform(R, t);  // applied to the source

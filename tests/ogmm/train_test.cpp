@@ -14,8 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("regbench_train_" + name + "_" +
-                                                    std::to_string(::getpid()));
+    const fs::path d =
+        fs::temp_directory_path() / ("regbench_train_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     return d;
 }
