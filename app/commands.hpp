@@ -15,5 +15,6 @@ void AddCompareCommand(CLI::App& app);
 void AddReproduceCommand(CLI::App& app);
 void AddScoreCommand(CLI::App& app);
 void AddAlignCommand(CLI::App& app);
+void AddTrainCommand(CLI::App& app);
 
 }  // namespace regbench::app

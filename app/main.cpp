@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
     regbench::app::AddImportCommand(app);
     regbench::app::AddCompareCommand(app);
     regbench::app::AddReproduceCommand(app);
+    regbench::app::AddTrainCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -11,6 +11,9 @@
 #include "baselines/icp_pl.hpp"
 #include "baselines/identity.hpp"
 #include "baselines/ndt.hpp"
+#ifdef REGBENCH_HAVE_LEARNED
+#include "baselines/learned.hpp"
+#endif
 #include "baselines/svr.hpp"
 
 namespace regbench {
@@ -20,6 +23,9 @@ const std::vector<MethodInfo>& AllMethods() {
         IdentityMethodInfo(), IcpMethodInfo(),       IcpPlMethodInfo(), FgrMethodInfo(),
         GicpMethodInfo(),     NdtMethodInfo(),       CpdMethodInfo(),   GmmRegMethodInfo(),
         SvrMethodInfo(),      FilterRegMethodInfo(),
+#ifdef REGBENCH_HAVE_LEARNED
+        OgmmMethodInfo(),     OgmmNoIcpMethodInfo(), DeepGmrMethodInfo(), DeepGmrNoIcpMethodInfo(),
+#endif
     };
     return methods;
 }

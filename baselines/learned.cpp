@@ -1,0 +1,217 @@
+// Torch-only translation unit: Open3D is reached through the `icp` method (baselines/icp.cpp), so
+// Torch and Open3D headers never meet in one file.
+#include "baselines/learned.hpp"
+
+#include <torch/torch.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+
+#include "baselines/icp.hpp"
+#include "core/options.hpp"
+#include "ogmm/checkpoint.hpp"
+
+#ifndef REGBENCH_SOURCE_DIR
+#define REGBENCH_SOURCE_DIR "."
+#endif
+
+namespace regbench {
+
+std::string ShippedCheckpointDir(const std::string& name) {
+    if (const char* env = std::getenv("REGBENCH_MODELS"); env != nullptr && *env != '\0') {
+        return (std::filesystem::path(env) / name).string();
+    }
+    return (std::filesystem::path(REGBENCH_SOURCE_DIR) / "data" / "models" / name).string();
+}
+
+Transform IcpRefine(const PointCloud& source,
+                    const PointCloud& target,
+                    const Transform& initial,
+                    const IcpRefineOptions& options,
+                    AlignResult* details) {
+    const auto icp = IcpMethodInfo().create(
+        {{"max_correspondence_distance", options.max_correspondence_distance},
+         {"max_iterations", options.max_iterations},
+         {"relative_fitness", options.relative_fitness},
+         {"relative_rmse", options.relative_rmse}});
+    // Open3D's RegistrationICP from `initial` first moves the source by it; doing that here and
+    // starting from the identity is the same computation.
+    const PointCloud moved = ((source * initial.topLeftCorner<3, 3>().transpose()).rowwise() +
+                              initial.topRightCorner<3, 1>().transpose());
+    const AlignResult r = icp->Align(moved, target);
+    if (details != nullptr) *details = r;
+    if (r.status != AlignStatus::kOk) return initial;
+    return r.T_target_source * initial;
+}
+
+namespace {
+
+struct LearnedOptions {
+    /// Checkpoint directory; "" = the shipped one (ShippedCheckpointDir of the method's model).
+    std::string checkpoint;
+    double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius (icp variants)
+    int icp_max_iterations = 30;                    ///< ICP iterations (icp variants)
+};
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedOptions,
+                                                checkpoint,
+                                                icp_max_correspondence_distance,
+                                                icp_max_iterations)
+
+torch::Tensor ToTensor(const PointCloud& cloud) {
+    torch::Tensor t = torch::empty({1, cloud.rows(), 3}, torch::kDouble);
+    std::copy(cloud.data(), cloud.data() + cloud.size(), t.data_ptr<double>());
+    return t.to(torch::kFloat);
+}
+
+Transform ToTransform(const torch::Tensor& T) {
+    const torch::Tensor c = T.detach().to(torch::kCPU, torch::kDouble).contiguous();
+    Eigen::Matrix<double, 4, 4, Eigen::RowMajor> m;
+    std::copy(c.data_ptr<double>(), c.data_ptr<double>() + 16, m.data());
+    return m;
+}
+
+class LearnedMethod final : public RegistrationMethod {
+public:
+    LearnedMethod(std::string name, std::string model_dir, bool icp, LearnedOptions options)
+        : name_(std::move(name)), icp_(icp), options_(std::move(options)) {
+        checkpoint_ =
+            options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
+    }
+    std::string Name() const override { return name_; }
+    nlohmann::json Params() const override {
+        nlohmann::json j = options_;  // "" = shipped; the resolved path is in each result's extra
+        if (!icp_) {
+            j.erase("icp_max_correspondence_distance");
+            j.erase("icp_max_iterations");
+        }
+        return j;
+    }
+
+protected:
+    AlignResult DoAlign(const PointCloud& source,
+                        const PointCloud& target,
+                        const AlignContext& context) override {
+        AlignResult result;
+        result.extra["checkpoint"] = checkpoint_;
+        if (!Load(result)) return result;
+        torch::set_num_threads(std::max(1, context.threads));
+        torch::NoGradGuard no_grad;
+        ogmm::PairBatch batch;
+        batch.source = ToTensor(source);
+        batch.target = ToTensor(target);
+        torch::manual_seed(context.IntSeed());  // FPS starts etc. depend on the pair only
+        const auto t0 = std::chrono::steady_clock::now();
+        const ogmm::NetOutput out = net_->Forward(batch);
+        const Transform T_net = ToTransform(out.T[0]);
+        result.extra["network_seconds"] =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        // Per-point outputs (overlap scores and the like) summarised by their mean.
+        for (const auto& [key, value] : out.aux) {
+            if (value.dim() == 2 && value.size(0) == 1 && value.size(1) == source.rows()) {
+                result.extra[key + "_mean"] = value.mean().item<double>();
+            }
+        }
+        result.T_target_source = T_net;
+        result.stop_reason = "network";
+        if (icp_) {
+            IcpRefineOptions o;
+            o.max_correspondence_distance = options_.icp_max_correspondence_distance;
+            o.max_iterations = options_.icp_max_iterations;
+            AlignResult icp;
+            result.T_target_source = IcpRefine(source, target, T_net, o, &icp);
+            result.iterations = icp.iterations;
+            result.stop_reason = "icp_" + icp.stop_reason;
+            result.extra["icp"] = icp.extra;
+        }
+        return result;
+    }
+
+private:
+    /// Loads the checkpoint on first use; a failure fails this and every later pair with the
+    /// same message instead of crashing the run.
+    bool Load(AlignResult& result) {
+        if (!net_ && load_error_.empty()) {
+            try {
+                if (!std::filesystem::exists(checkpoint_)) {
+                    throw std::runtime_error("checkpoint directory " + checkpoint_ +
+                                             " does not exist (train one with `regbench train`, "
+                                             "or set parameter checkpoint / $REGBENCH_MODELS)");
+                }
+                net_ = ogmm::LoadNetFromCheckpoint(checkpoint_);
+            } catch (const std::exception& e) {
+                load_error_ = name_ + ": " + e.what();
+            }
+        }
+        if (net_) return true;
+        result.status = AlignStatus::kFailed;
+        result.message = load_error_;
+        result.stop_reason = "no_checkpoint";
+        return false;
+    }
+
+    std::string name_;
+    bool icp_;
+    LearnedOptions options_;
+    std::string checkpoint_;
+    std::shared_ptr<ogmm::RegistrationNet> net_;
+    std::string load_error_;
+};
+
+MethodInfo MakeInfo(const std::string& name,
+                    const std::string& model_dir,
+                    bool icp,
+                    const std::string& summary) {
+    MethodInfo info;
+    info.name = name;
+    info.summary = summary;
+    info.param_docs = {
+        {"checkpoint", "checkpoint directory from `regbench train`; \"\" = the shipped one, " +
+                           ShippedCheckpointDir(model_dir) + " ($REGBENCH_MODELS overrides)"}};
+    LearnedOptions defaults;
+    nlohmann::json d = defaults;
+    if (icp) {
+        info.param_docs["icp_max_correspondence_distance"] =
+            "ICP refinement radius, > 0; 0.07 = 2 * overlap_radius of the OGMM code";
+        info.param_docs["icp_max_iterations"] = "ICP iterations, >= 1 (30, Open3D default)";
+    } else {
+        d.erase("icp_max_correspondence_distance");
+        d.erase("icp_max_iterations");
+    }
+    info.defaults = d;
+    info.create = [name, model_dir,
+                   icp](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
+        if (!icp && j.is_object() &&
+            (j.contains("icp_max_correspondence_distance") || j.contains("icp_max_iterations"))) {
+            throw std::invalid_argument(name +
+                                        ": no ICP in this variant; drop the icp_* parameters");
+        }
+        const auto o = ParseOptions<LearnedOptions>(j, name);
+        Require(o.icp_max_correspondence_distance > 0, name, "icp_max_correspondence_distance",
+                "must be > 0");
+        Require(o.icp_max_iterations >= 1, name, "icp_max_iterations", "must be >= 1");
+        return std::make_unique<LearnedMethod>(name, model_dir, icp, o);
+    };
+    return info;
+}
+
+}  // namespace
+
+MethodInfo OgmmMethodInfo() {
+    return MakeInfo("ogmm", "ogmm", true,
+                    "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement");
+}
+MethodInfo OgmmNoIcpMethodInfo() {
+    return MakeInfo("ogmm-noicp", "ogmm", false, "OGMM network alone (LibTorch, CPU batch 1)");
+}
+MethodInfo DeepGmrMethodInfo() {
+    return MakeInfo("deepgmr", "deepgmr", true,
+                    "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement");
+}
+MethodInfo DeepGmrNoIcpMethodInfo() {
+    return MakeInfo("deepgmr-noicp", "deepgmr", false,
+                    "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
+}
+}  // namespace regbench

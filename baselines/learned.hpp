@@ -1,0 +1,38 @@
+#pragma once
+// Learned methods (DeepGMR, OGMM) as regbench methods: batch-1 CPU inference of a checkpoint,
+// optionally refined by Open3D point-to-point ICP as the OGMM authors' evaluation does.
+#include <string>
+
+#include "core/registration.hpp"
+
+namespace regbench {
+
+/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`. Any checkpoint runs under any of them (the
+/// checkpoint names its model), e.g. `deepgmr` with checkpoint = a deepgmr-orig run.
+MethodInfo OgmmMethodInfo();
+MethodInfo OgmmNoIcpMethodInfo();
+MethodInfo DeepGmrMethodInfo();
+MethodInfo DeepGmrNoIcpMethodInfo();
+
+/// Directory of the shipped checkpoint `name` (e.g. "ogmm"): $REGBENCH_MODELS/<name> when that
+/// variable is set, else <source dir baked in at build time>/data/models/<name>.
+std::string ShippedCheckpointDir(const std::string& name);
+
+/// ICP refinement settings of the OGMM evaluation: Open3D point-to-point ICP started from the
+/// network's estimate.
+struct IcpRefineOptions {
+    double max_correspondence_distance = 0.07;  ///< 2 * overlap_radius (0.035, ModelNet)
+    int max_iterations = 30;                    ///< Open3D default
+    double relative_fitness = 1e-6;             ///< Open3D default
+    double relative_rmse = 1e-6;                ///< Open3D default
+};
+
+/// Open3D ICP from `initial` (the source moved by `initial`, ICP from the identity, composed).
+/// `details`, when given, receives ICP's AlignResult (iterations, fitness, inlier_rmse).
+Transform IcpRefine(const PointCloud& source,
+                    const PointCloud& target,
+                    const Transform& initial,
+                    const IcpRefineOptions& options = {},
+                    AlignResult* details = nullptr);
+
+}  // namespace regbench

@@ -1,0 +1,117 @@
+#pragma once
+// Training loop for every RegistrationNet: Adam, a schedule scaled to the budget, seeded and
+// deterministic on CPU, progress on a stream, per-epoch validation (with and without a
+// caller-supplied refinement such as ICP) in CSV and JSONL, best and last checkpoints, resume,
+// and a wall-clock budget that ends cleanly with a checkpoint. Data comes from callbacks so this
+// folder never depends on the dataset or protocol code.
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/point_cloud.hpp"
+#include "ogmm/net.hpp"
+
+namespace regbench::ogmm {
+
+/// One training or validation pair (the protocol layer's Pair, minus what training never uses).
+struct TrainSample {
+    PointCloud source;
+    PointCloud target;
+    Transform T_gt = Transform::Identity();  ///< maps source into the target frame
+    Eigen::VectorXd source_overlap;          ///< 0/1 per source point (may be empty)
+    Eigen::VectorXd target_overlap;          ///< 0/1 per target point (may be empty)
+};
+
+/// Where training data comes from.
+struct TrainData {
+    /// Pair `index` of the endless training stream; must depend on the index only (same index,
+    /// same pair), so training is deterministic and resumable. Called from one thread.
+    std::function<TrainSample(std::uint64_t index)> train_pair;
+    std::vector<TrainSample> validation;                   ///< fixed validation pairs
+    nlohmann::json provenance = nlohmann::json::object();  ///< stored in checkpoints
+};
+
+/// Refinement applied to a network estimate in validation (e.g. Open3D ICP): returns the refined
+/// T_target_source.
+using RefineFn = std::function<Transform(
+    const PointCloud& source, const PointCloud& target, const Transform& initial)>;
+
+/// The "train" object of a model config.
+struct TrainConfig {
+    double lr = 1e-3;                    ///< Adam learning rate
+    double weight_decay = 0.0;           ///< Adam (L2) weight decay
+    int batch = 8;                       ///< pairs per step (drop_last: every step is full)
+    int epochs = 10;                     ///< epochs of `pairs_per_epoch` pairs
+    int pairs_per_epoch = 512;           ///< training pairs per epoch (the stream is endless)
+    std::string schedule = "multistep";  ///< "multistep" | "plateau" | "constant"
+    /// multistep: LR x lr_gamma at these fractions of the run (steps, or of the wall budget when
+    /// --minutes ends the run first), so a short run keeps the recipe's shape.
+    std::vector<double> milestones = {75.0 / 450, 150.0 / 450, 200.0 / 450};
+    double lr_gamma = 0.1;      ///< multistep / plateau factor
+    int plateau_patience = 10;  ///< plateau: epochs without a 1e-4 relative gain before a cut
+    double min_lr = 1e-6;       ///< plateau: floor
+};
+nlohmann::json ToJson(const TrainConfig& c);
+/// Unknown keys or bad values throw std::invalid_argument naming them.
+TrainConfig TrainConfigFromJson(const nlohmann::json& j);
+
+struct TrainOptions {
+    std::string out_dir;             ///< run directory: last/, best/, metrics.csv, metrics.jsonl
+    bool resume = false;             ///< continue from out_dir/last
+    double minutes = 0.0;            ///< wall-clock budget; 0 = run all epochs
+    std::int64_t max_steps = 0;      ///< stop after this many steps in total; 0 = no limit
+    int threads = 1;                 ///< torch intra-op threads
+    std::uint64_t seed = 0;          ///< initialisation and per-step seeds
+    std::string device = "cpu";      ///< "cpu" | "cuda"
+    double progress_seconds = 10.0;  ///< progress line interval
+    std::ostream* log = nullptr;     ///< progress stream (null: std::cerr)
+    RefineFn refine;                 ///< optional refinement for "with ICP" metrics
+    int val_batch = 0;               ///< validation batch (0: the training batch)
+    nlohmann::json run_info = nlohmann::json::object();  ///< stored in checkpoints (command...)
+};
+
+struct EpochMetrics {
+    int epoch = 0;
+    std::int64_t step = 0;
+    double lr = 0.0;
+    double train_loss = 0.0;  ///< mean total loss over the epoch's steps
+    double val_loss = 0.0;    ///< mean total loss over the validation pairs
+    double mae_r = 0.0;       ///< validation mean MAE(R) [deg], network alone
+    double mae_t = 0.0;
+    double ccd = 0.0;
+    double mae_r_refined = -1.0;  ///< after `refine` (-1 when none)
+    double mae_t_refined = -1.0;
+    double ccd_refined = -1.0;
+    double identity_mae_r = 0.0;  ///< the identity's MAE(R) on the same pairs (the floor)
+    double seconds = 0.0;         ///< wall time since the run started (over resumes)
+};
+nlohmann::json ToJson(const EpochMetrics& m);
+
+struct TrainSummary {
+    std::int64_t steps = 0;            ///< total steps done (over resumes)
+    std::vector<double> step_losses;   ///< total loss of every step run in this call
+    std::vector<EpochMetrics> epochs;  ///< validations run in this call
+    bool budget_exhausted = false;     ///< --minutes ended the run
+};
+
+/// Trains the network `config` describes (zoo config with a "train" object) from scratch, or
+/// from out_dir/last when options.resume. Writes out_dir/{last,best}/ checkpoints,
+/// metrics.csv and metrics.jsonl. Throws std::runtime_error naming the file or input at fault.
+TrainSummary Train(const nlohmann::json& config,
+                   const TrainData& data,
+                   const TrainOptions& options);
+
+/// Stacks samples into a batch (same point counts required; names the first mismatch).
+PairBatch Collate(const std::vector<TrainSample>& samples, const torch::Device& device);
+
+/// Runs `net` (eval mode, no gradient) on samples in batches; returns T_target_source per pair.
+std::vector<Transform> Predict(RegistrationNet& net,
+                               const std::vector<TrainSample>& samples,
+                               int batch,
+                               const torch::Device& device);
+
+}  // namespace regbench::ogmm

@@ -1,0 +1,100 @@
+#include "ogmm/checkpoint.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "ogmm/zoo.hpp"
+
+namespace regbench::ogmm {
+namespace {
+namespace fs = std::filesystem;
+
+fs::path TempDir(const std::string& name) {
+    const fs::path d =
+        fs::temp_directory_path() / ("regbench_ckpt_" + name + "_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+std::string ThrowMessage(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const std::runtime_error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(Checkpoint, RoundTripIsBitExact) {
+    torch::set_num_threads(1);
+    const fs::path dir = TempDir("roundtrip");
+    torch::manual_seed(11);
+    auto a = MakeNet("deepgmr-orig-xyz");
+    // Give the BN running statistics non-default values so buffers are checked too.
+    for (auto& b : a->buffers()) {
+        if (b.is_floating_point()) b.uniform_(0.5, 2.0);
+    }
+    SaveCheckpoint((dir / "ck").string(), *a, {{"model", "deepgmr-orig-xyz"}, {"steps", 3}});
+    torch::manual_seed(12);  // different initial weights
+    auto b = MakeNet("deepgmr-orig-xyz");
+    const nlohmann::json j = LoadCheckpoint((dir / "ck").string(), *b);
+    EXPECT_EQ(j.at("steps"), 3);
+    EXPECT_EQ(j.at("git_sha"), BuildGitSha());
+    const auto pa = a->named_parameters();
+    const auto pb = b->named_parameters();
+    ASSERT_EQ(pa.size(), pb.size());
+    for (const auto& item : pa)
+        EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
+    const auto ba = a->named_buffers();
+    const auto bb = b->named_buffers();
+    for (const auto& item : ba)
+        EXPECT_TRUE(torch::equal(item.value(), bb[item.key()])) << item.key();
+    // A fresh net from the checkpoint alone gives the same net.
+    auto c = LoadNetFromCheckpoint((dir / "ck").string());
+    for (const auto& item : c->named_parameters()) {
+        EXPECT_TRUE(torch::equal(item.value(), pa[item.key()])) << item.key();
+    }
+    fs::remove_all(dir);
+}
+
+TEST(Checkpoint, RefusesAnotherConfigNamingTheFile) {
+    const fs::path dir = TempDir("mismatch");
+    auto a = MakeNet("deepgmr-orig-xyz");
+    SaveCheckpoint((dir / "ck").string(), *a, {});
+    auto b = MakeNet("deepgmr-orig-xyz", {{"clusters", 8}});
+    const std::string msg = ThrowMessage([&] { LoadCheckpoint((dir / "ck").string(), *b); });
+    EXPECT_NE(msg.find((dir / "ck" / "checkpoint.json").string()), std::string::npos) << msg;
+    fs::remove_all(dir);
+}
+
+TEST(Checkpoint, RefusesCorruptWeightsNamingTheFile) {
+    const fs::path dir = TempDir("corrupt");
+    auto a = MakeNet("deepgmr-orig-xyz");
+    SaveCheckpoint((dir / "ck").string(), *a, {});
+    const fs::path weights = dir / "ck" / "weights.pt";
+    const auto size = fs::file_size(weights);
+    fs::resize_file(weights, size / 2);  // truncated write
+    const std::string msg = ThrowMessage([&] { LoadCheckpoint((dir / "ck").string(), *a); });
+    EXPECT_NE(msg.find(weights.string()), std::string::npos) << msg;
+    fs::remove_all(dir);
+}
+
+TEST(Checkpoint, RefusesCorruptJsonNamingTheFile) {
+    const fs::path dir = TempDir("json");
+    auto a = MakeNet("deepgmr-orig-xyz");
+    SaveCheckpoint((dir / "ck").string(), *a, {});
+    const fs::path json = dir / "ck" / "checkpoint.json";
+    std::ofstream(json) << "{\"format\": \"regbench-checkpoint\", ";
+    const std::string msg = ThrowMessage([&] { LoadNetFromCheckpoint((dir / "ck").string()); });
+    EXPECT_NE(msg.find(json.string()), std::string::npos) << msg;
+    const std::string missing =
+        ThrowMessage([&] { LoadNetFromCheckpoint((dir / "nowhere").string()); });
+    EXPECT_NE(missing.find("nowhere"), std::string::npos) << missing;
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace regbench::ogmm
