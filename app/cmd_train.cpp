@@ -16,7 +16,7 @@
 #include "baselines/learned.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
-#include "protocols/dataset_shapes.hpp"
+#include "datasets/dataset_shapes.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_protocols.hpp"
 #endif
