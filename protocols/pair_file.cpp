@@ -10,6 +10,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/atomic_file.hpp"
@@ -365,35 +366,40 @@ std::uintmax_t FileSize(const std::string& path) {
 void WritePairFile(const std::string& path, const PairSet& set) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     AtomicFile out(path);  // refuses directories and special files; removes the temp on failure
+    // HDF5 builds the file in memory (core driver, no backing store) and AtomicFile writes the
+    // image with checked writes. HDF5 never meets a full disk itself: when its own write or
+    // flush fails it cannot close the file, and its exit handler then crashes the process
+    // (SIGSEGV after "wrote"), which is what happened on a full disk before.
+    std::vector<char> image;
     {
         Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-        // Strong close: H5Fclose closes (and so flushes) everything, or reports the failure,
-        // instead of deferring the close while an object is still open.
+        H5Pset_fapl_core(fapl.get(), std::size_t{1} << 20, /*backing_store=*/0);
+        // Strong close: H5Fclose closes everything, or reports why it could not.
         H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG);
         Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-        hid_t file = H5Fcreate(out.temp_path().c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get());
-        if (file < 0) Fail(path, "cannot create file");
-        try {
-            WriteStringAttr(path, file, "format", kFormatName);
-            WriteDoubleAttr(path, file, "format_version", kFormatVersion);
-            WriteDoubleAttr(path, file, "num_pairs", static_cast<double>(set.pairs.size()));
-            WriteStringAttr(path, file, "provenance", set.provenance.dump());
-            {
-                Handle gcpl = NoTimesGroupPlist();
-                Handle pairs(H5Gcreate2(file, "/pairs", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
-                             H5Gclose);
-                if (!pairs.ok()) Fail(path, "cannot create /pairs");
-            }
-            for (std::size_t k = 0; k < set.pairs.size(); ++k)
-                WritePair(path, file, k, set.pairs[k]);
-            // A full disk or a size limit shows up here or at close: both are checked.
-            if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) Fail(path, "cannot flush (disk full?)");
-        } catch (...) {
-            H5Fclose(file);
-            throw;  // `out` removes the temporary
+        Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
+        if (!file.ok()) Fail(path, "cannot create file");
+        WriteStringAttr(path, file.get(), "format", kFormatName);
+        WriteDoubleAttr(path, file.get(), "format_version", kFormatVersion);
+        WriteDoubleAttr(path, file.get(), "num_pairs", static_cast<double>(set.pairs.size()));
+        WriteStringAttr(path, file.get(), "provenance", set.provenance.dump());
+        {
+            Handle gcpl = NoTimesGroupPlist();
+            Handle pairs(H5Gcreate2(file.get(), "/pairs", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
+                         H5Gclose);
+            if (!pairs.ok()) Fail(path, "cannot create /pairs");
         }
-        if (H5Fclose(file) < 0) Fail(path, "cannot close (disk full?)");
+        for (std::size_t k = 0; k < set.pairs.size(); ++k)
+            WritePair(path, file.get(), k, set.pairs[k]);
+        if (H5Fflush(file.get(), H5F_SCOPE_GLOBAL) < 0) Fail(path, "cannot flush");
+        const ssize_t size = H5Fget_file_image(file.get(), nullptr, 0);
+        if (size <= 0) Fail(path, "cannot get the file image");
+        image.resize(static_cast<std::size_t>(size));
+        if (H5Fget_file_image(file.get(), image.data(), image.size()) != size) {
+            Fail(path, "cannot get the file image");
+        }
     }
+    out.Write(std::string_view(image.data(), image.size()));  // checked: ENOSPC, EFBIG, EIO
     out.Commit();
 }
 
