@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "app/commands.hpp"
+#include "core/atomic_file.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "runners/runner.hpp"
@@ -64,12 +65,7 @@ void AddReportCommand(CLI::App& app) {
             std::cout << text;
             return;
         }
-        const std::string tmp = *out + ".tmp";
-        std::ofstream f(tmp);
-        f << text;
-        f.close();
-        if (!f) throw std::runtime_error(*out + ": cannot write");
-        std::filesystem::rename(tmp, *out);
+        WriteFileAtomic(*out, text, *files);  // checked; never replaces an input
     });
 }
 

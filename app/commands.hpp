@@ -11,5 +11,6 @@ void AddGenerateCommand(CLI::App& app);
 void AddInspectCommand(CLI::App& app);
 void AddExportCommand(CLI::App& app);
 void AddImportCommand(CLI::App& app);
+void AddMergeCommand(CLI::App& app);
 
 }  // namespace regbench::app

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     regbench::app::AddInspectCommand(app);
     regbench::app::AddExportCommand(app);
     regbench::app::AddImportCommand(app);
+    regbench::app::AddMergeCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -1,5 +1,6 @@
 #include "runners/runner.hpp"
 
+#include <fcntl.h>
 #include <omp.h>
 #include <poll.h>
 #include <signal.h>
@@ -9,7 +10,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -19,10 +22,15 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
+#include "runners/interrupt.hpp"
 #include "runners/progress.hpp"
 #include "runners/registry.hpp"
+#include "runners/resume.hpp"
+#include "runners/scale_guard.hpp"
 
 namespace regbench {
 namespace {
@@ -93,6 +101,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     int fds[2];
     if (pipe(fds) != 0)
         return Failure("failed", "pipe() failed: " + std::string(strerror(errno)), 0);
+    const pid_t parent = getpid();
     const pid_t pid = fork();
     if (pid < 0) {
         close(fds[0]);
@@ -100,6 +109,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
         return Failure("failed", "fork() failed: " + std::string(strerror(errno)), 0);
     }
     if (pid == 0) {
+        BecomeDisposableChild(parent);  // dies with the parent: no orphan keeps computing
         close(fds[0]);
         omp_set_num_threads(threads);
         const std::string payload =
@@ -175,20 +185,77 @@ std::string RowKey(std::size_t pair, const std::string& method) {
     return std::to_string(pair) + "\t" + method;
 }
 
-/// Rows already in `<out>.part` from an interrupted run (resume); a torn last line is dropped.
-std::vector<nlohmann::json> ReadPartialRows(const std::string& path) {
-    std::vector<nlohmann::json> rows;
-    std::ifstream in(path);
-    std::string line;
-    while (std::getline(in, line)) {
-        if (line.empty()) continue;
-        try {
-            rows.push_back(nlohmann::json::parse(line));
-        } catch (const nlohmann::json::exception&) {
-            break;  // interrupted mid-write: everything after this is redone
+/// Shell-quotes one argument for the printed resume command.
+std::string ShellQuote(const std::string& s) {
+    std::string out = "'";
+    for (const char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+/// The command that continues this run (printed on SIGINT/SIGTERM).
+std::string ResumeCommand(const RunOptions& o) {
+    std::string names;
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& m : o.methods) {
+        names += (names.empty() ? "" : ",") + m.name;
+        params[m.name] = m.params;
+    }
+    std::string cmd = "regbench run --pairs " + ShellQuote(o.pairs_path) + " --methods " +
+                      ShellQuote(names) + " --params " + ShellQuote(params.dump()) + " --out " +
+                      ShellQuote(o.out_path);
+    if (o.shard_count > 1) {
+        cmd += " --shard " + std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
+    }
+    if (o.timeout_seconds > 0) cmd += " --timeout " + std::to_string(o.timeout_seconds);
+    return cmd + " --jobs " + std::to_string(o.jobs) + " --resume";
+}
+
+/// The streamed `<out>.part`: one checked write(2) per row, so every row that was reported
+/// written is in the file even if the process is killed right after.
+class PartFile {
+public:
+    explicit PartFile(const std::string& path) : path_(path) {
+        fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        if (fd_ < 0) throw std::runtime_error(path + ": cannot write: " + strerror(errno));
+    }
+    ~PartFile() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    PartFile(const PartFile&) = delete;
+    PartFile& operator=(const PartFile&) = delete;
+    void Append(const nlohmann::json& row) { WriteAllOrThrow(fd_, row.dump() + "\n", path_); }
+    /// fsync + close, checked: a full disk reported only at close is still an error.
+    void Close() {
+        const int fd = fd_;
+        fd_ = -1;
+        if (::fsync(fd) != 0 || ::close(fd) != 0) {
+            throw std::runtime_error(path_ + ": write failed: " + strerror(errno));
         }
     }
-    return rows;
+
+private:
+    std::string path_;
+    int fd_ = -1;
+};
+
+/// A number the method's option field cannot hold exactly (2.5 or -1 into an iteration count,
+/// 1e23 into an int) is truncated or wrapped by the JSON binding: compare each given number
+/// with the value the method kept and refuse any difference.
+void RequireExactNumbers(const std::string& method,
+                         const nlohmann::json& given,
+                         const nlohmann::json& kept) {
+    if (!given.is_object()) return;
+    for (const auto& item : given.items()) {
+        if (!item.value().is_number() || !kept.contains(item.key())) continue;
+        const nlohmann::json& k = kept.at(item.key());
+        const bool sign_flip =
+            k.is_number() && (k.get<double>() < 0) != (item.value().get<double>() < 0);
+        if (k != item.value() || sign_flip) {
+            throw std::invalid_argument(method + ": parameter '" + item.key() + "' cannot be " +
+                                        item.value().dump() + " (the option holds " + k.dump() +
+                                        "; give a value of its type and range)");
+        }
+    }
 }
 
 }  // namespace
@@ -217,7 +284,9 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
         if (params_by_method.is_object() && params_by_method.contains(name)) {
             spec.params = params_by_method.at(name);
         }
+        const nlohmann::json given = spec.params;
         spec.params = CreateMethod(name, spec.params)->Params();  // validates, fills defaults
+        RequireExactNumbers(name, given, spec.params);
         specs.push_back(spec);
     }
     if (params_by_method.is_object()) {
@@ -287,6 +356,29 @@ RunSummary RunBenchmark(const RunOptions& options) {
     if (options.out_path.empty()) throw std::invalid_argument("--out is required");
     const auto start = std::chrono::steady_clock::now();
     const PairSet set = ReadPairFile(options.pairs_path);  // throws naming the file
+    // The scale guard refuses before any output exists (or says what it will downsample).
+    {
+        std::vector<std::size_t> shard;
+        for (std::size_t k = 0; k < set.pairs.size(); ++k) {
+            if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
+                options.shard_index) {
+                shard.push_back(k);
+            }
+        }
+        const std::string notice =
+            CheckScale(set, shard, options.methods, options.max_points, options.downsample);
+        if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
+    }
+    const std::string part_path = options.out_path + ".part";
+    CheckOutputPath(options.out_path, {options.pairs_path});
+    CheckOutputPath(part_path, {options.pairs_path});
+    const OutputLock lock(options.out_path);  // one writer per output; names the holder's pid
+    RowExpectation expect;
+    expect.pairs_hash = PairFileHash(options.pairs_path);
+    expect.num_pairs = set.pairs.size();
+    expect.shard_index = options.shard_index;
+    expect.shard_count = options.shard_count;
+    expect.methods = options.methods;
 
     // Which data every number came from, carried in every row for the reports.
     const nlohmann::json data_tag = {
@@ -297,11 +389,12 @@ RunSummary RunBenchmark(const RunOptions& options) {
          set.provenance.value(
              "pairing",
              set.provenance.value("params", nlohmann::json::object()).value("pairing", "unknown"))},
-        {"seed", set.provenance.value("seed", nlohmann::json())}};
+        {"seed", set.provenance.value("seed", nlohmann::json())},
+        {"pairs_hash", expect.pairs_hash}};
     // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
     const nlohmann::json& seed_json = set.provenance.value("seed", nlohmann::json());
     const std::uint64_t benchmark_seed =
-        seed_json.is_number_unsigned() ? seed_json.get<std::uint64_t>()
+        seed_json.is_number_unsigned()  ? seed_json.get<std::uint64_t>()
         : seed_json.is_number_integer() ? static_cast<std::uint64_t>(seed_json.get<std::int64_t>())
                                         : 0;
     std::vector<std::size_t> indices;
@@ -311,22 +404,23 @@ RunSummary RunBenchmark(const RunOptions& options) {
             indices.push_back(k);
         }
     }
-    const std::string part_path = options.out_path + ".part";
     std::vector<nlohmann::json> rows;
     std::set<std::string> done;
     if (options.resume) {
         const bool have_part = std::filesystem::exists(part_path);
-        rows = ReadPartialRows(have_part ? part_path : options.out_path);
+        const bool have_out = std::filesystem::exists(options.out_path);
+        // Every kept row is checked against this run; a foreign row is refused, never mixed.
+        if (have_part || have_out) {
+            rows = ReadResumableRows(have_part ? part_path : options.out_path, expect);
+        }
         for (const auto& r : rows)
             done.insert(RowKey(r.at("pair").get<std::size_t>(), r.at("method")));
     }
     RunSummary summary;
     summary.rows_skipped = rows.size();
     // Rewrite the kept rows so a torn last line from the interrupted run disappears.
-    std::ofstream part(part_path, std::ios::trunc);
-    if (!part) throw std::runtime_error(part_path + ": cannot write");
-    for (const auto& r : rows) part << r.dump() << "\n";
-    part.flush();
+    PartFile part(part_path);
+    for (const auto& r : rows) part.Append(r);
 
     const std::size_t total_calls = indices.size() * options.methods.size();
     ProgressMeter progress("run", total_calls, options.progress);
@@ -335,14 +429,18 @@ RunSummary RunBenchmark(const RunOptions& options) {
     std::atomic<std::size_t> next{0};
     std::atomic<std::size_t> failures{0};
     std::atomic<std::size_t> written{0};
+    std::atomic<std::size_t> rows_safe{rows.size()};
+    std::atomic<bool> stop{false};
+    std::exception_ptr error;  // first failure in a worker (a write error), rethrown after join
 
-    auto worker = [&] {
+    auto work = [&] {
         // Each worker owns its method instances: methods keep scratch buffers.
         omp_set_num_threads(options.threads_per_call);
         std::vector<std::unique_ptr<RegistrationMethod>> methods;
         for (const auto& spec : options.methods)
             methods.push_back(CreateMethod(spec.name, spec.params));
         for (;;) {
+            if (stop.load()) return;
             const std::size_t i = next.fetch_add(1);
             if (i >= indices.size()) return;
             const std::size_t k = indices[i];
@@ -354,39 +452,61 @@ RunSummary RunBenchmark(const RunOptions& options) {
             for (std::size_t m = 0; m < methods.size(); ++m) {
                 const auto& spec = options.methods[m];
                 if (done.count(RowKey(k, spec.name))) continue;
+                // Scale guard: an O(N*M) method on a large cloud runs on the recorded
+                // stride-downsampled pair; metrics still compare against the full pair.
+                nlohmann::json downsampled;
+                const bool reduce =
+                    options.downsample && NeedsScaleGuard(spec.name, pair, options.max_points);
+                const Pair reduced =
+                    reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
+                const Pair& input = reduce ? reduced : pair;
                 CallOutcome outcome =
                     options.timeout_seconds > 0.0
-                        ? AlignIsolated(*methods[m], pair, context, options.timeout_seconds,
+                        ? AlignIsolated(*methods[m], input, context, options.timeout_seconds,
                                         options.threads_per_call)
-                        : AlignInProcess(*methods[m], pair, context);
+                        : AlignInProcess(*methods[m], input, context);
                 nlohmann::json row = MakeResultRow(k, pair, spec.name, spec.params, outcome.result,
                                                    options.threads_per_call);
                 row["status"] = outcome.status;
                 row["data"] = data_tag;
+                if (reduce) row["downsampled"] = downsampled;
                 if (outcome.status != "ok") failures.fetch_add(1);
                 {
-                    std::lock_guard<std::mutex> lock(out_mutex);
-                    part << row.dump() << "\n";
-                    part.flush();
+                    std::lock_guard<std::mutex> guard(out_mutex);
+                    if (stop.load()) return;
+                    part.Append(row);  // throws on a write error: `worker` stops the run
+                    rows_safe.fetch_add(1);
                 }
                 written.fetch_add(1);
                 progress.Advance();
             }
         }
     };
+    // An exception must not escape a std::thread (std::terminate): the first one stops all
+    // workers and is rethrown here after they joined.
+    auto worker = [&] {
+        try {
+            work();
+        } catch (...) {
+            std::lock_guard<std::mutex> guard(out_mutex);
+            if (!error) error = std::current_exception();
+            stop = true;
+        }
+    };
     // setenv is not thread-safe: set the process-wide part once, before any worker starts.
     SetOmpThreads(options.threads_per_call);
+    const InterruptNotice notice(&rows_safe, part_path, ResumeCommand(options));
     const int jobs = std::max(1, std::min<int>(options.jobs, static_cast<int>(indices.size())));
     std::vector<std::thread> threads;
     for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
     worker();
     for (auto& t : threads) t.join();
     progress.Finish();
-    part.close();
-    if (!part) throw std::runtime_error(part_path + ": write failed");
+    if (error) std::rethrow_exception(error);
+    part.Close();
 
     // Final file: rows sorted by (pair, method order), so output order does not depend on --jobs.
-    std::vector<nlohmann::json> all = ReadPartialRows(part_path);
+    std::vector<nlohmann::json> all = ReadResumableRows(part_path, expect);
     std::map<std::string, std::size_t> order;
     for (std::size_t m = 0; m < options.methods.size(); ++m) order[options.methods[m].name] = m;
     std::stable_sort(all.begin(), all.end(), [&](const nlohmann::json& a, const nlohmann::json& b) {
@@ -394,14 +514,9 @@ RunSummary RunBenchmark(const RunOptions& options) {
         const auto kb = std::make_pair(b.at("pair").get<std::size_t>(), order[b.at("method")]);
         return ka < kb;
     });
-    const std::string tmp_path = options.out_path + ".tmp";
-    {
-        std::ofstream out(tmp_path, std::ios::trunc);
-        for (const auto& r : all) out << r.dump() << "\n";
-        out.close();
-        if (!out) throw std::runtime_error(tmp_path + ": write failed");
-    }
-    std::filesystem::rename(tmp_path, options.out_path);
+    std::string text;
+    for (const auto& r : all) text += r.dump() + "\n";
+    WriteFileAtomic(options.out_path, text, {options.pairs_path});
     std::filesystem::remove(part_path);
     summary.rows_written = written.load();
     summary.failures = failures.load();
