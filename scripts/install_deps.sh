@@ -11,6 +11,7 @@ PACKAGES=(
   libfmt-dev libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
+  slurmctld slurmd slurm-client munge
 )
 if [ "${1:-}" = "--reference" ]; then
   PACKAGES+=(
