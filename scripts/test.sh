@@ -5,3 +5,5 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
 cd "$root/build"
 ctest --output-on-failure -j "$(nproc)" --timeout 900
+# Sanitizer build + fuzzing (REGBENCH_SKIP_EXTRA=1 skips it).
+bash "$root/scripts/ci_extra.sh"
