@@ -84,6 +84,18 @@ TEST(PairFileValidation, FileSizeLimitLeavesNoPairFileAndNoSignal) {
     fs::remove_all(dir);
 }
 
+TEST(PairFileValidation, FuzzFindingHugeMetadataAllocationIsRefused) {
+    // Found by fuzz_pair_file (libFuzzer): a flipped header field makes HDF5 itself ask for a
+    // 2^53-byte metadata buffer. The reader must refuse the file by name, not crash.
+    const std::string path = "fuzz/corpus/pair_file/regression_hdf5_huge_metadata_alloc.h5";
+    try {
+        ReadPairFile(path);
+        FAIL() << "fuzz regression accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+}
+
 TEST(PairFileValidation, OutputThatIsADirectoryIsRefused) {
     const fs::path dir = fs::temp_directory_path() / "regbench_pairfile_dir_out";
     fs::create_directories(dir);
