@@ -209,7 +209,8 @@ void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
     };
     if (d.points < 1) throw std::runtime_error(path + ": header declares no points");
     if (d.ascii) {
-        if (6.0 * d.points > body) refuse("only " + std::to_string(body) + " bytes follow");
+        if (6.0 * d.points > body)
+            refuse("only " + std::to_string(static_cast<long long>(body)) + " bytes follow");
         std::ifstream in(path, std::ios::binary);
         in.seekg(static_cast<std::streamoff>(d.body_offset));
         std::string line;
