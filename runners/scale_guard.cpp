@@ -60,7 +60,7 @@ std::string CheckScale(const PairSet& set,
         std::snprintf(line, sizeof(line),
                       "%s is O(N*M): %zu pair(s) have a cloud above --max-points %zu; the largest, "
                       "pair %zu, is %zu x %zu points = %.3g kernel evaluations per iteration "
-                      "(%.0fx a 10,000-point pair, which takes CPD ~4.5 s on one thread)",
+                      "(%.2gx a 10,000-point pair, which takes CPD ~4.5 s on one thread)",
                       spec.name.c_str(), affected, max_points, worst_pair, Points(w.source),
                       Points(w.target), worst, worst / 1e8);
         report += std::string(line) + "\n";
