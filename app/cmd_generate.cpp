@@ -1,15 +1,13 @@
 // `regbench generate`: freeze pairs of one protocol into an HDF5 benchmark file.
-#include <unistd.h>
-
-#include <cstdio>
 #include <iostream>
 #include <string>
 #include <vector>
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
-#include "protocols/dataset_shapes.hpp"
+#include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
+#include "runners/progress.hpp"
 
 namespace regbench::app {
 namespace {
@@ -39,19 +37,6 @@ ProtocolOptions BuildOptions(const CLI::App& cmd, const GenerateArgs& a) {
     if (given("--density-keep")) o.density_keep = a.flags.density_keep;
     if (given("--sweep-keeps")) o.sweep_keeps = a.flags.sweep_keeps;
     return o;
-}
-
-/// Progress on stderr: one line rewritten in place about every percent on a terminal, a new
-/// line about every 10% otherwise (logs).
-void PrintProgress(std::size_t done, std::size_t total) {
-    const bool terminal = isatty(fileno(stderr)) != 0;
-    const std::size_t parts = terminal ? 100 : 10;
-    const std::size_t step = total >= parts ? total / parts : 1;
-    if (done % step != 0 && done != total) return;
-    std::fprintf(stderr, terminal ? "\rgenerate: %zu/%zu pairs" : "generate: %zu/%zu pairs\n", done,
-                 total);
-    if (terminal && done == total) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
 }
 
 }  // namespace
@@ -95,7 +80,15 @@ void AddGenerateCommand(CLI::App& app) {
                                     {"git_sha", REGBENCH_GIT_SHA}};
         DatasetOptions dataset_options;
         dataset_options.data_dir = a->data_dir;
-        GenerateToFile(request, DatasetShapeLoader(dataset_options), PrintProgress);
+        // The same progress line as `run` (done, rate, ETA); the callback reports a count.
+        ProgressMeter progress("generate", request.num_pairs);
+        std::size_t reported = 0;
+        GenerateToFile(request, DatasetShapeLoader(dataset_options),
+                       [&](std::size_t done, std::size_t /*total*/) {
+                           progress.Advance(done - reported);
+                           reported = done;
+                       });
+        progress.Finish();
         std::cerr << "generate: wrote " << request.out << "\n";
     });
 }

@@ -16,6 +16,7 @@ void AddRunCommand(CLI::App& app) {
     auto params = std::make_shared<std::string>();
     auto shard = std::make_shared<std::string>("0/1");
     auto quiet = std::make_shared<bool>(false);
+    auto euler = std::make_shared<std::string>("zyx");
     cmd->add_option("--pairs", opts->pairs_path, "Frozen HDF5 pair file (regbench generate/import)")
         ->required();
     cmd->add_option("--methods", *methods, "Comma-separated method names (see `regbench methods`)")
@@ -46,6 +47,11 @@ void AddRunCommand(CLI::App& app) {
     cmd->add_flag("--downsample", opts->downsample,
                   "Scale guard: run such calls on clouds reduced to --max-points points by an "
                   "evenly spaced stride (recorded in each row as \"downsampled\")");
+    cmd->add_option("--euler", *euler,
+                    "Euler angles of mae_r/rmse_r: zyx = scipy as_euler('zyx'), the paper's; "
+                    "xyz = RPMNet's (docs/metrics.md)")
+        ->check(CLI::IsMember({"zyx", "xyz"}))
+        ->capture_default_str();
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");
     cmd->callback([=] {
         RunOptions o = *opts;
@@ -60,6 +66,7 @@ void AddRunCommand(CLI::App& app) {
         o.methods = ParseMethodSpecs(*methods, p);
         ParseShard(*shard, &o.shard_index, &o.shard_count);
         o.progress = !*quiet;
+        o.euler = ParseEulerConvention(*euler);
         const RunSummary s = RunBenchmark(o);
         std::cerr << fmt::format("[run] wrote {} rows ({} resumed, {} failed) to {} in {:.1f} s\n",
                                  s.rows_written, s.rows_skipped, s.failures, o.out_path,

@@ -1,28 +1,88 @@
 #include "baselines/cpd.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 
-#include "core/gauss_sum.hpp"
-#include "core/gmm_common.hpp"
 #include "core/kabsch.hpp"
-#include "core/options.hpp"
 #include "core/transform.hpp"
+#include "gmm/gauss_sum.hpp"
+#include "gmm/gmm_common.hpp"
 
 namespace regbench {
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(CpdOptions,
-                                                w,
-                                                maxiter,
-                                                tol,
-                                                update_scale,
-                                                sigma2_formula,
-                                                sigma2,
-                                                compat,
-                                                e_step,
-                                                truncation_sigmas,
-                                                truncation_min_points)
+namespace {
+/// Centroid of the target: the shared float origin of both blocked clouds.
+Eigen::Vector3d Centroid(const PointCloud& cloud) {
+    if (cloud.rows() == 0) throw std::invalid_argument("CpdEStep: target cloud is empty");
+    return cloud.colwise().mean().transpose();
+}
+}  // namespace
+
+CpdEStep::CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options)
+    : options_(options),
+      source_(source, Centroid(target)),
+      target_blocked_(target, Centroid(target)) {
+    if (!(options_.truncation_sigmas > 0.0)) {
+        throw std::invalid_argument("CpdEStep: truncation_sigmas must be positive");
+    }
+}
+
+bool CpdEStep::UsesTruncation(double sigma2) const {
+    switch (options_.mode) {
+        case GaussSumMode::kDense:
+            return false;
+        case GaussSumMode::kTruncated:
+            return true;
+        case GaussSumMode::kAuto:
+            break;
+    }
+    const Eigen::Index largest = std::max(source_.size(), target_blocked_.size());
+    const double r = options_.truncation_sigmas * std::sqrt(sigma2);
+    return largest >= options_.truncation_min_points &&
+           r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
+}
+
+void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out) {
+    if (!(c >= 0.0) || !std::isfinite(c)) {
+        throw std::invalid_argument("CpdEStep: outlier constant c must be finite and >= 0");
+    }
+    const bool truncated = UsesTruncation(sigma2);
+    const double cutoff = truncated ? options_.truncation_sigmas * std::sqrt(sigma2)
+                                    : UnderflowRadiusSigmas() * std::sqrt(sigma2);
+    source_.SetTransform(T);
+
+    // Pass 1: den_n = sum_m K_mn at every target point.
+    KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
+    const Eigen::Index n = target_blocked_.size();
+    const Eigen::Index m = source_.size();
+    inv_den_.resize(static_cast<size_t>(n));
+    out.pt1.resize(n);
+    const auto& t_order = target_blocked_.order();
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double den = pass1_.m0[k] == 0.0 ? kDenFloor : pass1_.m0[k];
+        const double inv = 1.0 / (den + c);
+        inv_den_[static_cast<size_t>(k)] = static_cast<float>(inv);
+        // sum_m K_mn / (den_n + c) = 1 - c / (den_n + c), as probreg (floored den).
+        out.pt1[t_order[static_cast<size_t>(k)]] = den * inv;
+    }
+
+    // Pass 2: p1_m = sum_n K_mn / (den_n + c) and PX_m = sum_n K_mn x_n / (den_n + c).
+    KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
+    out.p1.resize(m);
+    out.px.resize(m, 3);
+    const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
+    const auto& s_order = source_.order();
+    for (Eigen::Index k = 0; k < m; ++k) {
+        const Eigen::Index row = s_order[static_cast<size_t>(k)];
+        out.p1[row] = pass2_.m0[k];
+        out.px.row(row) = pass2_.m1.row(k) + pass2_.m0[k] * origin;  // back to absolute x_n
+    }
+    out.np = out.p1.sum();
+    out.truncated = truncated;
+    out.evaluated_pairs = pass1_.evaluated_pairs + pass2_.evaluated_pairs;
+}
 
 namespace {
 
@@ -32,7 +92,7 @@ constexpr int kDim = 3;
 /// finite once a clean pair has converged exactly.
 constexpr double kSigma2Floor = 1.19e-7;
 
-/// One M-step's outputs (spec section 1, "M-step").
+/// One M-step's outputs (docs/probabilistic-baselines.md, CPD M-step).
 struct MStep {
     Transform T = Transform::Identity();
     double scale = 1.0;
@@ -77,14 +137,58 @@ MStep MaximizationStep(const PointCloud& Y,
     return out;
 }
 
-class CpdMethod final : public RegistrationMethod {
+const MethodSpec<CpdOptions>& Spec() {
+    using O = CpdOptions;
+    static const MethodSpec<CpdOptions> spec{
+        kName,
+        "rigid Coherent Point Drift (Myronenko & Song 2010) per probreg 0.3.7; fused float "
+        "SIMD E-step (kd-leaf pruning, optional 4-sigma truncation), double M-step",
+        {
+            Param("w", &O::w,
+                  "weight of the uniform outlier component, in [0, 1); probreg default 0")
+                .AtLeast(0.0)
+                .Below(1.0),
+            Param("maxiter", &O::maxiter, "maximum EM iterations (>= 1); probreg 50").AtLeast(1),
+            Param("tol", &O::tol,
+                  "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3")
+                .AtLeast(0.0)
+                .Finite(),
+            Param("update_scale", &O::update_scale,
+                  "estimate a scale s (similarity transform); default false, true under "
+                  "compat=probreg"),
+            Param(
+                "sigma2_formula", &O::sigma2_formula,
+                "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without "
+                "scale (probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg"),
+            Param("sigma2", &O::sigma2, "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg")
+                .AtLeast(0.0)
+                .Finite(),
+            Param("compat", &O::compat,
+                  "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's "
+                  "sigma^2 formula unless those are given explicitly)"),
+            Param("e_step", &O::e_step,
+                  "\"auto\" (dense, truncated once the switch rule holds), \"dense\" (exact up "
+                  "to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"),
+            Param("truncation_sigmas", &O::truncation_sigmas,
+                  "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4")
+                .Greater(0.0)
+                .Finite(),
+            Param("truncation_min_points", &O::truncation_min_points,
+                  "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox "
+                  "diagonal")
+                .AtLeast(0),
+        },
+        nullptr,
+        {{"probreg", {{"update_scale", true}, {"sigma2_formula", "probreg"}}}}};
+    return spec;
+}
+
+class CpdMethod final : public SpecMethod<CpdOptions> {
 public:
-    explicit CpdMethod(CpdOptions options) : options_(std::move(options)) {}
-    std::string Name() const override { return kName; }
-    nlohmann::json Params() const override { return options_; }
+    using SpecMethod::SpecMethod;
 
 protected:
-    bool AllowsScale() const override { return options_.update_scale; }
+    bool AllowsScale() const override { return options().update_scale; }
 
     AlignResult DoAlign(const PointCloud& Y,
                         const PointCloud& X,
@@ -92,15 +196,15 @@ protected:
         const double m = static_cast<double>(Y.rows());
         const double n = static_cast<double>(X.rows());
         GaussSumOptions gs;
-        gs.mode = ParseGaussSumMode(options_.e_step, "cpd: parameter 'e_step'");
-        gs.truncation_sigmas = options_.truncation_sigmas;
-        gs.truncation_min_points = options_.truncation_min_points;
+        gs.mode = options().e_step;
+        gs.truncation_sigmas = options().truncation_sigmas;
+        gs.truncation_min_points = options().truncation_min_points;
         CpdEStep e_step(Y, X, gs);
-        const bool probreg_sigma2 = options_.sigma2_formula == "probreg";
+        const bool probreg_sigma2 = options().sigma2_formula == CpdSigma2Formula::kProbreg;
 
-        // Init (spec section 1): R = I, t = 0, s = 1, sigma^2 = sqsum, q0 = 1 + N D/2 ln sigma^2.
+        // Init: R = I, t = 0, s = 1, sigma^2 = sqsum, q0 = 1 + N D/2 ln sigma^2.
         MStep state;
-        state.sigma2 = options_.sigma2 > 0.0 ? options_.sigma2 : SquaredDistanceMean(Y, X);
+        state.sigma2 = options().sigma2 > 0.0 ? options().sigma2 : SquaredDistanceMean(Y, X);
         state.sigma2 = std::max(state.sigma2, kSigma2Floor);
         state.q = 1.0 + n * kDim * 0.5 * std::log(state.sigma2);
 
@@ -109,10 +213,10 @@ protected:
         CpdPosteriors post;
         int truncated_iterations = 0;
         std::int64_t evaluated_pairs = 0;
-        for (int it = 1; it <= options_.maxiter; ++it) {
+        for (int it = 1; it <= options().maxiter; ++it) {
             // c = (2 pi sigma^2)^(D/2) w/(1-w) M/N: the uniform outlier term (CPD eq. (7)).
-            const double c = std::pow(2.0 * M_PI * state.sigma2, 0.5 * kDim) * options_.w /
-                             (1.0 - options_.w) * m / n;
+            const double c = std::pow(2.0 * M_PI * state.sigma2, 0.5 * kDim) * options().w /
+                             (1.0 - options().w) * m / n;
             e_step.Compute(state.T, state.sigma2, c, post);
             truncated_iterations += post.truncated ? 1 : 0;
             evaluated_pairs += post.evaluated_pairs;
@@ -120,11 +224,11 @@ protected:
                 conv.stop_reason = "no_correspondences";  // keep the previous transform
                 break;
             }
-            const MStep next = MaximizationStep(Y, X, post, options_.update_scale, probreg_sigma2);
+            const MStep next = MaximizationStep(Y, X, post, options().update_scale, probreg_sigma2);
             const double dq = std::abs(next.q - state.q);
             state = next;
             conv.iterations = it;
-            if (dq < options_.tol) {
+            if (dq < options().tol) {
                 conv.stop_reason = "converged";
                 break;
             }
@@ -143,67 +247,12 @@ protected:
         r.extra["kernel_evaluations"] = evaluated_pairs;
         return r;
     }
-
-private:
-    CpdOptions options_;
 };
 
 }  // namespace
 
-CpdOptions ParseCpdOptions(const nlohmann::json& j) {
-    CpdOptions o = ParseOptions<CpdOptions>(j, kName);
-    RequireOneOf(o.compat, {"none", "probreg"}, kName, "compat");
-    const bool given = j.is_object();
-    if (o.compat == "probreg") {
-        if (!given || !j.contains("update_scale")) o.update_scale = true;
-        if (!given || !j.contains("sigma2_formula")) o.sigma2_formula = "probreg";
-    }
-    Require(o.w >= 0.0 && o.w < 1.0, kName, "w", "must be in [0, 1), got " + std::to_string(o.w));
-    Require(o.maxiter >= 1, kName, "maxiter", "must be >= 1, got " + std::to_string(o.maxiter));
-    Require(o.tol >= 0.0 && std::isfinite(o.tol), kName, "tol",
-            "must be finite and >= 0, got " + std::to_string(o.tol));
-    RequireOneOf(o.sigma2_formula, {"ml", "probreg"}, kName, "sigma2_formula");
-    Require(o.sigma2 >= 0.0 && std::isfinite(o.sigma2), kName, "sigma2",
-            "must be > 0, or 0 for sqsum(Y, X); got " + std::to_string(o.sigma2));
-    RequireOneOf(o.e_step, {"auto", "dense", "truncated"}, kName, "e_step");
-    Require(o.truncation_sigmas > 0.0 && std::isfinite(o.truncation_sigmas), kName,
-            "truncation_sigmas", "must be > 0, got " + std::to_string(o.truncation_sigmas));
-    Require(o.truncation_min_points >= 0, kName, "truncation_min_points",
-            "must be >= 0, got " + std::to_string(o.truncation_min_points));
-    return o;
-}
+CpdOptions ParseCpdOptions(const nlohmann::json& j) { return Spec().Parse(j); }
 
-MethodInfo CpdMethodInfo() {
-    MethodInfo info;
-    info.name = kName;
-    info.summary =
-        "rigid Coherent Point Drift (Myronenko & Song 2010) per probreg 0.3.7; fused float "
-        "SIMD E-step (kd-leaf pruning, optional 4-sigma truncation), double M-step";
-    info.param_docs = {
-        {"w", "weight of the uniform outlier component, in [0, 1); probreg default 0"},
-        {"maxiter", "maximum EM iterations (>= 1); probreg 50"},
-        {"tol", "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3"},
-        {"update_scale",
-         "estimate a scale s (similarity transform); default false, true under compat=probreg"},
-        {"sigma2_formula",
-         "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without scale "
-         "(probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg"},
-        {"sigma2", "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg"},
-        {"compat",
-         "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's sigma^2 "
-         "formula unless those are given explicitly)"},
-        {"e_step",
-         "\"auto\" (dense, truncated once the switch rule holds), \"dense\" (exact up to float "
-         "underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"},
-        {"truncation_sigmas", "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4"},
-        {"truncation_min_points",
-         "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal"},
-    };
-    info.defaults = CpdOptions{};
-    info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
-        return std::make_unique<CpdMethod>(ParseCpdOptions(j));
-    };
-    return info;
-}
+MethodInfo CpdMethodInfo() { return MakeMethodInfo<CpdMethod>(Spec()); }
 
 }  // namespace regbench

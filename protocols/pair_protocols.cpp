@@ -7,13 +7,13 @@
 #include <utility>
 
 #include "core/kd_tree.hpp"
+#include "core/math_constants.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 /// Fewest points a cropped cloud may keep: registration needs three non-collinear points.
 constexpr Eigen::Index kMinCloudPoints = 3;
 /// Indoor (Tab. 3) samples 2048 points per scan; the ModelNet protocols 1024.

@@ -10,15 +10,16 @@
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
 #include "protocols/pair_file.hpp"
+#include "runners/result_row.hpp"
 #include "runners/resume.hpp"
 
 namespace regbench {
 namespace {
 
-using RowKey = std::pair<std::uint64_t, std::size_t>;  // (pair, method index)
+using RowKey = std::pair<std::size_t, std::size_t>;  // (pair, method index)
 
 struct Located {
-    nlohmann::json row;
+    ResultRow row;
     std::string where;  ///< file:line
 };
 
@@ -42,10 +43,16 @@ void AddRows(const std::string& path,
         } catch (const nlohmann::json::exception& e) {
             throw std::runtime_error(where + ": not JSON: " + e.what());
         }
-        CheckResultRow(row, expect, where);
-        const RowKey key{row.at("pair").get<std::uint64_t>(),
-                         method_index.at(row.at("method").get<std::string>())};
-        const auto [it, inserted] = rows->emplace(key, Located{std::move(row), where});
+        ResultRow typed = CheckResultRow(row, expect, where);
+        // Shards of one run score in one Euler convention; a mix would split the report.
+        if (!rows->empty() && typed.euler != rows->begin()->second.row.euler) {
+            const Located& first = rows->begin()->second;
+            throw std::runtime_error(where + ": row scored with --euler " + ToString(typed.euler) +
+                                     " but " + first.where + " with --euler " +
+                                     ToString(first.row.euler));
+        }
+        const RowKey key{typed.pair, method_index.at(typed.method)};
+        const auto [it, inserted] = rows->emplace(key, Located{std::move(typed), where});
         if (!inserted) {
             throw std::runtime_error(
                 where + ": duplicate row for pair " + std::to_string(key.first) + ", method '" +
@@ -64,8 +71,11 @@ std::size_t MergeResults(const MergeOptions& options) {
     CheckOutputPath(options.out_path, inputs);
     const OutputLock lock(options.out_path);
     RowExpectation expect;
-    expect.num_pairs = CountPairs(options.pairs_path);
-    expect.pairs_hash = PairFileHash(options.pairs_path);
+    // The rows name their pairs by content hash, so the merge reads the pairs to recompute it
+    // (DataTagOf also refuses a file modified since generation).
+    const PairSet set = ReadPairFile(options.pairs_path);
+    expect.num_pairs = set.pairs.size();
+    expect.content_hash = DataTagOf(options.pairs_path, set).content_hash;
     expect.methods = options.methods;
     std::map<std::string, std::size_t> method_index;
     for (std::size_t m = 0; m < options.methods.size(); ++m) {
@@ -77,7 +87,7 @@ std::size_t MergeResults(const MergeOptions& options) {
     // Completeness: every pair of the file times every method, named when missing.
     std::string missing;
     std::size_t missing_count = 0;
-    for (std::uint64_t k = 0; k < expect.num_pairs; ++k) {
+    for (std::size_t k = 0; k < expect.num_pairs; ++k) {
         for (std::size_t m = 0; m < options.methods.size(); ++m) {
             if (rows.count({k, m})) continue;
             if (++missing_count <= 10) {
@@ -92,9 +102,10 @@ std::size_t MergeResults(const MergeOptions& options) {
             std::to_string(expect.num_pairs * options.methods.size()) + " rows missing (" +
             missing + (missing_count > 10 ? ", ..." : "") + ")");
     }
-    std::string text;
-    for (const auto& [key, located] : rows) text += located.row.dump() + "\n";  // map: sorted
-    WriteFileAtomic(options.out_path, text, inputs);
+    std::vector<ResultRow> sorted;  // the map is ordered by (pair, method order)
+    sorted.reserve(rows.size());
+    for (auto& [key, located] : rows) sorted.push_back(std::move(located.row));
+    WriteResultRows(options.out_path, sorted, inputs);
     return rows.size();
 }
 

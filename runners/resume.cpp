@@ -1,7 +1,6 @@
 #include "runners/resume.hpp"
 
 #include <cstdint>
-#include <cstdio>
 #include <fstream>
 #include <set>
 #include <stdexcept>
@@ -51,67 +50,49 @@ void CheckRequiredFields(const nlohmann::json& row, const std::string& where) {
 
 }  // namespace
 
-std::string PairFileHash(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error(path + ": cannot open to hash");
-    std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a 64 offset basis
-    std::vector<char> buf(1 << 20);
-    while (in) {
-        in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-        const auto n = static_cast<std::size_t>(in.gcount());
-        for (std::size_t i = 0; i < n; ++i) {
-            h ^= static_cast<unsigned char>(buf[i]);
-            h *= 0x100000001b3ULL;  // FNV 64 prime
-        }
+ResultRow CheckResultRow(const nlohmann::json& json,
+                         const RowExpectation& expect,
+                         const std::string& where) {
+    CheckRequiredFields(json, where);
+    ResultRow row;
+    try {
+        row = json.get<ResultRow>();  // types every field; an unknown status is refused here
+    } catch (const std::exception& e) {
+        Refuse(where, std::string("not a result row: ") + e.what());
     }
-    if (in.bad()) throw std::runtime_error(path + ": read error while hashing");
-    char text[32];
-    std::snprintf(text, sizeof(text), "fnv1a64:%016llx", static_cast<unsigned long long>(h));
-    return text;
-}
-
-void CheckResultRow(const nlohmann::json& row,
-                    const RowExpectation& expect,
-                    const std::string& where) {
-    CheckRequiredFields(row, where);
-    const std::string status = row.at("status").get<std::string>();
-    if (status != "ok" && status != "failed" && status != "timeout" && status != "crashed") {
-        Refuse(where, "unknown status '" + status + "'");
-    }
-    const auto pair = row.at("pair").get<std::uint64_t>();
-    if (pair >= expect.num_pairs) {
-        Refuse(where, "pair " + std::to_string(pair) + " is not in the pair file (" +
+    row.origin = where;
+    // "missing" is what `score` writes for an absent transform; a run never writes it.
+    if (row.status == Status::kMissing) Refuse(where, "status 'missing' is not a run's status");
+    if (row.pair >= expect.num_pairs) {
+        Refuse(where, "pair " + std::to_string(row.pair) + " is not in the pair file (" +
                           std::to_string(expect.num_pairs) + " pairs)");
     }
-    if (static_cast<int>(pair % static_cast<std::uint64_t>(expect.shard_count)) !=
+    if (static_cast<int>(row.pair % static_cast<std::size_t>(expect.shard_count)) !=
         expect.shard_index) {
-        Refuse(where, "pair " + std::to_string(pair) + " belongs to another shard");
+        Refuse(where, "pair " + std::to_string(row.pair) + " belongs to another shard");
     }
-    const std::string method = row.at("method").get<std::string>();
     const MethodSpec* spec = nullptr;
     for (const auto& m : expect.methods) {
-        if (m.name == method) spec = &m;
+        if (m.name == row.method) spec = &m;
     }
-    if (spec == nullptr) Refuse(where, "method '" + method + "' is not in --methods");
-    if (row.at("params") != spec->params) {
-        Refuse(where, "method '" + method + "' ran with other parameters " +
-                          row.at("params").dump() + " (this run: " + spec->params.dump() + ")");
+    if (spec == nullptr) Refuse(where, "method '" + row.method + "' is not in --methods");
+    if (row.params != spec->params) {
+        Refuse(where, "method '" + row.method + "' ran with other parameters " + row.params.dump() +
+                          " (this run: " + spec->params.dump() + ")");
     }
-    const auto& data = row.at("data");
-    const std::string hash = data.value("pairs_hash", std::string());
-    if (hash != expect.pairs_hash) {
-        Refuse(where, "row comes from another pair file (pairs_hash '" + hash + "', this run '" +
-                          expect.pairs_hash + "')");
+    if (row.data.content_hash != expect.content_hash) {
+        Refuse(where, "row comes from other pair data (content_hash '" + row.data.content_hash +
+                          "', this run '" + expect.content_hash + "')");
     }
+    return row;
 }
 
-std::vector<nlohmann::json> ReadResumableRows(const std::string& path,
-                                              const RowExpectation& expect) {
+std::vector<ResultRow> ReadResumableRows(const std::string& path, const RowExpectation& expect) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error(path + ": cannot open");
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::vector<nlohmann::json> rows;
-    std::set<std::pair<std::uint64_t, std::string>> seen;
+    std::vector<ResultRow> rows;
+    std::set<std::pair<std::size_t, std::string>> seen;
     std::size_t begin = 0;
     std::size_t line_no = 0;
     while (begin < text.size()) {
@@ -129,14 +110,13 @@ std::vector<nlohmann::json> ReadResumableRows(const std::string& path,
             if (!terminated) break;  // the write a kill cut short: redone
             Refuse(where, std::string("not JSON: ") + e.what());
         }
-        CheckResultRow(row, expect, where);
-        const auto key = std::make_pair(row.at("pair").get<std::uint64_t>(),
-                                        row.at("method").get<std::string>());
+        ResultRow typed = CheckResultRow(row, expect, where);
+        const auto key = std::make_pair(typed.pair, typed.method);
         if (!seen.insert(key).second) {
             Refuse(where, "duplicate row for pair " + std::to_string(key.first) + ", method '" +
                               key.second + "'");
         }
-        rows.push_back(std::move(row));
+        rows.push_back(std::move(typed));
     }
     return rows;
 }

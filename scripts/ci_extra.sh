@@ -5,7 +5,7 @@
 #     app and the CLI reliability scenarios (the Slurm test runs in the main build only);
 #  2. every libFuzzer target (fuzz/) for REGBENCH_FUZZ_SECONDS (default 20) on a copy of its
 #     seed corpus fuzz/corpus/<name>/. A crash stops CI and leaves the input in
-#     build-san/fuzz-artifacts/; turn it into a regression test (tests/protocols/).
+#     build-san/fuzz-artifacts/; turn it into a regression test (tests/protocols/ or tests/datasets/).
 # REGBENCH_SKIP_EXTRA=1 skips all of it.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

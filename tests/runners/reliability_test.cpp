@@ -14,6 +14,7 @@
 #include "core/file_lock.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/merge.hpp"
+#include "runners/result_row.hpp"
 #include "runners/resume.hpp"
 #include "runners/runner.hpp"
 #include "runners/scale_guard.hpp"
@@ -104,8 +105,28 @@ TEST_F(Reliability, ResumeRefusesRowsOfAnotherPairFile) {
     const RunOptions o = Options("r.jsonl", pairs_);
     const std::string err = ResumeWith(o, {foreign[0]});
     EXPECT_NE(err.find(o.out_path + ".part:1"), std::string::npos) << err;
-    EXPECT_NE(err.find("another pair file"), std::string::npos) << err;
+    EXPECT_NE(err.find("other pair data"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(o.out_path));
+}
+
+TEST_F(Reliability, ResumeAcceptsRowsOfAnotherFileWithTheSamePairs) {
+    // Rows name their pairs by content hash, not by the file's bytes: rows of pairs.h5 resume
+    // into a run on a second file written from the same pairs (a re-export).
+    const std::string copy = WritePairs("copy.h5", 0);
+    const auto lines = FinishedLines(Options("x.jsonl", pairs_));
+    EXPECT_EQ(ResumeWith(Options("r.jsonl", copy), {lines[0], lines[1]}), "");
+    EXPECT_EQ(ReadResultRows((dir_ / "r.jsonl").string()).size(), 8u);
+}
+
+TEST_F(Reliability, ResumeRefusesRowsScoredInAnotherEulerConvention) {
+    RunOptions xyz = Options("r.jsonl", pairs_);
+    xyz.euler = EulerConvention::kXyz;
+    const auto lines = FinishedLines(xyz);
+    const RunOptions o = Options("r.jsonl", pairs_);  // default zyx
+    const std::string err = ResumeWith(o, {lines[0]});
+    EXPECT_NE(err.find(o.out_path + ".part:1: rows were scored with --euler xyz"),
+              std::string::npos)
+        << err;
 }
 
 TEST_F(Reliability, ResumeRefusesOtherParametersMethodsDuplicatesAndStubs) {
@@ -251,6 +272,17 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     other.methods = ParseMethodSpecs("identity,icp", {{"icp", {{"max_iterations", 5}}}});
     err = ErrorOf([&] { MergeResults(other); });
     EXPECT_NE(err.find("other parameters"), std::string::npos) << err;
+
+    // A shard scored in another Euler convention is not merged with the others.
+    RunOptions xyz = Options("shard_xyz.jsonl", pairs_);
+    xyz.shard_index = 0;
+    xyz.shard_count = 4;
+    xyz.euler = EulerConvention::kXyz;
+    RunBenchmark(xyz);
+    MergeOptions mixed = m;
+    mixed.inputs = {(dir_ / "shard1.jsonl").string(), xyz.out_path};
+    err = ErrorOf([&] { MergeResults(mixed); });
+    EXPECT_NE(err.find(xyz.out_path + ":1: row scored with --euler xyz"), std::string::npos) << err;
 }
 
 TEST_F(Reliability, ScaleGuardRefusesQuadraticMethodsOnLargeCloudsOrDownsamplesThem) {
@@ -290,22 +322,6 @@ TEST(ScaleGuard, StrideKeepsEvenlySpacedPointsAndTheirLabels) {
         EXPECT_EQ(d.source_overlap(i), expected[i] % 2);
     }
     EXPECT_EQ(note["source_points"], nlohmann::json({10, 4}));
-}
-
-TEST(PairFileHash, ChangesWithOneByte) {
-    // FNV-1a 64 of "a" is af63dc4c8601ec8c (published test vector of the FNV authors).
-    const fs::path p = fs::temp_directory_path() / "regbench_hash_a.bin";
-    {
-        std::ofstream f(p);
-        f << "a";
-    }
-    EXPECT_EQ(PairFileHash(p.string()), "fnv1a64:af63dc4c8601ec8c");
-    {
-        std::ofstream f(p);
-        f << "b";
-    }
-    EXPECT_NE(PairFileHash(p.string()), "fnv1a64:af63dc4c8601ec8c");
-    fs::remove(p);
 }
 
 }  // namespace
