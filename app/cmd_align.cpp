@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "app/commands.hpp"
+#include "core/atomic_file.hpp"
 #include "core/metrics.hpp"
 #include "core/transform.hpp"
 #include "datasets/point_file.hpp"
@@ -24,15 +25,6 @@ std::string FormatTransform(const Transform& T) {
         out += fmt::format("{:.17g} {:.17g} {:.17g} {:.17g}\n", T(r, 0), T(r, 1), T(r, 2), T(r, 3));
     }
     return out;
-}
-
-void WriteAtomically(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp";
-    std::ofstream f(tmp);
-    f << text;
-    f.close();
-    if (!f) throw std::runtime_error(path + ": cannot write");
-    std::filesystem::rename(tmp, path);
 }
 
 }  // namespace
@@ -100,7 +92,11 @@ void AddAlignCommand(CLI::App& app) {
                 "ccd {:.4g} | chamfer {:.4g}\n",
                 m.mae_r, ToString(m.euler), m.mae_t, m.rre, m.rte, m.ccd, m.chamfer);
         }
-        if (!out->empty()) WriteAtomically(*out, FormatTransform(T));
+        if (!out->empty()) {
+            std::vector<std::string> inputs{*src, *tgt};
+            if (!gt->empty()) inputs.push_back(*gt);
+            WriteFileAtomic(*out, FormatTransform(T), inputs);  // checked; never an input
+        }
         if (r.status != AlignStatus::kOk) throw std::runtime_error(*method + " failed");
     });
 }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
@@ -86,10 +87,15 @@ void AddGenerateCommand(CLI::App& app) {
                     "Dataset split (default: test; all for a folder or file of point clouds)");
     cmd->add_option("--data-dir", a->data_dir,
                     "Data directory for named datasets (default: ./data)");
-    cmd->add_option("--pairs", a->request.num_pairs, "Number of pairs")->required();
-    cmd->add_option("--seed", a->request.seed, "Benchmark seed")->capture_default_str();
+    cmd->add_option("--pairs", a->request.num_pairs, "Number of pairs")
+        ->required()
+        ->check(WholeNumber());
+    cmd->add_option("--seed", a->request.seed, "Benchmark seed")
+        ->capture_default_str()
+        ->check(WholeNumber());
     cmd->add_option("--out", a->request.out, "Output HDF5 file")->required();
-    cmd->add_option("--points", a->flags.points, "Points sampled per cloud (1024; indoor 2048)");
+    cmd->add_option("--points", a->flags.points, "Points sampled per cloud (1024; indoor 2048)")
+        ->check(WholeNumber());
     cmd->add_option("--keep", a->flags.keep, "Crop keep ratio in (0, 1] (0.7)");
     cmd->add_option("--noise-sigma", a->flags.noise_sigma, "Jitter sigma (0.01)");
     cmd->add_option("--noise-clip", a->flags.noise_clip, "Jitter clip (0.05)");

@@ -5,22 +5,13 @@
 #include <iostream>
 
 #include "app/commands.hpp"
+#include "core/atomic_file.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "runners/result_row.hpp"
 
 namespace regbench::app {
 namespace {
-
-/// Writes text to path via path.tmp + rename, so a reader never sees half a report.
-void WriteAtomically(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp";
-    std::ofstream f(tmp);
-    f << text;
-    f.close();
-    if (!f) throw std::runtime_error(path + ": cannot write");
-    std::filesystem::rename(tmp, path);
-}
 
 std::string PaperComparison(const std::vector<ReportTable>& tables,
                             const std::string& paper,
@@ -106,7 +97,7 @@ void AddReportCommand(CLI::App& app) {
         if (out->empty()) {
             std::cout << text;
         } else {
-            WriteAtomically(*out, text);
+            WriteFileAtomic(*out, text, *files);  // checked; never replaces an input
         }
     });
 }

@@ -3,6 +3,7 @@
 
 #include <iostream>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "runners/runner.hpp"
 
@@ -26,17 +27,26 @@ void AddRunCommand(CLI::App& app) {
                     "Output JSONL (written as OUT.part, renamed at the end)")
         ->required();
     cmd->add_option("--jobs,-j", opts->jobs, "Pairs processed in parallel")
-        ->check(CLI::PositiveNumber);
+        ->check(WholeNumber() & CLI::PositiveNumber);
     cmd->add_option(
            "--threads", opts->threads_per_call,
            "OpenMP threads inside one method call (timings are single-threaded by default)")
-        ->check(CLI::PositiveNumber);
+        ->check(WholeNumber() & CLI::PositiveNumber);
     cmd->add_flag("--resume", opts->resume,
                   "Keep rows of an interrupted run (OUT.part) and skip them");
     cmd->add_option("--shard", *shard,
                     "Process pairs k with k % n == i, given as i/n (Slurm arrays)");
     cmd->add_option("--timeout", opts->timeout_seconds,
-                    "Seconds per call; > 0 runs each call in a child process (isolates crashes)");
+                    "Seconds per call; > 0 runs each call in a child process (isolates crashes)")
+        ->check(NonNegativeReal());
+    cmd->add_option("--max-points", opts->max_points,
+                    "Scale guard: O(N*M) methods (cpd, gmmreg, svr) on clouds above this many "
+                    "points are refused, or downsampled with --downsample; 0 = no guard")
+        ->check(WholeNumber())
+        ->capture_default_str();
+    cmd->add_flag("--downsample", opts->downsample,
+                  "Scale guard: run such calls on clouds reduced to --max-points points by an "
+                  "evenly spaced stride (recorded in each row as \"downsampled\")");
     cmd->add_option("--euler", *euler,
                     "Euler angles of mae_r/rmse_r: zyx = scipy as_euler('zyx'), the paper's; "
                     "xyz = RPMNet's (docs/metrics.md)")
@@ -54,9 +64,7 @@ void AddRunCommand(CLI::App& app) {
             }
         }
         o.methods = ParseMethodSpecs(*methods, p);
-        if (std::sscanf(shard->c_str(), "%d/%d", &o.shard_index, &o.shard_count) != 2) {
-            throw std::invalid_argument("--shard must look like i/n, got '" + *shard + "'");
-        }
+        ParseShard(*shard, &o.shard_index, &o.shard_count);
         o.progress = !*quiet;
         o.euler = ParseEulerConvention(*euler);
         const RunSummary s = RunBenchmark(o);

@@ -16,5 +16,6 @@ void AddReproduceCommand(CLI::App& app);
 void AddScoreCommand(CLI::App& app);
 void AddAlignCommand(CLI::App& app);
 void AddTrainCommand(CLI::App& app);
+void AddMergeCommand(CLI::App& app);
 
 }  // namespace regbench::app

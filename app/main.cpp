@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     regbench::app::AddCompareCommand(app);
     regbench::app::AddReproduceCommand(app);
     regbench::app::AddTrainCommand(app);
+    regbench::app::AddMergeCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

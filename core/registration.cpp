@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <exception>
+#include <limits>
 
 #include "core/rng.hpp"
 #include "core/transform.hpp"
@@ -25,6 +26,11 @@ std::string ValidateCloud(const PointCloud& cloud, const std::string& which) {
         return which + " cloud has " + std::to_string(cloud.rows()) + " points (need >= 3)";
     }
     if (!cloud.allFinite()) return which + " cloud has non-finite (NaN or Inf) coordinates";
+    // PCL (GICP, NDT) and the float E-steps convert to float: a finite double beyond float's
+    // range becomes Inf there and PCL aborts the whole process, so it fails here as a row.
+    if (cloud.cwiseAbs().maxCoeff() > static_cast<double>(std::numeric_limits<float>::max())) {
+        return which + " cloud has coordinates beyond float range (|x| > 3.4e38)";
+    }
     return {};
 }
 

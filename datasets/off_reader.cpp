@@ -3,7 +3,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -136,6 +138,17 @@ Mesh ReadOff(const std::string& path) {
     const int num_vertices = ToCount(counts[0], "vertex count", path, line_no);
     const int num_faces = ToCount(counts[1], "face count", path, line_no);
 
+    // Bound the allocations by the file: a vertex line takes at least 6 bytes ("0 0 0\n"), a
+    // face line at least 8 ("3 0 1 2\n"); a header declaring more is truncated or hostile.
+    std::error_code size_ec;
+    const double file_bytes = static_cast<double>(std::filesystem::file_size(path, size_ec));
+    if (!size_ec && 6.0 * num_vertices + 8.0 * num_faces > file_bytes) {
+        throw std::runtime_error(Where(path, line_no) + "OFF: header declares " +
+                                 std::to_string(num_vertices) + " vertices and " +
+                                 std::to_string(num_faces) + " faces, more than the file's " +
+                                 std::to_string(static_cast<long long>(file_bytes)) +
+                                 " bytes can hold (truncated or corrupt)");
+    }
     Mesh mesh;
     mesh.vertices.resize(num_vertices, 3);
     for (int i = 0; i < num_vertices; ++i) {
@@ -147,6 +160,14 @@ Mesh ReadOff(const std::string& path) {
         const std::vector<double> v = ParseNumbers(line, path, line_no);
         if (v.size() < 3) {
             throw std::runtime_error(Where(path, line_no) + "OFF: vertex with fewer than 3 values");
+        }
+        for (int c = 0; c < 3; ++c) {
+            if (!std::isfinite(v[c]) ||
+                std::abs(v[c]) > static_cast<double>(std::numeric_limits<float>::max())) {
+                throw std::runtime_error(Where(path, line_no) +
+                                         "OFF: vertex coordinate is not finite or does not fit "
+                                         "in a float");
+            }
         }
         mesh.vertices.row(i) << v[0], v[1], v[2];
     }

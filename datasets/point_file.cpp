@@ -5,11 +5,15 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace regbench {
@@ -20,6 +24,17 @@ std::string LowerExtension(const std::string& path) {
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return ext;
+}
+
+/// Registration libraries (PCL) convert to float and abort on overflow: refuse such clouds.
+void CheckCoordinates(const std::string& path, const PointCloud& points) {
+    const double limit = static_cast<double>(std::numeric_limits<float>::max());
+    for (Eigen::Index i = 0; i < points.rows(); ++i) {
+        if (points.row(i).cwiseAbs().maxCoeff() > limit) {
+            throw std::runtime_error(path + ": point " + std::to_string(i) +
+                                     " has a coordinate that does not fit in a float");
+        }
+    }
 }
 
 /// Plain-text XYZ: "x y z [nx ny nz ...]" per line. Normals are kept only when every point
@@ -76,6 +91,147 @@ PointCloud ReadXyz(const std::string& path, Normals* normals) {
     return points;
 }
 
+/// What a PLY or PCD header promises, read by us before Open3D allocates anything.
+struct DeclaredCloud {
+    double points = 0;               ///< declared point count
+    bool ascii = false;              ///< ASCII body (one point per line)
+    bool compressed = false;         ///< PCD binary_compressed (LZF)
+    double point_bytes = 0;          ///< bytes per point in a binary body (0: unknown)
+    std::uintmax_t body_offset = 0;  ///< where the body starts
+};
+
+[[noreturn]] void HeaderError(const std::string& path, int line_no, const std::string& what) {
+    throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + what);
+}
+
+/// Whole number from a header token, or an error naming the file and line (never std::stoul).
+double HeaderCount(const std::string& path, int line_no, const std::string& token) {
+    unsigned long long v = 0;
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), v);
+    if (token.empty() || ec != std::errc() || end != token.data() + token.size()) {
+        HeaderError(path, line_no, "bad count '" + token + "' in header");
+    }
+    return static_cast<double>(v);
+}
+
+double PlyTypeBytes(const std::string& type) {
+    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+    if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+        type == "float32")
+        return 4;
+    if (type == "double" || type == "float64") return 8;
+    return 0;
+}
+
+/// Reads header lines (at most 1 MB of them) until `last` starts a line.
+template <class OnLine>
+std::uintmax_t ReadHeader(const std::string& path, const char* last, OnLine on_line) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error(path + ": cannot open point file");
+    std::string line;
+    int line_no = 0;
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        std::istringstream words(line);
+        std::vector<std::string> w;
+        for (std::string t; words >> t;) w.push_back(t);
+        on_line(line_no, w);
+        if (!w.empty() && w[0] == last) return static_cast<std::uintmax_t>(in.tellg());
+        if (in.tellg() > (1 << 20)) break;
+    }
+    throw std::runtime_error(path + ": header has no '" + std::string(last) +
+                             "' line (truncated or not a point file)");
+}
+
+DeclaredCloud ReadPlyHeader(const std::string& path) {
+    DeclaredCloud d;
+    bool in_vertex = false;
+    bool list_property = false;
+    d.body_offset = ReadHeader(path, "end_header", [&](int n, const std::vector<std::string>& w) {
+        if (w.size() >= 2 && w[0] == "format") d.ascii = w[1] == "ascii";
+        if (w.size() >= 3 && w[0] == "element") {
+            in_vertex = w[1] == "vertex";
+            if (in_vertex) d.points = HeaderCount(path, n, w[2]);
+        }
+        if (in_vertex && w.size() >= 3 && w[0] == "property") {
+            if (w[1] == "list") list_property = true;
+            d.point_bytes += PlyTypeBytes(w[1]);
+        }
+    });
+    if (list_property) d.point_bytes = 0;  // variable size: bound by the ASCII rule only
+    return d;
+}
+
+DeclaredCloud ReadPcdHeader(const std::string& path) {
+    DeclaredCloud d;
+    std::vector<double> sizes, counts;
+    double width = 0, height = 1;
+    bool have_points = false;
+    d.body_offset = ReadHeader(path, "DATA", [&](int n, const std::vector<std::string>& w) {
+        if (w.empty()) return;
+        if (w[0] == "POINTS" && w.size() >= 2) {
+            d.points = HeaderCount(path, n, w[1]);
+            have_points = true;
+        }
+        if (w[0] == "WIDTH" && w.size() >= 2) width = HeaderCount(path, n, w[1]);
+        if (w[0] == "HEIGHT" && w.size() >= 2) height = HeaderCount(path, n, w[1]);
+        if (w[0] == "SIZE") {
+            for (std::size_t i = 1; i < w.size(); ++i) sizes.push_back(HeaderCount(path, n, w[i]));
+        }
+        if (w[0] == "COUNT") {
+            for (std::size_t i = 1; i < w.size(); ++i) counts.push_back(HeaderCount(path, n, w[i]));
+        }
+        if (w[0] == "DATA" && w.size() >= 2) {
+            d.ascii = w[1] == "ascii";
+            d.compressed = w[1] == "binary_compressed";
+        }
+    });
+    if (!have_points) d.points = width * height;
+    for (std::size_t i = 0; i < sizes.size(); ++i) {
+        d.point_bytes += sizes[i] * (i < counts.size() ? counts[i] : 1.0);
+    }
+    return d;
+}
+
+/// Refuses a header whose point count the file cannot hold, before any allocation. ASCII: a
+/// point takes at least 6 bytes ("0 0 0\n") and one line; the lines are counted, so a
+/// truncated ASCII body (which Open3D pads with zeros) is refused. Binary: count x point size
+/// bytes must follow. LZF (PCD binary_compressed) expands at most ~100x.
+void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) throw std::runtime_error(path + ": cannot stat: " + ec.message());
+    const double body = static_cast<double>(size) - static_cast<double>(d.body_offset);
+    const auto refuse = [&](const std::string& why) {
+        throw std::runtime_error(path + ": header declares " +
+                                 std::to_string(static_cast<unsigned long long>(d.points)) +
+                                 " points but " + why + " (truncated or corrupt file)");
+    };
+    if (d.points < 1) throw std::runtime_error(path + ": header declares no points");
+    if (d.ascii) {
+        if (6.0 * d.points > body)
+            refuse("only " + std::to_string(static_cast<long long>(body)) + " bytes follow");
+        std::ifstream in(path, std::ios::binary);
+        in.seekg(static_cast<std::streamoff>(d.body_offset));
+        std::string line;
+        double lines = 0;
+        while (lines < d.points && std::getline(in, line)) {
+            if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+        }
+        if (lines < d.points) {
+            refuse("the body has only " + std::to_string(static_cast<long long>(lines)) +
+                   " point lines");
+        }
+    } else if (d.point_bytes > 0) {
+        const double need = d.points * d.point_bytes;
+        if (d.compressed ? need > 100.0 * body : need > body) {
+            refuse("only " + std::to_string(static_cast<long long>(body)) + " bytes follow");
+        }
+    }
+}
+
 }  // namespace
 
 PointCloud ReadCloudFile(const std::string& path) {
@@ -91,8 +247,23 @@ PointCloud ReadPointFile(const std::string& path, Normals* normals) {
         throw std::runtime_error(path + ": no such point file");
     }
     const std::string ext = LowerExtension(path);
-    if (ext == ".xyz" || ext == ".xyzn" || ext == ".txt") return ReadXyz(path, normals);
-    if (ext == ".ply" || ext == ".pcd") return ReadPointFileOpen3D(path, normals);
+    if (ext == ".xyz" || ext == ".xyzn" || ext == ".txt") {
+        PointCloud points = ReadXyz(path, normals);
+        CheckCoordinates(path, points);
+        return points;
+    }
+    if (ext == ".ply" || ext == ".pcd") {
+        const DeclaredCloud declared = ext == ".ply" ? ReadPlyHeader(path) : ReadPcdHeader(path);
+        CheckDeclaredCloud(path, declared);
+        PointCloud points = ReadPointFileOpen3D(path, normals);
+        if (static_cast<double>(points.rows()) > declared.points) {
+            throw std::runtime_error(path + ": " + std::to_string(points.rows()) +
+                                     " points read but the header declares " +
+                                     std::to_string(static_cast<long long>(declared.points)));
+        }
+        CheckCoordinates(path, points);
+        return points;
+    }
     throw std::runtime_error(path + ": unsupported point file type '" + ext +
                              "' (expected .ply, .pcd, .xyz, .xyzn or .txt)");
 }

@@ -3,16 +3,26 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "core/atomic_file.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
 
 namespace regbench {
+
+constexpr std::size_t kMaxGeneratedPairs = 10000000;
 
 void GenerateToFile(const GenerateRequest& request,
                     const ShapeLoader& load_shapes,
                     const ProgressCallback& progress) {
     ValidateProtocolOptions(request.options);
     if (request.num_pairs < 1) throw std::invalid_argument("generate: --pairs must be >= 1");
+    // A pair file is held in memory while it is written; 10 million 1024-point pairs are
+    // already ~330 GB, so more is a typo, not a benchmark.
+    if (request.num_pairs > kMaxGeneratedPairs) {
+        throw std::invalid_argument("generate: --pairs " + std::to_string(request.num_pairs) +
+                                    " is more than the supported " +
+                                    std::to_string(kMaxGeneratedPairs));
+    }
     if (request.out.empty()) throw std::invalid_argument("generate: --out is required");
     const std::filesystem::path out(request.out);
     const std::filesystem::path dir = out.has_parent_path() ? out.parent_path() : ".";
@@ -20,6 +30,7 @@ void GenerateToFile(const GenerateRequest& request,
         throw std::invalid_argument(request.out + ": output directory " + dir.string() +
                                     " does not exist");
     }
+    CheckOutputPath(request.out);  // not a directory or device; before any work
     if (!load_shapes) throw std::invalid_argument("generate: no shape loader");
     const std::vector<ShapeSource> shapes = load_shapes(request.dataset, request.split);
     if (shapes.empty()) {

@@ -2,12 +2,18 @@
 
 #include <hdf5.h>
 
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "protocols/hdf5_handle.hpp"
 
 namespace regbench {
@@ -15,6 +21,8 @@ namespace {
 
 constexpr const char* kFormatName = "regbench-pairs";
 constexpr int kFormatVersion = 1;
+/// Tolerance on |R^T R - I| and on T_gt's last row (f64 round-off of a stored rotation).
+constexpr double kRigidTolerance = 1e-6;
 
 [[noreturn]] void Fail(const std::string& path, const std::string& what) {
     throw std::runtime_error(path + ": " + what);
@@ -70,6 +78,10 @@ std::string ReadStringAttr(const std::string& where, hid_t obj, const char* name
         return out;
     }
     const size_t n = H5Tget_size(type.get());
+    // Attributes live in the object header (64 KiB) or dense storage; anything bigger is a lie.
+    if (n == 0 || n > (std::size_t{1} << 28)) {
+        Fail(where, std::string(name) + " declares an implausible size " + std::to_string(n));
+    }
     std::string out(n, '\0');
     if (H5Aread(attr.get(), type.get(), out.data()) < 0) {
         Fail(where, std::string("cannot read ") + name);
@@ -128,14 +140,56 @@ Handle OpenH5Dataset(const std::string& where, hid_t group, const char* name) {
     return ds;
 }
 
-PointCloud ReadCloud(const std::string& where, hid_t group, const char* name) {
+/// How far a dataset's decoded size may exceed the bytes it occupies on disk (compression).
+/// regbench writes uncompressed f64 (ratio 1); float32 storage doubles it; gzip'd real clouds
+/// stay far below this. A header declaring 1e8 points in a 790 KB file does not.
+constexpr double kMaxExpansion = 64.0;
+
+/// Refuses a dataset whose declared size cannot be backed by the file, before allocating.
+void CheckBacked(const std::string& where,
+                 const char* name,
+                 hid_t ds,
+                 double decoded_bytes,
+                 std::uintmax_t file_size) {
+    const double stored = static_cast<double>(H5Dget_storage_size(ds));
+    if (decoded_bytes > 0 && (stored > static_cast<double>(file_size) ||
+                              decoded_bytes > std::max(stored, 1.0) * kMaxExpansion)) {
+        Fail(where, std::string(name) + " declares " + std::to_string(decoded_bytes / 1e6) +
+                        " MB of data but only " + std::to_string(stored / 1e6) +
+                        " MB are stored in the file (corrupt or hostile header)");
+    }
+}
+
+/// Every coordinate must be finite and fit in a float: PCL's methods convert to float and
+/// abort on overflow, and no real cloud comes near 3.4e38.
+void CheckValues(const std::string& where, const char* name, const double* v, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(v[i])) {
+            Fail(where,
+                 std::string(name) + " has a non-finite value (row " + std::to_string(i / 3) + ")");
+        }
+        if (std::abs(v[i]) > static_cast<double>(std::numeric_limits<float>::max())) {
+            Fail(where, std::string(name) + " row " + std::to_string(i / 3) + ": magnitude " +
+                            std::to_string(v[i]) + " does not fit in a float");
+        }
+    }
+}
+
+PointCloud ReadCloud(const std::string& where,
+                     hid_t group,
+                     const char* name,
+                     std::uintmax_t file_size) {
     Handle ds = OpenH5Dataset(where, group, name);
     const auto dims = DatasetDims(where, ds.get(), 2, name);
     if (dims[1] != 3) Fail(where, std::string(name) + " must be N x 3");
+    if (dims[0] == 0) Fail(where, std::string(name) + " cloud is empty");
+    CheckBacked(where, name, ds.get(), static_cast<double>(dims[0]) * 3.0 * sizeof(double),
+                file_size);
     PointCloud cloud(static_cast<Eigen::Index>(dims[0]), 3);
     if (H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, cloud.data()) < 0) {
         Fail(where, std::string("cannot read ") + name);
     }
+    CheckValues(where, name, cloud.data(), static_cast<std::size_t>(cloud.size()));
     return cloud;
 }
 
@@ -184,15 +238,35 @@ void WritePair(const std::string& path, hid_t file, std::size_t k, const Pair& p
     if (!p.meta.empty()) WriteStringAttr(path, g.get(), "meta", p.meta.dump());
 }
 
-Pair ReadPair(const std::string& path, hid_t file, std::size_t k) {
+/// T_gt must be a rigid motion: finite, last row 0 0 0 1, R orthonormal with det +1 (a scaled,
+/// reflected or all-zero "ground truth" would be scored as if it were one).
+void CheckRigid(const std::string& where, const Eigen::Matrix4d& T) {
+    if (!T.allFinite()) Fail(where, "T_gt has a non-finite entry");
+    if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kRigidTolerance) {
+        Fail(where, "T_gt's last row is not 0 0 0 1");
+    }
+    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    const double orth = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (orth > kRigidTolerance) {
+        Fail(where,
+             "T_gt's rotation is not orthonormal (max |R^T R - I| = " + std::to_string(orth) + ")");
+    }
+    if (R.determinant() < 0) Fail(where, "T_gt is a reflection (det R = -1)");
+    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() >
+        static_cast<double>(std::numeric_limits<float>::max())) {
+        Fail(where, "T_gt's translation does not fit in a float");
+    }
+}
+
+Pair ReadPair(const std::string& path, hid_t file, std::size_t k, std::uintmax_t file_size) {
     const std::string where = path + ": pair " + std::to_string(k);
     const std::string name = PairGroupName(k);
     if (H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0) Fail(where, "missing group " + name);
     Handle g(H5Gopen2(file, name.c_str(), H5P_DEFAULT), H5Gclose);
     if (!g.ok()) Fail(where, "cannot open group " + name);
     Pair p;
-    p.source = ReadCloud(where, g.get(), "source");
-    p.target = ReadCloud(where, g.get(), "target");
+    p.source = ReadCloud(where, g.get(), "source", file_size);
+    p.target = ReadCloud(where, g.get(), "target", file_size);
     Handle tds = OpenH5Dataset(where, g.get(), "T_gt");
     const auto tdims = DatasetDims(where, tds.get(), 2, "T_gt");
     if (tdims[0] != 4 || tdims[1] != 4) Fail(where, "T_gt must be 4 x 4");
@@ -201,12 +275,16 @@ Pair ReadPair(const std::string& path, hid_t file, std::size_t k) {
         Fail(where, "cannot read T_gt");
     }
     p.T_gt = T;
+    CheckRigid(where, p.T_gt);
     p.source_overlap = ReadLabels(where, g.get(), "source_overlap", p.source.rows());
     p.target_overlap = ReadLabels(where, g.get(), "target_overlap", p.target.rows());
     p.shape = ReadStringAttr(where, g.get(), "shape");
     p.category = ReadStringAttr(where, g.get(), "category");
     p.source_overlap_ratio = ReadDoubleAttr(where, g.get(), "source_overlap_ratio");
     p.target_overlap_ratio = ReadDoubleAttr(where, g.get(), "target_overlap_ratio");
+    for (const double r : {p.source_overlap_ratio, p.target_overlap_ratio}) {
+        if (!(r >= 0.0 && r <= 1.0)) Fail(where, "overlap ratio outside [0, 1]");
+    }
     if (H5Aexists(g.get(), "meta") > 0) {
         try {
             p.meta = nlohmann::json::parse(ReadStringAttr(where, g.get(), "meta"));
@@ -220,6 +298,7 @@ Pair ReadPair(const std::string& path, hid_t file, std::size_t k) {
 /// Opens a pair file read-only and checks its format tag; silences HDF5's own error stack.
 Handle OpenForRead(const std::string& path) {
     if (!std::filesystem::exists(path)) Fail(path, "no such file");
+    if (!std::filesystem::is_regular_file(path)) Fail(path, "not a regular file");
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     if (H5Fis_hdf5(path.c_str()) <= 0) {
         Fail(path, "not an HDF5 file (corrupt or truncated?)");
@@ -230,61 +309,101 @@ Handle OpenForRead(const std::string& path) {
         ReadStringAttr(path, file.get(), "format") != kFormatName) {
         Fail(path, "not a regbench pair file (no format='regbench-pairs' attribute)");
     }
+    const double version = ReadDoubleAttr(path, file.get(), "format_version");
+    if (version != kFormatVersion) {
+        Fail(path, "format_version " + std::to_string(version) +
+                       " is not supported (this regbench "
+                       "reads version " +
+                       std::to_string(kFormatVersion) + ")");
+    }
     return file;
+}
+
+/// num_pairs must be a whole number equal to the groups present under /pairs, so neither a
+/// header saying 1e30 nor 2.5 nor a file missing groups reads as something else.
+std::size_t CheckedPairCount(const std::string& path, hid_t file) {
+    const double n = ReadDoubleAttr(path, file, "num_pairs");
+    if (!std::isfinite(n) || n < 0 || n != std::floor(n)) {
+        Fail(path, "num_pairs = " + std::to_string(n) + " is not a whole number >= 0");
+    }
+    if (H5Lexists(file, "pairs", H5P_DEFAULT) <= 0) Fail(path, "missing group /pairs");
+    Handle pairs(H5Gopen2(file, "pairs", H5P_DEFAULT), H5Gclose);
+    H5G_info_t info{};
+    if (!pairs.ok() || H5Gget_info(pairs.get(), &info) < 0) Fail(path, "cannot open /pairs");
+    if (static_cast<double>(info.nlinks) != n) {
+        Fail(path, "num_pairs says " +
+                       std::to_string(static_cast<unsigned long long>(std::min(n, 1e19))) +
+                       " but /pairs holds " + std::to_string(info.nlinks) + " groups");
+    }
+    return static_cast<std::size_t>(info.nlinks);
+}
+
+std::uintmax_t FileSize(const std::string& path) {
+    std::error_code ec;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (ec) Fail(path, "cannot stat: " + ec.message());
+    return size;
 }
 
 }  // namespace
 
 void WritePairFile(const std::string& path, const PairSet& set) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-    const std::string tmp = path + ".tmp";
-    std::filesystem::remove(tmp);
-    try {
+    AtomicFile out(path);  // refuses directories and special files; removes the temp on failure
+    // HDF5 builds the file in memory (core driver, no backing store) and AtomicFile writes the
+    // image with checked writes. HDF5 never meets a full disk itself: when its own write or
+    // flush fails it cannot close the file, and its exit handler then crashes the process
+    // (SIGSEGV after "wrote"), which is what happened on a full disk before.
+    std::vector<char> image;
+    {
+        Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+        H5Pset_fapl_core(fapl.get(), std::size_t{1} << 20, /*backing_store=*/0);
+        // Strong close: H5Fclose closes everything, or reports why it could not.
+        H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG);
         Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-        Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, fcpl.get(), H5P_DEFAULT), H5Fclose);
+        Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
         if (!file.ok()) Fail(path, "cannot create file");
         WriteStringAttr(path, file.get(), "format", kFormatName);
         WriteDoubleAttr(path, file.get(), "format_version", kFormatVersion);
         WriteDoubleAttr(path, file.get(), "num_pairs", static_cast<double>(set.pairs.size()));
         WriteStringAttr(path, file.get(), "provenance", set.provenance.dump());
-        Handle gcpl = NoTimesGroupPlist();
-        Handle pairs(H5Gcreate2(file.get(), "/pairs", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
-                     H5Gclose);
-        if (!pairs.ok()) Fail(path, "cannot create /pairs");
+        {
+            Handle gcpl = NoTimesGroupPlist();
+            Handle pairs(H5Gcreate2(file.get(), "/pairs", H5P_DEFAULT, gcpl.get(), H5P_DEFAULT),
+                         H5Gclose);
+            if (!pairs.ok()) Fail(path, "cannot create /pairs");
+        }
         for (std::size_t k = 0; k < set.pairs.size(); ++k)
             WritePair(path, file.get(), k, set.pairs[k]);
-    } catch (...) {
-        std::filesystem::remove(tmp);
-        throw;
+        if (H5Fflush(file.get(), H5F_SCOPE_GLOBAL) < 0) Fail(path, "cannot flush");
+        const ssize_t size = H5Fget_file_image(file.get(), nullptr, 0);
+        if (size <= 0) Fail(path, "cannot get the file image");
+        image.resize(static_cast<std::size_t>(size));
+        if (H5Fget_file_image(file.get(), image.data(), image.size()) != size) {
+            Fail(path, "cannot get the file image");
+        }
     }
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::filesystem::remove(tmp);
-        Fail(path, "cannot rename temporary file: " + ec.message());
-    }
+    out.Write(std::string_view(image.data(), image.size()));  // checked: ENOSPC, EFBIG, EIO
+    out.Commit();
 }
 
 std::size_t CountPairs(const std::string& path) {
     Handle file = OpenForRead(path);
-    const double n = ReadDoubleAttr(path, file.get(), "num_pairs");
-    if (!(n >= 0)) Fail(path, "bad num_pairs");
-    return static_cast<std::size_t>(n);
+    return CheckedPairCount(path, file.get());
 }
 
 PairSet ReadPairFile(const std::string& path) {
     Handle file = OpenForRead(path);
+    const std::uintmax_t file_size = FileSize(path);
     PairSet set;
     try {
         set.provenance = nlohmann::json::parse(ReadStringAttr(path, file.get(), "provenance"));
     } catch (const nlohmann::json::exception& e) {
         Fail(path, std::string("provenance is not valid JSON: ") + e.what());
     }
-    const double n = ReadDoubleAttr(path, file.get(), "num_pairs");
-    if (!(n >= 0)) Fail(path, "bad num_pairs");
-    set.pairs.reserve(static_cast<std::size_t>(n));
-    for (std::size_t k = 0; k < static_cast<std::size_t>(n); ++k) {
-        set.pairs.push_back(ReadPair(path, file.get(), k));
+    const std::size_t n = CheckedPairCount(path, file.get());
+    for (std::size_t k = 0; k < n; ++k) {
+        set.pairs.push_back(ReadPair(path, file.get(), k, file_size));
     }
     return set;
 }

@@ -1,15 +1,22 @@
 #include "protocols/xyz_io.hpp"
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <regex>
 #include <stdexcept>
 #include <vector>
 
+#include "core/atomic_file.hpp"
 #include "core/transform.hpp"
 #include "protocols/pair_protocols.hpp"
 
@@ -20,6 +27,8 @@ namespace fs = std::filesystem;
 
 /// Tolerance on |R^T R - I| and |det R - 1| for an imported ground truth (text round-off).
 constexpr double kRotationTolerance = 1e-6;
+/// Largest pair number an import accepts (pairs must be numbered 0, 1, 2, ... anyway).
+constexpr std::size_t kMaxImportPairs = 100000000;
 
 [[noreturn]] void FailAt(const std::string& path, std::size_t line, const std::string& what) {
     throw std::runtime_error(path + ":" + std::to_string(line) + ": " + what);
@@ -44,6 +53,11 @@ std::vector<double> ParseNumbers(const std::string& path,
             FailAt(path, line_no, "not a number: '" + std::string(p, token_end) + "'");
         }
         if (!std::isfinite(v)) FailAt(path, line_no, "non-finite value");
+        // Registration libraries (PCL) work in float and abort on overflow.
+        if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+            FailAt(path, line_no,
+                   "value " + std::string(p, token_end) + " does not fit in a float");
+        }
         values.push_back(v);
         p = next;
     }
@@ -62,11 +76,9 @@ std::ifstream OpenText(const std::string& path) {
     return in;
 }
 
+/// Checked write of one exported file (inside the export's temporary directory).
 void WriteTextFile(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out) throw std::runtime_error(path + ": cannot write");
+    WriteFileAtomic(path, text);
 }
 
 std::string FormatRow(double a, double b, double c) {
@@ -99,11 +111,51 @@ std::string TransformText(const Transform& T) {
     return text;
 }
 
-void PrepareDir(const std::string& dir) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec || !fs::is_directory(dir)) throw std::runtime_error(dir + ": cannot create directory");
-}
+/// An export goes to a fresh temporary directory next to `dir` and is renamed into place only
+/// when every file was written, so `dir` never holds a partial export or stale pairs of an
+/// earlier one (which `import` would pick up). `dir` must be absent or empty.
+class ExportDir {
+public:
+    explicit ExportDir(const std::string& dir) : dir_(dir) {
+        std::error_code ec;
+        if (fs::exists(dir_, ec)) {
+            if (!fs::is_directory(dir_))
+                throw std::runtime_error(dir_ + ": exists and is not a directory");
+            if (!fs::is_empty(dir_)) {
+                throw std::runtime_error(dir_ +
+                                         ": directory is not empty (export refuses to mix "
+                                         "with earlier files; remove it or pick another)");
+            }
+        }
+        const fs::path parent =
+            fs::path(dir_).parent_path().empty() ? fs::path(".") : fs::path(dir_).parent_path();
+        fs::create_directories(parent, ec);
+        std::string templ =
+            (parent / ("." + fs::path(dir_).filename().string() + ".tmp.XXXXXX")).string();
+        if (::mkdtemp(templ.data()) == nullptr) {
+            throw std::runtime_error(dir_ + ": cannot create a temporary directory");
+        }
+        temp_ = templ;
+    }
+    ~ExportDir() {
+        std::error_code ec;
+        if (!temp_.empty()) fs::remove_all(temp_, ec);
+    }
+    std::string File(const std::string& name) const { return (fs::path(temp_) / name).string(); }
+    /// Renames the finished export over `dir` (rename(2) replaces an empty directory).
+    void Commit() {
+        ::chmod(temp_.c_str(), 0755);
+        if (::rename(temp_.c_str(), dir_.c_str()) != 0) {
+            throw std::runtime_error(
+                dir_ + ": cannot move the export into place: " + std::strerror(errno));
+        }
+        temp_.clear();
+    }
+
+private:
+    std::string dir_;
+    std::string temp_;
+};
 
 }  // namespace
 
@@ -166,23 +218,25 @@ std::string PairStem(std::size_t k) {
 }
 
 void ExportXyz(const PairSet& set, const std::string& dir) {
-    PrepareDir(dir);
+    ExportDir out(dir);
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
-        const std::string stem = (fs::path(dir) / PairStem(k)).string();
-        WriteTextFile(stem + "_src.xyz", XyzText(set.pairs[k].source));
-        WriteTextFile(stem + "_tgt.xyz", XyzText(set.pairs[k].target));
-        WriteTextFile(stem + "_gt.txt", TransformText(set.pairs[k].T_gt));
+        const std::string stem = PairStem(k);
+        WriteTextFile(out.File(stem + "_src.xyz"), XyzText(set.pairs[k].source));
+        WriteTextFile(out.File(stem + "_tgt.xyz"), XyzText(set.pairs[k].target));
+        WriteTextFile(out.File(stem + "_gt.txt"), TransformText(set.pairs[k].T_gt));
     }
+    out.Commit();
 }
 
 void ExportPly(const PairSet& set, const std::string& dir) {
-    PrepareDir(dir);
+    ExportDir out(dir);
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
-        const std::string stem = (fs::path(dir) / PairStem(k)).string();
-        WriteTextFile(stem + "_src.ply", PlyText(set.pairs[k].source));
-        WriteTextFile(stem + "_tgt.ply", PlyText(set.pairs[k].target));
-        WriteTextFile(stem + "_gt.txt", TransformText(set.pairs[k].T_gt));
+        const std::string stem = PairStem(k);
+        WriteTextFile(out.File(stem + "_src.ply"), PlyText(set.pairs[k].source));
+        WriteTextFile(out.File(stem + "_tgt.ply"), PlyText(set.pairs[k].target));
+        WriteTextFile(out.File(stem + "_gt.txt"), TransformText(set.pairs[k].T_gt));
     }
+    out.Commit();
 }
 
 PairSet ImportXyzDir(const std::string& dir, double eta) {
@@ -194,7 +248,16 @@ PairSet ImportXyzDir(const std::string& dir, double eta) {
     for (const auto& entry : fs::directory_iterator(dir)) {
         std::smatch m;
         const std::string name = entry.path().filename().string();
-        if (std::regex_match(name, m, pattern)) seen[std::stoul(m[1].str())] += 1;
+        if (!std::regex_match(name, m, pattern)) continue;
+        std::size_t number = 0;
+        const std::string digits = m[1].str();
+        const auto [end, ec] =
+            std::from_chars(digits.data(), digits.data() + digits.size(), number);
+        if (ec != std::errc() || end != digits.data() + digits.size() || number > kMaxImportPairs) {
+            throw std::runtime_error(entry.path().string() + ": pair number " + digits +
+                                     " is out of range");
+        }
+        seen[number] += 1;
     }
     if (seen.empty()) {
         throw std::runtime_error(dir + ": no NNNN_src.xyz / NNNN_tgt.xyz / NNNN_gt.txt files");

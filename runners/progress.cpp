@@ -11,17 +11,40 @@ ProgressMeter::ProgressMeter(std::string label, std::size_t total, bool enabled)
       total_(total),
       enabled_(enabled),
       start_(std::chrono::steady_clock::now()),
-      last_draw_(start_) {}
+      last_draw_(start_) {
+    if (enabled_) ticker_ = std::thread([this] { Tick(); });
+}
+
+ProgressMeter::~ProgressMeter() { Finish(); }
+
+namespace {
+// Redraw often on a terminal, rarely in logs (CI, Slurm), always at the end.
+constexpr double kTtyRedrawSeconds = 0.2;
+constexpr double kLogRedrawSeconds = 5.0;
+double RedrawSeconds() {
+    return isatty(fileno(stderr)) != 0 ? kTtyRedrawSeconds : kLogRedrawSeconds;
+}
+}  // namespace
+
+void ProgressMeter::Tick() {
+    const auto every = std::chrono::duration<double>(RedrawSeconds());
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!finished_) {
+        if (wake_.wait_for(lock, every, [this] { return finished_; })) break;
+        const auto now = std::chrono::steady_clock::now();
+        if (done_ < total_ && now - last_draw_ >= every) {
+            last_draw_ = now;
+            Draw(false);
+        }
+    }
+}
 
 void ProgressMeter::Advance(std::size_t n) {
     std::lock_guard<std::mutex> lock(mutex_);
     done_ += n;
     if (!enabled_) return;
     const auto now = std::chrono::steady_clock::now();
-    // Redraw often on a terminal, rarely in logs (CI, Slurm), always at the end.
-    constexpr double kTtyRedrawSeconds = 0.2;
-    constexpr double kLogRedrawSeconds = 5.0;
-    const double every = isatty(fileno(stderr)) != 0 ? kTtyRedrawSeconds : kLogRedrawSeconds;
+    const double every = RedrawSeconds();
     // The final line is Finish()'s.
     if (done_ < total_ && std::chrono::duration<double>(now - last_draw_).count() >= every) {
         last_draw_ = now;
@@ -30,10 +53,14 @@ void ProgressMeter::Advance(std::size_t n) {
 }
 
 void ProgressMeter::Finish() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!enabled_ || finished_) return;
-    finished_ = true;
-    Draw(true);
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (finished_) return;
+        finished_ = true;
+        if (enabled_) Draw(true);
+    }
+    wake_.notify_all();
+    if (ticker_.joinable()) ticker_.join();
 }
 
 void ProgressMeter::Draw(bool final_line) {

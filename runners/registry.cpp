@@ -1,5 +1,6 @@
 #include "runners/registry.hpp"
 
+#include <map>
 #include <stdexcept>
 
 #include "baselines/cpd.hpp"
@@ -28,6 +29,24 @@ const std::vector<MethodInfo>& AllMethods() {
 #endif
     };
     return methods;
+}
+
+CostClass MethodCost(const std::string& name) {
+    // CPD's E-step and GMMReg's Gauss transform sum a kernel over every (source, target) point
+    // pair; SVR trains a one-class SVM whose kernel matrix is quadratic in the points. The rest
+    // search kd-trees (ICP, GICP, FGR), voxel grids (NDT) or a permutohedral lattice
+    // (FilterReg). The numbers behind this: README "Larger clouds".
+    static const std::map<std::string, CostClass> kCost = {
+        {"identity", CostClass::kConstant}, {"icp", CostClass::kNearLinear},
+        {"icp-pl", CostClass::kNearLinear}, {"fgr", CostClass::kNearLinear},
+        {"gicp", CostClass::kNearLinear},   {"ndt", CostClass::kNearLinear},
+        {"cpd", CostClass::kQuadratic},     {"gmmreg", CostClass::kQuadratic},
+        {"svr", CostClass::kQuadratic},     {"filterreg", CostClass::kNearLinear},
+    };
+    FindMethod(name);  // unknown names fail with the list of known ones
+    const auto it = kCost.find(name);
+    // A method added to AllMethods without a declared class is treated as the expensive kind.
+    return it == kCost.end() ? CostClass::kQuadratic : it->second;
 }
 
 const MethodInfo& FindMethod(const std::string& name) {

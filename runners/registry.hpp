@@ -12,6 +12,17 @@ namespace regbench {
 const std::vector<MethodInfo>& AllMethods();
 /// Looks a method up by name; throws std::invalid_argument listing the known names.
 const MethodInfo& FindMethod(const std::string& name);
+/// How a method's time per iteration grows with the cloud sizes N (source) and M (target).
+enum class CostClass {
+    kConstant,    ///< independent of the clouds (identity)
+    kNearLinear,  ///< O((N + M) log M): kd-tree, voxel or lattice based
+    kQuadratic,   ///< O(N * M): dense kernel sums over all point pairs
+};
+
+/// The cost class each registered method declares (listed next to AllMethods in registry.cpp).
+/// Throws std::invalid_argument for an unknown name.
+CostClass MethodCost(const std::string& name);
+
 /// FindMethod(name).create(params).
 std::unique_ptr<RegistrationMethod> CreateMethod(const std::string& name,
                                                  const nlohmann::json& params = {});

@@ -1,10 +1,11 @@
 #include "runners/result_row.hpp"
 
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <stdexcept>
+
+#include "core/atomic_file.hpp"
 
 namespace regbench {
 namespace {
@@ -261,16 +262,12 @@ std::vector<ResultRow> ReadResultRows(const std::string& path) {
     return rows;
 }
 
-void WriteResultRows(const std::string& path, const std::vector<ResultRow>& rows) {
-    const std::string tmp = path + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::trunc);
-        if (!out) throw std::runtime_error(tmp + ": cannot write");
-        for (const auto& r : rows) out << ToJsonLine(r) << "\n";
-        out.close();
-        if (!out) throw std::runtime_error(tmp + ": write failed");
-    }
-    std::filesystem::rename(tmp, path);
+void WriteResultRows(const std::string& path,
+                     const std::vector<ResultRow>& rows,
+                     const std::vector<std::string>& inputs) {
+    std::string text;
+    for (const auto& r : rows) text += ToJsonLine(r) + "\n";
+    WriteFileAtomic(path, text, inputs);
 }
 
 }  // namespace regbench

@@ -90,7 +90,11 @@ std::vector<nlohmann::json> ReadJsonl(const std::string& path);
 /// Reads and types every row; a row that does not parse throws naming file:line and the key.
 /// Each row's `origin` is set to "path:line".
 std::vector<ResultRow> ReadResultRows(const std::string& path);
-/// Writes rows (one per line) to path via path.tmp + rename, so readers never see half a file.
-void WriteResultRows(const std::string& path, const std::vector<ResultRow>& rows);
+/// Writes rows (one per line) to path atomically and checked (core/atomic_file): readers never
+/// see half a file, a write error (full disk, file-size limit) throws naming the path, and
+/// `inputs` (the files the rows came from) are never replaced.
+void WriteResultRows(const std::string& path,
+                     const std::vector<ResultRow>& rows,
+                     const std::vector<std::string>& inputs = {});
 
 }  // namespace regbench

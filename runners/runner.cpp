@@ -1,15 +1,15 @@
 #include "runners/runner.hpp"
 
+#include <fcntl.h>
 #include <omp.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -19,167 +19,102 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
+#include "runners/interrupt.hpp"
+#include "runners/isolated_call.hpp"
 #include "runners/progress.hpp"
 #include "runners/registry.hpp"
+#include "runners/resume.hpp"
+#include "runners/scale_guard.hpp"
 
 namespace regbench {
 namespace {
-
-nlohmann::json AlignResultToJson(const AlignResult& r) {
-    return {{"transform", TransformToJson(r.T_target_source)},
-            {"iterations", r.iterations},
-            {"stop_reason", r.stop_reason},
-            {"seconds", r.seconds},
-            {"status", ToString(r.status)},
-            {"message", r.message},
-            {"scale", r.scale},
-            {"extra", r.extra}};
-}
-
-AlignResult AlignResultFromJson(const nlohmann::json& j) {
-    AlignResult r;
-    r.T_target_source = TransformFromJson(j.at("transform"));
-    r.iterations = j.at("iterations").get<int>();
-    r.stop_reason = j.at("stop_reason").get<std::string>();
-    r.seconds = j.at("seconds").get<double>();
-    r.status =
-        j.at("status") == ToString(AlignStatus::kOk) ? AlignStatus::kOk : AlignStatus::kFailed;
-    r.message = j.at("message").get<std::string>();
-    r.scale = j.at("scale").get<double>();
-    r.extra = j.at("extra");
-    return r;
-}
-
-/// Result of one call plus the runner-level status (ok, failed, timeout, crashed).
-struct CallOutcome {
-    AlignResult result;
-    Status status = Status::kOk;
-};
-
-Status StatusOf(const AlignResult& r) {
-    return r.status == AlignStatus::kOk ? Status::kOk : Status::kFailed;
-}
-
-CallOutcome Failure(Status status, const std::string& message, double seconds) {
-    CallOutcome out;
-    out.result.status = AlignStatus::kFailed;
-    out.result.message = message;
-    out.result.stop_reason = ToString(status);
-    out.result.seconds = seconds;
-    out.status = status;
-    return out;
-}
-
-/// Runs Align in a forked child so a crash or a hang cannot take the run down. The child
-/// sends the result as JSON through a pipe; the parent kills it after `timeout` seconds.
-CallOutcome AlignIsolated(RegistrationMethod& method,
-                          const Pair& pair,
-                          const AlignContext& context,
-                          double timeout,
-                          int threads) {
-    int fds[2];
-    if (pipe(fds) != 0)
-        return Failure(Status::kFailed, "pipe() failed: " + std::string(strerror(errno)), 0);
-    const pid_t pid = fork();
-    if (pid < 0) {
-        close(fds[0]);
-        close(fds[1]);
-        return Failure(Status::kFailed, "fork() failed: " + std::string(strerror(errno)), 0);
-    }
-    if (pid == 0) {
-        close(fds[0]);
-        omp_set_num_threads(threads);
-        const std::string payload =
-            AlignResultToJson(method.Align(pair.source, pair.target, context)).dump();
-        size_t off = 0;
-        while (off < payload.size()) {
-            const ssize_t n = write(fds[1], payload.data() + off, payload.size() - off);
-            if (n <= 0) break;
-            off += static_cast<size_t>(n);
-        }
-        close(fds[1]);
-        _exit(0);
-    }
-    close(fds[1]);
-    const auto start = std::chrono::steady_clock::now();
-    std::string payload;
-    char buf[65536];
-    bool timed_out = false;
-    for (;;) {
-        const double left =
-            timeout -
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (left <= 0.0) {
-            timed_out = true;
-            break;
-        }
-        pollfd pfd{fds[0], POLLIN, 0};
-        const int ready = poll(&pfd, 1, static_cast<int>(std::min(left, 1.0) * 1000.0) + 1);
-        if (ready < 0 && errno != EINTR) break;
-        if (ready <= 0) continue;
-        const ssize_t n = read(fds[0], buf, sizeof(buf));
-        if (n <= 0) break;  // EOF: child finished (or died)
-        payload.append(buf, static_cast<size_t>(n));
-    }
-    close(fds[0]);
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (timed_out) kill(pid, SIGKILL);
-    int wstatus = 0;
-    waitpid(pid, &wstatus, 0);
-    if (timed_out) {
-        return Failure(Status::kTimeout,
-                       method.Name() + ": exceeded timeout of " + std::to_string(timeout) + " s",
-                       elapsed);
-    }
-    if (WIFSIGNALED(wstatus)) {
-        return Failure(Status::kCrashed,
-                       method.Name() + ": crashed with signal " +
-                           std::to_string(WTERMSIG(wstatus)) + " (" + strsignal(WTERMSIG(wstatus)) +
-                           ")",
-                       elapsed);
-    }
-    try {
-        CallOutcome out;
-        out.result = AlignResultFromJson(nlohmann::json::parse(payload));
-        out.status = StatusOf(out.result);
-        return out;
-    } catch (const std::exception& e) {
-        return Failure(Status::kCrashed, method.Name() + ": child exited without a result",
-                       elapsed);
-    }
-}
-
-CallOutcome AlignInProcess(RegistrationMethod& method,
-                           const Pair& pair,
-                           const AlignContext& context) {
-    CallOutcome out;
-    out.result = method.Align(pair.source, pair.target, context);
-    out.status = StatusOf(out.result);
-    return out;
-}
 
 std::string RowKey(std::size_t pair, const std::string& method) {
     return std::to_string(pair) + "\t" + method;
 }
 
-/// Rows already in `<out>.part` from an interrupted run (resume); a torn last line is dropped.
-std::vector<ResultRow> ReadPartialRows(const std::string& path) {
-    std::vector<ResultRow> rows;
-    std::ifstream in(path);
-    std::string line;
-    while (std::getline(in, line)) {
-        if (line.empty()) continue;
-        try {
-            rows.push_back(nlohmann::json::parse(line).get<ResultRow>());
-        } catch (const std::exception&) {
-            break;  // interrupted mid-write: everything after this is redone
+/// Shell-quotes one argument for the printed resume command.
+std::string ShellQuote(const std::string& s) {
+    std::string out = "'";
+    for (const char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+/// The command that continues this run (printed on SIGINT/SIGTERM).
+std::string ResumeCommand(const RunOptions& o) {
+    std::string names;
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& m : o.methods) {
+        names += (names.empty() ? "" : ",") + m.name;
+        params[m.name] = m.params;
+    }
+    std::string cmd = "regbench run --pairs " + ShellQuote(o.pairs_path) + " --methods " +
+                      ShellQuote(names) + " --params " + ShellQuote(params.dump()) + " --out " +
+                      ShellQuote(o.out_path);
+    if (o.shard_count > 1) {
+        cmd += " --shard " + std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
+    }
+    if (o.timeout_seconds > 0) cmd += " --timeout " + std::to_string(o.timeout_seconds);
+    if (o.max_points != RunOptions{}.max_points) {
+        cmd += " --max-points " + std::to_string(o.max_points);
+    }
+    if (o.downsample) cmd += " --downsample";
+    // --resume refuses rows scored in another convention: repeat the one this run used.
+    cmd += std::string(" --euler ") + ToString(o.euler);
+    return cmd + " --jobs " + std::to_string(o.jobs) + " --resume";
+}
+
+/// The streamed `<out>.part`: one checked write(2) per row, so every row that was reported
+/// written is in the file even if the process is killed right after.
+class PartFile {
+public:
+    explicit PartFile(const std::string& path) : path_(path) {
+        fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        if (fd_ < 0) throw std::runtime_error(path + ": cannot write: " + strerror(errno));
+    }
+    ~PartFile() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    PartFile(const PartFile&) = delete;
+    PartFile& operator=(const PartFile&) = delete;
+    void Append(const ResultRow& row) { WriteAllOrThrow(fd_, ToJsonLine(row) + "\n", path_); }
+    /// fsync + close, checked: a full disk reported only at close is still an error.
+    void Close() {
+        const int fd = fd_;
+        fd_ = -1;
+        if (::fsync(fd) != 0 || ::close(fd) != 0) {
+            throw std::runtime_error(path_ + ": write failed: " + strerror(errno));
         }
     }
-    return rows;
+
+private:
+    std::string path_;
+    int fd_ = -1;
+};
+
+/// A number the method's option field cannot hold exactly (2.5 or -1 into an iteration count,
+/// 1e23 into an int) is truncated or wrapped by the JSON binding: compare each given number
+/// with the value the method kept and refuse any difference.
+void RequireExactNumbers(const std::string& method,
+                         const nlohmann::json& given,
+                         const nlohmann::json& kept) {
+    if (!given.is_object()) return;
+    for (const auto& item : given.items()) {
+        if (!item.value().is_number() || !kept.contains(item.key())) continue;
+        const nlohmann::json& k = kept.at(item.key());
+        const bool sign_flip =
+            k.is_number() && (k.get<double>() < 0) != (item.value().get<double>() < 0);
+        if (k != item.value() || sign_flip) {
+            throw std::invalid_argument(method + ": parameter '" + item.key() + "' cannot be " +
+                                        item.value().dump() + " (the option holds " + k.dump() +
+                                        "; give a value of its type and range)");
+        }
+    }
 }
 
 }  // namespace
@@ -208,7 +143,9 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
         if (params_by_method.is_object() && params_by_method.contains(name)) {
             spec.params = params_by_method.at(name);
         }
+        const nlohmann::json given = spec.params;
         spec.params = CreateMethod(name, spec.params)->Params();  // validates, fills defaults
+        RequireExactNumbers(name, given, spec.params);
         specs.push_back(spec);
     }
     if (params_by_method.is_object()) {
@@ -295,9 +232,32 @@ RunSummary RunBenchmark(const RunOptions& options) {
     if (options.out_path.empty()) throw std::invalid_argument("--out is required");
     const auto start = std::chrono::steady_clock::now();
     const PairSet set = ReadPairFile(options.pairs_path);  // throws naming the file
-
+    // The scale guard refuses before any output exists (or says what it will downsample).
+    {
+        std::vector<std::size_t> shard;
+        for (std::size_t k = 0; k < set.pairs.size(); ++k) {
+            if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
+                options.shard_index) {
+                shard.push_back(k);
+            }
+        }
+        const std::string notice =
+            CheckScale(set, shard, options.methods, options.max_points, options.downsample);
+        if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
+    }
+    const std::string part_path = options.out_path + ".part";
+    CheckOutputPath(options.out_path, {options.pairs_path});
+    CheckOutputPath(part_path, {options.pairs_path});
+    const OutputLock lock(options.out_path);  // one writer per output; names the holder's pid
     // Which data every number came from, carried in every row for the reports.
     const DataTag data_tag = DataTagOf(options.pairs_path, set);
+    RowExpectation expect;
+    expect.content_hash = data_tag.content_hash;
+    expect.num_pairs = set.pairs.size();
+    expect.shard_index = options.shard_index;
+    expect.shard_count = options.shard_count;
+    expect.methods = options.methods;
+
     // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
     const std::uint64_t benchmark_seed = BenchmarkSeed(set);
     std::vector<std::size_t> indices;
@@ -307,19 +267,20 @@ RunSummary RunBenchmark(const RunOptions& options) {
             indices.push_back(k);
         }
     }
-    const std::string part_path = options.out_path + ".part";
     std::vector<ResultRow> rows;
     std::set<std::string> done;
     if (options.resume) {
         const bool have_part = std::filesystem::exists(part_path);
-        rows = ReadPartialRows(have_part ? part_path : options.out_path);
+        const bool have_out = std::filesystem::exists(options.out_path);
+        const std::string& kept = have_part ? part_path : options.out_path;
+        // Every kept row is checked against this run; a foreign row is refused, never mixed.
+        if (have_part || have_out) rows = ReadResumableRows(kept, expect);
         for (const auto& r : rows) {
             // One file, one convention: resumed rows scored otherwise would split the report.
             if (r.euler != options.euler) {
-                throw std::runtime_error((have_part ? part_path : options.out_path) +
-                                         ": rows were scored with --euler " + ToString(r.euler) +
-                                         "; resume with --euler " + ToString(r.euler) +
-                                         " or start a new file");
+                throw std::runtime_error(r.origin + ": rows were scored with --euler " +
+                                         ToString(r.euler) + "; resume with --euler " +
+                                         ToString(r.euler) + " or start a new file");
             }
             done.insert(RowKey(r.pair, r.method));
         }
@@ -327,10 +288,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
     RunSummary summary;
     summary.rows_skipped = rows.size();
     // Rewrite the kept rows so a torn last line from the interrupted run disappears.
-    std::ofstream part(part_path, std::ios::trunc);
-    if (!part) throw std::runtime_error(part_path + ": cannot write");
-    for (const auto& r : rows) part << ToJsonLine(r) << "\n";
-    part.flush();
+    PartFile part(part_path);
+    for (const auto& r : rows) part.Append(r);
 
     const std::size_t total_calls = indices.size() * options.methods.size();
     ProgressMeter progress("run", total_calls, options.progress);
@@ -339,14 +298,18 @@ RunSummary RunBenchmark(const RunOptions& options) {
     std::atomic<std::size_t> next{0};
     std::atomic<std::size_t> failures{0};
     std::atomic<std::size_t> written{0};
+    std::atomic<std::size_t> rows_safe{rows.size()};
+    std::atomic<bool> stop{false};
+    std::exception_ptr error;  // first failure in a worker (a write error), rethrown after join
 
-    auto worker = [&] {
+    auto work = [&] {
         // Each worker owns its method instances: methods keep scratch buffers.
         omp_set_num_threads(options.threads_per_call);
         std::vector<std::unique_ptr<RegistrationMethod>> methods;
         for (const auto& spec : options.methods)
             methods.push_back(CreateMethod(spec.name, spec.params));
         for (;;) {
+            if (stop.load()) return;
             const std::size_t i = next.fetch_add(1);
             if (i >= indices.size()) return;
             const std::size_t k = indices[i];
@@ -358,47 +321,71 @@ RunSummary RunBenchmark(const RunOptions& options) {
             for (std::size_t m = 0; m < methods.size(); ++m) {
                 const auto& spec = options.methods[m];
                 if (done.count(RowKey(k, spec.name))) continue;
+                // Scale guard: an O(N*M) method on a large cloud runs on the recorded
+                // stride-downsampled pair; metrics still compare against the full pair.
+                nlohmann::json downsampled;
+                const bool reduce =
+                    options.downsample && NeedsScaleGuard(spec.name, pair, options.max_points);
+                const Pair reduced =
+                    reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
+                const Pair& input = reduce ? reduced : pair;
                 CallOutcome outcome =
                     options.timeout_seconds > 0.0
-                        ? AlignIsolated(*methods[m], pair, context, options.timeout_seconds,
+                        ? AlignIsolated(*methods[m], input, context, options.timeout_seconds,
                                         options.threads_per_call)
-                        : AlignInProcess(*methods[m], pair, context);
+                        : AlignInProcess(*methods[m], input, context);
                 RowContext row_context;
                 row_context.status = outcome.status;
                 row_context.threads = options.threads_per_call;
                 row_context.euler = options.euler;
                 row_context.data = data_tag;
-                const ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
+                ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
+                if (reduce) row.other["downsampled"] = downsampled;
                 if (outcome.status != Status::kOk) failures.fetch_add(1);
                 {
-                    std::lock_guard<std::mutex> lock(out_mutex);
-                    part << ToJsonLine(row) << "\n";
-                    part.flush();
+                    std::lock_guard<std::mutex> guard(out_mutex);
+                    if (stop.load()) return;
+                    part.Append(row);  // throws on a write error: `worker` stops the run
+                    rows_safe.fetch_add(1);
                 }
                 written.fetch_add(1);
                 progress.Advance();
             }
         }
     };
+    // An exception must not escape a std::thread (std::terminate): the first one stops all
+    // workers and is rethrown here after they joined.
+    auto worker = [&] {
+        try {
+            work();
+        } catch (...) {
+            std::lock_guard<std::mutex> guard(out_mutex);
+            if (!error) error = std::current_exception();
+            stop = true;
+        }
+    };
     // setenv is not thread-safe: set the process-wide part once, before any worker starts.
     SetOmpThreads(options.threads_per_call);
+    const InterruptNotice notice(&rows_safe, part_path, ResumeCommand(options));
     const int jobs = std::max(1, std::min<int>(options.jobs, static_cast<int>(indices.size())));
     std::vector<std::thread> threads;
     for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
     worker();
     for (auto& t : threads) t.join();
     progress.Finish();
-    part.close();
-    if (!part) throw std::runtime_error(part_path + ": write failed");
+    if (error) std::rethrow_exception(error);
+    part.Close();
 
     // Final file: rows sorted by (pair, method order), so output order does not depend on --jobs.
-    std::vector<ResultRow> all = ReadPartialRows(part_path);
+    std::vector<ResultRow> all = ReadResumableRows(part_path, expect);
     std::map<std::string, std::size_t> order;
     for (std::size_t m = 0; m < options.methods.size(); ++m) order[options.methods[m].name] = m;
     std::stable_sort(all.begin(), all.end(), [&](const ResultRow& a, const ResultRow& b) {
         return std::make_pair(a.pair, order[a.method]) < std::make_pair(b.pair, order[b.method]);
     });
-    WriteResultRows(options.out_path, all);
+    std::string text;
+    for (const auto& r : all) text += ToJsonLine(r) + "\n";
+    WriteFileAtomic(options.out_path, text, {options.pairs_path});
     std::filesystem::remove(part_path);
     summary.rows_written = written.load();
     summary.failures = failures.load();

@@ -30,6 +30,10 @@ struct RunOptions {
     int shard_count = 1;
     double timeout_seconds = 0.0;  ///< > 0: each call runs in a child process, killed after it
     bool progress = true;          ///< progress line (done, rate, ETA) on stderr
+    /// O(N*M) methods (MethodCost) on a cloud above this many points are refused before the run
+    /// starts, or downsampled when `downsample`; 0 disables the guard. See runners/scale_guard.
+    std::size_t max_points = 20000;
+    bool downsample = false;  ///< guard: run on stride-downsampled clouds instead of refusing
     EulerConvention euler = EulerConvention::kZyx;  ///< Euler angles of mae_r / rmse_r
 };
 

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/atomic_file.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
@@ -189,6 +190,8 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     if (o.method.empty()) throw std::invalid_argument("score: --method is required");
     if (o.out_path.empty()) throw std::invalid_argument("score: --out is required");
     if (!o.params.is_object()) throw std::invalid_argument("score: --params must be a JSON object");
+    // Refused before any work: a directory, a device or one of the inputs as --out.
+    CheckOutputPath(o.out_path, {o.pairs_path, o.transforms_path});
     const PairSet set = ReadPairFile(o.pairs_path);  // throws naming the file
     const std::vector<ExternalTransform> given = ReadTransforms(
         o.transforms_path, set.pairs.size(), o.method, o.rigid_tolerance, o.allow_scale);
@@ -219,7 +222,7 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
         }
         rows.push_back(MakeResultRow(k, set.pairs[k], spec, result, context));
     }
-    WriteResultRows(o.out_path, rows);
+    WriteResultRows(o.out_path, rows, {o.pairs_path, o.transforms_path});
     summary.rows = rows.size();
     return summary;
 }

@@ -13,6 +13,7 @@ PACKAGES=(
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
   chromium zlib1g-dev
+  slurmctld slurmd slurm-client munge
 )
 if [ "${1:-}" = "--reference" ]; then
   PACKAGES+=(

@@ -168,6 +168,15 @@ TEST_P(MethodContract, NonFiniteCoordinatesFail) {
     }
 }
 
+TEST_P(MethodContract, CoordinatesBeyondFloatRangeFailAsARow) {
+    // 1e300 is finite in double but Inf in float: PCL's GICP/NDT aborted the process on it.
+    auto method = Create();
+    PointCloud huge = *source_;
+    huge(7, 0) = 1e300;
+    ExpectFailsNaming(*method, huge, *target_, "source cloud has coordinates beyond float range");
+    ExpectFailsNaming(*method, *source_, huge, "target cloud has coordinates beyond float range");
+}
+
 TEST_P(MethodContract, UnknownParameterIsNamed) {
     const MethodInfo& info = FindMethod(GetParam());
     try {

@@ -1,0 +1,56 @@
+#pragma once
+// Strict number options: CLI11 alone turns "-1" into 2^64-1 for an unsigned option and reads
+// "1e23" into a count; these validators run on the text before any conversion.
+#include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+namespace regbench::app {
+
+/// Digits only, fitting in 64 bits: refuses "2.5", "-1", "1e23", "+3", "0x10", "".
+inline CLI::Validator WholeNumber() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            std::uint64_t v = 0;
+            const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+            if (s.empty() || ec != std::errc() || end != s.data() + s.size()) {
+                return "expected a whole number >= 0 (digits only), got '" + s + "'";
+            }
+            return "";
+        },
+        "UINT");
+}
+
+/// A finite decimal number >= 0 ("-1", "nan", "inf", "1s" refused).
+inline CLI::Validator NonNegativeReal() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            double v = 0;
+            const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+            if (s.empty() || ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v) ||
+                v < 0) {
+                return "expected a finite number >= 0, got '" + s + "'";
+            }
+            return "";
+        },
+        "REAL>=0");
+}
+
+/// Parses "i/n" with 0 <= i < n, digits only ("1/2x", "-1/2", "1/0" refused).
+inline void ParseShard(const std::string& text, int* index, int* count) {
+    const auto slash = text.find('/');
+    const auto parse = [&](const std::string& part, int* out) {
+        const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), *out);
+        return !part.empty() && part[0] != '-' && ec == std::errc() &&
+               end == part.data() + part.size();
+    };
+    if (slash == std::string::npos || !parse(text.substr(0, slash), index) ||
+        !parse(text.substr(slash + 1), count) || *count < 1 || *index >= *count) {
+        throw std::invalid_argument("--shard must be i/n with whole numbers 0 <= i < n, got '" +
+                                    text + "'");
+    }
+}
+
+}  // namespace regbench::app

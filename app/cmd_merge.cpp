@@ -1,0 +1,41 @@
+// `regbench merge`: shard results into one complete, checked result file.
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/commands.hpp"
+#include "runners/merge.hpp"
+
+namespace regbench::app {
+
+void AddMergeCommand(CLI::App& app) {
+    auto* cmd = app.add_subcommand(
+        "merge", "Merge shard results; every (pair, method) exactly once, or an error naming it");
+    auto o = std::make_shared<MergeOptions>();
+    auto methods = std::make_shared<std::string>();
+    auto params = std::make_shared<std::string>();
+    cmd->add_option("results", o->inputs, "Shard result files (JSONL)")->required();
+    cmd->add_option("--out", o->out_path, "Merged JSONL (written atomically)")->required();
+    cmd->add_option("--pairs", o->pairs_path, "The pair file the shards ran on")->required();
+    cmd->add_option("--methods", *methods, "The methods the shards ran (as given to run)")
+        ->required();
+    cmd->add_option("--params", *params, "The --params the shards ran with (JSON)");
+    cmd->callback([o, methods, params] {
+        MergeOptions options = *o;
+        nlohmann::json p = nlohmann::json::object();
+        if (!params->empty()) {
+            try {
+                p = nlohmann::json::parse(*params);
+            } catch (const nlohmann::json::exception& e) {
+                throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
+            }
+        }
+        options.methods = ParseMethodSpecs(*methods, p);
+        const std::size_t n = MergeResults(options);
+        std::cerr << "merge: wrote " << n << " rows from " << options.inputs.size() << " files to "
+                  << options.out_path << "\n";
+    });
+}
+
+}  // namespace regbench::app

@@ -1,0 +1,150 @@
+#include "runners/isolated_call.hpp"
+
+#include <omp.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <string>
+
+#include "runners/interrupt.hpp"
+
+namespace regbench {
+namespace {
+
+nlohmann::json AlignResultToJson(const AlignResult& r) {
+    return {{"transform", TransformToJson(r.T_target_source)},
+            {"iterations", r.iterations},
+            {"stop_reason", r.stop_reason},
+            {"seconds", r.seconds},
+            {"status", ToString(r.status)},
+            {"message", r.message},
+            {"scale", r.scale},
+            {"extra", r.extra}};
+}
+
+AlignResult AlignResultFromJson(const nlohmann::json& j) {
+    AlignResult r;
+    r.T_target_source = TransformFromJson(j.at("transform"));
+    r.iterations = j.at("iterations").get<int>();
+    r.stop_reason = j.at("stop_reason").get<std::string>();
+    r.seconds = j.at("seconds").get<double>();
+    r.status =
+        j.at("status") == ToString(AlignStatus::kOk) ? AlignStatus::kOk : AlignStatus::kFailed;
+    r.message = j.at("message").get<std::string>();
+    r.scale = j.at("scale").get<double>();
+    r.extra = j.at("extra");
+    return r;
+}
+
+CallOutcome Failure(Status status, const std::string& message, double seconds) {
+    CallOutcome out;
+    out.result.status = AlignStatus::kFailed;
+    out.result.message = message;
+    out.result.stop_reason = ToString(status);
+    out.result.seconds = seconds;
+    out.status = status;
+    return out;
+}
+
+}  // namespace
+
+Status StatusOf(const AlignResult& r) {
+    return r.status == AlignStatus::kOk ? Status::kOk : Status::kFailed;
+}
+
+CallOutcome AlignIsolated(RegistrationMethod& method,
+                          const Pair& pair,
+                          const AlignContext& context,
+                          double timeout,
+                          int threads) {
+    int fds[2];
+    if (pipe(fds) != 0)
+        return Failure(Status::kFailed, "pipe() failed: " + std::string(strerror(errno)), 0);
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) {
+        close(fds[0]);
+        close(fds[1]);
+        return Failure(Status::kFailed, "fork() failed: " + std::string(strerror(errno)), 0);
+    }
+    if (pid == 0) {
+        BecomeDisposableChild(parent);  // dies with the parent: no orphan keeps computing
+        close(fds[0]);
+        omp_set_num_threads(threads);
+        const std::string payload =
+            AlignResultToJson(method.Align(pair.source, pair.target, context)).dump();
+        size_t off = 0;
+        while (off < payload.size()) {
+            const ssize_t n = write(fds[1], payload.data() + off, payload.size() - off);
+            if (n <= 0) break;
+            off += static_cast<size_t>(n);
+        }
+        close(fds[1]);
+        _exit(0);
+    }
+    close(fds[1]);
+    const auto start = std::chrono::steady_clock::now();
+    std::string payload;
+    char buf[65536];
+    bool timed_out = false;
+    for (;;) {
+        const double left =
+            timeout -
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (left <= 0.0) {
+            timed_out = true;
+            break;
+        }
+        pollfd pfd{fds[0], POLLIN, 0};
+        const int ready = poll(&pfd, 1, static_cast<int>(std::min(left, 1.0) * 1000.0) + 1);
+        if (ready < 0 && errno != EINTR) break;
+        if (ready <= 0) continue;
+        const ssize_t n = read(fds[0], buf, sizeof(buf));
+        if (n <= 0) break;  // EOF: child finished (or died)
+        payload.append(buf, static_cast<size_t>(n));
+    }
+    close(fds[0]);
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (timed_out) kill(pid, SIGKILL);
+    int wstatus = 0;
+    waitpid(pid, &wstatus, 0);
+    if (timed_out) {
+        return Failure(Status::kTimeout,
+                       method.Name() + ": exceeded timeout of " + std::to_string(timeout) + " s",
+                       elapsed);
+    }
+    if (WIFSIGNALED(wstatus)) {
+        return Failure(Status::kCrashed,
+                       method.Name() + ": crashed with signal " +
+                           std::to_string(WTERMSIG(wstatus)) + " (" + strsignal(WTERMSIG(wstatus)) +
+                           ")",
+                       elapsed);
+    }
+    try {
+        CallOutcome out;
+        out.result = AlignResultFromJson(nlohmann::json::parse(payload));
+        out.status = StatusOf(out.result);
+        return out;
+    } catch (const std::exception& e) {
+        return Failure(Status::kCrashed, method.Name() + ": child exited without a result",
+                       elapsed);
+    }
+}
+
+CallOutcome AlignInProcess(RegistrationMethod& method,
+                           const Pair& pair,
+                           const AlignContext& context) {
+    CallOutcome out;
+    out.result = method.Align(pair.source, pair.target, context);
+    out.status = StatusOf(out.result);
+    return out;
+}
+
+}  // namespace regbench

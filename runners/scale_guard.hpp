@@ -1,0 +1,37 @@
+#pragma once
+// Scale guard: O(N*M) methods on large clouds would run for minutes to hours per call with no
+// sign of life. Before the run, such calls are either refused (default) or run on clouds
+// downsampled by an explicit, recorded rule.
+#include <cstddef>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "protocols/pair.hpp"
+#include "runners/runner.hpp"
+
+namespace regbench {
+
+/// Points above which an O(N*M) method is guarded. CPD takes ~4.5 s per call at 10,000 points
+/// (1 thread, README); at 20,000 about 4x that, and 200,000 points would take ~30 min.
+constexpr std::size_t kDefaultMaxPoints = 20000;
+
+/// True when `method` is O(N*M) and a cloud of `pair` has more than `max_points` points.
+bool NeedsScaleGuard(const std::string& method, const Pair& pair, std::size_t max_points);
+
+/// Checks every (pair, method) call of the run. Refuses (std::runtime_error with the expected
+/// cost: pairs affected, largest N x M) unless `downsample`; with it, returns the notice that
+/// says which calls will be downsampled (empty when none).
+std::string CheckScale(const PairSet& set,
+                       const std::vector<std::size_t>& indices,
+                       const std::vector<MethodSpec>& methods,
+                       std::size_t max_points,
+                       bool downsample);
+
+/// The recorded rule: keeps points floor(i * n / max_points), i = 0 .. max_points-1, of each
+/// cloud above max_points (a deterministic, evenly spaced stride; no RNG), with their overlap
+/// labels. `note` receives {"rule": "stride", "max_points", "source_points": [n, kept],
+/// "target_points": [m, kept]} for the result row.
+Pair DownsampleByStride(const Pair& pair, std::size_t max_points, nlohmann::json* note);
+
+}  // namespace regbench

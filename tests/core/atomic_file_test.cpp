@@ -1,0 +1,156 @@
+#include "core/atomic_file.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+
+#include "core/file_lock.hpp"
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path FreshDir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("regbench_atomic_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string Slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+std::string ErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+/// Runs `write` in a forked child under RLIMIT_FSIZE = `limit` bytes with SIGXFSZ ignored (so a
+/// write past the limit fails with EFBIG instead of killing the process, as on a full disk).
+/// Returns the child's wait status; the child exits 3 when `write` threw an error naming
+/// `expect_in_message`, 4 when it threw something else, 0 when it did not throw.
+int RunUnderFileSizeLimit(rlim_t limit,
+                          const std::string& expect_in_message,
+                          const std::function<void()>& write) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+        signal(SIGXFSZ, SIG_IGN);
+        rlimit rl{limit, limit};
+        setrlimit(RLIMIT_FSIZE, &rl);
+        try {
+            write();
+        } catch (const std::exception& e) {
+            _exit(std::strstr(e.what(), expect_in_message.c_str()) != nullptr ? 3 : 4);
+        }
+        _exit(0);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return status;
+}
+
+TEST(AtomicFile, WritesAndReplacesAtomically) {
+    const fs::path dir = FreshDir("replace");
+    const std::string path = (dir / "out.txt").string();
+    WriteFileAtomic(path, "first\n");
+    WriteFileAtomic(path, "second\n");
+    EXPECT_EQ(Slurp(path), "second\n");
+    // Only the final file remains: no temporaries.
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
+    fs::remove_all(dir);
+}
+
+TEST(AtomicFile, FileSizeLimitLeavesNoFileAndNoSignal) {
+    const fs::path dir = FreshDir("fsize");
+    const std::string path = (dir / "big.txt").string();
+    const int status =
+        RunUnderFileSizeLimit(4096, path, [&] { WriteFileAtomic(path, std::string(100000, 'x')); });
+    ASSERT_TRUE(WIFEXITED(status)) << "child died by a signal";
+    EXPECT_EQ(WEXITSTATUS(status), 3) << "expected an error naming " << path;
+    EXPECT_FALSE(fs::exists(path));
+    EXPECT_TRUE(fs::is_empty(dir)) << "temporary file left behind";
+    fs::remove_all(dir);
+}
+
+TEST(AtomicFile, FailedWriteKeepsThePreviousFile) {
+    const fs::path dir = FreshDir("keep");
+    const std::string path = (dir / "r.txt").string();
+    WriteFileAtomic(path, "old\n");
+    const int status =
+        RunUnderFileSizeLimit(1024, path, [&] { WriteFileAtomic(path, std::string(50000, 'y')); });
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 3);
+    EXPECT_EQ(Slurp(path), "old\n");
+    fs::remove_all(dir);
+}
+
+TEST(CheckOutputPath, RefusesDirectoriesDevicesInputsAndMissingDirs) {
+    const fs::path dir = FreshDir("check");
+    const std::string input = (dir / "in.h5").string();
+    WriteFileAtomic(input, "data");
+    EXPECT_NE(ErrorOf([&] { CheckOutputPath(dir.string()); }).find("is a directory"),
+              std::string::npos);
+    EXPECT_NE(ErrorOf([&] { CheckOutputPath("/dev/null"); }).find("not a regular file"),
+              std::string::npos);
+    EXPECT_NE(ErrorOf([&] { CheckOutputPath(input, {input}); }).find("same file as the input"),
+              std::string::npos);
+    // Another name for the same inode is the same file.
+    const std::string link = (dir / "link.h5").string();
+    fs::create_hard_link(input, link);
+    EXPECT_NE(ErrorOf([&] { CheckOutputPath(link, {input}); }).find("same file"),
+              std::string::npos);
+    EXPECT_NE(
+        ErrorOf([&] { CheckOutputPath((dir / "no/such/out").string()); }).find("does not exist"),
+        std::string::npos);
+    EXPECT_EQ(ErrorOf([&] { CheckOutputPath((dir / "new.txt").string(), {input}); }), "");
+    // The writer itself refuses too, and /dev/null is left alone.
+    EXPECT_THROW(WriteFileAtomic("/dev/null", "x"), std::runtime_error);
+    EXPECT_TRUE(fs::is_character_file("/dev/null"));
+    fs::remove_all(dir);
+}
+
+TEST(OutputLock, SecondHolderIsRefusedWithThePid) {
+    const fs::path dir = FreshDir("lock");
+    const std::string out = (dir / "r.jsonl").string();
+    {
+        const OutputLock first(out);
+        const std::string err = ErrorOf([&] { OutputLock second(out); });
+        EXPECT_NE(err.find("pid " + std::to_string(getpid())), std::string::npos) << err;
+        // Another process is refused as well (flock locks are per open file description).
+        const pid_t pid = fork();
+        if (pid == 0) {
+            try {
+                OutputLock other(out);
+            } catch (const std::runtime_error&) {
+                _exit(7);
+            }
+            _exit(0);
+        }
+        int status = 0;
+        waitpid(pid, &status, 0);
+        ASSERT_TRUE(WIFEXITED(status));
+        EXPECT_EQ(WEXITSTATUS(status), 7);
+    }
+    // Released: the next writer gets it, and no lock file is left behind afterwards.
+    { const OutputLock again(out); }
+    EXPECT_FALSE(fs::exists(out + ".lock"));
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace regbench

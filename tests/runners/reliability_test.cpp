@@ -1,0 +1,328 @@
+// One writer per output, checked writes and validated --resume.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+#include "core/file_lock.hpp"
+#include "protocols/pair_file.hpp"
+#include "runners/merge.hpp"
+#include "runners/result_row.hpp"
+#include "runners/resume.hpp"
+#include "runners/runner.hpp"
+#include "runners/scale_guard.hpp"
+#include "tests/testing/synthetic.hpp"
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string ErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+std::string Slurp(const std::string& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+class Reliability : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("regbench_rel_" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+        pairs_ = WritePairs("pairs.h5", 0);
+        other_pairs_ = WritePairs("other.h5", 100);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::string WritePairs(const std::string& name, int seed_offset) {
+        PairSet set;
+        set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
+        for (int k = 0; k < 4; ++k) {
+            set.pairs.push_back(testing::SyntheticPair(
+                40, static_cast<std::uint64_t>(10 + k + seed_offset),
+                MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
+        }
+        const std::string path = (dir_ / name).string();
+        WritePairFile(path, set);
+        return path;
+    }
+    RunOptions Options(const std::string& out, const std::string& pairs) const {
+        RunOptions o;
+        o.pairs_path = pairs;
+        o.methods = ParseMethodSpecs("identity,icp", {});
+        o.out_path = (dir_ / out).string();
+        o.progress = false;
+        return o;
+    }
+    /// Runs `o` to completion and returns its rows as lines.
+    std::vector<std::string> FinishedLines(const RunOptions& o) {
+        RunBenchmark(o);
+        std::vector<std::string> lines;
+        std::ifstream in(o.out_path);
+        for (std::string l; std::getline(in, l);) lines.push_back(l);
+        fs::remove(o.out_path);
+        return lines;
+    }
+    /// Resumes `o` with `.part` = `lines` and returns the error (empty if it succeeded).
+    /// With `torn_last`, the last line has no newline: a write cut short by a kill.
+    std::string ResumeWith(RunOptions o,
+                           const std::vector<std::string>& lines,
+                           bool torn_last = false) {
+        {
+            std::ofstream part(o.out_path + ".part");
+            for (std::size_t i = 0; i < lines.size(); ++i) {
+                part << lines[i] << (torn_last && i + 1 == lines.size() ? "" : "\n");
+            }
+        }
+        o.resume = true;
+        return ErrorOf([&] { RunBenchmark(o); });
+    }
+    fs::path dir_;
+    std::string pairs_;
+    std::string other_pairs_;
+};
+
+TEST_F(Reliability, ResumeRefusesRowsOfAnotherPairFile) {
+    const auto foreign = FinishedLines(Options("x.jsonl", other_pairs_));
+    const RunOptions o = Options("r.jsonl", pairs_);
+    const std::string err = ResumeWith(o, {foreign[0]});
+    EXPECT_NE(err.find(o.out_path + ".part:1"), std::string::npos) << err;
+    EXPECT_NE(err.find("other pair data"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(o.out_path));
+}
+
+TEST_F(Reliability, ResumeAcceptsRowsOfAnotherFileWithTheSamePairs) {
+    // Rows name their pairs by content hash, not by the file's bytes: rows of pairs.h5 resume
+    // into a run on a second file written from the same pairs (a re-export).
+    const std::string copy = WritePairs("copy.h5", 0);
+    const auto lines = FinishedLines(Options("x.jsonl", pairs_));
+    EXPECT_EQ(ResumeWith(Options("r.jsonl", copy), {lines[0], lines[1]}), "");
+    EXPECT_EQ(ReadResultRows((dir_ / "r.jsonl").string()).size(), 8u);
+}
+
+TEST_F(Reliability, ResumeRefusesRowsScoredInAnotherEulerConvention) {
+    RunOptions xyz = Options("r.jsonl", pairs_);
+    xyz.euler = EulerConvention::kXyz;
+    const auto lines = FinishedLines(xyz);
+    const RunOptions o = Options("r.jsonl", pairs_);  // default zyx
+    const std::string err = ResumeWith(o, {lines[0]});
+    EXPECT_NE(err.find(o.out_path + ".part:1: rows were scored with --euler xyz"),
+              std::string::npos)
+        << err;
+}
+
+TEST_F(Reliability, ResumeRefusesOtherParametersMethodsDuplicatesAndStubs) {
+    const RunOptions o = Options("r.jsonl", pairs_);
+    const auto lines = FinishedLines(o);
+    ASSERT_EQ(lines.size(), 8u);  // 4 pairs x 2 methods
+    auto other_params = nlohmann::json::parse(lines[1]);
+    other_params["params"]["max_iterations"] = 3;
+    std::string err = ResumeWith(o, {lines[0], other_params.dump()});
+    EXPECT_NE(err.find(".part:2"), std::string::npos) << err;
+    EXPECT_NE(err.find("other parameters"), std::string::npos) << err;
+
+    auto other_method = nlohmann::json::parse(lines[0]);
+    other_method["method"] = "cpd";
+    err = ResumeWith(o, {other_method.dump()});
+    EXPECT_NE(err.find("not in --methods"), std::string::npos) << err;
+
+    err = ResumeWith(o, {lines[0], lines[1], lines[0]});
+    EXPECT_NE(err.find(".part:3: duplicate row for pair 0"), std::string::npos) << err;
+
+    // The row that would otherwise skip pair 5 for good.
+    err = ResumeWith(o, {R"({"pair":1,"method":"icp"})"});
+    EXPECT_NE(err.find(".part:1: missing field"), std::string::npos) << err;
+
+    err = ResumeWith(o, {lines[0], "{not json", lines[1]});
+    EXPECT_NE(err.find(".part:2: not JSON"), std::string::npos) << err;
+
+    auto out_of_range = nlohmann::json::parse(lines[0]);
+    out_of_range["pair"] = 4;
+    err = ResumeWith(o, {out_of_range.dump()});
+    EXPECT_NE(err.find("not in the pair file"), std::string::npos) << err;
+}
+
+TEST_F(Reliability, ResumeKeepsValidRowsAndGivesTheUninterruptedResult) {
+    const RunOptions o = Options("r.jsonl", pairs_);
+    const auto full = FinishedLines(o);
+    // Three finished rows and a torn fourth (a kill mid-write): resumed output is identical
+    // to the uninterrupted run except for the timing fields.
+    EXPECT_EQ(ResumeWith(o, {full[0], full[3], full[5], full[6].substr(0, 30)}, true), "");
+    std::ifstream in(o.out_path);
+    std::vector<std::string> resumed;
+    for (std::string l; std::getline(in, l);) resumed.push_back(l);
+    ASSERT_EQ(resumed.size(), full.size());
+    for (std::size_t i = 0; i < full.size(); ++i) {
+        auto a = nlohmann::json::parse(full[i]);
+        auto b = nlohmann::json::parse(resumed[i]);
+        a.erase("seconds");
+        b.erase("seconds");
+        EXPECT_EQ(a, b) << i;
+    }
+}
+
+TEST_F(Reliability, SecondWriterOfOneOutputIsRefusedAndTheFirstResultSurvives) {
+    const RunOptions o = Options("r.jsonl", pairs_);
+    RunBenchmark(o);
+    const std::string before = Slurp(o.out_path);
+    const OutputLock holder(o.out_path);  // as if another run were writing it now
+    const std::string err = ErrorOf([&] { RunBenchmark(o); });
+    EXPECT_NE(err.find("pid " + std::to_string(getpid())), std::string::npos) << err;
+    EXPECT_EQ(Slurp(o.out_path), before);
+}
+
+TEST_F(Reliability, OutputThatIsThePairFileIsRefused) {
+    RunOptions o = Options("r.jsonl", pairs_);
+    o.out_path = pairs_;
+    const std::string before = Slurp(pairs_);
+    const std::string err = ErrorOf([&] { RunBenchmark(o); });
+    EXPECT_NE(err.find("same file as the input"), std::string::npos) << err;
+    EXPECT_EQ(Slurp(pairs_), before);
+    EXPECT_FALSE(fs::exists(pairs_ + ".part"));
+}
+
+TEST_F(Reliability, WriteFailureEndsTheRunWithAnErrorAndNoResultFile) {
+    const RunOptions o = Options("r.jsonl", pairs_);
+    const pid_t pid = fork();
+    if (pid == 0) {
+        // Rows of this run are ~1 KB: 2 KB lets a row or two through, then EFBIG.
+        signal(SIGXFSZ, SIG_IGN);
+        rlimit rl{2048, 2048};
+        setrlimit(RLIMIT_FSIZE, &rl);
+        try {
+            RunBenchmark(o);
+        } catch (const std::runtime_error& e) {
+            _exit(std::strstr(e.what(), o.out_path.c_str()) != nullptr ? 3 : 4);
+        }
+        _exit(0);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 3);
+    EXPECT_FALSE(fs::exists(o.out_path));
+}
+
+TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
+    const auto single = FinishedLines(Options("single.jsonl", pairs_));
+    MergeOptions m;
+    for (int i = 0; i < 4; ++i) {
+        RunOptions o = Options("shard" + std::to_string(i) + ".jsonl", pairs_);
+        o.shard_index = i;
+        o.shard_count = 4;
+        RunBenchmark(o);
+        m.inputs.push_back(o.out_path);
+    }
+    std::reverse(m.inputs.begin(), m.inputs.end());  // input order must not matter
+    m.out_path = (dir_ / "merged.jsonl").string();
+    m.pairs_path = pairs_;
+    m.methods = ParseMethodSpecs("identity,icp", {});
+    EXPECT_EQ(MergeResults(m), 8u);
+    std::ifstream in(m.out_path);
+    std::vector<std::string> merged;
+    for (std::string l; std::getline(in, l);) merged.push_back(l);
+    ASSERT_EQ(merged.size(), single.size());
+    for (std::size_t i = 0; i < single.size(); ++i) {
+        auto a = nlohmann::json::parse(single[i]);
+        auto b = nlohmann::json::parse(merged[i]);
+        a.erase("seconds");
+        b.erase("seconds");
+        EXPECT_EQ(a, b) << i;
+    }
+    fs::remove(m.out_path);
+
+    // A shard missing: the error names the missing rows.
+    MergeOptions three = m;
+    three.inputs.erase(
+        std::find(three.inputs.begin(), three.inputs.end(), (dir_ / "shard2.jsonl").string()));
+    std::string err = ErrorOf([&] { MergeResults(three); });
+    EXPECT_NE(err.find("2 of 8 rows missing (pair 2 identity, pair 2 icp)"), std::string::npos)
+        << err;
+    EXPECT_FALSE(fs::exists(m.out_path));
+
+    // A shard given twice: the duplicate is named with both places.
+    MergeOptions twice = m;
+    twice.inputs.push_back(m.inputs[0]);
+    err = ErrorOf([&] { MergeResults(twice); });
+    EXPECT_NE(
+        err.find("duplicate row for pair 3, method 'identity' (also at " + m.inputs[0] + ":1)"),
+        std::string::npos)
+        << err;
+
+    // Shards run with other parameters are not merged.
+    MergeOptions other = m;
+    other.methods = ParseMethodSpecs("identity,icp", {{"icp", {{"max_iterations", 5}}}});
+    err = ErrorOf([&] { MergeResults(other); });
+    EXPECT_NE(err.find("other parameters"), std::string::npos) << err;
+
+    // A shard scored in another Euler convention is not merged with the others.
+    RunOptions xyz = Options("shard_xyz.jsonl", pairs_);
+    xyz.shard_index = 0;
+    xyz.shard_count = 4;
+    xyz.euler = EulerConvention::kXyz;
+    RunBenchmark(xyz);
+    MergeOptions mixed = m;
+    mixed.inputs = {(dir_ / "shard1.jsonl").string(), xyz.out_path};
+    err = ErrorOf([&] { MergeResults(mixed); });
+    EXPECT_NE(err.find(xyz.out_path + ":1: row scored with --euler xyz"), std::string::npos) << err;
+}
+
+TEST_F(Reliability, ScaleGuardRefusesQuadraticMethodsOnLargeCloudsOrDownsamplesThem) {
+    RunOptions o = Options("guard.jsonl", pairs_);
+    o.methods = ParseMethodSpecs("icp,cpd", {});
+    o.max_points = 30;  // the fixture's clouds have 40 points
+    const std::string err = ErrorOf([&] { RunBenchmark(o); });
+    EXPECT_NE(err.find("cpd is O(N*M): 4 pair(s) have a cloud above --max-points 30"),
+              std::string::npos)
+        << err;
+    EXPECT_EQ(err.find("icp is"), std::string::npos) << "icp is not quadratic: " << err;
+    EXPECT_FALSE(fs::exists(o.out_path));
+
+    o.downsample = true;
+    RunBenchmark(o);
+    for (const auto& row : ReadJsonl(o.out_path)) {
+        if (row["method"] == "cpd") {
+            EXPECT_EQ(row["downsampled"]["rule"], "stride");
+            EXPECT_EQ(row["downsampled"]["source_points"], nlohmann::json({40, 30}));
+            EXPECT_EQ(row["status"], "ok");
+        } else {
+            EXPECT_FALSE(row.contains("downsampled"));
+        }
+    }
+}
+
+TEST(ScaleGuard, StrideKeepsEvenlySpacedPointsAndTheirLabels) {
+    Pair p = testing::SyntheticPair(10, 1, Transform::Identity());
+    for (int i = 0; i < 10; ++i) p.source_overlap(i) = static_cast<std::uint8_t>(i % 2);
+    nlohmann::json note;
+    const Pair d = DownsampleByStride(p, 4, &note);
+    // floor(i * 10 / 4) for i = 0..3 is 0, 2, 5, 7 (by hand).
+    const int expected[] = {0, 2, 5, 7};
+    ASSERT_EQ(d.source.rows(), 4);
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_EQ(d.source.row(i), p.source.row(expected[i]));
+        EXPECT_EQ(d.source_overlap(i), expected[i] % 2);
+    }
+    EXPECT_EQ(note["source_points"], nlohmann::json({10, 4}));
+}
+
+}  // namespace
+}  // namespace regbench

@@ -1,0 +1,113 @@
+#pragma once
+// Hostile pair files for the validation tests, written with the HDF5 C API (no h5py needed):
+// a valid two-pair file is written by WritePairFile, then one field is corrupted in place.
+#include <hdf5.h>
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "protocols/pair_file.hpp"
+#include "tests/testing/synthetic.hpp"
+
+namespace regbench::testing {
+
+/// A hostile file: its name, what is wrong, and a word the reader's error must contain.
+struct HostileCase {
+    std::string name;
+    std::string expect;  ///< substring of the error message
+    std::function<void(hid_t file)> corrupt;
+};
+
+inline void SetDoubleAttr(hid_t obj, const char* name, double v) {
+    if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t attr = H5Acreate2(obj, name, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(attr, H5T_NATIVE_DOUBLE, &v);
+    H5Aclose(attr);
+    H5Sclose(space);
+}
+
+/// Replaces dataset `path` by one of shape `dims`; writes `values` unless empty (then the
+/// dataset has no storage at all: a header that declares data the file does not hold).
+inline void ReplaceDataset(hid_t file,
+                           const std::string& path,
+                           std::vector<hsize_t> dims,
+                           const std::vector<double>& values) {
+    H5Ldelete(file, path.c_str(), H5P_DEFAULT);
+    const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+    const hid_t ds = H5Dcreate2(file, path.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT,
+                                H5P_DEFAULT);
+    if (!values.empty())
+        H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+    H5Dclose(ds);
+    H5Sclose(space);
+}
+
+/// T_gt of pair 1 replaced by the row-major 4x4 `m`.
+inline std::function<void(hid_t)> SetTgt(std::vector<double> m) {
+    return [m](hid_t f) { ReplaceDataset(f, "/pairs/000001/T_gt", {4, 4}, m); };
+}
+
+/// Pair 1's source with one coordinate set to `v` (20 points, as TwoPairFile writes).
+inline std::function<void(hid_t)> SetSourceValue(double v) {
+    return [v](hid_t f) {
+        std::vector<double> pts(60, 0.1);
+        pts[31] = v;
+        ReplaceDataset(f, "/pairs/000001/source", {20, 3}, pts);
+    };
+}
+
+inline std::vector<HostileCase> HostileCases() {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {
+        {"version99", "format_version", [](hid_t f) { SetDoubleAttr(f, "format_version", 99); }},
+        {"num_pairs_1e30", "num_pairs", [](hid_t f) { SetDoubleAttr(f, "num_pairs", 1e30); }},
+        {"num_pairs_2_5", "num_pairs", [](hid_t f) { SetDoubleAttr(f, "num_pairs", 2.5); }},
+        {"num_pairs_3", "num_pairs", [](hid_t f) { SetDoubleAttr(f, "num_pairs", 3); }},
+        {"num_pairs_nan", "num_pairs", [nan](hid_t f) { SetDoubleAttr(f, "num_pairs", nan); }},
+        {"tgt_scaled", "orthonormal", SetTgt({2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1})},
+        {"tgt_reflected", "reflection", SetTgt({-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1})},
+        {"tgt_zero", "last row", SetTgt(std::vector<double>(16, 0.0))},
+        {"tgt_nan", "non-finite", SetTgt({nan, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1})},
+        {"tgt_bad_last_row", "last row",
+         SetTgt({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0.5, 0, 0, 1})},
+        {"source_nan", "non-finite", SetSourceValue(nan)},
+        {"source_1e300", "float", SetSourceValue(1e300)},
+        {"source_empty", "empty",
+         [](hid_t f) {
+             ReplaceDataset(f, "/pairs/000001/source", {0, 3}, {});
+         }},
+        {"source_1e8_points", "declares",
+         [](hid_t f) {
+             ReplaceDataset(f, "/pairs/000001/source", {100000000, 3}, {});
+         }},
+        {"source_2e9_points", "declares",
+         [](hid_t f) {
+             ReplaceDataset(f, "/pairs/000001/source", {2000000000, 3}, {});
+         }},
+        {"source_rank1", "rank",
+         [](hid_t f) {
+             ReplaceDataset(f, "/pairs/000001/source", {60}, std::vector<double>(60, 0.1));
+         }},
+        {"missing_group", "num_pairs", [](hid_t f) { H5Ldelete(f, "/pairs/000001", H5P_DEFAULT); }},
+    };
+}
+
+/// Writes a valid two-pair file to `path`, then applies `c.corrupt` to it.
+inline void WriteHostile(const std::string& path, const HostileCase& c) {
+    PairSet set;
+    set.provenance = {{"protocol", "test"}, {"seed", 5}};
+    set.pairs.push_back(SyntheticPair(20, 1, Transform::Identity()));
+    set.pairs.push_back(SyntheticPair(20, 2, Transform::Identity()));
+    WritePairFile(path, set);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    c.corrupt(file);
+    H5Fclose(file);
+}
+
+}  // namespace regbench::testing
