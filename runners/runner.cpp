@@ -19,6 +19,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/cpu_time.hpp"
 #include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/progress.hpp"
@@ -48,6 +49,8 @@ nlohmann::json AlignResultToJson(const AlignResult& r) {
             {"iterations", r.iterations},
             {"stop_reason", r.stop_reason},
             {"seconds", r.seconds},
+            {"cpu_seconds", r.cpu_seconds},
+            {"cpu_scope", r.cpu_scope},
             {"status", ToString(r.status)},
             {"message", r.message},
             {"scale", r.scale},
@@ -60,6 +63,8 @@ AlignResult AlignResultFromJson(const nlohmann::json& j) {
     r.iterations = j.at("iterations").get<int>();
     r.stop_reason = j.at("stop_reason").get<std::string>();
     r.seconds = j.at("seconds").get<double>();
+    r.cpu_seconds = j.value("cpu_seconds", 0.0);
+    r.cpu_scope = j.value("cpu_scope", std::string("thread"));
     r.status = j.at("status") == "ok" ? AlignStatus::kOk : AlignStatus::kFailed;
     r.message = j.at("message").get<std::string>();
     r.scale = j.at("scale").get<double>();
@@ -299,6 +304,12 @@ RunSummary RunBenchmark(const RunOptions& options) {
              set.provenance.value("params", nlohmann::json::object()).value("pairing", "unknown"))},
         {"seed", set.provenance.value("seed", nlohmann::json())}};
     // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
+    // Timing provenance (perf): the machine's load when the run started, so a reader can tell
+    // whether wall times were taken on a busy machine (see docs/performance.md).
+    const MachineLoad load = ReadMachineLoad();
+    const nlohmann::json machine_tag = {{"loadavg", {load.load1, load.load5, load.load15}},
+                                        {"cores", load.cores},
+                                        {"jobs", options.jobs}};
     const nlohmann::json& seed_json = set.provenance.value("seed", nlohmann::json());
     const std::uint64_t benchmark_seed =
         seed_json.is_number_unsigned() ? seed_json.get<std::uint64_t>()
@@ -363,6 +374,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
                                                    options.threads_per_call);
                 row["status"] = outcome.status;
                 row["data"] = data_tag;
+                row["machine"] = machine_tag;
                 if (outcome.status != "ok") failures.fetch_add(1);
                 {
                     std::lock_guard<std::mutex> lock(out_mutex);
