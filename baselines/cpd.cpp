@@ -22,7 +22,9 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(CpdOptions,
                                                 compat,
                                                 e_step,
                                                 truncation_sigmas,
-                                                truncation_min_points)
+                                                truncation_min_points,
+                                                cluster_cell_sigmas,
+                                                cluster_min_points)
 
 namespace {
 
@@ -95,6 +97,8 @@ protected:
         gs.mode = ParseGaussSumMode(options_.e_step, "cpd: parameter 'e_step'");
         gs.truncation_sigmas = options_.truncation_sigmas;
         gs.truncation_min_points = options_.truncation_min_points;
+        gs.cluster_cell_sigmas = options_.cluster_cell_sigmas;
+        gs.cluster_min_points = options_.cluster_min_points;
         CpdEStep e_step(Y, X, gs);
         const bool probreg_sigma2 = options_.sigma2_formula == "probreg";
 
@@ -108,6 +112,7 @@ protected:
         conv.stop_reason = "max_iterations";
         CpdPosteriors post;
         int truncated_iterations = 0;
+        int compressed_iterations = 0;
         std::int64_t evaluated_pairs = 0;
         for (int it = 1; it <= options_.maxiter; ++it) {
             // c = (2 pi sigma^2)^(D/2) w/(1-w) M/N: the uniform outlier term (CPD eq. (7)).
@@ -115,6 +120,7 @@ protected:
                              (1.0 - options_.w) * m / n;
             e_step.Compute(state.T, state.sigma2, c, post);
             truncated_iterations += post.truncated ? 1 : 0;
+            compressed_iterations += post.compressed_cells > 0 ? 1 : 0;
             evaluated_pairs += post.evaluated_pairs;
             if (!(post.np > 0.0)) {
                 conv.stop_reason = "no_correspondences";  // keep the previous transform
@@ -140,6 +146,7 @@ protected:
         r.extra["sigma2"] = state.sigma2;
         r.extra["scale"] = state.scale;
         r.extra["truncated_iterations"] = truncated_iterations;
+        r.extra["compressed_iterations"] = compressed_iterations;
         r.extra["kernel_evaluations"] = evaluated_pairs;
         return r;
     }
@@ -170,6 +177,11 @@ CpdOptions ParseCpdOptions(const nlohmann::json& j) {
             "truncation_sigmas", "must be > 0, got " + std::to_string(o.truncation_sigmas));
     Require(o.truncation_min_points >= 0, kName, "truncation_min_points",
             "must be >= 0, got " + std::to_string(o.truncation_min_points));
+    Require(
+        o.cluster_cell_sigmas >= 0.0 && o.cluster_cell_sigmas <= 1.0, kName, "cluster_cell_sigmas",
+        "must be in [0, 1] (0 disables compression), got " + std::to_string(o.cluster_cell_sigmas));
+    Require(o.cluster_min_points >= 0, kName, "cluster_min_points",
+            "must be >= 0, got " + std::to_string(o.cluster_min_points));
     return o;
 }
 
@@ -193,11 +205,17 @@ MethodInfo CpdMethodInfo() {
          "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's sigma^2 "
          "formula unless those are given explicitly)"},
         {"e_step",
-         "\"auto\" (dense, truncated once the switch rule holds), \"dense\" (exact up to float "
+         "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" "
+         "(exact up to float "
          "underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"},
         {"truncation_sigmas", "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4"},
         {"truncation_min_points",
          "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal"},
+        {"cluster_cell_sigmas",
+         "auto, at scale: while a cloud has under half as many cells of edge "
+         "cluster_cell_sigmas * sigma as points, each E-step pass sums over its cells' weighted "
+         "centroids (docs/performance.md: accuracy cost); 0 = never"},
+        {"cluster_min_points", "auto: compress only if max(M, N) >= this"},
     };
     info.defaults = CpdOptions{};
     info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {

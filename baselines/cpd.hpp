@@ -26,6 +26,9 @@ struct CpdOptions {
     std::string e_step = "auto";        ///< "auto", "dense" or "truncated" (core/gauss_sum.hpp)
     double truncation_sigmas = 4.0;     ///< truncated E-step radius r = k sigma, > 0
     int truncation_min_points = 20000;  ///< auto: truncate only when max(M, N) >= this
+    /// auto: cell edge (in sigmas) of the cell-compressed E-step at scale; 0 = never compress
+    double cluster_cell_sigmas = 0.25;
+    int cluster_min_points = 20000;  ///< auto: compress only when max(M, N) >= this
 };
 
 /// Parses and validates CPD options, applying the compat preset to keys absent from `j`.

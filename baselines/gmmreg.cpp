@@ -38,6 +38,12 @@ struct GmmRegOptions {
     int gmm_max_iter = 100;           ///< EM iterations (sklearn max_iter)
     double gmm_tol = 1e-3;            ///< EM lower-bound tolerance (sklearn tol)
     int seed = 0;                     ///< k-means++ seed of the GMM fits
+    /// "auto": above approx_min_pairs = K_s * K_t, cell-compress both mixtures and cut the
+    /// sums off at cutoff_tolerance (gmm_l2.hpp); "dense": always exact
+    std::string kernel_sums = "auto";
+    double approx_min_pairs = 1e8;      ///< K_s * K_t from which "auto" approximates
+    double cutoff_tolerance = 1e-4;     ///< kernel value at the cutoff radius (4.29 sigma)
+    double compress_cell_sigmas = 0.1;  ///< cell edge of the compression, in sigmas
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GmmRegOptions,
                                                 compat,
@@ -54,7 +60,11 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(GmmRegOptions,
                                                 gtol,
                                                 gmm_max_iter,
                                                 gmm_tol,
-                                                seed)
+                                                seed,
+                                                kernel_sums,
+                                                approx_min_pairs,
+                                                cutoff_tolerance,
+                                                compress_cell_sigmas)
 
 /// Defaults (compat "none"): Jian & Vemuri's point features, the true gradient, a unit-free frame
 /// and a tight gtol. compat "probreg" switches to probreg's values; explicit keys win.
@@ -81,6 +91,12 @@ GmmRegOptions ResolveOptions(const nlohmann::json& j) {
     Require(o.gmm_max_iter >= 1, kName, "gmm_max_iter", "must be >= 1");
     Require(o.gmm_tol >= 0.0, kName, "gmm_tol", "must be >= 0");
     Require(o.seed >= 0, kName, "seed", "must be >= 0");
+    RequireOneOf(o.kernel_sums, {"auto", "dense"}, kName, "kernel_sums");
+    Require(o.approx_min_pairs >= 0.0, kName, "approx_min_pairs", "must be >= 0");
+    Require(o.cutoff_tolerance > 0.0 && o.cutoff_tolerance < 1.0, kName, "cutoff_tolerance",
+            "must be in (0, 1)");
+    Require(o.compress_cell_sigmas >= 0.0 && o.compress_cell_sigmas <= 1.0, kName,
+            "compress_cell_sigmas", "must be in [0, 1] (0 = no compression)");
     return o;
 }
 
@@ -125,8 +141,14 @@ protected:
         int outer = 0;
         double f_prev = 0.0;
         // probreg's L2DistRegistration.registration: BFGS, anneal sigma, stop on |df| < tol.
+        L2SumOptions sums;
+        sums.approximate = o.kernel_sums == "auto";
+        sums.min_pairs = o.approx_min_pairs;
+        sums.cutoff_tolerance = o.cutoff_tolerance;
+        sums.compress_cell_sigmas = o.compress_cell_sigmas;
+        bool approximated = false;
         for (outer = 1; outer <= o.outer_iterations; ++outer) {
-            run = MinimizeRigidL2(fs, ft, sigma, gradient, theta, bfgs);
+            run = MinimizeRigidL2(fs, ft, sigma, gradient, theta, bfgs, sums, &approximated);
             result.iterations += run.iterations;
             theta = run.x;
             sigma *= o.delta;
@@ -142,6 +164,7 @@ protected:
         result.extra["components_source"] = fs.means.rows();
         result.extra["components_target"] = ft.means.rows();
         result.extra["gmm_em_iterations"] = em_iterations;
+        result.extra["approximated_sums"] = approximated;
         return result;
     }
 
@@ -204,6 +227,13 @@ MethodInfo GmmRegMethodInfo() {
         {"gmm_max_iter", "EM iterations of each GMM fit (sklearn 100)"},
         {"gmm_tol", "EM stops when the mean log-likelihood changes by < gmm_tol (sklearn 1e-3)"},
         {"seed", "seed of the k-means++ initialisation (sklearn's is unseeded in probreg)"},
+        {"kernel_sums",
+         "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per cell of "
+         "compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1/cutoff_tolerance)) "
+         "are skipped (docs/performance.md: accuracy cost); \"dense\": always exact"},
+        {"approx_min_pairs", "component pairs K_s * K_t from which kernel_sums=auto approximates"},
+        {"cutoff_tolerance", "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma"},
+        {"compress_cell_sigmas", "cell edge of the compression in sigmas, [0, 1]; 0 = none"},
     };
     info.defaults = GmmRegOptions{};
     info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {

@@ -5,11 +5,14 @@
 
 #include <libsvm/svm.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/bfgs.hpp"
 #include "core/gmm_common.hpp"
@@ -41,6 +44,13 @@ struct SvrOptions {
     int maxiter = 200;                ///< BFGS iterations (probreg's opt_maxiter: 50)
     double gtol = 1e-6;               ///< BFGS |grad|_inf tolerance (probreg's opt_tol: 1e-3)
     double svm_tol = 1e-3;            ///< libsvm eps (sklearn tol)
+    /// Clouds larger than this are fitted on a seeded uniform random subsample of this size
+    /// (libsvm's SMO is ~quadratic in n); alphas are rescaled by n / subsample.
+    int svm_max_points = 8000;
+    std::string kernel_sums = "auto";   ///< as gmmreg: "auto" | "dense"
+    double approx_min_pairs = 1e8;      ///< S_s * S_t from which "auto" approximates
+    double cutoff_tolerance = 1e-4;     ///< kernel value at the cutoff radius
+    double compress_cell_sigmas = 0.1;  ///< cell edge of the compression, in sigmas
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SvrOptions,
                                                 compat,
@@ -56,7 +66,12 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(SvrOptions,
                                                 outer_tol,
                                                 maxiter,
                                                 gtol,
-                                                svm_tol)
+                                                svm_tol,
+                                                svm_max_points,
+                                                kernel_sums,
+                                                approx_min_pairs,
+                                                cutoff_tolerance,
+                                                compress_cell_sigmas)
 
 SvrOptions ResolveOptions(const nlohmann::json& j) {
     SvrOptions o = ParseOptions<SvrOptions>(j, kName);
@@ -80,20 +95,58 @@ SvrOptions ResolveOptions(const nlohmann::json& j) {
     Require(o.maxiter >= 0, kName, "maxiter", "must be >= 0");
     Require(o.gtol >= 0.0, kName, "gtol", "must be >= 0");
     Require(o.svm_tol > 0.0, kName, "svm_tol", "must be > 0");
+    Require(o.svm_max_points >= 10, kName, "svm_max_points", "must be >= 10");
+    RequireOneOf(o.kernel_sums, {"auto", "dense"}, kName, "kernel_sums");
+    Require(o.approx_min_pairs >= 0.0, kName, "approx_min_pairs", "must be >= 0");
+    Require(o.cutoff_tolerance > 0.0 && o.cutoff_tolerance < 1.0, kName, "cutoff_tolerance",
+            "must be in (0, 1)");
+    Require(o.compress_cell_sigmas >= 0.0 && o.compress_cell_sigmas <= 1.0, kName,
+            "compress_cell_sigmas", "must be in [0, 1] (0 = no compression)");
     return o;
 }
 
 /// Mixture from an OC-SVM: mu = support vectors, phi = alpha (2 pi sigma^2)^(D/2) (probreg's
 /// features.OneClassSVM.compute; the weights are not normalised).
-MixtureFeatures SvmFeatures(
-    const PointCloud& P, double nu, double gamma, double phi_sigma, double tol) {
+/// A seeded uniform random subset of `max_points` rows (all rows when the cloud is smaller),
+/// in increasing row order.
+PointCloud SubsampleRows(const PointCloud& P, Eigen::Index max_points, std::mt19937_64& rng) {
+    if (P.rows() <= max_points) return P;
+    std::vector<Eigen::Index> idx(static_cast<size_t>(P.rows()));
+    for (size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<Eigen::Index>(i);
+    // Partial Fisher-Yates with the portable UniformInt-free draw: rng() % range is fine here
+    // (range << 2^64: the bias is < 1e-13).
+    for (Eigen::Index k = 0; k < max_points; ++k) {
+        const auto range = static_cast<std::uint64_t>(P.rows() - k);
+        std::swap(idx[static_cast<size_t>(k)],
+                  idx[static_cast<size_t>(k + static_cast<Eigen::Index>(rng() % range))]);
+    }
+    idx.resize(static_cast<size_t>(max_points));
+    std::sort(idx.begin(), idx.end());
+    PointCloud out(max_points, 3);
+    for (Eigen::Index k = 0; k < max_points; ++k) out.row(k) = P.row(idx[static_cast<size_t>(k)]);
+    return out;
+}
+
+/// Mixture from an OC-SVM: mu = support vectors, phi = alpha (2 pi sigma^2)^(D/2) (probreg's
+/// features.OneClassSVM.compute; the weights are not normalised). Above svm_max_points the SVM
+/// is fitted on a random subsample and alpha scaled by n / subsample, so sum(alpha) = nu n as
+/// for a full fit and the two clouds' weights stay comparable.
+MixtureFeatures SvmFeatures(const PointCloud& full,
+                            double nu,
+                            double gamma,
+                            double phi_sigma,
+                            double tol,
+                            Eigen::Index max_points,
+                            std::mt19937_64& rng) {
+    const PointCloud P = SubsampleRows(full, max_points, rng);
     const OneClassSvm svm = FitOneClassSvm(P, nu, gamma, tol);
     MixtureFeatures f;
     f.means.resize(static_cast<Eigen::Index>(svm.support.size()), 3);
     for (size_t i = 0; i < svm.support.size(); ++i) {
         f.means.row(static_cast<Eigen::Index>(i)) = P.row(svm.support[i]);
     }
-    f.weights = svm.alpha * std::pow(2.0 * kPi * phi_sigma * phi_sigma, 1.5);
+    const double rescale = static_cast<double>(full.rows()) / static_cast<double>(P.rows());
+    f.weights = rescale * svm.alpha * std::pow(2.0 * kPi * phi_sigma * phi_sigma, 1.5);
     return f;
 }
 
@@ -106,8 +159,9 @@ public:
 protected:
     AlignResult DoAlign(const PointCloud& source,
                         const PointCloud& target,
-                        const AlignContext& /*context*/) override {
+                        const AlignContext& context) override {
         const SvrOptions& o = options_;
+        std::mt19937_64 rng = context.MakeRng();  // the SVM subsample, when one is drawn
         double sigma = o.sigma;
         double gamma = o.gamma;
         if (o.use_estimated_sigma) {
@@ -139,16 +193,24 @@ protected:
         int outer = 0;
         double f_prev = 0.0;
         Eigen::Index sv_source = 0, sv_target = 0;
+        L2SumOptions sums;
+        sums.approximate = o.kernel_sums == "auto";
+        sums.min_pairs = o.approx_min_pairs;
+        sums.cutoff_tolerance = o.cutoff_tolerance;
+        sums.compress_cell_sigmas = o.compress_cell_sigmas;
+        bool approximated = false;
         for (outer = 1; outer <= o.outer_iterations; ++outer) {
             // probreg refits both SVMs each outer step with gamma *= 10 while phi keeps the
             // first sigma and the cost uses sigma * 0.9^k (inconsistent). "none" keeps
             // gamma = 1 / 2 sigma^2 and phi consistent with the annealed sigma.
             const double fs_sigma = probreg ? phi_sigma : sigma;
-            const MixtureFeatures fs = SvmFeatures(Y, o.nu, gamma, fs_sigma, o.svm_tol);
-            const MixtureFeatures ft = SvmFeatures(X, o.nu, gamma, fs_sigma, o.svm_tol);
+            const MixtureFeatures fs =
+                SvmFeatures(Y, o.nu, gamma, fs_sigma, o.svm_tol, o.svm_max_points, rng);
+            const MixtureFeatures ft =
+                SvmFeatures(X, o.nu, gamma, fs_sigma, o.svm_tol, o.svm_max_points, rng);
             sv_source = fs.means.rows();
             sv_target = ft.means.rows();
-            run = MinimizeRigidL2(fs, ft, sigma, gradient, theta, bfgs);
+            run = MinimizeRigidL2(fs, ft, sigma, gradient, theta, bfgs, sums, &approximated);
             result.iterations += run.iterations;
             theta = run.x;
             sigma *= o.delta;
@@ -164,6 +226,9 @@ protected:
         result.extra["evaluations"] = run.evaluations;
         result.extra["support_vectors_source"] = sv_source;
         result.extra["support_vectors_target"] = sv_target;
+        result.extra["approximated_sums"] = approximated;
+        result.extra["svm_subsampled"] =
+            std::max(Y.rows(), X.rows()) > static_cast<Eigen::Index>(o.svm_max_points);
         return result;
     }
 
@@ -248,6 +313,15 @@ MethodInfo SvrMethodInfo() {
         {"maxiter", "BFGS iterations per outer step (probreg opt_maxiter 50)"},
         {"gtol", "BFGS stops when |grad|_inf <= gtol (probreg opt_tol 1e-3)"},
         {"svm_tol", "libsvm stopping tolerance eps (sklearn tol 1e-3)"},
+        {"svm_max_points",
+         "fit each one-class SVM on a seeded random subsample of this many points when the "
+         "cloud is larger (alphas scaled by n / subsample); >= 10"},
+        {"kernel_sums",
+         "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed mixtures and "
+         "a kd-tree cutoff (as gmmreg); \"dense\": always exact"},
+        {"approx_min_pairs", "S_s * S_t from which kernel_sums=auto approximates"},
+        {"cutoff_tolerance", "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma"},
+        {"compress_cell_sigmas", "cell edge of the compression in sigmas, [0, 1]; 0 = none"},
     };
     info.defaults = SvrOptions{};
     info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {

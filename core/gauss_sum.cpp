@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/cell_compress.hpp"
 #include "core/nanoflann_adaptor.hpp"
 
 namespace regbench {
@@ -185,9 +186,26 @@ std::int64_t EvaluateLeafBaseline(const LeafJob& job) {
     return EvaluateLeafImpl<kWeighted, kMoment>(job);
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64-v4 (AVX-512) clone; the lane order is the same, so results match the AVX2 build
+/// up to FMA contraction. Not exercised on machines without AVX-512 (such as CI's).
+template <bool kWeighted, bool kMoment>
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) std::int64_t EvaluateLeafV4(
+    const LeafJob& job) {
+    return EvaluateLeafImpl<kWeighted, kMoment>(job);
+}
+bool HasAvx512Leaf() {
+    static const bool has =
+        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+    return has;
+}
+#endif
+
 template <bool kWeighted, bool kMoment>
 std::int64_t EvaluateLeaf(const LeafJob& job) {
 #if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512Leaf()) return EvaluateLeafV4<kWeighted, kMoment>(job);
     if (HasAvx2Fma()) return EvaluateLeafAvx2<kWeighted, kMoment>(job);
 #endif
     return EvaluateLeafBaseline<kWeighted, kMoment>(job);
@@ -198,6 +216,152 @@ std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
         return moment ? EvaluateLeaf<true, true>(job) : EvaluateLeaf<true, false>(job);
     }
     return moment ? EvaluateLeaf<false, true>(job) : EvaluateLeaf<false, false>(job);
+}
+
+/// One row of the stored CPD kernel: row[i] = exp(a |q - p_i|^2) for all i, and its sum
+/// (8 float lanes per chunk of kChunk, chunks added in double: the same scheme as SumChunk).
+__attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
+                                                           const float* __restrict px,
+                                                           const float* __restrict py,
+                                                           const float* __restrict pz,
+                                                           Eigen::Index count,
+                                                           float qx,
+                                                           float qy,
+                                                           float qz,
+                                                           float a) {
+    constexpr int kLanes = 8;
+    double total = 0.0;
+    for (Eigen::Index c0 = 0; c0 < count; c0 += kChunk) {
+        const Eigen::Index c1 = std::min(count, c0 + kChunk);
+        float lanes[kLanes] = {};
+        Eigen::Index j = c0;
+        const auto term = [&](Eigen::Index i) {
+            const float dx = qx - px[i], dy = qy - py[i], dz = qz - pz[i];
+            const float k = FastExp((dx * dx + dy * dy + dz * dz) * a);
+            row[i] = k;
+            return k;
+        };
+        for (; j + kLanes <= c1; j += kLanes) {
+            for (int l = 0; l < kLanes; ++l) lanes[l] += term(j + l);
+        }
+        for (int l = 0; j < c1; ++j, ++l) lanes[l] += term(j);
+        float s = 0.0f;
+        for (int l = 0; l < kLanes; ++l) s += lanes[l];
+        total += s;
+    }
+    return total;
+}
+
+/// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's column of
+/// the second pass, read back from the stored kernel instead of recomputing its exps.
+__attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict row,
+                                                       Eigen::Index count,
+                                                       float w,
+                                                       float wx,
+                                                       float wy,
+                                                       float wz,
+                                                       float* __restrict acc0,
+                                                       float* __restrict acc1,
+                                                       float* __restrict acc2,
+                                                       float* __restrict acc3) {
+    for (Eigen::Index i = 0; i < count; ++i) {
+        const float k = row[i];
+        acc0[i] += k * w;
+        acc1[i] += k * wx;
+        acc2[i] += k * wy;
+        acc3[i] += k * wz;
+    }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64-v4 (AVX-512) clones, chosen at run time; this project's CI machine has no AVX-512,
+/// so they are compiled but exercised only where the CPU supports them.
+#define REGBENCH_V4_TARGET "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"
+bool HasAvx512() {
+    static const bool has =
+        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+    return has;
+}
+__attribute__((target(REGBENCH_V4_TARGET))) double KernelRowV4(float* row,
+                                                               const float* px,
+                                                               const float* py,
+                                                               const float* pz,
+                                                               Eigen::Index count,
+                                                               float qx,
+                                                               float qy,
+                                                               float qz,
+                                                               float a) {
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+__attribute__((target("avx2,fma"))) double KernelRowAvx2(float* row,
+                                                         const float* px,
+                                                         const float* py,
+                                                         const float* pz,
+                                                         Eigen::Index count,
+                                                         float qx,
+                                                         float qy,
+                                                         float qz,
+                                                         float a) {
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+__attribute__((target(REGBENCH_V4_TARGET))) void AxpyRowV4(const float* row,
+                                                           Eigen::Index count,
+                                                           float w,
+                                                           float wx,
+                                                           float wy,
+                                                           float wz,
+                                                           float* acc0,
+                                                           float* acc1,
+                                                           float* acc2,
+                                                           float* acc3) {
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+__attribute__((target("avx2,fma"))) void AxpyRowAvx2(const float* row,
+                                                     Eigen::Index count,
+                                                     float w,
+                                                     float wx,
+                                                     float wy,
+                                                     float wz,
+                                                     float* acc0,
+                                                     float* acc1,
+                                                     float* acc2,
+                                                     float* acc3) {
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+#endif
+
+double KernelRow(float* row,
+                 const float* px,
+                 const float* py,
+                 const float* pz,
+                 Eigen::Index count,
+                 float qx,
+                 float qy,
+                 float qz,
+                 float a) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return KernelRowV4(row, px, py, pz, count, qx, qy, qz, a);
+    if (HasAvx2Fma()) return KernelRowAvx2(row, px, py, pz, count, qx, qy, qz, a);
+#endif
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+
+void AxpyRow(const float* row,
+             Eigen::Index count,
+             float w,
+             float wx,
+             float wy,
+             float wz,
+             float* acc0,
+             float* acc1,
+             float* acc2,
+             float* acc3) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return AxpyRowV4(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+    if (HasAvx2Fma()) return AxpyRowAvx2(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+#endif
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
 }
 
 /// Copies nanoflann's tree into BlockedCloud nodes (pre-order), returning the node index.
@@ -340,6 +504,36 @@ void KernelSums(const BlockedCloud& queries,
     out.evaluated_pairs = pairs;
 }
 
+namespace {
+__attribute__((always_inline)) inline double FastExpPassImpl(const float* __restrict x,
+                                                             float* __restrict y,
+                                                             std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) y[i] = FastExp(x[i]);
+    double s = 0.0;
+    for (std::size_t i = 0; i < n; i += 4096) s += y[i];  // touch, do not re-add everything
+    return s;
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) double FastExpPassV4(
+    const float* x, float* y, std::size_t n) {
+    return FastExpPassImpl(x, y, n);
+}
+__attribute__((target("avx2,fma"))) double FastExpPassAvx2(const float* x,
+                                                           float* y,
+                                                           std::size_t n) {
+    return FastExpPassImpl(x, y, n);
+}
+#endif
+}  // namespace
+
+double FastExpPass(const float* x, float* y, std::size_t n) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return FastExpPassV4(x, y, n);
+    if (HasAvx2Fma()) return FastExpPassAvx2(x, y, n);
+#endif
+    return FastExpPassImpl(x, y, n);
+}
+
 double UnderflowRadiusSigmas() { return std::sqrt(2.0 * -kFastExpMinArg); }
 
 GaussSumMode ParseGaussSumMode(const std::string& name, const std::string& what) {
@@ -371,12 +565,27 @@ Eigen::Vector3d Centroid(const PointCloud& cloud) {
 
 CpdEStep::CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options)
     : options_(options),
+      source_points_(source),
+      target_points_(target),
       source_(source, Centroid(target)),
       target_blocked_(target, Centroid(target)) {
     if (!(options_.truncation_sigmas > 0.0)) {
         throw std::invalid_argument("CpdEStep: truncation_sigmas must be positive");
     }
 }
+
+bool CpdEStep::CompressionPays(Eigen::Index cells, Eigen::Index points) const {
+    return static_cast<double>(cells) < options_.cluster_max_fraction * static_cast<double>(points);
+}
+
+namespace {
+/// Float weights in a BlockedCloud's stored order from per-input-row weights.
+std::vector<float> StoredWeights(const BlockedCloud& cloud, const Eigen::VectorXd& weights) {
+    std::vector<float> w(static_cast<size_t>(cloud.size()));
+    for (size_t k = 0; k < w.size(); ++k) w[k] = static_cast<float>(weights[cloud.order()[k]]);
+    return w;
+}
+}  // namespace
 
 bool CpdEStep::UsesTruncation(double sigma2) const {
     switch (options_.mode) {
@@ -393,6 +602,70 @@ bool CpdEStep::UsesTruncation(double sigma2) const {
            r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
 }
 
+void CpdEStep::ComputeStoredKernel(double sigma2, double c, CpdPosteriors& out) {
+    const Eigen::Index n = target_blocked_.size();
+    const Eigen::Index m = source_.size();
+    kernel_.resize(static_cast<size_t>(m * n));
+    inv_den_.resize(static_cast<size_t>(n));
+    out.pt1.resize(n);
+    const auto a = static_cast<float>(-0.5 / sigma2);
+    const float* sx = source_.x();
+    const float* sy = source_.y();
+    const float* sz = source_.z();
+    const float* tx = target_blocked_.x();
+    const float* ty = target_blocked_.y();
+    const float* tz = target_blocked_.z();
+    const auto& t_order = target_blocked_.order();
+    const bool parallel = omp_get_max_threads() > 1 && m * n >= 200000;
+    // Pass 1 (the only exps): K row per target point, its sum den_n, 1 / (den_n + c).
+#pragma omp parallel for schedule(static) if (parallel)
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const double sum = KernelRow(kernel_.data() + j * m, sx, sy, sz, m, tx[j], ty[j], tz[j], a);
+        const double den = sum == 0.0 ? kDenFloor : sum;
+        const double inv = 1.0 / (den + c);
+        inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
+        out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
+    }
+    // Pass 2 reads K back: p1 and PX as weighted column sums, per block of source points
+    // (float accumulators flushed to double every kChunk targets; fixed order, so the result
+    // does not depend on the thread count).
+    constexpr Eigen::Index kBlock = 256;
+    const Eigen::Index num_blocks = (m + kBlock - 1) / kBlock;
+    out.p1.resize(m);
+    out.px.resize(m, 3);
+    const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
+    const auto& s_order = source_.order();
+#pragma omp parallel for schedule(static) if (parallel)
+    for (Eigen::Index b = 0; b < num_blocks; ++b) {
+        const Eigen::Index i0 = b * kBlock;
+        const Eigen::Index count = std::min(kBlock, m - i0);
+        float acc[4][kBlock];
+        double total[4][kBlock] = {};
+        for (Eigen::Index j0 = 0; j0 < n; j0 += kChunk) {
+            for (auto& row : acc) std::fill(row, row + count, 0.0f);
+            const Eigen::Index j1 = std::min(n, j0 + kChunk);
+            for (Eigen::Index j = j0; j < j1; ++j) {
+                const float w = inv_den_[static_cast<size_t>(j)];
+                AxpyRow(kernel_.data() + j * m + i0, count, w, w * tx[j], w * ty[j], w * tz[j],
+                        acc[0], acc[1], acc[2], acc[3]);
+            }
+            for (int k = 0; k < 4; ++k) {
+                for (Eigen::Index i = 0; i < count; ++i) total[k][i] += acc[k][i];
+            }
+        }
+        for (Eigen::Index i = 0; i < count; ++i) {
+            const Eigen::Index row = s_order[static_cast<size_t>(i0 + i)];
+            out.p1[row] = total[0][i];
+            out.px.row(row) =
+                Eigen::RowVector3d(total[1][i], total[2][i], total[3][i]) + total[0][i] * origin;
+        }
+    }
+    out.np = out.p1.sum();
+    out.truncated = false;
+    out.compressed_cells = 0;
+    out.evaluated_pairs = m * n;
+}
+
 void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out) {
     if (!(c >= 0.0) || !std::isfinite(c)) {
         throw std::invalid_argument("CpdEStep: outlier constant c must be finite and >= 0");
@@ -401,11 +674,39 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     const double cutoff = truncated ? options_.truncation_sigmas * std::sqrt(sigma2)
                                     : UnderflowRadiusSigmas() * std::sqrt(sigma2);
     source_.SetTransform(T);
-
-    // Pass 1: den_n = sum_m K_mn at every target point.
-    KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
     const Eigen::Index n = target_blocked_.size();
     const Eigen::Index m = source_.size();
+    // Small dense problems: keep K between the passes, so each exp is computed once.
+    if (!truncated && m * n <= kStoredKernelMaxEntries) {
+        ComputeStoredKernel(sigma2, c, out);
+        return;
+    }
+    // Compression (auto mode at scale): cells of edge kappa * sigma in each summed-over cloud.
+    const bool may_compress = options_.mode == GaussSumMode::kAuto &&
+                              options_.cluster_cell_sigmas > 0.0 &&
+                              std::max(m, n) >= options_.cluster_min_points;
+    const double cell = options_.cluster_cell_sigmas * std::sqrt(sigma2);
+    Eigen::Index cells_used = 0;
+    bool compressed = false;
+
+    // Pass 1: den_n = sum_m K_mn at every target point.
+    if (may_compress) {
+        // Cells in the source's own frame, edge cell / s, so they have edge `cell` once moved.
+        const double s = T.topLeftCorner<3, 3>().col(0).norm();
+        const CellCompressed cs = CompressToCells(source_points_, nullptr, cell / s);
+        if (CompressionPays(cs.centroids.rows(), m)) {
+            BlockedCloud cells(cs.centroids, target_blocked_.origin());
+            cells.SetTransform(T);
+            const std::vector<float> w = StoredWeights(cells, cs.weights);
+            KernelSums(target_blocked_, cells, sigma2, cutoff, w.data(), false, pass1_);
+            cells_used += cells.size();
+            compressed = true;
+        }
+    }
+    if (!compressed) {
+        KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
+        cells_used += m;
+    }
     inv_den_.resize(static_cast<size_t>(n));
     out.pt1.resize(n);
     const auto& t_order = target_blocked_.order();
@@ -418,7 +719,26 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     }
 
     // Pass 2: p1_m = sum_n K_mn / (den_n + c) and PX_m = sum_n K_mn x_n / (den_n + c).
-    KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
+    bool compressed2 = false;
+    if (may_compress) {
+        Eigen::VectorXd w_input(n);
+        for (Eigen::Index k = 0; k < n; ++k) {
+            w_input[t_order[static_cast<size_t>(k)]] = inv_den_[static_cast<size_t>(k)];
+        }
+        const CellCompressed ct = CompressToCells(target_points_, &w_input, cell);
+        if (CompressionPays(ct.centroids.rows(), n)) {
+            // Weighted centroids: sum_n w_n K(y, x_n) x_n ~ W_c K(y, xbar_c) xbar_c.
+            BlockedCloud cells(ct.centroids, target_blocked_.origin());
+            const std::vector<float> w = StoredWeights(cells, ct.weights);
+            KernelSums(source_, cells, sigma2, cutoff, w.data(), true, pass2_);
+            cells_used += cells.size();
+            compressed2 = true;
+        }
+    }
+    if (!compressed2) {
+        KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
+        cells_used += n;
+    }
     out.p1.resize(m);
     out.px.resize(m, 3);
     const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
@@ -430,6 +750,7 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     }
     out.np = out.p1.sum();
     out.truncated = truncated;
+    out.compressed_cells = (compressed || compressed2) ? cells_used : 0;
     out.evaluated_pairs = pass1_.evaluated_pairs + pass2_.evaluated_pairs;
 }
 

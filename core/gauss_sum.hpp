@@ -134,6 +134,11 @@ void KernelSums(const BlockedCloud& queries,
                 bool want_first_moment,
                 KernelSumResult& out);
 
+/// The machine's exp floor: y[i] = FastExp(x[i]) for i < n, dispatched to the same ISA clones
+/// as the kernel sums (bench/core/cpd_floor_bench.cpp times it against a CPD iteration).
+/// Returns the sum of y so the work cannot be optimised away.
+double FastExpPass(const float* x, float* y, std::size_t n);
+
 /// Radius (in sigmas) beyond which FastExp(-d^2 / 2 sigma^2) is exactly 0: sqrt(2 * 87).
 double UnderflowRadiusSigmas();
 
@@ -156,30 +161,48 @@ struct GaussSumOptions {
     double truncation_sigmas = 4.0;              ///< r = k sigma; exp(-k^2/2) at the edge
     Eigen::Index truncation_min_points = 20000;  ///< auto: below this, always dense
     double truncation_max_diag_fraction = 0.25;  ///< auto: truncate once r < this * diagonal
+    /// auto: cell edge, in sigmas, of the cell-compressed E-step (core/cell_compress.hpp);
+    /// 0 disables compression. 0.25 keeps each merged term within a few percent.
+    double cluster_cell_sigmas = 0.25;
+    Eigen::Index cluster_min_points = 20000;  ///< auto: compress only if max(M, N) >= this
+    /// auto: compress a cloud only while it has fewer than this fraction as many cells as
+    /// points (late iterations, with sigma near the point spacing, stay exact).
+    double cluster_max_fraction = 0.5;
 };
 
 /// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
 /// clouds' input order, all in double.
 struct CpdPosteriors {
-    Eigen::VectorXd p1;                ///< P 1 (M)
-    Eigen::VectorXd pt1;               ///< P^T 1 (N)
-    PointCloud px;                     ///< P X (M x 3), in the target's input frame
-    double np = 0.0;                   ///< sum(p1)
-    bool truncated = false;            ///< whether the truncated evaluation was used
+    Eigen::VectorXd p1;      ///< P 1 (M)
+    Eigen::VectorXd pt1;     ///< P^T 1 (N)
+    PointCloud px;           ///< P X (M x 3), in the target's input frame
+    double np = 0.0;         ///< sum(p1)
+    bool truncated = false;  ///< whether the truncated evaluation was used
+    /// Cells the compressed evaluation summed over (source cells in pass 1 plus target cells
+    /// in pass 2; a pass left exact counts its points); 0 when neither pass was compressed.
+    Eigen::Index compressed_cells = 0;
     std::int64_t evaluated_pairs = 0;  ///< kernel evaluations in both passes
 };
 
-/// The fused CPD E-step, P_mn = K_mn / (den_n + c), K_mn = exp(-|T(y_m) - x_n|^2 / 2 sigma^2),
+/// The CPD E-step, P_mn = K_mn / (den_n + c), K_mn = exp(-|T(y_m) - x_n|^2 / 2 sigma^2),
 /// den_n = sum_m K_mn (0 becomes kDenFloor), in two passes and without storing P:
 ///   pass 1: den_n by kernel sums over the moved source at each target point;
 ///   pass 2: p1 and PX by kernel sums over the target, weighted by 1/(den_n + c), at each moved
 ///           source point; pt1_n = den_n / (den_n + c) follows without a second sum.
+/// Small dense problems (M N <= kStoredKernelMaxEntries, not truncated) keep K from pass 1 and
+/// read it back in pass 2 (one exp per pair); larger ones recompute it in pass 2.
+/// At scale (GaussSumOptions::cluster_*), the summed-over cloud of each pass is replaced by
+/// its cell-compressed form (source cells of edge kappa sigma in pass 1, target cells weighted
+/// by 1/(den_n + c) in pass 2) while sigma is large; queries stay the exact points, so p1, pt1
+/// and PX keep one entry per point.
 /// Holds prepared copies of both clouds, so build it once per registration and call Compute
 /// every iteration. Not thread-safe (scratch buffers); Compute itself uses OpenMP.
 class CpdEStep {
 public:
     /// probreg's floor for an all-zero column: np.finfo(np.float32).eps.
     static constexpr double kDenFloor = 1.19e-7;
+    /// Dense E-steps with M N up to this keep K between passes (16 MB of floats).
+    static constexpr Eigen::Index kStoredKernelMaxEntries = Eigen::Index{1} << 22;
 
     CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options = {});
 
@@ -191,11 +214,19 @@ public:
     bool UsesTruncation(double sigma2) const;
 
 private:
+    /// Whether a pass summing over `points` compressed into `cells` cells should use them.
+    bool CompressionPays(Eigen::Index cells, Eigen::Index points) const;
+    /// The dense E-step with K (float, M x N) stored by pass 1 and read back by pass 2: one exp
+    /// per pair per iteration instead of two. Used while M N <= kStoredKernelMaxEntries.
+    void ComputeStoredKernel(double sigma2, double c, CpdPosteriors& out);
+
     GaussSumOptions options_;
+    PointCloud source_points_, target_points_;  ///< input copies, for the compressed passes
     BlockedCloud source_;
     BlockedCloud target_blocked_;
     KernelSumResult pass1_, pass2_;
     std::vector<float> inv_den_;  ///< target stored order
+    std::vector<float> kernel_;   ///< stored K, row j = target stored index j
 };
 
 }  // namespace regbench

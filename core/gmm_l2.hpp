@@ -5,6 +5,8 @@
 // Notation (probabilistic-baselines.md Sec. 2): theta = (q_w, q_x, q_y, q_z, t), q unnormalised.
 #include <Eigen/Core>
 #include <array>
+#include <limits>
+#include <memory>
 
 #include "core/bfgs.hpp"
 #include "core/point_cloud.hpp"
@@ -32,16 +34,42 @@ std::array<Eigen::Matrix3d, 4> RotationDerivativeFromQuaternionWxyz(const Eigen:
 /// T(theta) = [R(q/|q|), t] for theta = (q_w, q_x, q_y, q_z, t_x, t_y, t_z).
 Transform TransformFromTheta(const Eigen::VectorXd& theta);
 
+class KdTree;
+
+/// How the L2 cost's Gaussian sums are evaluated at scale (docs/performance.md). Below
+/// `min_pairs` = K_s * K_t everything is dense and exact; at or above it:
+///  - both mixtures are cell-compressed (core/cell_compress.hpp) with cell edge
+///    `compress_cell_sigmas` * sigma: the cost becomes the exact L2 of the compressed mixtures,
+///    so its gradient stays consistent for BFGS;
+///  - pairs farther apart than r = sigma sqrt(2 ln(1 / cutoff_tolerance)) are skipped, found by
+///    a kd-tree radius search on the target components (gmmreg's own cutoff). Every skipped
+///    term is below cutoff_tolerance times its weight product, so
+///    |f_cutoff - f_dense| <= cutoff_tolerance * sum_ij phi_i phi_j / Z.
+struct L2SumOptions {
+    bool approximate = true;            ///< false: always dense and exact
+    double min_pairs = 1e8;             ///< K_s * K_t at which approximation starts
+    double cutoff_tolerance = 1e-4;     ///< relative kernel value at the cutoff radius (4.29 sigma)
+    double compress_cell_sigmas = 0.1;  ///< cell edge in sigmas; 0 = no compression
+};
+
+/// Cutoff radius, in sigmas, at which exp(-r^2 / 2) = tolerance: sqrt(2 ln(1 / tolerance)).
+double CutoffRadiusSigmas(double tolerance);
+
 /// f(theta) = -sum_ij phi_s_i phi_t_j / Z exp(-|R mu_s_i + t - mu_t_j|^2 / 2 sigma^2),
 /// Z = (2 pi sigma^2)^(D/2), and its gradient w.r.t. theta (7 entries).
 /// Sums are dense (O(K_s K_t) exps per call), parallel over source components with OpenMP
 /// (thread-count independent: each row is summed alone, rows are reduced in order).
 class RigidGmmL2Cost {
 public:
+    /// `cutoff_radius` (input units; infinity = dense): pairs farther apart are skipped.
     RigidGmmL2Cost(const MixtureFeatures& source,
                    const MixtureFeatures& target,
                    double sigma,
-                   L2Gradient gradient);
+                   L2Gradient gradient,
+                   double cutoff_radius = std::numeric_limits<double>::infinity());
+    ~RigidGmmL2Cost();
+    RigidGmmL2Cost(const RigidGmmL2Cost&) = delete;  // the kd-tree references target_means_
+    RigidGmmL2Cost& operator=(const RigidGmmL2Cost&) = delete;
     /// Returns f(theta) and writes the gradient (probreg's half or exact) into grad.
     double operator()(const Eigen::VectorXd& theta, Eigen::VectorXd& grad) const;
     /// theta0 = (1, 0, 0, 0, 0, 0, 0): probreg's RigidCostFunction.initial().
@@ -54,6 +82,9 @@ private:
     Eigen::VectorXd tx_, ty_, tz_, tw_;
     double sigma_;
     L2Gradient gradient_;
+    double cutoff_radius_;
+    PointCloud target_means_;       ///< referenced by tree_
+    std::unique_ptr<KdTree> tree_;  ///< only with a finite cutoff
 };
 
 /// Where an L2 method optimises: y' = (y - c_source) / scale, x' = (x - c_target) / scale.
@@ -74,11 +105,20 @@ struct L2Frame {
 };
 
 /// One BFGS run of RigidGmmL2Cost from theta0 (probreg's minimize(..., method='BFGS')).
+/// With `sums` approximating (K_s K_t >= sums.min_pairs), the mixtures are compressed and the
+/// cost uses the cutoff; `approximated` (optional) reports whether that happened.
 BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            const MixtureFeatures& target,
                            double sigma,
                            L2Gradient gradient,
                            const Eigen::VectorXd& theta0,
-                           const BfgsOptions& options);
+                           const BfgsOptions& options,
+                           const L2SumOptions& sums = {},
+                           bool* approximated = nullptr);
+
+/// The mixture with components merged per cell of edge `cell` (weights summed, means the
+/// weight-averaged centroids): the L2 cost of compressed mixtures approximates the original
+/// to O((cell / sigma)^2).
+MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell);
 
 }  // namespace regbench
