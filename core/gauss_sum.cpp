@@ -218,7 +218,7 @@ std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
     return moment ? EvaluateLeaf<false, true>(job) : EvaluateLeaf<false, false>(job);
 }
 
-/// One row of the stored CPD kernel: row[i] = exp(a |q - p_i|^2) for all i, and its sum
+/// One target's kernel column: row[i] = exp(a |q - p_i|^2) for all sources i, and its sum
 /// (8 float lanes per chunk of kChunk, chunks added in double: the same scheme as SumChunk).
 __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
                                                            const float* __restrict px,
@@ -252,8 +252,8 @@ __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row
     return total;
 }
 
-/// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's column of
-/// the second pass, read back from the stored kernel instead of recomputing its exps.
+/// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's share of
+/// p1 and PX, w = 1 / (den + c), from its kernel column while it is still in L1.
 __attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict row,
                                                        Eigen::Index count,
                                                        float w,
@@ -602,10 +602,16 @@ bool CpdEStep::UsesTruncation(double sigma2) const {
            r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
 }
 
-void CpdEStep::ComputeStoredKernel(double sigma2, double c, CpdPosteriors& out) {
+void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     const Eigen::Index n = target_blocked_.size();
     const Eigen::Index m = source_.size();
-    kernel_.resize(static_cast<size_t>(m * n));
+    // P_mn = K_mn / (den_n + c) normalises each target's column over all sources, so one
+    // target's column, once computed, already gives its share of p1 and PX: one pass over the
+    // targets, one exp per pair, nothing M x N stored. Targets go in fixed chunks, each with
+    // its own float accumulators, reduced in chunk order: thread-count independent.
+    constexpr Eigen::Index kTargetsPerChunk = 64;
+    const Eigen::Index num_chunks = (n + kTargetsPerChunk - 1) / kTargetsPerChunk;
+    partial_.resize(static_cast<size_t>(num_chunks * 4 * m));
     inv_den_.resize(static_cast<size_t>(n));
     out.pt1.resize(n);
     const auto a = static_cast<float>(-0.5 / sigma2);
@@ -616,49 +622,43 @@ void CpdEStep::ComputeStoredKernel(double sigma2, double c, CpdPosteriors& out) 
     const float* ty = target_blocked_.y();
     const float* tz = target_blocked_.z();
     const auto& t_order = target_blocked_.order();
-    const bool parallel = omp_get_max_threads() > 1 && m * n >= 200000;
-    // Pass 1 (the only exps): K row per target point, its sum den_n, 1 / (den_n + c).
-#pragma omp parallel for schedule(static) if (parallel)
-    for (Eigen::Index j = 0; j < n; ++j) {
-        const double sum = KernelRow(kernel_.data() + j * m, sx, sy, sz, m, tx[j], ty[j], tz[j], a);
-        const double den = sum == 0.0 ? kDenFloor : sum;
-        const double inv = 1.0 / (den + c);
-        inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
-        out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
+    const bool parallel = omp_get_max_threads() > 1 && num_chunks > 1 && m * n >= 200000;
+#pragma omp parallel if (parallel)
+    {
+        std::vector<float> column(static_cast<size_t>(m));
+#pragma omp for schedule(static)
+        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+            float* acc = partial_.data() + chunk * 4 * m;
+            std::fill(acc, acc + 4 * m, 0.0f);
+            const Eigen::Index j1 = std::min(n, (chunk + 1) * kTargetsPerChunk);
+            for (Eigen::Index j = chunk * kTargetsPerChunk; j < j1; ++j) {
+                const double sum = KernelRow(column.data(), sx, sy, sz, m, tx[j], ty[j], tz[j], a);
+                const double den = sum == 0.0 ? kDenFloor : sum;
+                const double inv = 1.0 / (den + c);
+                inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
+                out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
+                const auto w = static_cast<float>(inv);
+                AxpyRow(column.data(), m, w, w * tx[j], w * ty[j], w * tz[j], acc, acc + m,
+                        acc + 2 * m, acc + 3 * m);
+            }
+        }
     }
-    // Pass 2 reads K back: p1 and PX as weighted column sums, per block of source points
-    // (float accumulators flushed to double every kChunk targets; fixed order, so the result
-    // does not depend on the thread count).
-    constexpr Eigen::Index kBlock = 256;
-    const Eigen::Index num_blocks = (m + kBlock - 1) / kBlock;
     out.p1.resize(m);
     out.px.resize(m, 3);
     const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
     const auto& s_order = source_.order();
-#pragma omp parallel for schedule(static) if (parallel)
-    for (Eigen::Index b = 0; b < num_blocks; ++b) {
-        const Eigen::Index i0 = b * kBlock;
-        const Eigen::Index count = std::min(kBlock, m - i0);
-        float acc[4][kBlock];
-        double total[4][kBlock] = {};
-        for (Eigen::Index j0 = 0; j0 < n; j0 += kChunk) {
-            for (auto& row : acc) std::fill(row, row + count, 0.0f);
-            const Eigen::Index j1 = std::min(n, j0 + kChunk);
-            for (Eigen::Index j = j0; j < j1; ++j) {
-                const float w = inv_den_[static_cast<size_t>(j)];
-                AxpyRow(kernel_.data() + j * m + i0, count, w, w * tx[j], w * ty[j], w * tz[j],
-                        acc[0], acc[1], acc[2], acc[3]);
-            }
-            for (int k = 0; k < 4; ++k) {
-                for (Eigen::Index i = 0; i < count; ++i) total[k][i] += acc[k][i];
-            }
+    for (Eigen::Index i = 0; i < m; ++i) {
+        double t0 = 0.0, t1 = 0.0, t2 = 0.0, t3 = 0.0;
+        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+            const float* acc = partial_.data() + chunk * 4 * m;
+            t0 += acc[i];
+            t1 += acc[m + i];
+            t2 += acc[2 * m + i];
+            t3 += acc[3 * m + i];
         }
-        for (Eigen::Index i = 0; i < count; ++i) {
-            const Eigen::Index row = s_order[static_cast<size_t>(i0 + i)];
-            out.p1[row] = total[0][i];
-            out.px.row(row) =
-                Eigen::RowVector3d(total[1][i], total[2][i], total[3][i]) + total[0][i] * origin;
-        }
+        const Eigen::Index row = s_order[static_cast<size_t>(i)];
+        out.p1[row] = t0;
+        out.px.row(row) = Eigen::RowVector3d(t1, t2, t3) + t0 * origin;
     }
     out.np = out.p1.sum();
     out.truncated = false;
@@ -676,9 +676,9 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     source_.SetTransform(T);
     const Eigen::Index n = target_blocked_.size();
     const Eigen::Index m = source_.size();
-    // Small dense problems: keep K between the passes, so each exp is computed once.
-    if (!truncated && m * n <= kStoredKernelMaxEntries) {
-        ComputeStoredKernel(sigma2, c, out);
+    // Dense problems up to kFusedMaxEntries pairs: one fused pass, each exp computed once.
+    if (!truncated && m * n <= kFusedMaxEntries) {
+        ComputeFused(sigma2, c, out);
         return;
     }
     // Compression (auto mode at scale): cells of edge kappa * sigma in each summed-over cloud.

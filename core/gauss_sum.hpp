@@ -189,8 +189,8 @@ struct CpdPosteriors {
 ///   pass 1: den_n by kernel sums over the moved source at each target point;
 ///   pass 2: p1 and PX by kernel sums over the target, weighted by 1/(den_n + c), at each moved
 ///           source point; pt1_n = den_n / (den_n + c) follows without a second sum.
-/// Small dense problems (M N <= kStoredKernelMaxEntries, not truncated) keep K from pass 1 and
-/// read it back in pass 2 (one exp per pair); larger ones recompute it in pass 2.
+/// Dense problems up to kFusedMaxEntries pairs run as one fused pass instead: each target's
+/// kernel column is normalised and accumulated into p1 and PX as soon as it is computed.
 /// At scale (GaussSumOptions::cluster_*), the summed-over cloud of each pass is replaced by
 /// its cell-compressed form (source cells of edge kappa sigma in pass 1, target cells weighted
 /// by 1/(den_n + c) in pass 2) while sigma is large; queries stay the exact points, so p1, pt1
@@ -201,8 +201,8 @@ class CpdEStep {
 public:
     /// probreg's floor for an all-zero column: np.finfo(np.float32).eps.
     static constexpr double kDenFloor = 1.19e-7;
-    /// Dense E-steps with M N up to this keep K between passes (16 MB of floats).
-    static constexpr Eigen::Index kStoredKernelMaxEntries = Eigen::Index{1} << 22;
+    /// Dense E-steps with M N up to this run fused (per-chunk accumulators: M N / 4 bytes).
+    static constexpr Eigen::Index kFusedMaxEntries = Eigen::Index{1} << 22;
 
     CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options = {});
 
@@ -216,9 +216,9 @@ public:
 private:
     /// Whether a pass summing over `points` compressed into `cells` cells should use them.
     bool CompressionPays(Eigen::Index cells, Eigen::Index points) const;
-    /// The dense E-step with K (float, M x N) stored by pass 1 and read back by pass 2: one exp
-    /// per pair per iteration instead of two. Used while M N <= kStoredKernelMaxEntries.
-    void ComputeStoredKernel(double sigma2, double c, CpdPosteriors& out);
+    /// The dense E-step in one fused pass over the targets (one exp per pair, nothing M x N
+    /// stored); used while M N <= kFusedMaxEntries.
+    void ComputeFused(double sigma2, double c, CpdPosteriors& out);
 
     GaussSumOptions options_;
     PointCloud source_points_, target_points_;  ///< input copies, for the compressed passes
@@ -226,7 +226,7 @@ private:
     BlockedCloud target_blocked_;
     KernelSumResult pass1_, pass2_;
     std::vector<float> inv_den_;  ///< target stored order
-    std::vector<float> kernel_;   ///< stored K, row j = target stored index j
+    std::vector<float> partial_;  ///< fused path: float p1/PX accumulators per target chunk
 };
 
 }  // namespace regbench
