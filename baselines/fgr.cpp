@@ -1,7 +1,5 @@
 #include "baselines/fgr.hpp"
 
-#include "core/rng.hpp"
-
 #include <open3d/geometry/KDTreeSearchParam.h>
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/pipelines/registration/FastGlobalRegistration.h>
@@ -15,6 +13,8 @@
 
 #include "baselines/open3d_adapter.hpp"
 #include "core/options.hpp"
+#include "core/rng.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -41,6 +41,9 @@ struct FgrOptions {
     int maximum_tuple_count = 1000;   ///< Open3D default
     bool tuple_test = true;           ///< Open3D default
     int seed = 0;                     ///< Open3D RNG seed set before each call (tuple sampling)
+    /// "auto": voxel_size times the pair's unit, and voxel downsampling for clouds above 2048
+    /// points (core/scale_rule.hpp); "preset": the values as given (the paper's setting)
+    std::string scale_rule = "auto";
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FgrOptions,
                                                 voxel_size,
@@ -57,7 +60,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FgrOptions,
                                                 tuple_scale,
                                                 maximum_tuple_count,
                                                 tuple_test,
-                                                seed)
+                                                seed,
+                                                scale_rule)
 
 void Validate(const FgrOptions& o) {
     Require(o.voxel_size > 0.0, kName, "voxel_size", "must be > 0");
@@ -71,6 +75,7 @@ void Validate(const FgrOptions& o) {
     Require(o.iteration_number >= 1, kName, "iteration_number", "must be >= 1");
     Require(o.tuple_scale > 0.0 && o.tuple_scale < 1.0, kName, "tuple_scale", "must be in (0, 1)");
     Require(o.maximum_tuple_count >= 1, kName, "maximum_tuple_count", "must be >= 1");
+    RequireOneOf(o.scale_rule, {"auto", "preset"}, kName, "scale_rule");
 }
 
 class FgrMethod final : public RegistrationMethod {
@@ -84,12 +89,15 @@ protected:
                         const PointCloud& target,
                         const AlignContext& context) override {
         namespace o3r = open3d::pipelines::registration;
-        const auto source_o3d = Prepare(source);
-        const auto target_o3d = Prepare(target);
-        const auto source_fpfh = Fpfh(*source_o3d);
-        const auto target_fpfh = Fpfh(*target_o3d);
+        const ScaleRule rule = ResolveScaleRule(source, target);
+        const bool automatic = options_.scale_rule == "auto";
+        const double voxel = options_.voxel_size * (automatic ? rule.unit : 1.0);
+        const bool downsample = options_.voxel_downsample || (automatic && rule.dense);
+        const auto source_o3d = Prepare(source, voxel, downsample);
+        const auto target_o3d = Prepare(target, voxel, downsample);
+        const auto source_fpfh = Fpfh(*source_o3d, voxel);
+        const auto target_fpfh = Fpfh(*target_o3d, voxel);
 
-        const double voxel = options_.voxel_size;
         const o3r::FastGlobalRegistrationOption fgr_option(
             options_.division_factor, options_.use_absolute_scale, options_.decrease_mu,
             options_.max_correspondence_distance_voxels * voxel, options_.iteration_number,
@@ -120,25 +128,31 @@ protected:
                         {"correspondences", reg.correspondence_set_.size()},
                         {"source_points_used", source_o3d->points_.size()},
                         {"target_points_used", target_o3d->points_.size()},
+                        {"resolved",
+                         {{"voxel_size", voxel},
+                          {"voxel_downsample", downsample},
+                          {"scale_rule", rule.ToJson()}}},
                         {kExcludedSecondsKey, waited}};
         return result;
     }
 
 private:
     /// Optional voxel downsampling, then normals (FPFH needs them).
-    std::shared_ptr<open3d::geometry::PointCloud> Prepare(const PointCloud& points) const {
+    std::shared_ptr<open3d::geometry::PointCloud> Prepare(const PointCloud& points,
+                                                          double voxel,
+                                                          bool downsample) const {
         auto cloud = std::make_shared<open3d::geometry::PointCloud>(ToOpen3d(points));
-        if (options_.voxel_downsample) cloud = cloud->VoxelDownSample(options_.voxel_size);
+        if (downsample) cloud = cloud->VoxelDownSample(voxel);
         cloud->EstimateNormals(open3d::geometry::KDTreeSearchParamHybrid(
-            options_.normal_radius_voxels * options_.voxel_size, options_.normal_max_nn));
+            options_.normal_radius_voxels * voxel, options_.normal_max_nn));
         return cloud;
     }
 
     std::shared_ptr<open3d::pipelines::registration::Feature> Fpfh(
-        const open3d::geometry::PointCloud& cloud) const {
+        const open3d::geometry::PointCloud& cloud, double voxel) const {
         return open3d::pipelines::registration::ComputeFPFHFeature(
-            cloud, open3d::geometry::KDTreeSearchParamHybrid(
-                       options_.fpfh_radius_voxels * options_.voxel_size, options_.fpfh_max_nn));
+            cloud, open3d::geometry::KDTreeSearchParamHybrid(options_.fpfh_radius_voxels * voxel,
+                                                             options_.fpfh_max_nn));
     }
 
     FgrOptions options_;
@@ -177,6 +191,10 @@ MethodInfo FgrMethodInfo() {
         {"maximum_tuple_count", "tuples kept at most, >= 1; 1000 = Open3D default"},
         {"tuple_test", "run the tuple (geometric consistency) test; true = Open3D default"},
         {"seed", "seed for Open3D's global RNG, set right before each call (tuple sampling); 0"},
+        {"scale_rule",
+         "\"auto\": voxel_size scaled by the pair's unit (RMS radius / 0.6 when outside [0.5, "
+         "2], else 1) and voxel downsampling when a cloud has > 2048 points "
+         "(docs/performance.md); used values in extra.resolved; \"preset\": as given"},
     };
     info.defaults = FgrOptions{};
     info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {

@@ -5,6 +5,7 @@
 
 #include "baselines/open3d_adapter.hpp"
 #include "core/options.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -18,14 +19,22 @@ struct IcpOptions {
     int max_iterations = 30;         ///< Open3D ICPConvergenceCriteria default, as OGMM
     double relative_fitness = 1e-6;  ///< stop when |fitness change| is below this ...
     double relative_rmse = 1e-6;     ///< ... and |inlier RMSE change| is below this
+    /// "auto": max_correspondence_distance times the pair's unit (core/scale_rule.hpp; 1 for
+    /// unit-sphere objects); "preset": as given
+    std::string scale_rule = "auto";
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
-    IcpOptions, max_correspondence_distance, max_iterations, relative_fitness, relative_rmse)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IcpOptions,
+                                                max_correspondence_distance,
+                                                max_iterations,
+                                                relative_fitness,
+                                                relative_rmse,
+                                                scale_rule)
 
 void Validate(const IcpOptions& o) {
     Require(o.max_correspondence_distance > 0.0, kName, "max_correspondence_distance",
             "must be > 0");
     Require(o.max_iterations >= 1, kName, "max_iterations", "must be >= 1");
+    RequireOneOf(o.scale_rule, {"auto", "preset"}, kName, "scale_rule");
     Require(o.relative_fitness >= 0.0, kName, "relative_fitness", "must be >= 0");
     Require(o.relative_rmse >= 0.0, kName, "relative_rmse", "must be >= 0");
 }
@@ -43,9 +52,15 @@ protected:
         namespace o3r = open3d::pipelines::registration;
         const o3r::ICPConvergenceCriteria criteria(options_.relative_fitness,
                                                    options_.relative_rmse, options_.max_iterations);
-        return RunOpen3dIcp(
-            ToOpen3d(source), ToOpen3d(target), options_.max_correspondence_distance,
+        const ScaleRule rule = ResolveScaleRule(source, target);
+        const double unit = options_.scale_rule == "auto" ? rule.unit : 1.0;
+        const double distance = options_.max_correspondence_distance * unit;
+        AlignResult result = RunOpen3dIcp(
+            ToOpen3d(source), ToOpen3d(target), distance,
             o3r::TransformationEstimationPointToPoint(/*with_scaling=*/false), criteria);
+        result.extra["resolved"] = {{"max_correspondence_distance", distance},
+                                    {"scale_rule", rule.ToJson()}};
+        return result;
     }
 
 private:
@@ -65,6 +80,10 @@ MethodInfo IcpMethodInfo() {
          "motions (translation up to 0.5 per axis) from the identity; 0.07 = 2 * overlap_radius "
          "is the OGMM code's radius for refining a network's estimate, where ICP barely moves"},
         {"max_iterations", "iteration cap, >= 1; 30 = Open3D default, as the OGMM code"},
+        {"scale_rule",
+         "\"auto\": max_correspondence_distance is scaled by the pair's unit (RMS radius / 0.6 "
+         "when outside [0.5, 2], else 1: unit-sphere objects keep the preset; "
+         "docs/performance.md), the value used is in extra.resolved; \"preset\": as given"},
         {"relative_fitness",
          "stop when the fitness change is below this (and the RMSE change too), >= 0; 1e-6 = "
          "Open3D default"},

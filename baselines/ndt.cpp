@@ -7,6 +7,7 @@
 
 #include "baselines/pcl_adapter.hpp"
 #include "core/options.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -29,6 +30,9 @@ struct NdtOptions {
     /// ... and the cosine of the last step's rotation angle is >= this (0 disables):
     /// cos(1e-3 rad), so mostly-rotational steps about the centroid also count.
     double transformation_rotation_epsilon = 0.9999995;
+    /// "auto": resolution (and the step size) times the pair's unit (core/scale_rule.hpp);
+    /// "preset": as given
+    std::string scale_rule = "auto";
 };
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(NdtOptions,
                                                 resolution,
@@ -37,7 +41,8 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(NdtOptions,
                                                 outlier_ratio,
                                                 max_iterations,
                                                 transformation_epsilon,
-                                                transformation_rotation_epsilon)
+                                                transformation_rotation_epsilon,
+                                                scale_rule)
 
 void Validate(const NdtOptions& o) {
     Require(o.resolution > 0.0, kName, "resolution", "must be > 0");
@@ -47,6 +52,7 @@ void Validate(const NdtOptions& o) {
     Require(o.outlier_ratio >= 0.0 && o.outlier_ratio < 1.0, kName, "outlier_ratio",
             "must be in [0, 1)");
     Require(o.max_iterations >= 1, kName, "max_iterations", "must be >= 1");
+    RequireOneOf(o.scale_rule, {"auto", "preset"}, kName, "scale_rule");
     Require(o.transformation_epsilon > 0.0, kName, "transformation_epsilon", "must be > 0");
     Require(o.transformation_rotation_epsilon >= 0.0 && o.transformation_rotation_epsilon < 1.0,
             kName, "transformation_rotation_epsilon", "must be in [0, 1)");
@@ -71,20 +77,23 @@ protected:
     AlignResult DoAlign(const PointCloud& source,
                         const PointCloud& target,
                         const AlignContext& /*context*/) override {
+        const ScaleRule rule = ResolveScaleRule(source, target);
+        const double unit = options_.scale_rule == "auto" ? rule.unit : 1.0;
+        const double resolution = options_.resolution * unit;
         CheckedNdt ndt;
         // Order matters: PCL voxelises the target inside setInputTarget.
         ndt.setMinPointPerVoxel(static_cast<unsigned int>(options_.min_points_per_voxel));
-        ndt.setResolution(static_cast<float>(options_.resolution));
-        ndt.setStepSize(options_.step_size);
+        ndt.setResolution(static_cast<float>(resolution));
+        ndt.setStepSize(options_.step_size * unit);
         ndt.setOulierRatio(options_.outlier_ratio);
         ndt.setMaximumIterations(options_.max_iterations);
         ndt.setTransformationEpsilon(options_.transformation_epsilon);
         ndt.setTransformationRotationEpsilon(options_.transformation_rotation_epsilon);
         ndt.setInputTarget(ToPcl(target));
         if (ndt.TargetCells() == 0) {
-            throw std::runtime_error(
-                "no target voxel of side " + std::to_string(options_.resolution) +
-                " holds >= " + std::to_string(options_.min_points_per_voxel) + " points");
+            throw std::runtime_error("no target voxel of side " + std::to_string(resolution) +
+                                     " holds >= " + std::to_string(options_.min_points_per_voxel) +
+                                     " points");
         }
         ndt.setInputSource(ToPcl(source));
 
@@ -102,7 +111,11 @@ protected:
             result.stop_reason = "no_step";  // PCL: NaN Newton step, returns where it was
         }
         result.extra = {{"transformation_likelihood", ndt.getTransformationLikelihood()},
-                        {"target_cells", ndt.TargetCells()}};
+                        {"target_cells", ndt.TargetCells()},
+                        {"resolved",
+                         {{"resolution", resolution},
+                          {"step_size", options_.step_size * unit},
+                          {"scale_rule", rule.ToJson()}}}};
         return result;
     }
 
@@ -123,6 +136,10 @@ MethodInfo NdtMethodInfo() {
          "target voxel side [unit-sphere units], > 0; 0.25: ~10-20 points per occupied cell of a "
          "717-point crop (PCL's 1.0 is metre-scale)"},
         {"min_points_per_voxel", "cells with fewer points are dropped, >= 3; 6 = PCL default"},
+        {"scale_rule",
+         "\"auto\": resolution and step_size scaled by the pair's unit (RMS radius / 0.6 when "
+         "outside [0.5, 2], else 1; docs/performance.md), used values in extra.resolved; "
+         "\"preset\": as given"},
         {"step_size", "More-Thuente maximum step length, > 0; 0.1 = PCL default"},
         {"outlier_ratio", "uniform outlier weight of the NDT mixture, [0, 1); 0.55 = PCL default"},
         {"max_iterations", "Newton iteration cap, >= 1; 35 = PCL default"},
