@@ -5,6 +5,7 @@
 
 #include "app/commands.hpp"
 #include "protocols/pair_file.hpp"
+#include "protocols/pair_hash.hpp"
 #include "protocols/pair_protocols.hpp"
 #include "protocols/pair_summary.hpp"
 #include "protocols/xyz_io.hpp"
@@ -69,6 +70,7 @@ void AddImportCommand(CLI::App& app) {
         PairSet set = ImportXyzDir(*dir, *eta);
         set.provenance["regbench_version"] = REGBENCH_VERSION;
         set.provenance["git_sha"] = REGBENCH_GIT_SHA;
+        set.provenance["content_hash"] = PairSetContentHash(set);
         WritePairFile(*out, set);
         std::cerr << "import: wrote " << set.pairs.size() << " pairs to " << *out << "\n";
     });

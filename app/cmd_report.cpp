@@ -1,4 +1,5 @@
-// `regbench report`: per-method tables from JSONL results.
+// `regbench report`: per-method tables from JSONL results, one table per pair file and
+// Euler convention (rows from different data are never pooled).
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -6,70 +7,107 @@
 #include "app/commands.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
-#include "runners/runner.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench::app {
+namespace {
+
+/// Writes text to path via path.tmp + rename, so a reader never sees half a report.
+void WriteAtomically(const std::string& path, const std::string& text) {
+    const std::string tmp = path + ".tmp";
+    std::ofstream f(tmp);
+    f << text;
+    f.close();
+    if (!f) throw std::runtime_error(path + ": cannot write");
+    std::filesystem::rename(tmp, path);
+}
+
+std::string PaperComparison(const std::vector<ReportTable>& tables,
+                            const std::string& paper,
+                            const std::string& paper_file) {
+    const auto colon = paper.find(':');
+    const std::string table = paper.substr(0, colon);
+    const std::string group = colon == std::string::npos ? "" : paper.substr(colon + 1);
+    const nlohmann::json published = LoadPaperTables(paper_file);
+    std::string text;
+    for (const auto& t : tables) {
+        text += "\n" + FormatPaperComparison(t.methods, published, table, group);
+        text += "\nOurs: " + DescribeTable(t) +
+                ". Paper: ModelNet40 / 7Scenes / ICL-NUIM as published (their machine, their "
+                "pairs; mae_r with scipy as_euler('zyx')).\n";
+    }
+    return text;
+}
+
+}  // namespace
 
 void AddReportCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("report", "Summarise JSONL results into a table per method");
+    auto* cmd = app.add_subcommand(
+        "report",
+        "Summarise JSONL results: one table per pair file and Euler convention, a row per "
+        "method and parameter set (metrics: docs/metrics.md)");
     auto files = std::make_shared<std::vector<std::string>>();
     auto format = std::make_shared<std::string>("md");
     auto out = std::make_shared<std::string>();
     auto o = std::make_shared<ReportOptions>();
+    auto euler = std::make_shared<std::string>();
     auto paper = std::make_shared<std::string>();
     auto paper_file = std::make_shared<std::string>(DefaultPaperTablesPath());
     cmd->add_option("results", *files, "One or more JSONL result files (e.g. shards)")->required();
     cmd->add_option("--format,-f", *format, "md | csv | json | latex")
-        ->check(CLI::IsMember({"md", "csv", "json", "latex"}));
+        ->check(CLI::IsMember({"md", "csv", "json", "latex"}))
+        ->capture_default_str();
     cmd->add_option("--out,-o", *out, "Write to this file (atomically) instead of stdout");
-    cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r threshold [deg]");
-    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t threshold");
-    cmd->add_option("--bootstrap", o->bootstrap_samples, "Bootstrap resamples for the 95% CIs");
+    cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r < r [deg]")
+        ->capture_default_str();
+    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")->capture_default_str();
+    cmd->add_option("--success-rre", o->success_rre_deg, "success: rre < this [deg] (and rte)")
+        ->capture_default_str();
+    cmd->add_option("--success-rte", o->success_rte, "success: rte < this (and rre)")
+        ->capture_default_str();
+    cmd->add_flag("--recall-3dmatch", o->recall_3dmatch,
+                  "Add the 3DMatch-style recall: overlap RMSE < 0.2, rre < 15 deg, rte < 0.3");
+    cmd->add_option("--euler", *euler,
+                    "Report mae_r/rmse_r in this convention (zyx: the paper's, xyz: RPMNet's); "
+                    "default: the rows' own. Rows in another one are recomputed from their "
+                    "stored ground truth")
+        ->check(CLI::IsMember({"zyx", "xyz"}));
+    cmd->add_option("--bootstrap", o->bootstrap_samples, "Bootstrap resamples for the 95% CIs")
+        ->capture_default_str();
     cmd->add_option("--paper", *paper,
                     "Also print the paper's cells side by side: TABLE[:GROUP], e.g. "
                     "table1_modelnet_partial:same_category (md format)");
     cmd->add_option("--paper-file", *paper_file, "The paper's tables (JSON)");
     cmd->callback([=] {
-        std::vector<nlohmann::json> rows;
+        std::vector<ResultRow> rows;
         for (const auto& f : *files) {
-            auto part = ReadJsonl(f);
+            auto part = ReadResultRows(f);  // throws naming file:line
             rows.insert(rows.end(), part.begin(), part.end());
         }
         if (rows.empty()) throw std::runtime_error("no result rows in " + files->front());
-        const auto summaries = Summarize(rows, *o);
+        ReportOptions opts = *o;
+        if (!euler->empty()) opts.euler = ParseEulerConvention(*euler);
+        const std::vector<ReportTable> tables = BuildTables(rows, opts);
         std::string text;
         if (*format == "md") {
-            text = "Data: " + DescribeData(rows) + "\n\n" + FormatMarkdown(summaries, *o);
-            if (!paper->empty()) {
-                const auto colon = paper->find(':');
-                const std::string table = paper->substr(0, colon);
-                const std::string group =
-                    colon == std::string::npos ? "" : paper->substr(colon + 1);
-                text += "\n" + FormatPaperComparison(summaries, LoadPaperTables(*paper_file), table,
-                                                     group);
-                text += "\nOurs: " + DescribeData(rows) +
-                        ". Paper: ModelNet40 / 7Scenes / ICL-NUIM "
-                        "as published (their machine, their pairs).\n";
-            }
+            text = FormatMarkdown(tables, opts);
+            if (!paper->empty()) text += PaperComparison(tables, *paper, *paper_file);
         } else if (*format == "csv") {
-            text = FormatCsv(summaries);
+            text = FormatCsv(tables);
         } else if (*format == "latex") {
-            text = "% Data: " + DescribeData(rows) + "\n" + FormatLatex(summaries, *o);
+            text = FormatLatex(tables, opts);
         } else {
-            text = nlohmann::json{{"data", DescribeData(rows)}, {"methods", ToJson(summaries, *o)}}
-                       .dump(2) +
-                   "\n";
+            text = nlohmann::json{{"tables", ToJson(tables, opts)}}.dump(2) + "\n";
+        }
+        if (tables.size() > 1) {
+            std::cerr << "[report] rows come from " << tables.size()
+                      << " different pair files / conventions: one table each, never pooled\n";
         }
         if (out->empty()) {
             std::cout << text;
-            return;
+        } else {
+            WriteAtomically(*out, text);
         }
-        const std::string tmp = *out + ".tmp";
-        std::ofstream f(tmp);
-        f << text;
-        f.close();
-        if (!f) throw std::runtime_error(*out + ": cannot write");
-        std::filesystem::rename(tmp, *out);
     });
 }
 

@@ -16,6 +16,7 @@ void AddRunCommand(CLI::App& app) {
     auto params = std::make_shared<std::string>();
     auto shard = std::make_shared<std::string>("0/1");
     auto quiet = std::make_shared<bool>(false);
+    auto euler = std::make_shared<std::string>("zyx");
     cmd->add_option("--pairs", opts->pairs_path, "Frozen HDF5 pair file (regbench generate/import)")
         ->required();
     cmd->add_option("--methods", *methods, "Comma-separated method names (see `regbench methods`)")
@@ -37,6 +38,11 @@ void AddRunCommand(CLI::App& app) {
                     "Process pairs k with k % n == i, given as i/n (Slurm arrays)");
     cmd->add_option("--timeout", opts->timeout_seconds,
                     "Seconds per call; > 0 runs each call in a child process (isolates crashes)");
+    cmd->add_option("--euler", *euler,
+                    "Euler angles of mae_r/rmse_r: zyx = scipy as_euler('zyx'), the paper's; "
+                    "xyz = RPMNet's (docs/metrics.md)")
+        ->check(CLI::IsMember({"zyx", "xyz"}))
+        ->capture_default_str();
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");
     cmd->callback([=] {
         RunOptions o = *opts;
@@ -53,6 +59,7 @@ void AddRunCommand(CLI::App& app) {
             throw std::invalid_argument("--shard must look like i/n, got '" + *shard + "'");
         }
         o.progress = !*quiet;
+        o.euler = ParseEulerConvention(*euler);
         // Threads beyond the idle cores wait for each other: wall time balloons and the
         // per-call timings stop meaning anything (docs/performance.md).
         const MachineLoad load = ReadMachineLoad();

@@ -11,5 +11,7 @@ void AddGenerateCommand(CLI::App& app);
 void AddInspectCommand(CLI::App& app);
 void AddExportCommand(CLI::App& app);
 void AddImportCommand(CLI::App& app);
+void AddScoreCommand(CLI::App& app);
+void AddAlignCommand(CLI::App& app);
 
 }  // namespace regbench::app

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "app/commands.hpp"
 
@@ -29,10 +30,14 @@ void EnsurePassiveOmpWaitPolicy(char** argv) {
 int main(int argc, char** argv) {
     EnsurePassiveOmpWaitPolicy(argv);
     CLI::App app{"regbench: reproducible benchmarks for rigid point-cloud registration"};
+    app.set_version_flag("--version", std::string("regbench ") + REGBENCH_VERSION + " (git " +
+                                          REGBENCH_GIT_SHA + ")");
     app.require_subcommand(1);
     regbench::app::AddMethodsCommand(app);
     regbench::app::AddRunCommand(app);
     regbench::app::AddReportCommand(app);
+    regbench::app::AddScoreCommand(app);
+    regbench::app::AddAlignCommand(app);
     regbench::app::AddGenerateCommand(app);
     regbench::app::AddInspectCommand(app);
     regbench::app::AddExportCommand(app);

@@ -1,30 +1,217 @@
 #include "baselines/cpd.hpp"
 
+#include <omp.h>
+
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
 
-#include "core/gauss_sum.hpp"
-#include "core/gmm_common.hpp"
 #include "core/kabsch.hpp"
-#include "core/options.hpp"
 #include "core/transform.hpp"
+#include "gmm/cell_compress.hpp"
+#include "gmm/gauss_sum.hpp"
+#include "gmm/gmm_common.hpp"
 
 namespace regbench {
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(CpdOptions,
-                                                w,
-                                                maxiter,
-                                                tol,
-                                                update_scale,
-                                                sigma2_formula,
-                                                sigma2,
-                                                compat,
-                                                e_step,
-                                                truncation_sigmas,
-                                                truncation_min_points,
-                                                cluster_cell_sigmas,
-                                                cluster_min_points)
+namespace {
+Eigen::Vector3d Centroid(const PointCloud& cloud) {
+    if (cloud.rows() == 0) throw std::invalid_argument("CpdEStep: target cloud is empty");
+    return cloud.colwise().mean().transpose();
+}
+}  // namespace
+
+CpdEStep::CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options)
+    : options_(options),
+      source_points_(source),
+      target_points_(target),
+      source_(source, Centroid(target)),
+      target_blocked_(target, Centroid(target)) {
+    if (!(options_.truncation_sigmas > 0.0)) {
+        throw std::invalid_argument("CpdEStep: truncation_sigmas must be positive");
+    }
+}
+
+bool CpdEStep::CompressionPays(Eigen::Index cells, Eigen::Index points) const {
+    return static_cast<double>(cells) < options_.cluster_max_fraction * static_cast<double>(points);
+}
+
+namespace {
+/// Float weights in a BlockedCloud's stored order from per-input-row weights.
+std::vector<float> StoredWeights(const BlockedCloud& cloud, const Eigen::VectorXd& weights) {
+    std::vector<float> w(static_cast<size_t>(cloud.size()));
+    for (size_t k = 0; k < w.size(); ++k) w[k] = static_cast<float>(weights[cloud.order()[k]]);
+    return w;
+}
+}  // namespace
+
+bool CpdEStep::UsesTruncation(double sigma2) const {
+    switch (options_.mode) {
+        case GaussSumMode::kDense:
+            return false;
+        case GaussSumMode::kTruncated:
+            return true;
+        case GaussSumMode::kAuto:
+            break;
+    }
+    const Eigen::Index largest = std::max(source_.size(), target_blocked_.size());
+    const double r = options_.truncation_sigmas * std::sqrt(sigma2);
+    return largest >= options_.truncation_min_points &&
+           r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
+}
+
+void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
+    const Eigen::Index n = target_blocked_.size();
+    const Eigen::Index m = source_.size();
+    // P_mn = K_mn / (den_n + c) normalises each target's column over all sources, so one
+    // target's column, once computed, already gives its share of p1 and PX: one pass over the
+    // targets, one exp per pair, nothing M x N stored. Targets go in fixed chunks, each with
+    // its own float accumulators, reduced in chunk order: thread-count independent.
+    constexpr Eigen::Index kTargetsPerChunk = 64;
+    const Eigen::Index num_chunks = (n + kTargetsPerChunk - 1) / kTargetsPerChunk;
+    partial_.resize(static_cast<size_t>(num_chunks * 4 * m));
+    inv_den_.resize(static_cast<size_t>(n));
+    out.pt1.resize(n);
+    const auto a = static_cast<float>(-0.5 / sigma2);
+    const float* sx = source_.x();
+    const float* sy = source_.y();
+    const float* sz = source_.z();
+    const float* tx = target_blocked_.x();
+    const float* ty = target_blocked_.y();
+    const float* tz = target_blocked_.z();
+    const auto& t_order = target_blocked_.order();
+    const bool parallel = omp_get_max_threads() > 1 && num_chunks > 1 && m * n >= 200000;
+#pragma omp parallel if (parallel)
+    {
+        std::vector<float> column(static_cast<size_t>(m));
+#pragma omp for schedule(static)
+        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+            float* acc = partial_.data() + chunk * 4 * m;
+            std::fill(acc, acc + 4 * m, 0.0f);
+            const Eigen::Index j1 = std::min(n, (chunk + 1) * kTargetsPerChunk);
+            for (Eigen::Index j = chunk * kTargetsPerChunk; j < j1; ++j) {
+                const double sum = KernelRow(column.data(), sx, sy, sz, m, tx[j], ty[j], tz[j], a);
+                const double den = sum == 0.0 ? kDenFloor : sum;
+                const double inv = 1.0 / (den + c);
+                inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
+                out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
+                const auto w = static_cast<float>(inv);
+                AxpyRow(column.data(), m, w, w * tx[j], w * ty[j], w * tz[j], acc, acc + m,
+                        acc + 2 * m, acc + 3 * m);
+            }
+        }
+    }
+    out.p1.resize(m);
+    out.px.resize(m, 3);
+    const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
+    const auto& s_order = source_.order();
+    for (Eigen::Index i = 0; i < m; ++i) {
+        double t0 = 0.0, t1 = 0.0, t2 = 0.0, t3 = 0.0;
+        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+            const float* acc = partial_.data() + chunk * 4 * m;
+            t0 += acc[i];
+            t1 += acc[m + i];
+            t2 += acc[2 * m + i];
+            t3 += acc[3 * m + i];
+        }
+        const Eigen::Index row = s_order[static_cast<size_t>(i)];
+        out.p1[row] = t0;
+        out.px.row(row) = Eigen::RowVector3d(t1, t2, t3) + t0 * origin;
+    }
+    out.np = out.p1.sum();
+    out.truncated = false;
+    out.compressed_cells = 0;
+    out.evaluated_pairs = m * n;
+}
+
+void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out) {
+    if (!(c >= 0.0) || !std::isfinite(c)) {
+        throw std::invalid_argument("CpdEStep: outlier constant c must be finite and >= 0");
+    }
+    const bool truncated = UsesTruncation(sigma2);
+    const double cutoff = truncated ? options_.truncation_sigmas * std::sqrt(sigma2)
+                                    : UnderflowRadiusSigmas() * std::sqrt(sigma2);
+    source_.SetTransform(T);
+    const Eigen::Index n = target_blocked_.size();
+    const Eigen::Index m = source_.size();
+    // Dense problems up to kFusedMaxEntries pairs: one fused pass, each exp computed once.
+    if (!truncated && m * n <= kFusedMaxEntries) {
+        ComputeFused(sigma2, c, out);
+        return;
+    }
+    // Compression (auto mode at scale): cells of edge kappa * sigma in each summed-over cloud.
+    const bool may_compress = options_.mode == GaussSumMode::kAuto &&
+                              options_.cluster_cell_sigmas > 0.0 &&
+                              std::max(m, n) >= options_.cluster_min_points;
+    const double cell = options_.cluster_cell_sigmas * std::sqrt(sigma2);
+    Eigen::Index cells_used = 0;
+    bool compressed = false;
+
+    // Pass 1: den_n = sum_m K_mn at every target point.
+    if (may_compress) {
+        // Cells in the source's own frame, edge cell / s, so they have edge `cell` once moved.
+        const double s = T.topLeftCorner<3, 3>().col(0).norm();
+        const CellCompressed cs = CompressToCells(source_points_, nullptr, cell / s);
+        if (CompressionPays(cs.centroids.rows(), m)) {
+            BlockedCloud cells(cs.centroids, target_blocked_.origin());
+            cells.SetTransform(T);
+            const std::vector<float> w = StoredWeights(cells, cs.weights);
+            KernelSums(target_blocked_, cells, sigma2, cutoff, w.data(), false, pass1_);
+            cells_used += cells.size();
+            compressed = true;
+        }
+    }
+    if (!compressed) {
+        KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
+        cells_used += m;
+    }
+    inv_den_.resize(static_cast<size_t>(n));
+    out.pt1.resize(n);
+    const auto& t_order = target_blocked_.order();
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const double den = pass1_.m0[k] == 0.0 ? kDenFloor : pass1_.m0[k];
+        const double inv = 1.0 / (den + c);
+        inv_den_[static_cast<size_t>(k)] = static_cast<float>(inv);
+        // sum_m K_mn / (den_n + c) = 1 - c / (den_n + c), as probreg (floored den).
+        out.pt1[t_order[static_cast<size_t>(k)]] = den * inv;
+    }
+
+    // Pass 2: p1_m = sum_n K_mn / (den_n + c) and PX_m = sum_n K_mn x_n / (den_n + c).
+    bool compressed2 = false;
+    if (may_compress) {
+        Eigen::VectorXd w_input(n);
+        for (Eigen::Index k = 0; k < n; ++k) {
+            w_input[t_order[static_cast<size_t>(k)]] = inv_den_[static_cast<size_t>(k)];
+        }
+        const CellCompressed ct = CompressToCells(target_points_, &w_input, cell);
+        if (CompressionPays(ct.centroids.rows(), n)) {
+            // Weighted centroids: sum_n w_n K(y, x_n) x_n ~ W_c K(y, xbar_c) xbar_c.
+            BlockedCloud cells(ct.centroids, target_blocked_.origin());
+            const std::vector<float> w = StoredWeights(cells, ct.weights);
+            KernelSums(source_, cells, sigma2, cutoff, w.data(), true, pass2_);
+            cells_used += cells.size();
+            compressed2 = true;
+        }
+    }
+    if (!compressed2) {
+        KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
+        cells_used += n;
+    }
+    out.p1.resize(m);
+    out.px.resize(m, 3);
+    const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
+    const auto& s_order = source_.order();
+    for (Eigen::Index k = 0; k < m; ++k) {
+        const Eigen::Index row = s_order[static_cast<size_t>(k)];
+        out.p1[row] = pass2_.m0[k];
+        out.px.row(row) = pass2_.m1.row(k) + pass2_.m0[k] * origin;  // back to absolute x_n
+    }
+    out.np = out.p1.sum();
+    out.truncated = truncated;
+    out.compressed_cells = (compressed || compressed2) ? cells_used : 0;
+    out.evaluated_pairs = pass1_.evaluated_pairs + pass2_.evaluated_pairs;
+}
 
 namespace {
 
@@ -34,7 +221,7 @@ constexpr int kDim = 3;
 /// finite once a clean pair has converged exactly.
 constexpr double kSigma2Floor = 1.19e-7;
 
-/// One M-step's outputs (spec section 1, "M-step").
+/// One M-step's outputs (docs/probabilistic-baselines.md, CPD M-step).
 struct MStep {
     Transform T = Transform::Identity();
     double scale = 1.0;
@@ -79,14 +266,67 @@ MStep MaximizationStep(const PointCloud& Y,
     return out;
 }
 
-class CpdMethod final : public RegistrationMethod {
+const MethodSpec<CpdOptions>& Spec() {
+    using O = CpdOptions;
+    static const MethodSpec<CpdOptions> spec{
+        kName,
+        "rigid Coherent Point Drift (Myronenko & Song 2010) per probreg 0.3.7; fused float "
+        "SIMD E-step (kd-leaf pruning, optional 4-sigma truncation), double M-step",
+        {
+            Param("w", &O::w,
+                  "weight of the uniform outlier component, in [0, 1); probreg default 0")
+                .AtLeast(0.0)
+                .Below(1.0),
+            Param("maxiter", &O::maxiter, "maximum EM iterations (>= 1); probreg 50").AtLeast(1),
+            Param("tol", &O::tol,
+                  "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3")
+                .AtLeast(0.0)
+                .Finite(),
+            Param("update_scale", &O::update_scale,
+                  "estimate a scale s (similarity transform); default false, true under "
+                  "compat=probreg"),
+            Param(
+                "sigma2_formula", &O::sigma2_formula,
+                "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without "
+                "scale (probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg"),
+            Param("sigma2", &O::sigma2, "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg")
+                .AtLeast(0.0)
+                .Finite(),
+            Param("compat", &O::compat,
+                  "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's "
+                  "sigma^2 formula unless those are given explicitly)"),
+            Param("e_step", &O::e_step,
+                  "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" (exact up "
+                  "to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"),
+            Param("truncation_sigmas", &O::truncation_sigmas,
+                  "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4")
+                .Greater(0.0)
+                .Finite(),
+            Param("truncation_min_points", &O::truncation_min_points,
+                  "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox "
+                  "diagonal")
+                .AtLeast(0),
+            Param("cluster_cell_sigmas", &O::cluster_cell_sigmas,
+                  "auto, at scale: while a cloud has under half as many cells of edge "
+                  "cluster_cell_sigmas * sigma as points, each E-step pass sums over its cells' "
+                  "weighted centroids (docs/performance.md: accuracy cost); 0 = never")
+                .AtLeast(0.0)
+                .AtMost(1.0),
+            Param("cluster_min_points", &O::cluster_min_points,
+                  "auto: compress only if max(M, N) >= this")
+                .AtLeast(0),
+        },
+        nullptr,
+        {{"probreg", {{"update_scale", true}, {"sigma2_formula", "probreg"}}}}};
+    return spec;
+}
+
+class CpdMethod final : public SpecMethod<CpdOptions> {
 public:
-    explicit CpdMethod(CpdOptions options) : options_(std::move(options)) {}
-    std::string Name() const override { return kName; }
-    nlohmann::json Params() const override { return options_; }
+    using SpecMethod::SpecMethod;
 
 protected:
-    bool AllowsScale() const override { return options_.update_scale; }
+    bool AllowsScale() const override { return options().update_scale; }
 
     AlignResult DoAlign(const PointCloud& Y,
                         const PointCloud& X,
@@ -94,17 +334,17 @@ protected:
         const double m = static_cast<double>(Y.rows());
         const double n = static_cast<double>(X.rows());
         GaussSumOptions gs;
-        gs.mode = ParseGaussSumMode(options_.e_step, "cpd: parameter 'e_step'");
-        gs.truncation_sigmas = options_.truncation_sigmas;
-        gs.truncation_min_points = options_.truncation_min_points;
-        gs.cluster_cell_sigmas = options_.cluster_cell_sigmas;
-        gs.cluster_min_points = options_.cluster_min_points;
+        gs.mode = options().e_step;
+        gs.truncation_sigmas = options().truncation_sigmas;
+        gs.truncation_min_points = options().truncation_min_points;
+        gs.cluster_cell_sigmas = options().cluster_cell_sigmas;
+        gs.cluster_min_points = options().cluster_min_points;
         CpdEStep e_step(Y, X, gs);
-        const bool probreg_sigma2 = options_.sigma2_formula == "probreg";
+        const bool probreg_sigma2 = options().sigma2_formula == CpdSigma2Formula::kProbreg;
 
-        // Init (spec section 1): R = I, t = 0, s = 1, sigma^2 = sqsum, q0 = 1 + N D/2 ln sigma^2.
+        // Init: R = I, t = 0, s = 1, sigma^2 = sqsum, q0 = 1 + N D/2 ln sigma^2.
         MStep state;
-        state.sigma2 = options_.sigma2 > 0.0 ? options_.sigma2 : SquaredDistanceMean(Y, X);
+        state.sigma2 = options().sigma2 > 0.0 ? options().sigma2 : SquaredDistanceMean(Y, X);
         state.sigma2 = std::max(state.sigma2, kSigma2Floor);
         state.q = 1.0 + n * kDim * 0.5 * std::log(state.sigma2);
 
@@ -114,10 +354,10 @@ protected:
         int truncated_iterations = 0;
         int compressed_iterations = 0;
         std::int64_t evaluated_pairs = 0;
-        for (int it = 1; it <= options_.maxiter; ++it) {
+        for (int it = 1; it <= options().maxiter; ++it) {
             // c = (2 pi sigma^2)^(D/2) w/(1-w) M/N: the uniform outlier term (CPD eq. (7)).
-            const double c = std::pow(2.0 * M_PI * state.sigma2, 0.5 * kDim) * options_.w /
-                             (1.0 - options_.w) * m / n;
+            const double c = std::pow(2.0 * M_PI * state.sigma2, 0.5 * kDim) * options().w /
+                             (1.0 - options().w) * m / n;
             e_step.Compute(state.T, state.sigma2, c, post);
             truncated_iterations += post.truncated ? 1 : 0;
             compressed_iterations += post.compressed_cells > 0 ? 1 : 0;
@@ -126,11 +366,11 @@ protected:
                 conv.stop_reason = "no_correspondences";  // keep the previous transform
                 break;
             }
-            const MStep next = MaximizationStep(Y, X, post, options_.update_scale, probreg_sigma2);
+            const MStep next = MaximizationStep(Y, X, post, options().update_scale, probreg_sigma2);
             const double dq = std::abs(next.q - state.q);
             state = next;
             conv.iterations = it;
-            if (dq < options_.tol) {
+            if (dq < options().tol) {
                 conv.stop_reason = "converged";
                 break;
             }
@@ -150,78 +390,12 @@ protected:
         r.extra["kernel_evaluations"] = evaluated_pairs;
         return r;
     }
-
-private:
-    CpdOptions options_;
 };
 
 }  // namespace
 
-CpdOptions ParseCpdOptions(const nlohmann::json& j) {
-    CpdOptions o = ParseOptions<CpdOptions>(j, kName);
-    RequireOneOf(o.compat, {"none", "probreg"}, kName, "compat");
-    const bool given = j.is_object();
-    if (o.compat == "probreg") {
-        if (!given || !j.contains("update_scale")) o.update_scale = true;
-        if (!given || !j.contains("sigma2_formula")) o.sigma2_formula = "probreg";
-    }
-    Require(o.w >= 0.0 && o.w < 1.0, kName, "w", "must be in [0, 1), got " + std::to_string(o.w));
-    Require(o.maxiter >= 1, kName, "maxiter", "must be >= 1, got " + std::to_string(o.maxiter));
-    Require(o.tol >= 0.0 && std::isfinite(o.tol), kName, "tol",
-            "must be finite and >= 0, got " + std::to_string(o.tol));
-    RequireOneOf(o.sigma2_formula, {"ml", "probreg"}, kName, "sigma2_formula");
-    Require(o.sigma2 >= 0.0 && std::isfinite(o.sigma2), kName, "sigma2",
-            "must be > 0, or 0 for sqsum(Y, X); got " + std::to_string(o.sigma2));
-    RequireOneOf(o.e_step, {"auto", "dense", "truncated"}, kName, "e_step");
-    Require(o.truncation_sigmas > 0.0 && std::isfinite(o.truncation_sigmas), kName,
-            "truncation_sigmas", "must be > 0, got " + std::to_string(o.truncation_sigmas));
-    Require(o.truncation_min_points >= 0, kName, "truncation_min_points",
-            "must be >= 0, got " + std::to_string(o.truncation_min_points));
-    Require(
-        o.cluster_cell_sigmas >= 0.0 && o.cluster_cell_sigmas <= 1.0, kName, "cluster_cell_sigmas",
-        "must be in [0, 1] (0 disables compression), got " + std::to_string(o.cluster_cell_sigmas));
-    Require(o.cluster_min_points >= 0, kName, "cluster_min_points",
-            "must be >= 0, got " + std::to_string(o.cluster_min_points));
-    return o;
-}
+CpdOptions ParseCpdOptions(const nlohmann::json& j) { return Spec().Parse(j); }
 
-MethodInfo CpdMethodInfo() {
-    MethodInfo info;
-    info.name = kName;
-    info.summary =
-        "rigid Coherent Point Drift (Myronenko & Song 2010) per probreg 0.3.7; fused float "
-        "SIMD E-step (kd-leaf pruning, optional 4-sigma truncation), double M-step";
-    info.param_docs = {
-        {"w", "weight of the uniform outlier component, in [0, 1); probreg default 0"},
-        {"maxiter", "maximum EM iterations (>= 1); probreg 50"},
-        {"tol", "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3"},
-        {"update_scale",
-         "estimate a scale s (similarity transform); default false, true under compat=probreg"},
-        {"sigma2_formula",
-         "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without scale "
-         "(probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg"},
-        {"sigma2", "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg"},
-        {"compat",
-         "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's sigma^2 "
-         "formula unless those are given explicitly)"},
-        {"e_step",
-         "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" "
-         "(exact up to float "
-         "underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"},
-        {"truncation_sigmas", "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4"},
-        {"truncation_min_points",
-         "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal"},
-        {"cluster_cell_sigmas",
-         "auto, at scale: while a cloud has under half as many cells of edge "
-         "cluster_cell_sigmas * sigma as points, each E-step pass sums over its cells' weighted "
-         "centroids (docs/performance.md: accuracy cost); 0 = never"},
-        {"cluster_min_points", "auto: compress only if max(M, N) >= this"},
-    };
-    info.defaults = CpdOptions{};
-    info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
-        return std::make_unique<CpdMethod>(ParseCpdOptions(j));
-    };
-    return info;
-}
+MethodInfo CpdMethodInfo() { return MakeMethodInfo<CpdMethod>(Spec()); }
 
 }  // namespace regbench

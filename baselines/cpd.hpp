@@ -1,34 +1,100 @@
 #pragma once
 // Rigid Coherent Point Drift (Myronenko & Song, TPAMI 2010) as probreg 0.3.7 implements it,
-// with its two deviations from the paper made explicit options (spec:
-// ../shared/specs/probabilistic-baselines.md section 1).
+// with its two deviations from the paper made explicit options (docs/probabilistic-baselines.md,
+// "CPD").
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/method_spec.hpp"
 #include "core/registration.hpp"
+#include "gmm/gauss_sum.hpp"
 
 namespace regbench {
 
-/// Options of `cpd`. `compat` picks the defaults of update_scale and sigma2_formula; a value
-/// given explicitly always wins over the compat preset:
-///   compat "none"    -> update_scale false, sigma2_formula "ml": the correct rigid algorithm;
-///   compat "probreg" -> update_scale true,  sigma2_formula "probreg": registration_cpd(...,
-///                       'rigid') as published (similarity transform; with update_scale false
-///                       its sigma^2 = (cx + b - a)/(Np D) bug, which stalls sigma^2).
+/// How CPD updates sigma^2 after each M-step.
+enum class CpdSigma2Formula {
+    kMl,       ///< (cx - 2sa + s^2 b)/(Np D): the maximum-likelihood update
+    kProbreg,  ///< (cx + b - a)/(Np D): probreg's formula (stalls without scale)
+};
+NLOHMANN_JSON_SERIALIZE_ENUM(CpdSigma2Formula,
+                             {{CpdSigma2Formula::kMl, "ml"},
+                              {CpdSigma2Formula::kProbreg, "probreg"}})
+
+/// Options of `cpd`, each documented once in the parameter table of baselines/cpd.cpp
+/// (`regbench methods cpd` prints it). compat "probreg" presets update_scale = true and
+/// sigma2_formula = probreg; a value given explicitly always wins over the preset.
 struct CpdOptions {
-    double w = 0.0;                     ///< outlier weight of the uniform component, in [0, 1)
-    int maxiter = 50;                   ///< EM iterations, >= 1 (probreg 50, MATLAB 150)
-    double tol = 1e-3;                  ///< stop when |q - q_prev| < tol (absolute), >= 0
-    bool update_scale = false;          ///< estimate s (similarity); default from compat
-    std::string sigma2_formula = "ml";  ///< "ml" or "probreg"; default from compat
-    double sigma2 = 0.0;                ///< initial sigma^2 (> 0), or 0 = sqsum(Y, X)
-    std::string compat = "none";        ///< "none" or "probreg" (see above)
-    std::string e_step = "auto";        ///< "auto", "dense" or "truncated" (core/gauss_sum.hpp)
-    double truncation_sigmas = 4.0;     ///< truncated E-step radius r = k sigma, > 0
-    int truncation_min_points = 20000;  ///< auto: truncate only when max(M, N) >= this
-    /// auto: cell edge (in sigmas) of the cell-compressed E-step at scale; 0 = never compress
+    double w = 0.0;
+    int maxiter = 50;
+    double tol = 1e-3;
+    bool update_scale = false;
+    CpdSigma2Formula sigma2_formula = CpdSigma2Formula::kMl;
+    double sigma2 = 0.0;
+    Compat compat = Compat::kNone;
+    GaussSumMode e_step = GaussSumMode::kAuto;
+    double truncation_sigmas = 4.0;
+    int truncation_min_points = 20000;
     double cluster_cell_sigmas = 0.25;
-    int cluster_min_points = 20000;  ///< auto: compress only when max(M, N) >= this
+    int cluster_min_points = 20000;
+};
+
+/// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
+/// clouds' input order, all in double.
+struct CpdPosteriors {
+    Eigen::VectorXd p1;      ///< P 1 (M)
+    Eigen::VectorXd pt1;     ///< P^T 1 (N)
+    PointCloud px;           ///< P X (M x 3), in the target's input frame
+    double np = 0.0;         ///< sum(p1)
+    bool truncated = false;  ///< whether the truncated evaluation was used
+    /// Cells the compressed evaluation summed over (source cells in pass 1 plus target cells
+    /// in pass 2; a pass left exact counts its points); 0 when neither pass was compressed.
+    Eigen::Index compressed_cells = 0;
+    std::int64_t evaluated_pairs = 0;  ///< kernel evaluations in both passes
+};
+
+/// The CPD E-step, P_mn = K_mn / (den_n + c), K_mn = exp(-|T(y_m) - x_n|^2 / 2 sigma^2),
+/// den_n = sum_m K_mn (0 becomes kDenFloor), in two passes and without storing P:
+///   pass 1: den_n by kernel sums over the moved source at each target point;
+///   pass 2: p1 and PX by kernel sums over the target, weighted by 1/(den_n + c), at each moved
+///           source point; pt1_n = den_n / (den_n + c) follows without a second sum.
+/// Dense problems up to kFusedMaxEntries pairs run as one fused pass instead: each target's
+/// kernel column is normalised and accumulated into p1 and PX as soon as it is computed.
+/// At scale (GaussSumOptions::cluster_*), the summed-over cloud of each pass is replaced by
+/// its cell-compressed form (source cells of edge kappa sigma in pass 1, target cells weighted
+/// by 1/(den_n + c) in pass 2) while sigma is large; queries stay the exact points, so p1, pt1
+/// and PX keep one entry per point.
+/// Holds prepared copies of both clouds, so build it once per registration and call Compute
+/// every iteration. Not thread-safe (scratch buffers); Compute itself uses OpenMP.
+class CpdEStep {
+public:
+    /// probreg's floor for an all-zero column: np.finfo(np.float32).eps.
+    static constexpr double kDenFloor = 1.19e-7;
+    /// Dense E-steps with M N up to this run fused (per-chunk accumulators: M N / 4 bytes).
+    static constexpr Eigen::Index kFusedMaxEntries = Eigen::Index{1} << 22;
+
+    CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options = {});
+
+    /// One E-step for the source moved by T (a similarity), variance sigma2 > 0 and outlier
+    /// constant c = (2 pi sigma2)^(D/2) w/(1-w) M/N >= 0.
+    void Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out);
+
+    /// True when Compute with this sigma2 would truncate (the options' switch rule).
+    bool UsesTruncation(double sigma2) const;
+
+private:
+    /// Whether a pass summing over `points` compressed into `cells` cells should use them.
+    bool CompressionPays(Eigen::Index cells, Eigen::Index points) const;
+    /// The dense E-step in one fused pass over the targets (one exp per pair, nothing M x N
+    /// stored); used while M N <= kFusedMaxEntries.
+    void ComputeFused(double sigma2, double c, CpdPosteriors& out);
+
+    GaussSumOptions options_;
+    PointCloud source_points_, target_points_;  ///< input copies, for the compressed passes
+    BlockedCloud source_;
+    BlockedCloud target_blocked_;
+    KernelSumResult pass1_, pass2_;
+    std::vector<float> inv_den_;  ///< target stored order
+    std::vector<float> partial_;  ///< fused path: float p1/PX accumulators per target chunk
 };
 
 /// Parses and validates CPD options, applying the compat preset to keys absent from `j`.

@@ -9,13 +9,12 @@
 #include <utility>
 #include <vector>
 
-#include "core/gmm_common.hpp"
 #include "core/kabsch.hpp"
 #include "core/kd_tree.hpp"
 #include "core/normals.hpp"
-#include "core/options.hpp"
-#include "core/permutohedral.hpp"
 #include "core/transform.hpp"
+#include "gmm/gmm_common.hpp"
+#include "gmm/permutohedral.hpp"
 
 namespace regbench {
 namespace {
@@ -30,7 +29,6 @@ constexpr double kExactCutoffSigmas = 3.0;
 /// target's bounding-box diagonal; above it nearly every pair is inside, so loop densely.
 constexpr double kTreeRadiusFraction = 0.25;
 constexpr std::int64_t kParallelMinPoints = 2048;
-
 
 // ---------------------------------------------------------------------------------------------
 // E-step
@@ -62,14 +60,14 @@ public:
     MomentEstimator(const PointCloud& target,
                     const Normals* normals,
                     bool with_m2,
-                    std::string estimator,
+                    FilterRegEstimator estimator,
                     LatticeBlur blur)
         : target_(target),
           normals_(normals),
           channels_(MakeChannels(with_m2, normals != nullptr)),
-          estimator_(std::move(estimator)),
+          estimator_(estimator),
           blur_(blur) {
-        if (estimator_ == "exact") {
+        if (estimator_ == FilterRegEstimator::kExact) {
             tree_ = std::make_unique<KdTree>(target_);
             const Eigen::Vector3d extent =
                 target_.colwise().maxCoeff() - target_.colwise().minCoeff();
@@ -93,7 +91,8 @@ public:
     }
 
     FilterRegMoments Compute(const PointCloud& moved, double sigma2) {
-        return estimator_ == "exact" ? Exact(moved, sigma2) : Lattice(moved, sigma2);
+        return estimator_ == FilterRegEstimator::kExact ? Exact(moved, sigma2)
+                                                        : Lattice(moved, sigma2);
     }
 
 private:
@@ -224,7 +223,7 @@ private:
     const PointCloud& target_;
     const Normals* normals_;
     Channels channels_;
-    std::string estimator_;
+    FilterRegEstimator estimator_;
     LatticeBlur blur_;
     // lattice
     LatticeValues values_;
@@ -364,27 +363,12 @@ MStep PointToPlane(const Selection& s, const FilterRegMoments& mom, bool probreg
 // ---------------------------------------------------------------------------------------------
 // The method
 
-class FilterRegMethod final : public RegistrationMethod {
-public:
-    explicit FilterRegMethod(FilterRegOptions options) : options_(std::move(options)) {}
-    std::string Name() const override { return kName; }
-    nlohmann::json Params() const override { return options_; }
-
-protected:
-    AlignResult DoAlign(const PointCloud& source,
-                        const PointCloud& target,
-                        const AlignContext& /*context*/) override;
-
-private:
-    FilterRegOptions options_;
-};
-
-AlignResult FilterRegMethod::DoAlign(const PointCloud& source,
-                        const PointCloud& target,
-                        const AlignContext& /*context*/) {
-    const FilterRegOptions& o = options_;
-    const bool pt2pl = o.objective == "pt2pl";
-    const bool probreg_weights = o.compat == "probreg";
+AlignResult AlignFilterReg(const FilterRegOptions& o,
+                           const PointCloud& source,
+                           const PointCloud& target,
+                           const AlignContext& /*context*/) {
+    const bool pt2pl = o.objective == FilterRegObjective::kPt2Pl;
+    const bool probreg_weights = o.compat == Compat::kProbreg;
     Normals normals;
     if (pt2pl) normals = EstimateNormals(target, o.normals_k);
     MomentEstimator estimator(target, pt2pl ? &normals : nullptr, o.update_sigma2, o.estimator,
@@ -454,13 +438,10 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
                                 const Normals* target_normals,
                                 double sigma2,
                                 bool with_m2,
-                                const std::string& estimator,
+                                FilterRegEstimator estimator,
                                 LatticeBlur blur) {
     if (!(sigma2 > 0.0) || !std::isfinite(sigma2)) {
         throw std::invalid_argument("FilterRegEStep: sigma2 must be positive and finite");
-    }
-    if (estimator != "lattice" && estimator != "exact") {
-        throw std::invalid_argument("FilterRegEStep: unknown estimator '" + estimator + "'");
     }
     if (target_normals != nullptr && target_normals->rows() != target.rows()) {
         throw std::invalid_argument("FilterRegEStep: target_normals must have one row per point");
@@ -469,59 +450,74 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
     return est.Compute(moved_source, sigma2);
 }
 
+namespace {
+
+const MethodSpec<FilterRegOptions>& Spec() {
+    static const MethodSpec<FilterRegOptions> spec{
+        kName,
+        "FilterReg (Gao & Tedrake 2019) as probreg's registration_filterreg: permutohedral-lattice "
+        "E-step, weighted Kabsch (pt2pt) or twist (pt2pl) M-step; regbench C++",
+        {
+            Param("sigma2", &FilterRegOptions::sigma2,
+                  "initial kernel variance [length^2]; 0 or null = max(sqsum(Y,X), min_sigma2) "
+                  "(probreg)")
+                .Finite()
+                .AtLeast(0.0),
+            Param("update_sigma2", &FilterRegOptions::update_sigma2,
+                  "re-estimate sigma2 in every M-step; default true; false under compat = "
+                  "\"probreg\" unless given (probreg keeps sigma fixed)"),
+            Param("w", &FilterRegOptions::w,
+                  "weight of the uniform outlier component, in [0, 1); probreg default 0")
+                .AtLeast(0.0)
+                .Below(1.0),
+            Param("maxiter", &FilterRegOptions::maxiter,
+                  "maximum EM iterations (>= 1); probreg default 50")
+                .AtLeast(1),
+            Param("tol", &FilterRegOptions::tol,
+                  "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3")
+                .Finite()
+                .AtLeast(0.0),
+            Param("min_sigma2", &FilterRegOptions::min_sigma2,
+                  "floor on sigma2 after each iteration and on the auto init (> 0); 1e-4")
+                .Finite()
+                .Greater(0.0),
+            Param("objective", &FilterRegOptions::objective,
+                  "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton "
+                  "on filtered target normals, normals by PCA of normals_k neighbours; give a "
+                  "small sigma2, e.g. 0.01 as probreg's example: from sqsum its undamped steps can "
+                  "flip the cloud)"),
+            Param("estimator", &FilterRegOptions::estimator,
+                  "\"lattice\": permutohedral lattice, blurred only while <= 0.015 N vertices "
+                  "(probreg); \"exact\": Gaussian sums within 3 sigma (kd-tree), not "
+                  "probreg-equivalent"),
+            Param("compat", &FilterRegOptions::compat,
+                  "\"none\" (default): consistent w_i^2 weights and update_sigma2 on unless given; "
+                  "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by "
+                  "w_i, sigma fixed"),
+            Param("normals_k", &FilterRegOptions::normals_k,
+                  "pt2pl only: neighbours for the target's PCA normals (>= 3); 30")
+                .AtLeast(3),
+        },
+        nullptr,
+        // compat "probreg" keeps sigma fixed unless update_sigma2 is given.
+        {{"probreg", {{"update_sigma2", false}}}}};
+    return spec;
+}
+
+}  // namespace
+
 FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
     nlohmann::json j = params.is_null() ? nlohmann::json::object() : params;
     // sigma2: null means "auto", like probreg's None.
     if (j.is_object() && j.contains("sigma2") && j["sigma2"].is_null()) j.erase("sigma2");
-    FilterRegOptions o = ParseOptions<FilterRegOptions>(j, kName);
-    Require(std::isfinite(o.sigma2) && o.sigma2 >= 0.0, kName, "sigma2",
-            "must be >= 0 (0 or null = auto)");
-    Require(o.w >= 0.0 && o.w < 1.0, kName, "w", "must be in [0, 1)");
-    Require(o.maxiter >= 1, kName, "maxiter", "must be >= 1");
-    Require(std::isfinite(o.tol) && o.tol >= 0.0, kName, "tol", "must be >= 0");
-    Require(std::isfinite(o.min_sigma2) && o.min_sigma2 > 0.0, kName, "min_sigma2", "must be > 0");
-    RequireOneOf(o.objective, {"pt2pt", "pt2pl"}, kName, "objective");
-    RequireOneOf(o.estimator, {"lattice", "exact"}, kName, "estimator");
-    RequireOneOf(o.compat, {"probreg", "none"}, kName, "compat");
-    Require(o.normals_k >= 3, kName, "normals_k", "must be >= 3");
-    if (o.compat == "probreg" && !(j.is_object() && j.contains("update_sigma2"))) {
-        o.update_sigma2 = false;
-    }
-    return o;
+    return Spec().Parse(j);
 }
 
 MethodInfo FilterRegMethodInfo() {
-    MethodInfo info;
-    info.name = kName;
-    info.summary =
-        "FilterReg (Gao & Tedrake 2019) as probreg's registration_filterreg: permutohedral-lattice "
-        "E-step, weighted Kabsch (pt2pt) or twist (pt2pl) M-step; regbench C++";
-    info.param_docs = {
-        {"sigma2",
-         "initial kernel variance [length^2]; 0 or null = max(sqsum(Y,X), min_sigma2) (probreg)"},
-        {"update_sigma2",
-         "re-estimate sigma2 in every M-step; default true; false under compat = \"probreg\" "
-         "unless given (probreg keeps sigma fixed)"},
-        {"w", "weight of the uniform outlier component, in [0, 1); probreg default 0"},
-        {"maxiter", "maximum EM iterations (>= 1); probreg default 50"},
-        {"tol", "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3"},
-        {"min_sigma2", "floor on sigma2 after each iteration and on the auto init (> 0); 1e-4"},
-        {"objective",
-         "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton on "
-         "filtered target normals, normals by PCA of normals_k neighbours; give a small sigma2, "
-         "e.g. 0.01 as probreg's example: from sqsum its undamped steps can flip the cloud)"},
-        {"estimator",
-         "\"lattice\": permutohedral lattice, blurred only while <= 0.015 N vertices (probreg); "
-         "\"exact\": Gaussian sums within 3 sigma (kd-tree), not probreg-equivalent"},
-        {"compat",
-         "\"none\" (default): consistent w_i^2 weights and update_sigma2 on unless given; "
-         "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by w_i, "
-         "sigma fixed"},
-        {"normals_k", "pt2pl only: neighbours for the target's PCA normals (>= 3); 30"},
-    };
-    info.defaults = FilterRegOptions{};
+    MethodInfo info = MakeMethodInfo(Spec(), AlignFilterReg);
     info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
-        return std::make_unique<FilterRegMethod>(ParseFilterRegOptions(j));
+        return std::make_unique<FunctionMethod<FilterRegOptions>>(Spec(), ParseFilterRegOptions(j),
+                                                                  AlignFilterReg);
     };
     return info;
 }

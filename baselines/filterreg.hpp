@@ -3,42 +3,52 @@
 // Registration using Gaussian Filter and Twist Parameterization", CVPR 2019), rigid, as
 // probreg 0.3.x runs it (`registration_filterreg`): an E-step that filters the target through
 // a permutohedral lattice built over [T(Y)/sigma; X/sigma] and a weighted Kabsch (pt2pt) or
-// twist Gauss-Newton (pt2pl) M-step. See ../shared/specs/probabilistic-baselines.md sec. 4 and
-// docs/probabilistic-baselines.md ("FilterReg") for what matches probreg and what does not.
+// twist Gauss-Newton (pt2pl) M-step. See docs/probabilistic-baselines.md ("FilterReg") for what
+// matches probreg and what does not.
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/method_spec.hpp"
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
 
 namespace regbench {
 
-/// Options of `filterreg`. Defaults are probreg's `registration_filterreg` defaults, except
-/// that compat "probreg" switches update_sigma2 off unless it is given (see FilterRegMethodInfo).
-struct FilterRegOptions {
-    double sigma2 = 0.0;  ///< initial variance [length^2]; 0 = auto: max(sqsum(Y,X), min_sigma2)
-    bool update_sigma2 = true;  ///< re-estimate sigma2 each M-step (probreg: false, sigma fixed)
-    double w = 0.0;              ///< outlier weight of the uniform component, in [0, 1)
-    int maxiter = 50;            ///< maximum EM iterations, >= 1
-    double tol = 1e-3;           ///< stop when |q - q_prev| < tol (absolute), from iteration 2
-    double min_sigma2 = 1e-4;    ///< floor on sigma2 [length^2], > 0
-    std::string objective = "pt2pt";    ///< "pt2pt" (Kabsch) or "pt2pl" (twist, target normals)
-    std::string estimator = "lattice";  ///< "lattice" (probreg) or "exact" (3-sigma Gaussian sums)
-    std::string compat = "none";  ///< "none" (consistent, default) or "probreg" (w / w^2 Kabsch)
-    int normals_k = 30;           ///< pt2pl only: neighbours for the target's PCA normals, >= 3
+/// FilterReg's M-step objective.
+enum class FilterRegObjective {
+    kPt2Pt,  ///< weighted Kabsch to the filtered target mean
+    kPt2Pl,  ///< twist Gauss-Newton on filtered target normals
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(FilterRegOptions,
-                                                sigma2,
-                                                update_sigma2,
-                                                w,
-                                                maxiter,
-                                                tol,
-                                                min_sigma2,
-                                                objective,
-                                                estimator,
-                                                compat,
-                                                normals_k)
+NLOHMANN_JSON_SERIALIZE_ENUM(FilterRegObjective,
+                             {{FilterRegObjective::kPt2Pt, "pt2pt"},
+                              {FilterRegObjective::kPt2Pl, "pt2pl"}})
+
+/// How the E-step evaluates the Gaussian filter.
+enum class FilterRegEstimator {
+    kLattice,  ///< permutohedral lattice (probreg)
+    kExact,    ///< Gaussian sums within 3 sigma
+};
+NLOHMANN_JSON_SERIALIZE_ENUM(FilterRegEstimator,
+                             {{FilterRegEstimator::kLattice, "lattice"},
+                              {FilterRegEstimator::kExact, "exact"}})
+
+/// Options of `filterreg`, each documented once in the parameter table of
+/// baselines/filterreg.cpp (`regbench methods filterreg` prints it). Defaults are probreg's
+/// `registration_filterreg` defaults, except that compat "probreg" switches update_sigma2 off
+/// unless it is given.
+struct FilterRegOptions {
+    double sigma2 = 0.0;
+    bool update_sigma2 = true;
+    double w = 0.0;
+    int maxiter = 50;
+    double tol = 1e-3;
+    double min_sigma2 = 1e-4;
+    FilterRegObjective objective = FilterRegObjective::kPt2Pt;
+    FilterRegEstimator estimator = FilterRegEstimator::kLattice;
+    Compat compat = Compat::kNone;
+    int normals_k = 30;
+};
 
 /// Parses and validates `filterreg` parameters: unknown keys, wrong types and out-of-range
 /// values throw std::invalid_argument naming the parameter. Applies the compat "none"
@@ -71,7 +81,7 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
                                 const Normals* target_normals,
                                 double sigma2,
                                 bool with_m2,
-                                const std::string& estimator = "lattice",
+                                FilterRegEstimator estimator = FilterRegEstimator::kLattice,
                                 LatticeBlur blur = LatticeBlur::kAuto);
 
 /// `filterreg`: registry entry (name, summary, param_docs, defaults, create).

@@ -10,8 +10,9 @@
 
 namespace regbench {
 
-PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est) {
+PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est, EulerConvention euler) {
     PairMetrics m;
+    m.euler = euler;
     const Eigen::Matrix3d R_gt = T_gt.topLeftCorner<3, 3>();
     // A similarity estimate (e.g. CPD with update_scale) carries s*R: divide the scale out so the
     // rotation metrics measure the rotation only (scale is reported separately in the row).
@@ -19,7 +20,7 @@ PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est) {
     const double det = R_est.determinant();
     if (det > 0.0) R_est /= std::cbrt(det);
     const Eigen::Vector3d dr =
-        (EulerZyxDegFromRotation(R_gt) - EulerZyxDegFromRotation(R_est)).cwiseAbs();
+        (EulerDegFromRotation(R_gt, euler) - EulerDegFromRotation(R_est, euler)).cwiseAbs();
     const Eigen::Vector3d dt = (T_gt.topRightCorner<3, 1>() - T_est.topRightCorner<3, 1>());
     m.mae_r = dr.mean();
     m.mae_t = dt.cwiseAbs().mean();
@@ -48,11 +49,29 @@ ChamferResult ChamferDistances(const PointCloud& a, const PointCloud& b, double 
     return r;
 }
 
+double OverlapRmse(const Transform& T_gt,
+                   const Transform& T_est,
+                   const PointCloud& source,
+                   const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& overlap) {
+    const bool use_mask = overlap.size() == source.rows() && (overlap.array() != 0).any();
+    const PointCloud diff = Apply(T_est, source) - Apply(T_gt, source);
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (Eigen::Index i = 0; i < source.rows(); ++i) {
+        if (use_mask && overlap[i] == 0) continue;
+        sum += diff.row(i).squaredNorm();
+        ++n;
+    }
+    return n == 0 ? std::numeric_limits<double>::quiet_NaN()
+                  : std::sqrt(sum / static_cast<double>(n));
+}
+
 PairMetrics ComputeMetrics(const Transform& T_gt,
                            const Transform& T_est,
                            const PointCloud& source,
-                           const PointCloud& target) {
-    PairMetrics m = MotionMetrics(T_gt, T_est);
+                           const PointCloud& target,
+                           EulerConvention euler) {
+    PairMetrics m = MotionMetrics(T_gt, T_est, euler);
     const ChamferResult c = ChamferDistances(Apply(T_est, source), target);
     m.ccd = c.ccd;
     m.chamfer = c.chamfer;

@@ -1,8 +1,11 @@
 #pragma once
-// Per-pair registration metrics exactly as ../shared/specs/protocols.md defines them.
+// Per-pair registration metrics; docs/metrics.md defines each one with its formula.
 #include <Eigen/Core>
+#include <cstdint>
+#include <limits>
 
 #include "core/point_cloud.hpp"
+#include "core/transform.hpp"
 
 namespace regbench {
 
@@ -10,7 +13,8 @@ namespace regbench {
 constexpr double kCcdClip = 0.1;
 
 struct PairMetrics {
-    double mae_r = 0.0;    ///< mean |e_zyx(R_gt) - e_zyx(R_est)| over 3 angles [deg], no wrapping
+    EulerConvention euler = EulerConvention::kZyx;  ///< the Euler angles e() of mae_r / mse_r
+    double mae_r = 0.0;    ///< mean |e(R_gt) - e(R_est)| over 3 angles [deg], no wrapping
     double mae_t = 0.0;    ///< mean |t_gt - t_est| over 3 axes
     double mse_r = 0.0;    ///< mean squared angle error [deg^2] (rmse_r = sqrt(mean over pairs))
     double mse_t = 0.0;    ///< mean squared axis error (rmse_t = sqrt(mean over pairs))
@@ -18,19 +22,33 @@ struct PairMetrics {
     double rte = 0.0;      ///< |t_gt - t_est|
     double ccd = 0.0;      ///< clipped Chamfer distance of T_est(source) vs target, clip 0.1
     double chamfer = 0.0;  ///< same, unclipped, squared distances
+    /// RMSE of ||T_est p - T_gt p|| over the source points labelled overlapping (all points
+    /// when none is labelled); NaN when not computed (MotionMetrics, old rows).
+    double overlap_rmse = std::numeric_limits<double>::quiet_NaN();
     /// Paper-text variant: the pair counts for CCD only when its unclipped one-sided mean
     /// distances are both below the clip; false means "discard this pair" under that variant.
     bool ccd_within_clip = true;
 };
 
-/// Rotation/translation metrics only (no clouds needed).
-PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est);
+/// Rotation/translation metrics only (no clouds needed). `euler` picks the Euler angles of
+/// mae_r / mse_r: scipy's extrinsic 'zyx' (the paper's evaluation code) unless asked otherwise.
+PairMetrics MotionMetrics(const Transform& T_gt,
+                          const Transform& T_est,
+                          EulerConvention euler = EulerConvention::kZyx);
 
 /// All metrics; source/target are the pair's clouds (source in its own frame).
 PairMetrics ComputeMetrics(const Transform& T_gt,
                            const Transform& T_est,
                            const PointCloud& source,
-                           const PointCloud& target);
+                           const PointCloud& target,
+                           EulerConvention euler = EulerConvention::kZyx);
+
+/// RMSE of ||T_est p - T_gt p|| over the points p of `source` whose `overlap` label is 1 (over
+/// all points when `overlap` is empty or labels none); NaN for an empty cloud.
+double OverlapRmse(const Transform& T_gt,
+                   const Transform& T_est,
+                   const PointCloud& source,
+                   const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& overlap);
 
 struct ChamferResult {
     double ccd = 0.0;         ///< mean_a min(d, clip) + mean_b min(d, clip)

@@ -20,6 +20,14 @@ constexpr double kScaleRuleReferenceRadius = 0.6;      ///< L of a typical unit-
 constexpr double kScaleRuleBand = 2.0;                 ///< u = 1 while L / reference in [1/2, 2]
 constexpr Eigen::Index kScaleRulePresetPoints = 2048;  ///< above: downsample where supported
 
+/// The `scale_rule` option of FGR, NDT and ICP.
+enum class ScaleRuleMode {
+    kAuto,    ///< length parameters times the pair's unit (and FGR downsampling when dense)
+    kPreset,  ///< the values as given (the paper's setting)
+};
+NLOHMANN_JSON_SERIALIZE_ENUM(ScaleRuleMode,
+                             {{ScaleRuleMode::kAuto, "auto"}, {ScaleRuleMode::kPreset, "preset"}})
+
 struct ScaleRule {
     double rms_radius = 0.0;  ///< L of the target
     double unit = 1.0;        ///< factor for every unit-sphere length parameter

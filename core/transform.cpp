@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace regbench {
 namespace {
 constexpr double kDegPerRad = 180.0 / M_PI;
 constexpr double kRadPerDeg = M_PI / 180.0;
+/// |cos| of the middle angle below which the decomposition is treated as gimbal-locked. scipy
+/// uses an angle tolerance of 1e-7 rad around +-90 deg; cos of such an angle is ~1e-7.
+constexpr double kGimbalCos = 1e-7;
 }  // namespace
 
 Transform MakeTransform(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
@@ -32,7 +36,24 @@ PointCloud Apply(const Transform& T, const PointCloud& points) {
     return out;
 }
 
-Eigen::Matrix3d RotationFromEulerZyxDeg(double z_deg, double y_deg, double x_deg) {
+const char* ToString(EulerConvention convention) {
+    switch (convention) {
+        case EulerConvention::kZyx:
+            return "zyx";
+        case EulerConvention::kXyz:
+            return "xyz";
+    }
+    return "?";
+}
+
+EulerConvention ParseEulerConvention(const std::string& name) {
+    if (name == "zyx") return EulerConvention::kZyx;
+    if (name == "xyz") return EulerConvention::kXyz;
+    throw std::invalid_argument("unknown Euler convention '" + name +
+                                "' (expected 'zyx' -- the paper's -- or 'xyz' -- RPMNet's)");
+}
+
+Eigen::Matrix3d RotationZyxProductDeg(double z_deg, double y_deg, double x_deg) {
     return (Eigen::AngleAxisd(z_deg * kRadPerDeg, Eigen::Vector3d::UnitZ()) *
             Eigen::AngleAxisd(y_deg * kRadPerDeg, Eigen::Vector3d::UnitY()) *
             Eigen::AngleAxisd(x_deg * kRadPerDeg, Eigen::Vector3d::UnitX()))
@@ -40,21 +61,45 @@ Eigen::Matrix3d RotationFromEulerZyxDeg(double z_deg, double y_deg, double x_deg
 }
 
 Eigen::Vector3d EulerZyxDegFromRotation(const Eigen::Matrix3d& R) {
-    // R = Rz(a) Ry(b) Rx(c): R(2,0) = -sin(b), R(1,0)/R(0,0) = tan(a), R(2,1)/R(2,2) = tan(c).
-    const double sy = std::clamp(-R(2, 0), -1.0, 1.0);
-    const double b = std::asin(sy);
+    // R = Rx(g) Ry(b) Rz(a) has first row (cos b cos a, -cos b sin a, sin b), last column
+    // (sin b, -sin g cos b, cos g cos b). The middle angle comes from atan2 of sin b against
+    // cos b = |first row's first two entries|, which stays accurate near b = +-90 deg.
+    const double cos_b = std::hypot(R(0, 0), R(0, 1));
+    const double b = std::atan2(R(0, 2), cos_b);
+    double a = 0.0;
+    double g = 0.0;
+    if (cos_b > kGimbalCos) {
+        a = std::atan2(-R(0, 1), R(0, 0));
+        g = std::atan2(-R(1, 2), R(2, 2));
+    } else {
+        // Gimbal lock: only a combination of a and g is defined; scipy sets the last angle (g)
+        // to 0, leaving R = Ry(+-90) Rz(a), whose second row is (sin a, cos a, 0).
+        a = std::atan2(R(1, 0), R(1, 1));
+    }
+    return Eigen::Vector3d(a, b, g) * kDegPerRad;
+}
+
+Eigen::Vector3d EulerXyzDegFromRotation(const Eigen::Matrix3d& R) {
+    // R = Rz(c) Ry(b) Rx(a) has last row (-sin b, cos b sin a, cos b cos a) and first column
+    // (cos c cos b, sin c cos b, -sin b).
+    const double cos_b = std::hypot(R(2, 1), R(2, 2));
+    const double b = std::atan2(-R(2, 0), cos_b);
     double a = 0.0;
     double c = 0.0;
-    constexpr double kGimbalEps = 1e-9;
-    if (std::abs(std::abs(sy) - 1.0) > kGimbalEps) {
-        a = std::atan2(R(1, 0), R(0, 0));
-        c = std::atan2(R(2, 1), R(2, 2));
+    if (cos_b > kGimbalCos) {
+        a = std::atan2(R(2, 1), R(2, 2));
+        c = std::atan2(R(1, 0), R(0, 0));
     } else {
-        // Gimbal lock: only a -/+ c is defined; scipy sets the third angle to 0.
-        c = 0.0;
-        a = std::atan2(-R(0, 1), R(1, 1));
+        // Gimbal lock: scipy sets the last angle (c) to 0, leaving R = Ry(+-90) Rx(a), whose
+        // second row is (0, cos a, -sin a).
+        a = std::atan2(-R(1, 2), R(1, 1));
     }
     return Eigen::Vector3d(a, b, c) * kDegPerRad;
+}
+
+Eigen::Vector3d EulerDegFromRotation(const Eigen::Matrix3d& R, EulerConvention convention) {
+    return convention == EulerConvention::kZyx ? EulerZyxDegFromRotation(R)
+                                               : EulerXyzDegFromRotation(R);
 }
 
 Eigen::Matrix3d RotationXyzProductDeg(double x_deg, double y_deg, double z_deg) {

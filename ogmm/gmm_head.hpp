@@ -1,7 +1,7 @@
 #pragma once
 // Differentiable GMM pieces shared by DeepGMR and OGMM (LibTorch). Points are row vectors
-// [B, N, 3]; float32 like the authors' code. See ../shared/specs/deepgmr.md section 3 and
-// ../shared/specs/ogmm.md section 1.
+// [B, N, 3]; float32 like the authors' code (DeepGMR's GMM parameter estimation from soft
+// assignments and OGMM's overlap-weighted variant).
 #include <torch/torch.h>
 
 namespace regbench::ogmm {

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "protocols/pair_file.hpp"
+#include "protocols/pair_hash.hpp"
 
 namespace regbench {
 
@@ -31,6 +32,8 @@ void GenerateToFile(const GenerateRequest& request,
     for (const auto& item : request.extra_provenance.items()) {
         set.provenance[item.key()] = item.value();
     }
+    // Rows computed on these pairs carry this hash, so reports can tell pair files apart.
+    set.provenance["content_hash"] = PairSetContentHash(set);
     WritePairFile(request.out, set);
 }
 

@@ -1,5 +1,6 @@
 #pragma once
-// Triangle meshes: reading, normalising into the unit sphere, area-weighted surface sampling.
+// Triangle meshes: normalising into the unit sphere, area-weighted surface sampling. Reading
+// mesh files is datasets/off_reader.hpp.
 #include <Eigen/Core>
 #include <random>
 #include <string>
@@ -12,11 +13,6 @@ struct Mesh {
     Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> vertices;
     Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> faces;  ///< triangles (polygons fanned)
 };
-
-/// Reads an OFF / COFF / NOFF file, tolerating ModelNet40's malformed header ("OFF490 ...") and
-/// polygonal faces (fanned into triangles). Throws std::runtime_error naming the path on a
-/// missing, truncated or corrupt file.
-Mesh ReadOff(const std::string& path);
 
 /// Centres the mesh at its bounding-box centre and scales it so every vertex lies in the unit
 /// sphere (max vertex norm = 1), as ModelNet40 preprocessing does.

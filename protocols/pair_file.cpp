@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "protocols/hdf5_handle.hpp"
+
 namespace regbench {
 namespace {
 
@@ -18,24 +20,7 @@ constexpr int kFormatVersion = 1;
     throw std::runtime_error(path + ": " + what);
 }
 
-/// Owns one HDF5 identifier and closes it with the right function.
-class Handle {
-public:
-    Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-    ~Handle() {
-        if (id_ >= 0) close_(id_);
-    }
-    Handle(const Handle&) = delete;
-    Handle& operator=(const Handle&) = delete;
-    Handle(Handle&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
-    Handle& operator=(Handle&&) = delete;
-    hid_t get() const { return id_; }
-    bool ok() const { return id_ >= 0; }
-
-private:
-    hid_t id_;
-    herr_t (*close_)(hid_t);
-};
+using Handle = H5Handle;
 
 std::string PairGroupName(std::size_t k) {
     char buf[32];
@@ -134,7 +119,7 @@ std::vector<hsize_t> DatasetDims(const std::string& where, hid_t ds, int rank, c
     return dims;
 }
 
-Handle OpenDataset(const std::string& where, hid_t group, const char* name) {
+Handle OpenH5Dataset(const std::string& where, hid_t group, const char* name) {
     if (H5Lexists(group, name, H5P_DEFAULT) <= 0) {
         Fail(where, std::string("missing dataset '") + name + "'");
     }
@@ -144,7 +129,7 @@ Handle OpenDataset(const std::string& where, hid_t group, const char* name) {
 }
 
 PointCloud ReadCloud(const std::string& where, hid_t group, const char* name) {
-    Handle ds = OpenDataset(where, group, name);
+    Handle ds = OpenH5Dataset(where, group, name);
     const auto dims = DatasetDims(where, ds.get(), 2, name);
     if (dims[1] != 3) Fail(where, std::string(name) + " must be N x 3");
     PointCloud cloud(static_cast<Eigen::Index>(dims[0]), 3);
@@ -158,7 +143,7 @@ Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> ReadLabels(const std::string& whe
                                                           hid_t group,
                                                           const char* name,
                                                           Eigen::Index expected) {
-    Handle ds = OpenDataset(where, group, name);
+    Handle ds = OpenH5Dataset(where, group, name);
     const auto dims = DatasetDims(where, ds.get(), 1, name);
     if (static_cast<Eigen::Index>(dims[0]) != expected) {
         Fail(where, std::string(name) + " has " + std::to_string(dims[0]) + " labels for " +
@@ -208,7 +193,7 @@ Pair ReadPair(const std::string& path, hid_t file, std::size_t k) {
     Pair p;
     p.source = ReadCloud(where, g.get(), "source");
     p.target = ReadCloud(where, g.get(), "target");
-    Handle tds = OpenDataset(where, g.get(), "T_gt");
+    Handle tds = OpenH5Dataset(where, g.get(), "T_gt");
     const auto tdims = DatasetDims(where, tds.get(), 2, "T_gt");
     if (tdims[0] != 4 || tdims[1] != 4) Fail(where, "T_gt must be 4 x 4");
     Eigen::Matrix<double, 4, 4, Eigen::RowMajor> T;

@@ -7,13 +7,13 @@
 #include <utility>
 
 #include "core/kd_tree.hpp"
+#include "core/math_constants.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 /// Fewest points a cropped cloud may keep: registration needs three non-collinear points.
 constexpr Eigen::Index kMinCloudPoints = 3;
 /// Indoor (Tab. 3) samples 2048 points per scan; the ModelNet protocols 1024.
@@ -98,8 +98,9 @@ Pair IndependentPair(const ShapeSource& shape,
     const PointCloud source_full = shape.Sample(o.points, rng);
     const PointCloud target_full = shape.Sample(o.points, rng);
     Pair pair;
-    pair.source = Gather(source_full, CropIndices(source_full, keep_source, rng));
-    PointCloud target = Gather(target_full, CropIndices(target_full, keep_target, rng));
+    const CropRounding rounding = CropRoundingFor(o.protocol);
+    pair.source = Gather(source_full, CropIndices(source_full, keep_source, rng, rounding));
+    PointCloud target = Gather(target_full, CropIndices(target_full, keep_target, rng, rounding));
     if (o.protocol == Protocol::kDensity) {
         target = Gather(target, ThinAndRepeat(target.rows(), o.density_keep, rng));
     }
@@ -140,8 +141,9 @@ Pair SharedPair(const ShapeSource& shape,
                 double keep_target,
                 std::mt19937_64& rng) {
     const PointCloud full = shape.Sample(o.points, rng);
-    std::vector<Eigen::Index> source_index = CropIndices(full, keep_source, rng);
-    std::vector<Eigen::Index> target_index = CropIndices(full, keep_target, rng);
+    const CropRounding rounding = CropRoundingFor(o.protocol);
+    std::vector<Eigen::Index> source_index = CropIndices(full, keep_source, rng, rounding);
+    std::vector<Eigen::Index> target_index = CropIndices(full, keep_target, rng, rounding);
     const std::vector<char> in_source = Membership(source_index, full.rows());
     const std::vector<char> in_target = Membership(target_index, full.rows());
     if (o.protocol == Protocol::kDensity) {
@@ -249,8 +251,14 @@ bool ProtocolAddsNoise(Protocol p) {
            p == Protocol::kCompleteToPartial || p == Protocol::kOverlapSweep;
 }
 
-Eigen::Index CropCount(Eigen::Index n, double keep) {
-    return static_cast<Eigen::Index>(std::llround(keep * static_cast<double>(n)));
+CropRounding CropRoundingFor(Protocol p) {
+    return p == Protocol::kIndoor ? CropRounding::kFloor : CropRounding::kNearest;
+}
+
+Eigen::Index CropCount(Eigen::Index n, double keep, CropRounding rounding) {
+    const double x = keep * static_cast<double>(n);
+    return static_cast<Eigen::Index>(rounding == CropRounding::kFloor ? std::floor(x)
+                                                                      : std::round(x));
 }
 
 void ValidateProtocolOptions(const ProtocolOptions& o) {
@@ -286,7 +294,10 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
     return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
 }
 
-std::vector<Eigen::Index> CropIndices(const PointCloud& cloud, double keep, std::mt19937_64& rng) {
+std::vector<Eigen::Index> CropIndices(const PointCloud& cloud,
+                                      double keep,
+                                      std::mt19937_64& rng,
+                                      CropRounding rounding) {
     const Eigen::Index n = cloud.rows();
     std::vector<Eigen::Index> index(static_cast<std::size_t>(n));
     std::iota(index.begin(), index.end(), Eigen::Index{0});
@@ -295,7 +306,8 @@ std::vector<Eigen::Index> CropIndices(const PointCloud& cloud, double keep, std:
     const Eigen::RowVector3d centroid = cloud.colwise().mean();
     const Eigen::VectorXd signed_distance = (cloud.rowwise() - centroid) * direction;
     // Keep the m largest projections: those above the (1 - keep) quantile.
-    const auto m = static_cast<std::size_t>(std::clamp<Eigen::Index>(CropCount(n, keep), 0, n));
+    const auto m =
+        static_cast<std::size_t>(std::clamp<Eigen::Index>(CropCount(n, keep, rounding), 0, n));
     std::partial_sort(index.begin(), index.begin() + static_cast<std::ptrdiff_t>(m), index.end(),
                       [&](Eigen::Index a, Eigen::Index b) {
                           if (signed_distance(a) != signed_distance(b)) {

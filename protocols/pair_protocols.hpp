@@ -1,5 +1,5 @@
 #pragma once
-// Pair protocols of the OGMM paper (../shared/specs/protocols.md): partial, jitter, density,
+// Pair protocols of the OGMM paper (docs/benchmark-format.md): partial, jitter, density,
 // complete, complete-to-partial, overlap-sweep, indoor; independent or shared-sample pairing.
 #include <Eigen/Core>
 #include <cstdint>
@@ -77,8 +77,15 @@ ProtocolOptions DefaultProtocolOptions(Protocol p);
 void ValidateProtocolOptions(const ProtocolOptions& o);
 /// True for the protocols that jitter both clouds.
 bool ProtocolAddsNoise(Protocol p);
-/// Number of points a crop with ratio `keep` leaves of n: round(keep * n).
-Eigen::Index CropCount(Eigen::Index n, double keep);
+/// How a crop turns keep * n into a point count.
+enum class CropRounding {
+    kNearest,  ///< round(keep * n): 717 of 1024 at 0.7, as the ModelNet protocols keep
+    kFloor,    ///< floor(keep * n): 1433 of 2048 at 0.7, as the authors' indoor code keeps
+};
+/// The rounding the protocol's crops use (kFloor for indoor, kNearest otherwise).
+CropRounding CropRoundingFor(Protocol p);
+/// Number of points a crop with ratio `keep` leaves of n.
+Eigen::Index CropCount(Eigen::Index n, double keep, CropRounding rounding = CropRounding::kNearest);
 
 // ---- Building blocks (each uses only the rng it is given) ----
 
@@ -87,7 +94,10 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng);
 /// Indices (ascending) of the CropCount(n, keep) points with the largest signed distance to the
 /// centroid along a uniformly random direction, i.e. those above the (1 - keep) quantile.
 /// Ties broken by index. keep = 1 returns every index and draws nothing.
-std::vector<Eigen::Index> CropIndices(const PointCloud& cloud, double keep, std::mt19937_64& rng);
+std::vector<Eigen::Index> CropIndices(const PointCloud& cloud,
+                                      double keep,
+                                      std::mt19937_64& rng,
+                                      CropRounding rounding = CropRounding::kNearest);
 /// Rigid motion drawn with `convention` (see MotionConvention).
 Transform DrawMotion(MotionConvention convention,
                      double max_rotation_deg,

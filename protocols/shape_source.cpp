@@ -80,8 +80,10 @@ PointCloud ShapeSource::SampleMesh(Eigen::Index n, std::mt19937_64& rng) const {
 PointCloud ShapeSource::SamplePoints(Eigen::Index n, std::mt19937_64& rng) const {
     const PointCloud& pts = *points_;
     if (n > pts.rows()) {
-        throw std::invalid_argument("shape '" + name_ + "' has " + std::to_string(pts.rows()) +
-                                    " points, " + std::to_string(n) + " requested");
+        throw std::invalid_argument(
+            "shape '" + name_ + "' has " + std::to_string(pts.rows()) + " points, fewer than the " +
+            std::to_string(n) + " sampled per cloud: pass --points " + std::to_string(pts.rows()) +
+            " (or less), or leave this cloud out");
     }
     std::vector<Eigen::Index> index(static_cast<std::size_t>(pts.rows()));
     std::iota(index.begin(), index.end(), Eigen::Index{0});

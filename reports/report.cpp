@@ -8,12 +8,24 @@
 #include <set>
 #include <stdexcept>
 
+#include "core/metrics.hpp"
 #include "core/rng.hpp"
 
 namespace regbench {
 namespace {
 
 constexpr std::uint64_t kBootstrapSeed = 20230103;
+
+/// FNV-1a 64: a stable hash of a string, so bootstrap streams depend on what a row of the table
+/// is (data, method, params, metric), never on where it stands or how the input was ordered.
+std::uint64_t Fnv1a(const std::string& s) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (unsigned char c : s) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
 
 double Mean(const std::vector<double>& v) {
     if (v.empty()) return std::nan("");
@@ -33,7 +45,8 @@ double Median(std::vector<double> v) {
     return m;
 }
 
-/// Percentile bootstrap (Efron): resample pairs with replacement, 2.5 / 97.5 percentiles.
+/// Percentile bootstrap (Efron): resample pairs with replacement, 2.5 / 97.5 percentiles. `v`
+/// is in pair order (rows are sorted by pair first), so the CI does not depend on row order.
 Estimate Bootstrap(const std::vector<double>& v, int samples, std::uint64_t stream) {
     Estimate e;
     e.mean = Mean(v);
@@ -55,156 +68,333 @@ Estimate Bootstrap(const std::vector<double>& v, int samples, std::uint64_t stre
     return e;
 }
 
-double Metric(const nlohmann::json& row, const char* key) {
-    if (!row.contains("metrics") || !row["metrics"].contains(key)) {
-        throw std::runtime_error("result row for pair " +
-                                 row.value("pair", nlohmann::json()).dump() + ", method " +
-                                 row.value("method", std::string("?")) + " has no metrics." + key);
-    }
-    return row["metrics"][key].get<double>();
+/// Which pair file a row was computed on: its content hash when the row has one, otherwise
+/// (rows written before hashes) the file name with the provenance that identifies it.
+std::string DataKey(const DataTag& d) {
+    if (!d.content_hash.empty()) return "hash:" + d.content_hash;
+    return fmt::format("file:{}|{}|{}|{}|{}", d.pairs_file, d.dataset, d.protocol, d.pairing,
+                       d.seed.dump());
 }
 
-}  // namespace
+std::string Where(const ResultRow& r) { return r.origin.empty() ? "(in memory)" : r.origin; }
 
-std::vector<MethodSummary> Summarize(const std::vector<nlohmann::json>& rows,
-                                     const ReportOptions& o) {
+/// The row's metrics in the convention the report asks for.
+PairMetrics MetricsIn(const ResultRow& r, const ReportOptions& o) {
+    if (!o.euler || *o.euler == r.euler) return r.metrics;
+    if (!r.gt_transform) {
+        throw std::runtime_error(fmt::format(
+            "{}: row was scored with euler '{}' and stores no ground truth to recompute '{}'; "
+            "rescore it: regbench score --pairs PAIRS.h5 --transforms {} --method {} --euler {}",
+            Where(r), ToString(r.euler), ToString(*o.euler),
+            r.origin.substr(0, r.origin.rfind(':')), r.method, ToString(*o.euler)));
+    }
+    PairMetrics m = r.metrics;
+    const PairMetrics motion = MotionMetrics(*r.gt_transform, r.transform, *o.euler);
+    m.euler = *o.euler;
+    m.mae_r = motion.mae_r;
+    m.mse_r = motion.mse_r;
+    return m;
+}
+
+bool AllFinite(const PairMetrics& m) {
+    for (double x : {m.mae_r, m.mae_t, m.mse_r, m.mse_t, m.rre, m.rte, m.ccd, m.chamfer}) {
+        if (!std::isfinite(x)) return false;
+    }
+    return true;
+}
+
+/// Rows of one (method, params) set, sorted by pair.
+MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
+                           const ReportOptions& o,
+                           const std::string& data_key,
+                           std::vector<std::string>* notes) {
+    std::stable_sort(group.begin(), group.end(),
+                     [](const ResultRow* a, const ResultRow* b) { return a->pair < b->pair; });
+    MethodSummary s;
+    s.method = group.front()->method;
+    s.label = s.method;
+    s.params = group.front()->params;
+    s.pairs = group.size();
+    std::vector<double> mae_r, mae_t, ccd, rre, rte, mse_r, mse_t, chamfer, secs;
+    std::size_t recalled = 0, succeeded = 0, recalled_3dm = 0;
+    for (const ResultRow* r : group) {
+        const PairMetrics m = MetricsIn(*r, o);
+        secs.push_back(r->seconds);
+        s.threads = r->threads;
+        if (!AllFinite(m)) {
+            // Not a number to average: the row counts as a failure and is named.
+            ++s.failed;
+            if (notes) {
+                notes->push_back(
+                    fmt::format("{}: {} pair {}: metrics not finite (null), counted "
+                                "as failed",
+                                Where(*r), r->method, r->pair));
+            }
+            continue;
+        }
+        if (r->status != Status::kOk) ++s.failed;
+        mae_r.push_back(m.mae_r);
+        mae_t.push_back(m.mae_t);
+        ccd.push_back(m.ccd);
+        rre.push_back(m.rre);
+        rte.push_back(m.rte);
+        mse_r.push_back(m.mse_r);
+        mse_t.push_back(m.mse_t);
+        chamfer.push_back(m.chamfer);
+        if (m.mae_r < o.recall_r_deg && m.mae_t < o.recall_t) ++recalled;
+        if (m.rre < o.success_rre_deg && m.rte < o.success_rte) ++succeeded;
+        if (o.recall_3dmatch) {
+            if (!std::isfinite(m.overlap_rmse)) {
+                throw std::runtime_error(
+                    Where(*r) +
+                    ": row has no metrics.overlap_rmse (written before it existed); "
+                    "rescore it with `regbench score` for the 3DMatch-style recall");
+            }
+            if (m.overlap_rmse < kRecall3dmatchRmse && m.rre < kRecall3dmatchRreDeg &&
+                m.rte < kRecall3dmatchRte) {
+                ++recalled_3dm;
+            }
+        }
+    }
+    const std::string id = data_key + "\n" + s.method + "\n" + s.params.dump() + "\n";
+    const auto boot = [&](const std::vector<double>& v, const char* metric) {
+        return Bootstrap(v, o.bootstrap_samples, Fnv1a(id + metric));
+    };
+    s.mae_r = boot(mae_r, "mae_r");
+    s.mae_t = boot(mae_t, "mae_t");
+    s.ccd = boot(ccd, "ccd");
+    s.rre = boot(rre, "rre");
+    s.rte = boot(rte, "rte");
+    s.rmse_r = std::sqrt(Mean(mse_r));
+    s.rmse_t = std::sqrt(Mean(mse_t));
+    s.chamfer = Mean(chamfer);
+    const double n = static_cast<double>(group.size());
+    s.recall = static_cast<double>(recalled) / n;
+    s.success = static_cast<double>(succeeded) / n;
+    s.recall_3dmatch = static_cast<double>(recalled_3dm) / n;
+    s.median_seconds = Median(secs);
+    s.mean_seconds = Mean(secs);
+    return s;
+}
+
+/// Splits one table's rows by (method, params); refuses a (pair, method, params) seen twice.
+std::vector<MethodSummary> SummarizeGroup(const std::vector<const ResultRow*>& rows,
+                                          const ReportOptions& o,
+                                          const std::string& data_key,
+                                          std::vector<std::string>* notes) {
     std::vector<std::string> order;
-    std::map<std::string, std::vector<const nlohmann::json*>> by_method;
-    for (const auto& r : rows) {
-        const std::string m = r.at("method").get<std::string>();
-        if (!by_method.count(m)) order.push_back(m);
-        by_method[m].push_back(&r);
+    std::map<std::string, std::vector<const ResultRow*>> by_set;
+    std::map<std::string, const ResultRow*> seen;  // (pair, method, params) -> first row
+    std::map<std::string, int> sets_per_method;
+    for (const ResultRow* r : rows) {
+        const std::string set_key = r->method + "\n" + r->params.dump();
+        const std::string row_key = std::to_string(r->pair) + "\n" + set_key;
+        const auto [it, fresh] = seen.emplace(row_key, r);
+        if (!fresh) {
+            throw std::runtime_error(fmt::format(
+                "{}: duplicate row for pair {}, method {} with the same params (first at {}); "
+                "remove one (e.g. a shard given twice)",
+                Where(*r), r->pair, r->method, Where(*it->second)));
+        }
+        if (!by_set.count(set_key)) {
+            order.push_back(set_key);
+            ++sets_per_method[r->method];
+        }
+        by_set[set_key].push_back(r);
     }
     std::vector<MethodSummary> out;
-    for (std::size_t mi = 0; mi < order.size(); ++mi) {
-        const auto& group = by_method[order[mi]];
-        MethodSummary s;
-        s.method = order[mi];
-        s.pairs = group.size();
-        std::vector<double> mae_r, mae_t, ccd, rre, rte, mse_r, mse_t, chamfer, secs;
-        std::size_t recalled = 0, succeeded = 0;
-        for (const auto* r : group) {
-            if (r->value("status", std::string("failed")) != "ok") ++s.failed;
-            mae_r.push_back(Metric(*r, "mae_r"));
-            mae_t.push_back(Metric(*r, "mae_t"));
-            ccd.push_back(Metric(*r, "ccd"));
-            rre.push_back(Metric(*r, "rre"));
-            rte.push_back(Metric(*r, "rte"));
-            mse_r.push_back(Metric(*r, "mse_r"));
-            mse_t.push_back(Metric(*r, "mse_t"));
-            chamfer.push_back(Metric(*r, "chamfer"));
-            secs.push_back(r->value("seconds", 0.0));
-            s.threads = r->value("threads", 1);
-            if (mae_r.back() < o.recall_r_deg && mae_t.back() < o.recall_t) ++recalled;
-            if (rre.back() < o.success_rre_deg && rte.back() < o.success_rte) ++succeeded;
-        }
-        const std::uint64_t stream = mi * 8;
-        s.mae_r = Bootstrap(mae_r, o.bootstrap_samples, stream + 0);
-        s.mae_t = Bootstrap(mae_t, o.bootstrap_samples, stream + 1);
-        s.ccd = Bootstrap(ccd, o.bootstrap_samples, stream + 2);
-        s.rre = Bootstrap(rre, o.bootstrap_samples, stream + 3);
-        s.rte = Bootstrap(rte, o.bootstrap_samples, stream + 4);
-        s.rmse_r = std::sqrt(Mean(mse_r));
-        s.rmse_t = std::sqrt(Mean(mse_t));
-        s.chamfer = Mean(chamfer);
-        const double n = static_cast<double>(group.size());
-        s.recall = static_cast<double>(recalled) / n;
-        s.success = static_cast<double>(succeeded) / n;
-        s.median_seconds = Median(secs);
-        s.mean_seconds = Mean(secs);
-        out.push_back(s);
+    for (const auto& key : order) {
+        MethodSummary s = SummarizeOne(by_set[key], o, data_key, notes);
+        // Several parameter sets of one method are separate rows, labelled by their params.
+        if (sets_per_method[s.method] > 1) s.label = s.method + " " + s.params.dump();
+        out.push_back(std::move(s));
     }
     return out;
 }
 
-std::string DescribeData(const std::vector<nlohmann::json>& rows) {
-    std::set<std::string> descriptions;
+std::string Caption(const ReportTable& t) { return DescribeTable(t); }
+
+std::string Fmt(double x, const char* spec) {
+    return std::isfinite(x) ? fmt::format(fmt::runtime(spec), x) : "n/a";
+}
+
+}  // namespace
+
+std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const ReportOptions& o) {
+    std::vector<std::string> order;
+    std::map<std::string, std::vector<const ResultRow*>> groups;
     for (const auto& r : rows) {
-        if (!r.contains("data")) {
-            descriptions.insert("unknown data (rows carry no 'data' field)");
-            continue;
-        }
-        const auto& d = r["data"];
-        descriptions.insert(
-            fmt::format("dataset `{}`, protocol `{}`, pairing `{}`, seed {}, file `{}`",
-                        d.value("dataset", "?"), d.value("protocol", "?"), d.value("pairing", "?"),
-                        d.value("seed", nlohmann::json()).dump(), d.value("pairs_file", "?")));
+        const EulerConvention euler = o.euler.value_or(r.euler);
+        const std::string key = DataKey(r.data) + "\neuler:" + ToString(euler);
+        if (!groups.count(key)) order.push_back(key);
+        groups[key].push_back(&r);
     }
-    std::string out;
-    for (const auto& d : descriptions) out += (out.empty() ? "" : "; ") + d;
+    std::vector<ReportTable> tables;
+    for (const auto& key : order) {
+        const auto& group = groups[key];
+        ReportTable t;
+        t.data = group.front()->data;
+        t.euler = o.euler.value_or(group.front()->euler);
+        std::set<std::string> files;
+        for (const ResultRow* r : group) {
+            const std::string file = r->origin.substr(0, r->origin.rfind(':'));
+            if (!file.empty() && files.insert(file).second) t.files.push_back(file);
+        }
+        t.methods = SummarizeGroup(group, o, DataKey(t.data), &t.notes);
+        tables.push_back(std::move(t));
+    }
+    return tables;
+}
+
+std::vector<MethodSummary> Summarize(const std::vector<ResultRow>& rows, const ReportOptions& o) {
+    std::vector<const ResultRow*> ptrs;
+    for (const auto& r : rows) ptrs.push_back(&r);
+    return SummarizeGroup(ptrs, o, rows.empty() ? "" : DataKey(rows.front().data), nullptr);
+}
+
+std::string DescribeTable(const ReportTable& t) {
+    const DataTag& d = t.data;
+    std::string out = fmt::format("dataset `{}`, protocol `{}`, pairing `{}`, seed {}, file `{}`",
+                                  d.dataset, d.protocol, d.pairing, d.seed.dump(), d.pairs_file);
+    if (!d.content_hash.empty()) out += fmt::format(" (content {})", d.content_hash);
+    out += fmt::format("; mae_r/rmse_r: scipy as_euler('{}')", ToString(t.euler));
+    if (t.euler == EulerConvention::kZyx) out += ", the paper's convention";
+    if (t.euler == EulerConvention::kXyz) out += ", RPMNet's convention";
     return out;
 }
 
 std::string FormatMarkdown(const std::vector<MethodSummary>& ss, const ReportOptions& o) {
     std::string out = fmt::format(
         "| method | pairs | failed | mae_r [deg] | mae_r 95% CI | mae_t | ccd | rre [deg] | rte | "
-        "rmse_r | rmse_t | recall@({:g},{:g}) | success(rre<{:g},rte<{:g}) | median s | mean s |\n",
-        o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte);
-    out += "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "rmse_r | rmse_t | recall@({:g},{:g}) | success(rre<{:g},rte<{:g}) |{} median s | mean s "
+        "|\n",
+        o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte,
+        o.recall_3dmatch ? " 3DMatch recall |" : "");
+    out += "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|";
+    out += o.recall_3dmatch ? "---:|" : "";
+    out += "---:|---:|\n";
     for (const auto& s : ss) {
         out += fmt::format(
-            "| {} | {} | {} | {:.4f} | [{:.3f}, {:.3f}] | {:.4f} | {:.4f} | {:.4f} | {:.4f} | "
-            "{:.4f} | "
-            "{:.4f} | {:.3f} | {:.3f} | {:.5f} | {:.5f} |\n",
-            s.method, s.pairs, s.failed, s.mae_r.mean, s.mae_r.lo, s.mae_r.hi, s.mae_t.mean,
-            s.ccd.mean, s.rre.mean, s.rte.mean, s.rmse_r, s.rmse_t, s.recall, s.success,
-            s.median_seconds, s.mean_seconds);
+            "| {} | {} | {} | {} | [{}, {}] | {} | {} | {} | {} | {} | {} | {:.3f} | {:.3f} |{} "
+            "{:.5f} | {:.5f} |\n",
+            s.label, s.pairs, s.failed, Fmt(s.mae_r.mean, "{:.4f}"), Fmt(s.mae_r.lo, "{:.3f}"),
+            Fmt(s.mae_r.hi, "{:.3f}"), Fmt(s.mae_t.mean, "{:.4f}"), Fmt(s.ccd.mean, "{:.4f}"),
+            Fmt(s.rre.mean, "{:.4f}"), Fmt(s.rte.mean, "{:.4f}"), Fmt(s.rmse_r, "{:.4f}"),
+            Fmt(s.rmse_t, "{:.4f}"), s.recall, s.success,
+            o.recall_3dmatch ? fmt::format(" {:.3f} |", s.recall_3dmatch) : "", s.median_seconds,
+            s.mean_seconds);
+    }
+    return out;
+}
+
+std::string FormatMarkdown(const std::vector<ReportTable>& tables, const ReportOptions& o) {
+    std::string out;
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+        const ReportTable& t = tables[i];
+        if (i > 0) out += "\n";
+        if (tables.size() > 1) out += fmt::format("Table {} of {}. ", i + 1, tables.size());
+        out += "Data: " + Caption(t) + "\n\n" + FormatMarkdown(t.methods, o);
+        if (!t.notes.empty()) {
+            out += "\nRows counted as failed:\n";
+            for (const auto& n : t.notes) out += "- " + n + "\n";
+        }
     }
     return out;
 }
 
 std::string FormatCsv(const std::vector<MethodSummary>& ss) {
+    std::vector<ReportTable> one(1);
+    one[0].methods = ss;
+    return FormatCsv(one);
+}
+
+std::string FormatCsv(const std::vector<ReportTable>& tables) {
     std::string out =
         "method,pairs,failed,mae_r,mae_r_lo,mae_r_hi,mae_t,mae_t_lo,mae_t_hi,ccd,ccd_lo,ccd_hi,rre,"
-        "rte,rmse_r,rmse_t,chamfer,recall,success,median_seconds,mean_seconds,threads\n";
-    for (const auto& s : ss) {
-        out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                           s.method, s.pairs, s.failed, s.mae_r.mean, s.mae_r.lo, s.mae_r.hi,
-                           s.mae_t.mean, s.mae_t.lo, s.mae_t.hi, s.ccd.mean, s.ccd.lo, s.ccd.hi,
-                           s.rre.mean, s.rte.mean, s.rmse_r, s.rmse_t, s.chamfer, s.recall,
-                           s.success, s.median_seconds, s.mean_seconds, s.threads);
+        "rte,rmse_r,rmse_t,chamfer,recall,success,median_seconds,mean_seconds,threads,params,"
+        "euler,pairs_file,content_hash,recall_3dmatch\n";
+    for (const auto& t : tables) {
+        for (const auto& s : t.methods) {
+            // params is JSON: quote it, doubling inner quotes (RFC 4180).
+            std::string params = s.params.dump();
+            std::string quoted = "\"";
+            for (char c : params) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+            quoted += "\"";
+            out += fmt::format(
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}"
+                "\n",
+                s.method, s.pairs, s.failed, s.mae_r.mean, s.mae_r.lo, s.mae_r.hi, s.mae_t.mean,
+                s.mae_t.lo, s.mae_t.hi, s.ccd.mean, s.ccd.lo, s.ccd.hi, s.rre.mean, s.rte.mean,
+                s.rmse_r, s.rmse_t, s.chamfer, s.recall, s.success, s.median_seconds,
+                s.mean_seconds, s.threads, quoted, ToString(t.euler), t.data.pairs_file,
+                t.data.content_hash, s.recall_3dmatch);
+        }
     }
     return out;
 }
 
-std::string FormatLatex(const std::vector<MethodSummary>& ss, const ReportOptions& o) {
-    std::string out = "\\begin{tabular}{lrrrrrr}\n\\toprule\n";
-    out += fmt::format(
-        "Method & MAE(R) & MAE(t) & CCD & RRE & Recall@({:g},{:g}) & Time (s) \\\\\n\\midrule\n",
-        o.recall_r_deg, o.recall_t);
-    for (const auto& s : ss) {
-        out += fmt::format("{} & {:.4f} & {:.4f} & {:.4f} & {:.4f} & {:.3f} & {:.4f} \\\\\n",
-                           s.method, s.mae_r.mean, s.mae_t.mean, s.ccd.mean, s.rre.mean, s.recall,
-                           s.median_seconds);
+std::string FormatLatex(const std::vector<ReportTable>& tables, const ReportOptions& o) {
+    std::string out;
+    for (const auto& t : tables) {
+        out += "% Data: " + Caption(t) + "\n";
+        out += "\\begin{tabular}{lrrrrrr}\n\\toprule\n";
+        out += fmt::format(
+            "Method & MAE(R) & MAE(t) & CCD & RRE & Recall@({:g},{:g}) & Time (s) \\\\\n"
+            "\\midrule\n",
+            o.recall_r_deg, o.recall_t);
+        for (const auto& s : t.methods) {
+            out += fmt::format("{} & {} & {} & {} & {} & {:.3f} & {:.4f} \\\\\n", s.label,
+                               Fmt(s.mae_r.mean, "{:.4f}"), Fmt(s.mae_t.mean, "{:.4f}"),
+                               Fmt(s.ccd.mean, "{:.4f}"), Fmt(s.rre.mean, "{:.4f}"), s.recall,
+                               s.median_seconds);
+        }
+        out += "\\bottomrule\n\\end{tabular}\n";
     }
-    out += "\\bottomrule\n\\end{tabular}\n";
     return out;
 }
 
 nlohmann::json ToJson(const std::vector<MethodSummary>& ss, const ReportOptions& o) {
     nlohmann::json arr = nlohmann::json::array();
-    const auto est = [](const Estimate& e) {
-        return nlohmann::json{{"mean", e.mean}, {"ci95", {e.lo, e.hi}}};
+    const auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; };
+    const auto est = [&](const Estimate& e) {
+        return nlohmann::json{{"mean", num(e.mean)}, {"ci95", {num(e.lo), num(e.hi)}}};
     };
     for (const auto& s : ss) {
-        arr.push_back({{"method", s.method},
-                       {"pairs", s.pairs},
-                       {"failed", s.failed},
-                       {"mae_r", est(s.mae_r)},
-                       {"mae_t", est(s.mae_t)},
-                       {"ccd", est(s.ccd)},
-                       {"rre", est(s.rre)},
-                       {"rte", est(s.rte)},
-                       {"rmse_r", s.rmse_r},
-                       {"rmse_t", s.rmse_t},
-                       {"chamfer", s.chamfer},
-                       {"recall", s.recall},
-                       {"recall_thresholds", {o.recall_r_deg, o.recall_t}},
-                       {"success", s.success},
-                       {"success_thresholds", {o.success_rre_deg, o.success_rte}},
-                       {"median_seconds", s.median_seconds},
-                       {"mean_seconds", s.mean_seconds},
-                       {"threads", s.threads}});
+        nlohmann::json j = {{"method", s.method},
+                            {"label", s.label},
+                            {"params", s.params},
+                            {"pairs", s.pairs},
+                            {"failed", s.failed},
+                            {"mae_r", est(s.mae_r)},
+                            {"mae_t", est(s.mae_t)},
+                            {"ccd", est(s.ccd)},
+                            {"rre", est(s.rre)},
+                            {"rte", est(s.rte)},
+                            {"rmse_r", num(s.rmse_r)},
+                            {"rmse_t", num(s.rmse_t)},
+                            {"chamfer", num(s.chamfer)},
+                            {"recall", s.recall},
+                            {"recall_thresholds", {o.recall_r_deg, o.recall_t}},
+                            {"success", s.success},
+                            {"success_thresholds", {o.success_rre_deg, o.success_rte}},
+                            {"median_seconds", s.median_seconds},
+                            {"mean_seconds", s.mean_seconds},
+                            {"threads", s.threads}};
+        if (o.recall_3dmatch) j["recall_3dmatch"] = s.recall_3dmatch;
+        arr.push_back(std::move(j));
+    }
+    return arr;
+}
+
+nlohmann::json ToJson(const std::vector<ReportTable>& tables, const ReportOptions& o) {
+    nlohmann::json arr = nlohmann::json::array();
+    for (const auto& t : tables) {
+        arr.push_back({{"data", t.data},
+                       {"description", DescribeTable(t)},
+                       {"euler", ToString(t.euler)},
+                       {"files", t.files},
+                       {"notes", t.notes},
+                       {"methods", ToJson(t.methods, o)}});
     }
     return arr;
 }

@@ -1,17 +1,34 @@
 #pragma once
-// Aggregates JSONL result rows into per-method tables (Markdown, CSV, JSON, LaTeX).
+// Aggregates result rows into per-method tables (Markdown, CSV, JSON, LaTeX). Tables are data
+// (ReportTable: a caption, rows of MethodSummary, notes); the Format* writers only render them.
+// Metrics, thresholds and success rules are defined in docs/metrics.md.
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "runners/result_row.hpp"
+
 namespace regbench {
 
+/// 3DMatch-style registration recall: RMSE of the ground-truth-overlapping source points under
+/// the estimate below kRecall3dmatchRmse, with rre < kRecall3dmatchRreDeg and rte below
+/// kRecall3dmatchRte.
+constexpr double kRecall3dmatchRmse = 0.2;
+constexpr double kRecall3dmatchRreDeg = 15.0;
+constexpr double kRecall3dmatchRte = 0.3;
+
 struct ReportOptions {
-    double recall_r_deg = 1.0;  ///< recall@(r, t): mae_r < r [deg] and mae_t < t (paper code)
-    double recall_t = 0.1;
-    double success_rre_deg = 5.0;  ///< rre/rte based success: rre < this [deg] and rte < next
-    double success_rte = 0.1;
-    int bootstrap_samples = 1000;  ///< 95% percentile-bootstrap CI of the means (fixed seed)
+    double recall_r_deg = 1.0;     ///< recall@(r, t): mae_r < r [deg] and mae_t < t (paper code)
+    double recall_t = 0.1;         ///< recall@(r, t): mae_t threshold
+    double success_rre_deg = 5.0;  ///< success: rre < this [deg] and rte < success_rte
+    double success_rte = 0.1;      ///< success: rte threshold
+    int bootstrap_samples = 1000;  ///< 95% percentile-bootstrap CI of the means (seeded)
+    bool recall_3dmatch = false;   ///< add the 3DMatch-style recall column
+    /// Convention of mae_r / rmse_r to report. Unset: each row's own (tables never mix two).
+    /// Set: rows in another convention are recomputed from their stored ground truth, or
+    /// refused when they carry none (rows written before `gt_transform` existed).
+    std::optional<EulerConvention> euler;
 };
 
 /// Mean with a 95% bootstrap confidence interval.
@@ -21,29 +38,50 @@ struct Estimate {
     double hi = 0.0;
 };
 
-/// One table row: one method over all its rows.
+/// One table row: one method with one parameter set over all its pairs.
 struct MethodSummary {
     std::string method;
+    std::string label;  ///< method, plus its params when one table holds several sets of them
+    nlohmann::json params = nlohmann::json::object();
     std::size_t pairs = 0;
-    std::size_t failed = 0;  ///< status != ok (their metrics use the identity fallback)
+    std::size_t failed = 0;  ///< status != ok or a null metric (such rows count as not recalled)
     Estimate mae_r, mae_t, ccd, rre, rte;
     double rmse_r = 0.0, rmse_t = 0.0, chamfer = 0.0;
-    double recall = 0.0;   ///< recall@(recall_r_deg, recall_t)
-    double success = 0.0;  ///< rre/rte based
+    double recall = 0.0;          ///< recall@(recall_r_deg, recall_t)
+    double success = 0.0;         ///< rre/rte based
+    double recall_3dmatch = 0.0;  ///< 3DMatch-style (only with ReportOptions::recall_3dmatch)
     double median_seconds = 0.0, mean_seconds = 0.0;
     int threads = 1;
 };
 
-/// Summaries in first-seen method order. Rows without metrics are rejected naming the row.
-std::vector<MethodSummary> Summarize(const std::vector<nlohmann::json>& rows,
+/// Rows computed on one pair file (same content) with one Euler convention.
+struct ReportTable {
+    DataTag data;
+    EulerConvention euler = EulerConvention::kZyx;
+    std::vector<std::string> files;      ///< result files the rows came from
+    std::vector<MethodSummary> methods;  ///< in first-seen order
+    std::vector<std::string> notes;      ///< "file:line: ..." for rows counted as failed
+};
+
+/// Groups rows by pair file (content hash; file name and provenance for old rows without
+/// one) and Euler convention, and by (method, params) inside a group. Throws
+/// std::runtime_error naming both file:line for a duplicated (pair, method, params) row.
+std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows,
                                      const ReportOptions& options);
 
-/// A one-line description of the data the rows came from (dataset, protocol, pairing, file).
-std::string DescribeData(const std::vector<nlohmann::json>& rows);
+/// Summaries of rows that belong to one table (no grouping by data), in first-seen order.
+std::vector<MethodSummary> Summarize(const std::vector<ResultRow>& rows,
+                                     const ReportOptions& options);
+
+/// One line describing a table's data and convention, e.g. for captions.
+std::string DescribeTable(const ReportTable& table);
 
 std::string FormatMarkdown(const std::vector<MethodSummary>& s, const ReportOptions& o);
+std::string FormatMarkdown(const std::vector<ReportTable>& tables, const ReportOptions& o);
 std::string FormatCsv(const std::vector<MethodSummary>& s);
-std::string FormatLatex(const std::vector<MethodSummary>& s, const ReportOptions& o);
+std::string FormatCsv(const std::vector<ReportTable>& tables);
+std::string FormatLatex(const std::vector<ReportTable>& tables, const ReportOptions& o);
 nlohmann::json ToJson(const std::vector<MethodSummary>& s, const ReportOptions& o);
+nlohmann::json ToJson(const std::vector<ReportTable>& tables, const ReportOptions& o);
 
 }  // namespace regbench

@@ -1,5 +1,6 @@
 #pragma once
-// A progress line on stderr for long work: done/total, rate, ETA. Thread-safe.
+// The one progress line on stderr for long work (`run`, `generate`): done/total, rate, ETA.
+// Thread-safe.
 #include <chrono>
 #include <cstddef>
 #include <mutex>

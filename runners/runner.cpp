@@ -22,27 +22,12 @@
 #include "core/cpu_time.hpp"
 #include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
+#include "protocols/pair_hash.hpp"
 #include "runners/progress.hpp"
 #include "runners/registry.hpp"
 
 namespace regbench {
 namespace {
-
-nlohmann::json TransformToJson(const Transform& T) {
-    nlohmann::json rows = nlohmann::json::array();
-    for (int r = 0; r < 4; ++r) {
-        rows.push_back({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
-    }
-    return rows;
-}
-
-Transform TransformFromJson(const nlohmann::json& j) {
-    Transform T;
-    for (int r = 0; r < 4; ++r) {
-        for (int c = 0; c < 4; ++c) T(r, c) = j.at(r).at(c).get<double>();
-    }
-    return T;
-}
 
 nlohmann::json AlignResultToJson(const AlignResult& r) {
     return {{"transform", TransformToJson(r.T_target_source)},
@@ -65,24 +50,29 @@ AlignResult AlignResultFromJson(const nlohmann::json& j) {
     r.seconds = j.at("seconds").get<double>();
     r.cpu_seconds = j.value("cpu_seconds", 0.0);
     r.cpu_scope = j.value("cpu_scope", std::string("thread"));
-    r.status = j.at("status") == "ok" ? AlignStatus::kOk : AlignStatus::kFailed;
+    r.status =
+        j.at("status") == ToString(AlignStatus::kOk) ? AlignStatus::kOk : AlignStatus::kFailed;
     r.message = j.at("message").get<std::string>();
     r.scale = j.at("scale").get<double>();
     r.extra = j.at("extra");
     return r;
 }
 
-/// Result of one call plus the runner-level status ("ok", "failed", "timeout", "crashed").
+/// Result of one call plus the runner-level status (ok, failed, timeout, crashed).
 struct CallOutcome {
     AlignResult result;
-    std::string status;
+    Status status = Status::kOk;
 };
 
-CallOutcome Failure(const std::string& status, const std::string& message, double seconds) {
+Status StatusOf(const AlignResult& r) {
+    return r.status == AlignStatus::kOk ? Status::kOk : Status::kFailed;
+}
+
+CallOutcome Failure(Status status, const std::string& message, double seconds) {
     CallOutcome out;
     out.result.status = AlignStatus::kFailed;
     out.result.message = message;
-    out.result.stop_reason = status;
+    out.result.stop_reason = ToString(status);
     out.result.seconds = seconds;
     out.status = status;
     return out;
@@ -97,12 +87,12 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
                           int threads) {
     int fds[2];
     if (pipe(fds) != 0)
-        return Failure("failed", "pipe() failed: " + std::string(strerror(errno)), 0);
+        return Failure(Status::kFailed, "pipe() failed: " + std::string(strerror(errno)), 0);
     const pid_t pid = fork();
     if (pid < 0) {
         close(fds[0]);
         close(fds[1]);
-        return Failure("failed", "fork() failed: " + std::string(strerror(errno)), 0);
+        return Failure(Status::kFailed, "fork() failed: " + std::string(strerror(errno)), 0);
     }
     if (pid == 0) {
         close(fds[0]);
@@ -146,12 +136,12 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     int wstatus = 0;
     waitpid(pid, &wstatus, 0);
     if (timed_out) {
-        return Failure("timeout",
+        return Failure(Status::kTimeout,
                        method.Name() + ": exceeded timeout of " + std::to_string(timeout) + " s",
                        elapsed);
     }
     if (WIFSIGNALED(wstatus)) {
-        return Failure("crashed",
+        return Failure(Status::kCrashed,
                        method.Name() + ": crashed with signal " +
                            std::to_string(WTERMSIG(wstatus)) + " (" + strsignal(WTERMSIG(wstatus)) +
                            ")",
@@ -160,10 +150,11 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     try {
         CallOutcome out;
         out.result = AlignResultFromJson(nlohmann::json::parse(payload));
-        out.status = ToString(out.result.status);
+        out.status = StatusOf(out.result);
         return out;
     } catch (const std::exception& e) {
-        return Failure("crashed", method.Name() + ": child exited without a result", elapsed);
+        return Failure(Status::kCrashed, method.Name() + ": child exited without a result",
+                       elapsed);
     }
 }
 
@@ -172,7 +163,7 @@ CallOutcome AlignInProcess(RegistrationMethod& method,
                            const AlignContext& context) {
     CallOutcome out;
     out.result = method.Align(pair.source, pair.target, context);
-    out.status = ToString(out.result.status);
+    out.status = StatusOf(out.result);
     return out;
 }
 
@@ -181,15 +172,15 @@ std::string RowKey(std::size_t pair, const std::string& method) {
 }
 
 /// Rows already in `<out>.part` from an interrupted run (resume); a torn last line is dropped.
-std::vector<nlohmann::json> ReadPartialRows(const std::string& path) {
-    std::vector<nlohmann::json> rows;
+std::vector<ResultRow> ReadPartialRows(const std::string& path) {
+    std::vector<ResultRow> rows;
     std::ifstream in(path);
     std::string line;
     while (std::getline(in, line)) {
         if (line.empty()) continue;
         try {
-            rows.push_back(nlohmann::json::parse(line));
-        } catch (const nlohmann::json::exception&) {
+            rows.push_back(nlohmann::json::parse(line).get<ResultRow>());
+        } catch (const std::exception&) {
             break;  // interrupted mid-write: everything after this is redone
         }
     }
@@ -237,48 +228,68 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
     return specs;
 }
 
-nlohmann::json MakeResultRow(std::size_t pair_index,
-                             const Pair& pair,
-                             const std::string& method,
-                             const nlohmann::json& params,
-                             const AlignResult& result,
-                             int threads) {
-    nlohmann::json row = AlignResultToJson(result);
-    row["pair"] = pair_index;
-    row["method"] = method;
-    row["params"] = params;
-    row["threads"] = threads;
-    row["shape"] = pair.shape;
-    row["category"] = pair.category;
-    const PairMetrics m =
-        ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target);
-    row["metrics"] = {
-        {"mae_r", m.mae_r}, {"mae_t", m.mae_t},     {"mse_r", m.mse_r},
-        {"mse_t", m.mse_t}, {"rre", m.rre},         {"rte", m.rte},
-        {"ccd", m.ccd},     {"chamfer", m.chamfer}, {"ccd_within_clip", m.ccd_within_clip}};
+ResultRow MakeResultRow(std::size_t pair_index,
+                        const Pair& pair,
+                        const MethodSpec& method,
+                        const AlignResult& result,
+                        const RowContext& context) {
+    ResultRow row;
+    row.pair = pair_index;
+    row.method = method.name;
+    row.params = method.params;
+    row.transform = result.T_target_source;
+    row.seconds = result.seconds;
+    row.cpu_seconds = result.cpu_seconds;
+    row.cpu_scope = result.cpu_scope;
+    row.iterations = result.iterations;
+    row.status = context.status.value_or(StatusOf(result));
+    row.message = result.message;
+    row.stop_reason = result.stop_reason;
+    row.scale = result.scale;
+    row.extra = result.extra;
+    row.threads = context.threads;
+    row.shape = pair.shape;
+    row.category = pair.category;
+    row.source_overlap_ratio = pair.source_overlap_ratio;
+    row.target_overlap_ratio = pair.target_overlap_ratio;
+    row.euler = context.euler;
+    row.metrics =
+        ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target, context.euler);
+    row.metrics.overlap_rmse =
+        OverlapRmse(pair.T_gt, result.T_target_source, pair.source, pair.source_overlap);
+    row.gt_transform = pair.T_gt;
+    row.data = context.data;
+    row.machine = context.machine;
     return row;
 }
 
-std::vector<nlohmann::json> ReadJsonl(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error(path + ": cannot open results file");
-    std::vector<nlohmann::json> rows;
-    std::string line;
-    std::size_t lineno = 0;
-    while (std::getline(in, line)) {
-        ++lineno;
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        try {
-            rows.push_back(nlohmann::json::parse(line));
-        } catch (const nlohmann::json::exception& e) {
-            throw std::runtime_error(path + ":" + std::to_string(lineno) +
-                                     ": not JSON: " + e.what());
-        }
-        if (!rows.back().is_object()) {
-            throw std::runtime_error(path + ":" + std::to_string(lineno) + ": not a JSON object");
-        }
+DataTag DataTagOf(const std::string& pairs_path, const PairSet& set) {
+    DataTag d;
+    const nlohmann::json& p = set.provenance;
+    d.pairs_file = std::filesystem::path(pairs_path).filename().string();
+    d.dataset = p.value("dataset", "unknown");
+    d.protocol = p.value("protocol", "unknown");
+    d.pairing =
+        p.value("pairing", p.value("params", nlohmann::json::object()).value("pairing", "unknown"));
+    d.seed = p.value("seed", nlohmann::json());
+    // Hashed on every read, so files written before hashes existed get one too; a stored hash
+    // that disagrees means the arrays changed after generation.
+    d.content_hash = PairSetContentHash(set);
+    const std::string stored = p.value("content_hash", "");
+    if (!stored.empty() && stored != d.content_hash) {
+        throw std::runtime_error(pairs_path +
+                                 ": pairs do not match the content hash stored at "
+                                 "generation (" +
+                                 stored + " vs " + d.content_hash + "): the file was modified");
     }
-    return rows;
+    return d;
+}
+
+std::uint64_t BenchmarkSeed(const PairSet& set) {
+    const nlohmann::json& seed = set.provenance.value("seed", nlohmann::json());
+    if (seed.is_number_unsigned()) return seed.get<std::uint64_t>();
+    if (seed.is_number_integer()) return static_cast<std::uint64_t>(seed.get<std::int64_t>());
+    return 0;
 }
 
 RunSummary RunBenchmark(const RunOptions& options) {
@@ -294,15 +305,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
     const PairSet set = ReadPairFile(options.pairs_path);  // throws naming the file
 
     // Which data every number came from, carried in every row for the reports.
-    const nlohmann::json data_tag = {
-        {"pairs_file", std::filesystem::path(options.pairs_path).filename().string()},
-        {"dataset", set.provenance.value("dataset", "unknown")},
-        {"protocol", set.provenance.value("protocol", "unknown")},
-        {"pairing",
-         set.provenance.value(
-             "pairing",
-             set.provenance.value("params", nlohmann::json::object()).value("pairing", "unknown"))},
-        {"seed", set.provenance.value("seed", nlohmann::json())}};
+    const DataTag data_tag = DataTagOf(options.pairs_path, set);
     // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
     // Timing provenance (perf): the machine's load when the run started, so a reader can tell
     // whether wall times were taken on a busy machine (see docs/performance.md).
@@ -310,11 +313,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
     const nlohmann::json machine_tag = {{"loadavg", {load.load1, load.load5, load.load15}},
                                         {"cores", load.cores},
                                         {"jobs", options.jobs}};
-    const nlohmann::json& seed_json = set.provenance.value("seed", nlohmann::json());
-    const std::uint64_t benchmark_seed =
-        seed_json.is_number_unsigned() ? seed_json.get<std::uint64_t>()
-        : seed_json.is_number_integer() ? static_cast<std::uint64_t>(seed_json.get<std::int64_t>())
-                                        : 0;
+    const std::uint64_t benchmark_seed = BenchmarkSeed(set);
     std::vector<std::size_t> indices;
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
         if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
@@ -323,20 +322,28 @@ RunSummary RunBenchmark(const RunOptions& options) {
         }
     }
     const std::string part_path = options.out_path + ".part";
-    std::vector<nlohmann::json> rows;
+    std::vector<ResultRow> rows;
     std::set<std::string> done;
     if (options.resume) {
         const bool have_part = std::filesystem::exists(part_path);
         rows = ReadPartialRows(have_part ? part_path : options.out_path);
-        for (const auto& r : rows)
-            done.insert(RowKey(r.at("pair").get<std::size_t>(), r.at("method")));
+        for (const auto& r : rows) {
+            // One file, one convention: resumed rows scored otherwise would split the report.
+            if (r.euler != options.euler) {
+                throw std::runtime_error((have_part ? part_path : options.out_path) +
+                                         ": rows were scored with --euler " + ToString(r.euler) +
+                                         "; resume with --euler " + ToString(r.euler) +
+                                         " or start a new file");
+            }
+            done.insert(RowKey(r.pair, r.method));
+        }
     }
     RunSummary summary;
     summary.rows_skipped = rows.size();
     // Rewrite the kept rows so a torn last line from the interrupted run disappears.
     std::ofstream part(part_path, std::ios::trunc);
     if (!part) throw std::runtime_error(part_path + ": cannot write");
-    for (const auto& r : rows) part << r.dump() << "\n";
+    for (const auto& r : rows) part << ToJsonLine(r) << "\n";
     part.flush();
 
     const std::size_t total_calls = indices.size() * options.methods.size();
@@ -370,15 +377,17 @@ RunSummary RunBenchmark(const RunOptions& options) {
                         ? AlignIsolated(*methods[m], pair, context, options.timeout_seconds,
                                         options.threads_per_call)
                         : AlignInProcess(*methods[m], pair, context);
-                nlohmann::json row = MakeResultRow(k, pair, spec.name, spec.params, outcome.result,
-                                                   options.threads_per_call);
-                row["status"] = outcome.status;
-                row["data"] = data_tag;
-                row["machine"] = machine_tag;
-                if (outcome.status != "ok") failures.fetch_add(1);
+                RowContext row_context;
+                row_context.status = outcome.status;
+                row_context.threads = options.threads_per_call;
+                row_context.euler = options.euler;
+                row_context.data = data_tag;
+                row_context.machine = machine_tag;
+                const ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
+                if (outcome.status != Status::kOk) failures.fetch_add(1);
                 {
                     std::lock_guard<std::mutex> lock(out_mutex);
-                    part << row.dump() << "\n";
+                    part << ToJsonLine(row) << "\n";
                     part.flush();
                 }
                 written.fetch_add(1);
@@ -398,22 +407,13 @@ RunSummary RunBenchmark(const RunOptions& options) {
     if (!part) throw std::runtime_error(part_path + ": write failed");
 
     // Final file: rows sorted by (pair, method order), so output order does not depend on --jobs.
-    std::vector<nlohmann::json> all = ReadPartialRows(part_path);
+    std::vector<ResultRow> all = ReadPartialRows(part_path);
     std::map<std::string, std::size_t> order;
     for (std::size_t m = 0; m < options.methods.size(); ++m) order[options.methods[m].name] = m;
-    std::stable_sort(all.begin(), all.end(), [&](const nlohmann::json& a, const nlohmann::json& b) {
-        const auto ka = std::make_pair(a.at("pair").get<std::size_t>(), order[a.at("method")]);
-        const auto kb = std::make_pair(b.at("pair").get<std::size_t>(), order[b.at("method")]);
-        return ka < kb;
+    std::stable_sort(all.begin(), all.end(), [&](const ResultRow& a, const ResultRow& b) {
+        return std::make_pair(a.pair, order[a.method]) < std::make_pair(b.pair, order[b.method]);
     });
-    const std::string tmp_path = options.out_path + ".tmp";
-    {
-        std::ofstream out(tmp_path, std::ios::trunc);
-        for (const auto& r : all) out << r.dump() << "\n";
-        out.close();
-        if (!out) throw std::runtime_error(tmp_path + ": write failed");
-    }
-    std::filesystem::rename(tmp_path, options.out_path);
+    WriteResultRows(options.out_path, all);
     std::filesystem::remove(part_path);
     summary.rows_written = written.load();
     summary.failures = failures.load();

@@ -2,12 +2,14 @@
 // Runs registration methods over a frozen pair file: timing, fault isolation, resume, shards.
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/metrics.hpp"
 #include "core/registration.hpp"
 #include "protocols/pair.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench {
 
@@ -28,6 +30,7 @@ struct RunOptions {
     int shard_count = 1;
     double timeout_seconds = 0.0;  ///< > 0: each call runs in a child process, killed after it
     bool progress = true;          ///< progress line (done, rate, ETA) on stderr
+    EulerConvention euler = EulerConvention::kZyx;  ///< Euler angles of mae_r / rmse_r
 };
 
 /// Summary of a finished run.
@@ -44,20 +47,31 @@ struct RunSummary {
 std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
                                          const nlohmann::json& params_by_method);
 
-/// One JSONL row: the spec'd keys (pair, method, params, transform, seconds, iterations, status,
-/// message) plus stop_reason, scale, extra, shape, category, threads, and the metrics against
-/// T_gt computed after the timed call.
-nlohmann::json MakeResultRow(std::size_t pair_index,
-                             const Pair& pair,
-                             const std::string& method,
-                             const nlohmann::json& params,
-                             const AlignResult& result,
-                             int threads);
+/// What a row needs besides the pair and the call.
+struct RowContext {
+    std::optional<Status> status;  ///< runner-level status; unset: from the AlignResult
+    int threads = 1;               ///< OpenMP threads of the call
+    EulerConvention euler = EulerConvention::kZyx;
+    DataTag data;
+    /// Load and cores of the machine when the run started (`run`); empty when not recorded.
+    nlohmann::json machine = nlohmann::json::object();
+};
+
+/// One result row: the call's outcome plus the metrics against the pair's T_gt (computed after
+/// the timed call). `run` and `score` both build rows here, so their schemas cannot drift.
+ResultRow MakeResultRow(std::size_t pair_index,
+                        const Pair& pair,
+                        const MethodSpec& method,
+                        const AlignResult& result,
+                        const RowContext& context);
+
+/// The `data` tag of rows computed on `set` read from `pairs_path`.
+DataTag DataTagOf(const std::string& pairs_path, const PairSet& set);
+
+/// The pair file's generation seed (0 when it has none): seeds the methods' per-pair streams.
+std::uint64_t BenchmarkSeed(const PairSet& set);
 
 /// Runs everything; throws std::runtime_error for bad input files before any work is done.
 RunSummary RunBenchmark(const RunOptions& options);
-
-/// Reads a JSONL results file (one object per line). Throws naming file and line.
-std::vector<nlohmann::json> ReadJsonl(const std::string& path);
 
 }  // namespace regbench

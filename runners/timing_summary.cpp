@@ -6,20 +6,20 @@
 
 namespace regbench {
 
-TimingSummary SummariseTiming(const std::vector<nlohmann::json>& rows) {
+TimingSummary SummariseTiming(const std::vector<ResultRow>& rows) {
     TimingSummary s;
     double wall = 0.0, cpu = 0.0, load_sum = 0.0;
     std::size_t load_rows = 0;
     for (const auto& row : rows) {
-        if (row.value("status", std::string()) != "ok") continue;
-        const double w = row.value("seconds", 0.0);
-        const double c = row.value("cpu_seconds", 0.0);
+        if (row.status != Status::kOk) continue;
+        const double w = row.seconds;
+        const double c = row.cpu_seconds;
         if (!(w > 0.0) || !(c > 0.0)) continue;
         ++s.rows;
         wall += w;
         cpu += c;
-        if (row.contains("machine") && row["machine"].contains("loadavg")) {
-            load_sum += row["machine"]["loadavg"].at(0).get<double>();
+        if (row.machine.contains("loadavg")) {
+            load_sum += row.machine.at("loadavg").at(0).get<double>();
             ++load_rows;
         }
     }

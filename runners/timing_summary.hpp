@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "runners/result_row.hpp"
+
 namespace regbench {
 
 /// Wall/CPU ratio above which a run counts as oversubscribed: wall time then mostly measures
@@ -25,6 +27,6 @@ struct TimingSummary {
 /// Summarises the ok rows of a results file (rows without `cpu_seconds`, from older runs, are
 /// skipped). Threaded rows (cpu_scope "process") count all the call's threads' CPU time, so
 /// their ratio can fall below 1; that is not flagged.
-TimingSummary SummariseTiming(const std::vector<nlohmann::json>& rows);
+TimingSummary SummariseTiming(const std::vector<ResultRow>& rows);
 
 }  // namespace regbench

@@ -3,8 +3,8 @@
 
 Runs probreg's rigid CPD, GMMReg, SVR and FilterReg (the settings the OGMM paper used:
 probreg's defaults) on every pair of a regbench pair file and writes one JSONL row per
-(pair, method) in regbench's result format, with the metrics of
-../shared/specs/protocols.md computed here (scipy Euler zyx, no wrapping), then prints
+(pair, method) in regbench's result format, with the metrics of docs/metrics.md
+computed here (scipy as_euler('zyx'), lower case, no wrapping), then prints
 a summary per method. This file contains no probreg code: probreg is imported from
 --probreg-path (a checkout with its C++ extensions built in place) or from PYTHONPATH.
 
@@ -143,7 +143,7 @@ def chamfer(a, b, clip=kCcdClip):
 
 
 def pair_metrics(T_gt, T_est, source, target):
-    """Metrics of specs/protocols.md: Euler zyx (scipy) differences without wrapping."""
+    """Metrics of docs/metrics.md: scipy as_euler('zyx') differences without wrapping."""
     R_gt, _ = rotation_part(T_gt)
     R_est, _ = rotation_part(T_est)
     dr = np.abs(euler_zyx_deg(R_gt) - euler_zyx_deg(R_est))

@@ -6,33 +6,20 @@
 #include <cmath>
 #include <string>
 
-#include "core/gmm_fit.hpp"
-#include "core/gmm_l2.hpp"
-#include "core/rng.hpp"
 #include "core/transform.hpp"
+#include "gmm/gmm_fit.hpp"
+#include "gmm/gmm_l2.hpp"
 #include "runners/registry.hpp"
+#include "tests/testing/shapes.hpp"
 
 namespace regbench {
 namespace {
 
-PointCloud BenchShape(int n) {
-    auto rng = MakePairRng(2024, static_cast<std::uint64_t>(n));
-    PointCloud P(n, 3);
-    for (int i = 0; i < n; ++i) {
-        Eigen::Vector3d u(StandardNormal(rng), StandardNormal(rng), StandardNormal(rng));
-        u.normalize();
-        const double r = 1.0 + 0.25 * u.x() * u.y() + 0.2 * u.z() * u.z() * u.z() + 0.15 * u.x();
-        P.row(i) = (r * Eigen::Vector3d(0.9 * u.x(), 0.6 * u.y(), 0.4 * u.z())).transpose();
-    }
-    return P;
-}
-
 void BM_L2Align(benchmark::State& state, const std::string& method, const std::string& params) {
     const int n = static_cast<int>(state.range(0));
     const int threads = static_cast<int>(state.range(1));
-    const PointCloud Y = BenchShape(n);
-    const Transform T =
-        MakeTransform(RotationFromEulerZyxDeg(30.0, 0.0, 0.0), Eigen::Vector3d(0.1, -0.05, 0.2));
+    const PointCloud Y = testing::LumpyEllipsoid(n, 2024);
+    const Transform T = testing::ThirtyDegreesAboutZ();
     const PointCloud X = Apply(T, Y);
     auto m = CreateMethod(method, nlohmann::json::parse(params));
     const int saved = omp_get_max_threads();
@@ -59,7 +46,7 @@ void BM_L2Align(benchmark::State& state, const std::string& method, const std::s
 void BM_SphericalGmmFit(benchmark::State& state) {
     const int n = static_cast<int>(state.range(0));
     omp_set_num_threads(static_cast<int>(state.range(1)));
-    const PointCloud Y = BenchShape(n);
+    const PointCloud Y = testing::LumpyEllipsoid(n, 2024);
     GmmFitOptions options;
     options.n_components = std::min(800, static_cast<int>(0.8 * n));
     SphericalGmm g;
@@ -74,7 +61,7 @@ void BM_SphericalGmmFit(benchmark::State& state) {
 void BM_GmmL2Evaluation(benchmark::State& state) {
     const int n = static_cast<int>(state.range(0));
     omp_set_num_threads(static_cast<int>(state.range(1)));
-    MixtureFeatures f{BenchShape(n), Eigen::VectorXd::Constant(n, 1.0 / n)};
+    MixtureFeatures f{testing::LumpyEllipsoid(n, 2024), Eigen::VectorXd::Constant(n, 1.0 / n)};
     const RigidGmmL2Cost cost(f, f, 0.4, L2Gradient::kExact);
     Eigen::VectorXd theta = RigidGmmL2Cost::InitialTheta(), grad;
     for (auto _ : state) benchmark::DoNotOptimize(cost(theta, grad));

@@ -5,12 +5,13 @@
 
 #include <cmath>
 
-#include "core/gauss_sum.hpp"
 #include "core/metrics.hpp"
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
+#include "gmm/gauss_sum.hpp"
 #include "runners/registry.hpp"
+#include "tests/testing/method_params.hpp"
 
 namespace regbench {
 namespace {
@@ -159,34 +160,26 @@ TEST(Cpd, IdenticalCloudsGiveIdentity) {
 }
 
 TEST(Cpd, RejectsOutOfRangeParametersByName) {
-    const auto expect_named = [](const nlohmann::json& j, const std::string& name) {
-        try {
-            CreateMethod("cpd", j);
-            ADD_FAILURE() << "accepted " << j.dump();
-        } catch (const std::invalid_argument& e) {
-            EXPECT_NE(std::string(e.what()).find("'" + name + "'"), std::string::npos) << e.what();
-        }
-    };
-    expect_named({{"w", 1.0}}, "w");
-    expect_named({{"w", -0.1}}, "w");
-    expect_named({{"sigma2", -1.0}}, "sigma2");
-    expect_named({{"maxiter", 0}}, "maxiter");
-    expect_named({{"tol", -1.0}}, "tol");
-    expect_named({{"sigma2_formula", "exact"}}, "sigma2_formula");
-    expect_named({{"compat", "matlab"}}, "compat");
-    expect_named({{"e_step", "fgt"}}, "e_step");
-    expect_named({{"sigma_2", 1.0}}, "sigma_2");
+    testing::ExpectRejected("cpd", {{"w", 1.0}}, "'w'");
+    testing::ExpectRejected("cpd", {{"w", -0.1}}, "'w'");
+    testing::ExpectRejected("cpd", {{"sigma2", -1.0}}, "'sigma2'");
+    testing::ExpectRejected("cpd", {{"maxiter", 0}}, "'maxiter'");
+    testing::ExpectRejected("cpd", {{"tol", -1.0}}, "'tol'");
+    testing::ExpectRejected("cpd", {{"sigma2_formula", "exact"}}, "'sigma2_formula'");
+    testing::ExpectRejected("cpd", {{"compat", "matlab"}}, "'compat'");
+    testing::ExpectRejected("cpd", {{"e_step", "fgt"}}, "'e_step'");
+    testing::ExpectRejected("cpd", {{"sigma_2", 1.0}}, "'sigma_2'");
 }
 
 TEST(Cpd, CompatPresetAndExplicitValues) {
     EXPECT_FALSE(ParseCpdOptions({}).update_scale);
-    EXPECT_EQ(ParseCpdOptions({}).sigma2_formula, "ml");
+    EXPECT_EQ(ParseCpdOptions({}).sigma2_formula, CpdSigma2Formula::kMl);
     const CpdOptions p = ParseCpdOptions({{"compat", "probreg"}});
     EXPECT_TRUE(p.update_scale);
-    EXPECT_EQ(p.sigma2_formula, "probreg");
+    EXPECT_EQ(p.sigma2_formula, CpdSigma2Formula::kProbreg);
     const CpdOptions q = ParseCpdOptions({{"compat", "probreg"}, {"sigma2_formula", "ml"}});
     EXPECT_TRUE(q.update_scale);
-    EXPECT_EQ(q.sigma2_formula, "ml");
+    EXPECT_EQ(q.sigma2_formula, CpdSigma2Formula::kMl);
     const auto info = FindMethod("cpd");
     for (const auto& item : info.defaults.items()) {
         EXPECT_TRUE(info.param_docs.count(item.key())) << "undocumented: " << item.key();

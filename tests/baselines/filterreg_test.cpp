@@ -7,11 +7,11 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/gmm_common.hpp"
 #include "core/metrics.hpp"
 #include "core/normals.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
+#include "gmm/gmm_common.hpp"
 #include "runners/registry.hpp"
 #include "tests/testing/synthetic.hpp"
 
@@ -50,7 +50,8 @@ TEST(FilterRegEStep, ExactEstimatorMatchesBruteForceWithinCutoff) {
     const PointCloud X = Apply(SpecMotion(), testing::EllipsoidSurface(200, 2));
     const Normals normals = EstimateNormals(X, 10);
     const double sigma2 = 0.02;
-    const FilterRegMoments mom = FilterRegEStep(Y, X, &normals, sigma2, true, "exact");
+    const FilterRegMoments mom =
+        FilterRegEStep(Y, X, &normals, sigma2, true, FilterRegEstimator::kExact);
     const double r2 = 9.0 * sigma2;
     for (Eigen::Index i = 0; i < Y.rows(); ++i) {
         double m0 = 0.0, m2 = 0.0;
@@ -82,8 +83,8 @@ TEST(FilterRegEStep, BlurredLatticeMeanIsCloseToGaussianMean) {
     const double sigma = std::sqrt(sigma2);
     const FilterRegMoments auto_blur = FilterRegEStep(Y, X, nullptr, sigma2, false);
     EXPECT_FALSE(auto_blur.blurred);  // > 0.015 N vertices: probreg drops the blur
-    const FilterRegMoments mom =
-        FilterRegEStep(Y, X, nullptr, sigma2, false, "lattice", LatticeBlur::kOn);
+    const FilterRegMoments mom = FilterRegEStep(Y, X, nullptr, sigma2, false,
+                                                FilterRegEstimator::kLattice, LatticeBlur::kOn);
     ASSERT_TRUE(mom.blurred);
     EXPECT_GT(mom.lattice_vertices, 0.015 * 717);
     double worst = 0.0;
@@ -204,12 +205,14 @@ TEST(FilterReg, IdenticalCloudsGiveIdentity) {
 TEST(FilterReg, ReportsIterationsStopReasonObjectiveAndSigma2) {
     const PointCloud Y = testing::EllipsoidSurface(300, 4);
     const PointCloud X = Apply(SpecMotion(), Y);
-    const AlignResult capped = RunFilterReg(R"({"maxiter": 2, "tol": 0, "compat": "probreg"})", Y, X);
+    const AlignResult capped =
+        RunFilterReg(R"({"maxiter": 2, "tol": 0, "compat": "probreg"})", Y, X);
     EXPECT_EQ(capped.iterations, 2);
     EXPECT_EQ(capped.stop_reason, "max_iterations");
     EXPECT_TRUE(std::isfinite(capped.extra["objective"].get<double>()));
     EXPECT_EQ(capped.extra["sigma2"].get<double>(), SquaredDistanceMean(Y, X));
-    const AlignResult given = RunFilterReg(R"({"sigma2": 0.05, "maxiter": 3, "compat": "probreg"})", Y, X);
+    const AlignResult given =
+        RunFilterReg(R"({"sigma2": 0.05, "maxiter": 3, "compat": "probreg"})", Y, X);
     EXPECT_EQ(given.extra["sigma2"].get<double>(), 0.05);
     const AlignResult floored = RunFilterReg(R"({"sigma2": 1e-6, "maxiter": 1})", Y, Y);
     ASSERT_EQ(floored.iterations, 1);
@@ -295,7 +298,7 @@ TEST(FilterRegOptions, RejectsBadParametersNamingThem) {
 TEST(FilterRegOptions, DefaultsAndCompatProbregSwitchesUpdateSigma2Off) {
     const FilterRegOptions defaults = ParseFilterRegOptions(nlohmann::json::object());
     EXPECT_TRUE(defaults.update_sigma2);
-    EXPECT_EQ(defaults.compat, "none");
+    EXPECT_EQ(defaults.compat, Compat::kNone);
     const FilterRegOptions probreg = ParseFilterRegOptions({{"compat", "probreg"}});
     EXPECT_FALSE(probreg.update_sigma2);
     EXPECT_EQ(probreg.maxiter, 50);

@@ -50,7 +50,7 @@ TEST(Kabsch, FixesReflection) {
 TEST(Kabsch, RecoversSimilarityWithScale) {
     auto rng = MakePairRng(3, 0);
     const PointCloud src = RandomCloud(rng, 40);
-    const Eigen::Matrix3d R = RotationFromEulerZyxDeg(30, -10, 5);
+    const Eigen::Matrix3d R = RotationZyxProductDeg(30, -10, 5);
     const PointCloud tgt = Apply(MakeTransform(1.7 * R, {0.2, 0.1, -0.4}), src);
     const ProcrustesResult fit = WeightedProcrustes(src, tgt, {}, true);
     EXPECT_NEAR(fit.scale, 1.7, 1e-10);
@@ -60,7 +60,7 @@ TEST(Kabsch, RecoversSimilarityWithScale) {
 TEST(Kabsch, ZeroWeightsIgnoreOutliers) {
     auto rng = MakePairRng(4, 0);
     const PointCloud src = RandomCloud(rng, 30);
-    const Transform T = MakeTransform(RotationFromEulerZyxDeg(5, 15, 25), {0.1, 0.2, 0.3});
+    const Transform T = MakeTransform(RotationZyxProductDeg(5, 15, 25), {0.1, 0.2, 0.3});
     PointCloud tgt = Apply(T, src);
     tgt.row(0) << 10, 10, 10;  // an outlier with zero weight
     Eigen::VectorXd w = Eigen::VectorXd::Ones(30);

@@ -4,7 +4,6 @@
 
 #include <filesystem>
 
-#include "protocols/dataset_shapes.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_summary.hpp"
 #include "tests/protocols/test_shapes.hpp"
@@ -55,20 +54,6 @@ TEST(Generate, WritesOneFileWithProvenanceAndProgress) {
     std::filesystem::remove_all(dir);
 }
 
-TEST(Generate, ProceduralDatasetThroughTheRealLoader) {
-    // End to end with the datasets module (no data files needed): shapes load once, pairs come out.
-    const std::string dir = test::FreshTempDir("generate_procedural");
-    GenerateRequest r = Request(dir + "/p.h5");
-    r.dataset = "procedural";
-    r.split = "test";
-    GenerateToFile(r, DatasetShapeLoader(DatasetOptions{}));
-    const PairSet set = ReadPairFile(dir + "/p.h5");
-    ASSERT_EQ(set.pairs.size(), 4u);
-    EXPECT_EQ(set.pairs[0].source.rows(), 717);
-    EXPECT_FALSE(set.pairs[0].shape.empty());
-    std::filesystem::remove_all(dir);
-}
-
 TEST(Generate, BadRequestsFailBeforeWorkAndLeaveNoFile) {
     const std::string dir = test::FreshTempDir("generate_bad");
     const std::string out = dir + "/p.h5";
@@ -98,16 +83,6 @@ TEST(Generate, BadRequestsFailBeforeWorkAndLeaveNoFile) {
     r = Request(out);
     r.dataset = "missing";
     fails(r, "dataset 'missing'");
-    // The real dataset loader: a missing dataset path fails and leaves no file either.
-    r = Request(out);
-    r.dataset = dir + "/no_such_dataset";
-    try {
-        GenerateToFile(r, DatasetShapeLoader(DatasetOptions{}));
-        ADD_FAILURE() << "missing dataset path accepted";
-    } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find("no_such_dataset"), std::string::npos) << e.what();
-    }
-    EXPECT_FALSE(std::filesystem::exists(out));
     std::filesystem::remove_all(dir);
 }
 

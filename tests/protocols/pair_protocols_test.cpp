@@ -43,6 +43,12 @@ TEST(Crop, KeepsExactlyRoundedCountAboveQuantile) {
     const std::vector<Eigen::Index> kept = CropIndices(cloud, 0.7, crop_rng);
     ASSERT_EQ(kept.size(), 717u);
     EXPECT_EQ(CropCount(1024, 0.7), 717);
+    // Hand arithmetic: 0.7 * 1024 = 716.8, 0.7 * 2048 = 1433.6.
+    EXPECT_EQ(CropCount(1024, 0.7, CropRounding::kFloor), 716);
+    EXPECT_EQ(CropCount(2048, 0.7, CropRounding::kFloor), 1433);
+    EXPECT_EQ(CropCount(2048, 0.7, CropRounding::kNearest), 1434);
+    EXPECT_EQ(CropRoundingFor(Protocol::kIndoor), CropRounding::kFloor);
+    EXPECT_EQ(CropRoundingFor(Protocol::kPartial), CropRounding::kNearest);
     // Every kept point projects above every dropped one: a half-space cut along n.
     const Eigen::RowVector3d c = cloud.colwise().mean();
     std::vector<char> in(1024, 0);
@@ -161,9 +167,10 @@ TEST(Protocols, CompleteAndCompleteToPartialCounts) {
     EXPECT_EQ(cp.source.rows(), 717);
     EXPECT_EQ(cp.target.rows(), 1024);
     const Pair in = GeneratePair(shapes, DefaultProtocolOptions(Protocol::kIndoor), 1, 2);
-    EXPECT_EQ(in.shape, "cloud");       // the point-cloud source
-    EXPECT_EQ(in.source.rows(), 1434);  // round(0.7 * 2048)
-    EXPECT_EQ(in.target.rows(), 1434);
+    EXPECT_EQ(in.shape, "cloud");  // the point-cloud source
+    // The authors' indoor loader keeps int(0.7 * 2048) = 1433 points (floor), not round's 1434.
+    EXPECT_EQ(in.source.rows(), 1433);
+    EXPECT_EQ(in.target.rows(), 1433);
 }
 
 TEST(Protocols, OverlapSweepCyclesKeepLevelsAndOverlapGrowsWithKeep) {

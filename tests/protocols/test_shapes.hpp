@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "core/math_constants.hpp"
 #include "protocols/shape_source.hpp"
 
 namespace regbench::test {
 
 /// Ellipsoid with semi-axes (a, b, c) as a UV-sphere triangle mesh (inside the unit sphere).
 inline Mesh EllipsoidMesh(double a, double b, double c, int stacks = 24, int slices = 48) {
-    constexpr double kPi = 3.14159265358979323846;
     Mesh mesh;
     const int nv = (stacks + 1) * slices;
     mesh.vertices.resize(nv, 3);

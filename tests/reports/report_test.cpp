@@ -2,32 +2,51 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "core/transform.hpp"
+
 namespace regbench {
 namespace {
 
-nlohmann::json Row(const std::string& method,
-                   double mae_r,
-                   double mae_t,
-                   double seconds,
-                   const std::string& status = "ok") {
-    return {{"method", method},
-            {"status", status},
-            {"seconds", seconds},
-            {"metrics",
-             {{"mae_r", mae_r},
-              {"mae_t", mae_t},
-              {"mse_r", mae_r * mae_r},
-              {"mse_t", mae_t * mae_t},
-              {"rre", mae_r * 2},
-              {"rte", mae_t * 2},
-              {"ccd", 0.05},
-              {"chamfer", 0.01}}}};
+ResultRow Row(const std::string& method,
+              double mae_r,
+              double mae_t,
+              double seconds,
+              Status status = Status::kOk,
+              std::size_t pair = 0) {
+    ResultRow r;
+    r.pair = pair;
+    r.method = method;
+    r.status = status;
+    r.seconds = seconds;
+    r.metrics.mae_r = mae_r;
+    r.metrics.mae_t = mae_t;
+    r.metrics.mse_r = mae_r * mae_r;
+    r.metrics.mse_t = mae_t * mae_t;
+    r.metrics.rre = mae_r * 2;
+    r.metrics.rte = mae_t * 2;
+    r.metrics.ccd = 0.05;
+    r.metrics.chamfer = 0.01;
+    r.data.pairs_file = "a.h5";
+    r.data.content_hash = "fnv1a64:aaaa";
+    return r;
+}
+
+/// Rows of one method on distinct pairs 0, 1, 2, ...
+std::vector<ResultRow> Numbered(std::vector<ResultRow> rows) {
+    for (std::size_t k = 0; k < rows.size(); ++k) rows[k].pair = k;
+    return rows;
 }
 
 TEST(Report, AggregatesPerMethodByHand) {
-    const std::vector<nlohmann::json> rows = {Row("a", 0.5, 0.01, 1.0), Row("a", 2.0, 0.01, 3.0),
-                                              Row("a", 0.2, 0.5, 2.0, "failed"),
-                                              Row("b", 10.0, 0.2, 0.1)};
+    std::vector<ResultRow> rows =
+        Numbered({Row("a", 0.5, 0.01, 1.0), Row("a", 2.0, 0.01, 3.0),
+                  Row("a", 0.2, 0.5, 2.0, Status::kFailed), Row("b", 10.0, 0.2, 0.1)});
     const auto s = Summarize(rows, ReportOptions{});
     ASSERT_EQ(s.size(), 2u);
     EXPECT_EQ(s[0].method, "a");
@@ -47,15 +66,200 @@ TEST(Report, AggregatesPerMethodByHand) {
     EXPECT_NE(FormatCsv(s).find("a,3,1,0.9"), std::string::npos);
 }
 
+TEST(Report, SuccessThresholdsAreOptions) {
+    // rre = 2 * mae_r, rte = 2 * mae_t: rows (rre 1, rte 0.02) and (rre 4, rte 0.02).
+    const std::vector<ResultRow> rows = Numbered({Row("a", 0.5, 0.01, 1), Row("a", 2.0, 0.01, 1)});
+    ReportOptions o;
+    EXPECT_NEAR(Summarize(rows, o)[0].success, 1.0, 1e-12);  // rre < 5, rte < 0.1
+    o.success_rre_deg = 3.0;
+    EXPECT_NEAR(Summarize(rows, o)[0].success, 0.5, 1e-12);
+    o.success_rte = 0.01;
+    EXPECT_NEAR(Summarize(rows, o)[0].success, 0.0, 1e-12);
+}
+
 TEST(Report, MedianOfEvenCountAveragesTheMiddle) {
-    const auto s = Summarize(
-        {Row("a", 1, 0, 1.0), Row("a", 1, 0, 4.0), Row("a", 1, 0, 2.0), Row("a", 1, 0, 3.0)},
-        ReportOptions{});
+    const auto s = Summarize(Numbered({Row("a", 1, 0, 1.0), Row("a", 1, 0, 4.0),
+                                       Row("a", 1, 0, 2.0), Row("a", 1, 0, 3.0)}),
+                             ReportOptions{});
     EXPECT_NEAR(s[0].median_seconds, 2.5, 1e-12);
 }
 
-TEST(Report, RowWithoutMetricsIsRejected) {
-    EXPECT_THROW(Summarize({{{"method", "a"}, {"pair", 0}}}, ReportOptions{}), std::runtime_error);
+TEST(Report, RowWithoutMetricsIsRejectedWhenRead) {
+    const auto path = std::filesystem::temp_directory_path() / "regbench_report_nometrics.jsonl";
+    std::ofstream(path) << "{\"method\": \"a\", \"pair\": 0}\n";
+    try {
+        ReadResultRows(path.string());
+        FAIL() << "expected an error";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(path.string() + ":1"), std::string::npos) << e.what();
+    }
+    std::filesystem::remove(path);
+}
+
+TEST(Report, DifferentPairFilesGiveSeparateTables) {
+    std::vector<ResultRow> rows = Numbered({Row("a", 1, 0, 1), Row("a", 3, 0, 1)});
+    rows[1].pair = 0;  // same pair index, but from another pair file
+    rows[1].data.pairs_file = "b.h5";
+    rows[1].data.content_hash = "fnv1a64:bbbb";
+    const auto tables = BuildTables(rows, ReportOptions{});
+    ASSERT_EQ(tables.size(), 2u);
+    EXPECT_EQ(tables[0].data.pairs_file, "a.h5");
+    EXPECT_EQ(tables[1].data.pairs_file, "b.h5");
+    EXPECT_NEAR(tables[0].methods[0].mae_r.mean, 1.0, 1e-12);
+    EXPECT_NEAR(tables[1].methods[0].mae_r.mean, 3.0, 1e-12);
+    const std::string md = FormatMarkdown(tables, ReportOptions{});
+    EXPECT_NE(md.find("Table 1 of 2"), std::string::npos) << md;
+    EXPECT_NE(md.find("file `b.h5`"), std::string::npos) << md;
+}
+
+TEST(Report, SameFileNameButOtherContentIsNotPooled) {
+    std::vector<ResultRow> rows = Numbered({Row("a", 1, 0, 1), Row("a", 3, 0, 1)});
+    rows[1].data.content_hash = "fnv1a64:cccc";  // regenerated file under the same name
+    EXPECT_EQ(BuildTables(rows, ReportOptions{}).size(), 2u);
+}
+
+TEST(Report, DifferentConventionsAreNotPooled) {
+    std::vector<ResultRow> rows = Numbered({Row("a", 1, 0, 1), Row("a", 3, 0, 1)});
+    rows[1].euler = EulerConvention::kXyz;
+    const auto tables = BuildTables(rows, ReportOptions{});
+    ASSERT_EQ(tables.size(), 2u);
+    EXPECT_NE(DescribeTable(tables[0]).find("as_euler('zyx')"), std::string::npos);
+    EXPECT_NE(DescribeTable(tables[1]).find("as_euler('xyz')"), std::string::npos);
+}
+
+TEST(Report, ParameterSetsOfOneMethodAreSeparateRows) {
+    std::vector<ResultRow> rows = {Row("icp", 1, 0, 1, Status::kOk, 0),
+                                   Row("icp", 3, 0, 1, Status::kOk, 0)};
+    rows[0].params = {{"max_iterations", 10}};
+    rows[1].params = {{"max_iterations", 50}};
+    const auto tables = BuildTables(rows, ReportOptions{});
+    ASSERT_EQ(tables.size(), 1u);
+    ASSERT_EQ(tables[0].methods.size(), 2u);
+    EXPECT_EQ(tables[0].methods[0].label, "icp {\"max_iterations\":10}");
+    EXPECT_NEAR(tables[0].methods[1].mae_r.mean, 3.0, 1e-12);
+}
+
+TEST(Report, DuplicateRowIsAnErrorNamingBothLines) {
+    std::vector<ResultRow> rows = {Row("a", 1, 0, 1), Row("a", 1, 0, 1)};
+    rows[0].origin = "r1.jsonl:4";
+    rows[1].origin = "r2.jsonl:7";
+    try {
+        BuildTables(rows, ReportOptions{});
+        FAIL() << "expected an error";
+    } catch (const std::runtime_error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("r2.jsonl:7"), std::string::npos) << what;
+        EXPECT_NE(what.find("r1.jsonl:4"), std::string::npos) << what;
+        EXPECT_NE(what.find("duplicate"), std::string::npos) << what;
+    }
+}
+
+TEST(Report, NullMetricsCountAsFailedWithTheirLine) {
+    std::vector<ResultRow> rows = Numbered({Row("a", 1, 0.01, 1), Row("a", 0.5, 0.01, 1)});
+    rows[1].metrics.ccd = std::numeric_limits<double>::quiet_NaN();
+    rows[1].origin = "r.jsonl:2";
+    const auto tables = BuildTables(rows, ReportOptions{});
+    ASSERT_EQ(tables.size(), 1u);
+    const MethodSummary& s = tables[0].methods[0];
+    EXPECT_EQ(s.pairs, 2u);
+    EXPECT_EQ(s.failed, 1u);
+    EXPECT_NEAR(s.mae_r.mean, 1.0, 1e-12);  // the null row's numbers are not averaged
+    EXPECT_NEAR(s.recall, 0.0, 1e-12);      // 1 deg is not < 1; the null row is not recalled
+    ASSERT_EQ(tables[0].notes.size(), 1u);
+    EXPECT_NE(tables[0].notes[0].find("r.jsonl:2"), std::string::npos) << tables[0].notes[0];
+}
+
+TEST(Report, NullMetricsRoundTripThroughJsonl) {
+    ResultRow r = Row("a", 1, 0, 1);
+    r.metrics.mae_r = std::numeric_limits<double>::infinity();
+    const nlohmann::json j = r;
+    EXPECT_TRUE(j["metrics"]["mae_r"].is_null());
+    const ResultRow back = j.get<ResultRow>();
+    EXPECT_TRUE(std::isnan(back.metrics.mae_r));
+}
+
+TEST(Report, BootstrapDoesNotDependOnRowOrderOrTablePosition) {
+    std::vector<ResultRow> rows;
+    for (std::size_t k = 0; k < 20; ++k) {
+        rows.push_back(Row("a", 0.1 * static_cast<double>(k * k % 7), 0, 1, Status::kOk, k));
+        rows.push_back(Row("b", 0.3 * static_cast<double>(k % 5), 0, 1, Status::kOk, k));
+    }
+    const auto first = BuildTables(rows, ReportOptions{})[0].methods;
+    std::vector<ResultRow> reversed(rows.rbegin(), rows.rend());  // b now comes first
+    const auto second = BuildTables(reversed, ReportOptions{})[0].methods;
+    ASSERT_EQ(first.size(), 2u);
+    ASSERT_EQ(second.size(), 2u);
+    ASSERT_EQ(second[0].method, "b");
+    for (const auto& a : first) {
+        const auto it = std::find_if(second.begin(), second.end(),
+                                     [&](const MethodSummary& b) { return b.method == a.method; });
+        ASSERT_NE(it, second.end());
+        EXPECT_EQ(a.mae_r.lo, it->mae_r.lo) << a.method;
+        EXPECT_EQ(a.mae_r.hi, it->mae_r.hi) << a.method;
+        EXPECT_EQ(a.ccd.lo, it->ccd.lo) << a.method;
+    }
+    EXPECT_LT(first[0].mae_r.lo, first[0].mae_r.hi);  // a real interval, not a constant
+}
+
+TEST(Report, EulerOptionRecomputesFromStoredGroundTruth) {
+    // R_gt = Rx(10) Ry(20) Rz(30), R_est = Rx(16) Ry(20) Rz(25): 'zyx' angles (30, 20, 10) and
+    // (25, 20, 16) -> mae_r 11/3 (hand computation). The row says 0 under 'xyz' on purpose.
+    ResultRow r = Row("a", 0.0, 0.0, 1);
+    r.euler = EulerConvention::kXyz;
+    r.gt_transform = MakeTransform(RotationXyzProductDeg(10, 20, 30), Eigen::Vector3d::Zero());
+    r.transform = MakeTransform(RotationXyzProductDeg(16, 20, 25), Eigen::Vector3d::Zero());
+    ReportOptions o;
+    o.euler = EulerConvention::kZyx;
+    const auto tables = BuildTables({r}, o);
+    ASSERT_EQ(tables.size(), 1u);
+    EXPECT_EQ(tables[0].euler, EulerConvention::kZyx);
+    EXPECT_NEAR(tables[0].methods[0].mae_r.mean, 11.0 / 3.0, 1e-9);
+    // Without a stored ground truth the report refuses instead of mixing conventions.
+    r.gt_transform.reset();
+    EXPECT_THROW(BuildTables({r}, o), std::runtime_error);
+}
+
+TEST(Report, OldRowsWithoutEulerKeyReadAsXyz) {
+    // A row as regbench wrote it before the convention was recorded.
+    const auto j = nlohmann::json::parse(
+        R"({"pair": 3, "method": "icp", "status": "ok", "seconds": 0.5,
+            "metrics": {"mae_r": 1, "mae_t": 0, "mse_r": 1, "mse_t": 0, "rre": 1, "rte": 0,
+                        "ccd": 0, "chamfer": 0, "ccd_within_clip": true},
+            "data": {"pairs_file": "p.h5", "dataset": "d", "protocol": "x",
+                     "pairing": "y", "seed": 1}})");
+    const ResultRow r = j.get<ResultRow>();
+    EXPECT_EQ(r.euler, EulerConvention::kXyz);
+    EXPECT_EQ(r.pair, 3u);
+    EXPECT_TRUE(r.data.content_hash.empty());
+    EXPECT_TRUE(std::isnan(r.metrics.overlap_rmse));
+}
+
+TEST(Report, UnknownKeysSurviveARoundTrip) {
+    ResultRow r = Row("a", 1, 0, 1);
+    r.other["measured_overlap"] = 0.42;
+    const ResultRow back = nlohmann::json(r).get<ResultRow>();
+    EXPECT_EQ(back.other["measured_overlap"], 0.42);
+}
+
+TEST(Report, StatusNamesAreTheRowStrings) {
+    for (Status s :
+         {Status::kOk, Status::kFailed, Status::kTimeout, Status::kCrashed, Status::kMissing}) {
+        EXPECT_EQ(ParseStatus(ToString(s)), s);
+    }
+    EXPECT_STREQ(ToString(Status::kMissing), "missing");
+    EXPECT_THROW(ParseStatus("nope"), std::invalid_argument);
+}
+
+TEST(Report, Recall3dmatchUsesOverlapRmseRreAndRte) {
+    // Thresholds: overlap RMSE < 0.2, rre < 15, rte < 0.3.
+    std::vector<ResultRow> rows =
+        Numbered({Row("a", 1, 0.01, 1), Row("a", 1, 0.01, 1), Row("a", 10, 0.01, 1)});
+    rows[0].metrics.overlap_rmse = 0.1;  // recalled
+    rows[1].metrics.overlap_rmse = 0.3;  // RMSE too large
+    rows[2].metrics.overlap_rmse = 0.1;  // rre = 20 >= 15
+    ReportOptions o;
+    o.recall_3dmatch = true;
+    EXPECT_NEAR(Summarize(rows, o)[0].recall_3dmatch, 1.0 / 3.0, 1e-12);
 }
 
 }  // namespace

@@ -24,8 +24,7 @@ protected:
         set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
         for (int k = 0; k < 6; ++k) {
             set.pairs.push_back(testing::SyntheticPair(
-                50, 10 + k,
-                MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
+                50, 10 + k, MakeTransform(RotationZyxProductDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
         }
         pairs_ = (dir_ / "pairs.h5").string();
         WritePairFile(pairs_, set);
@@ -66,6 +65,28 @@ TEST_F(RunnerTest, WritesOneRowPerPairAndMethodWithRequiredKeys) {
     EXPECT_NEAR(rows[3]["metrics"]["rre"].get<double>(), 15.0, 1e-6);
 }
 
+TEST_F(RunnerTest, RowsRecordConventionOverlapAndGroundTruth) {
+    RunOptions o = Options("typed.jsonl");
+    o.euler = EulerConvention::kXyz;
+    RunBenchmark(o);
+    const auto raw = ReadJsonl(o.out_path);
+    const auto rows = ReadResultRows(o.out_path);
+    ASSERT_EQ(rows.size(), 6u);
+    const PairSet set = ReadPairFile(pairs_);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        EXPECT_EQ(raw[k]["euler"], "xyz");
+        EXPECT_EQ(rows[k].euler, EulerConvention::kXyz);
+        EXPECT_EQ(rows[k].status, Status::kOk);
+        EXPECT_EQ(rows[k].source_overlap_ratio, set.pairs[k].source_overlap_ratio);
+        EXPECT_EQ(rows[k].target_overlap_ratio, set.pairs[k].target_overlap_ratio);
+        ASSERT_TRUE(rows[k].gt_transform.has_value());
+        EXPECT_EQ(*rows[k].gt_transform, set.pairs[k].T_gt);
+        EXPECT_EQ(rows[k].origin, o.out_path + ":" + std::to_string(k + 1));
+        // Writing the typed row back gives the same line (no key lost or renamed).
+        EXPECT_EQ(nlohmann::json(rows[k]), raw[k]);
+    }
+}
+
 TEST_F(RunnerTest, ParallelJobsGiveTheSameRowsInTheSameOrder) {
     RunOptions a = Options("a.jsonl");
     RunOptions b = Options("b.jsonl");
@@ -97,6 +118,19 @@ TEST_F(RunnerTest, ResumeSkipsFinishedRowsAndDropsATornLine) {
     EXPECT_EQ(s.rows_skipped, 2u);
     EXPECT_EQ(s.rows_written, 4u);
     EXPECT_EQ(ReadJsonl(o.out_path).size(), 6u);
+}
+
+TEST_F(RunnerTest, ResumeRefusesRowsOfAnotherEulerConvention) {
+    RunOptions o = Options("euler.jsonl");
+    RunBenchmark(o);  // zyx
+    o.resume = true;
+    o.euler = EulerConvention::kXyz;
+    try {
+        RunBenchmark(o);
+        FAIL() << "resumed zyx rows into an xyz run";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("--euler zyx"), std::string::npos) << e.what();
+    }
 }
 
 TEST_F(RunnerTest, ShardsPartitionThePairs) {

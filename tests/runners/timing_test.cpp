@@ -60,20 +60,22 @@ TEST(RunnerTiming, EveryOkRowHasPositiveCpuSecondsAndTheMachineLoad) {
     std::filesystem::remove_all(dir);
 }
 
-nlohmann::json Row(double wall, double cpu, const std::string& status = "ok") {
-    return {{"status", status},
-            {"seconds", wall},
-            {"cpu_seconds", cpu},
-            {"machine", {{"loadavg", {3.0, 2.0, 1.0}}}}};
+ResultRow Row(double wall, double cpu, Status status = Status::kOk) {
+    ResultRow row;
+    row.status = status;
+    row.seconds = wall;
+    row.cpu_seconds = cpu;
+    row.machine = {{"loadavg", {3.0, 2.0, 1.0}}};
+    return row;
 }
 
 TEST(TimingSummary, RatioOfMeansAndWarningAboveThreshold) {
     // Hand values: wall 0.2 + 0.4 = 0.6, CPU 0.1 + 0.2 = 0.3 -> ratio 2; the failed row and the
     // row without cpu_seconds are skipped.
-    std::vector<nlohmann::json> rows = {Row(0.2, 0.1),
-                                        Row(0.4, 0.2),
-                                        Row(9.0, 1.0, "failed"),
-                                        {{"status", "ok"}, {"seconds", 5.0}}};
+    ResultRow old_row;  // written before cpu_seconds existed: reads as 0
+    old_row.seconds = 5.0;
+    std::vector<ResultRow> rows = {Row(0.2, 0.1), Row(0.4, 0.2), Row(9.0, 1.0, Status::kFailed),
+                                   old_row};
     const TimingSummary s = SummariseTiming(rows);
     EXPECT_EQ(s.rows, 2u);
     EXPECT_DOUBLE_EQ(s.mean_wall_seconds, 0.3);

@@ -1,0 +1,59 @@
+// `regbench score`: result rows for transforms computed outside regbench (any language), so
+// `report` treats external and built-in methods alike.
+#include <fmt/format.h>
+
+#include <iostream>
+
+#include "app/commands.hpp"
+#include "runners/score.hpp"
+
+namespace regbench::app {
+
+void AddScoreCommand(CLI::App& app) {
+    auto* cmd = app.add_subcommand(
+        "score",
+        "Score transforms computed elsewhere on a pair file; writes the same rows as `run` "
+        "(formats: docs/metrics.md#scoring-external-transforms)");
+    auto o = std::make_shared<ScoreOptions>();
+    auto params = std::make_shared<std::string>();
+    auto euler = std::make_shared<std::string>("zyx");
+    cmd->add_option("--pairs", o->pairs_path, "Frozen HDF5 pair file the transforms belong to")
+        ->required();
+    cmd->add_option("--transforms", o->transforms_path,
+                    "T.jsonl ({\"pair\": k, \"transform\": [[4x4]], \"seconds\": s} per line) or "
+                    "T.csv (pair,t00,...,t23[,seconds]: top 3 rows, row-major)")
+        ->required();
+    cmd->add_option("--method", o->method, "Method name written in every row")->required();
+    cmd->add_option("--params", *params, "JSON object of the method's parameters, recorded");
+    cmd->add_option("--out", o->out_path, "Output JSONL (written atomically)")->required();
+    cmd->add_option("--euler", *euler,
+                    "Euler angles of mae_r/rmse_r: zyx = scipy as_euler('zyx'), the paper's; "
+                    "xyz = RPMNet's")
+        ->check(CLI::IsMember({"zyx", "xyz"}))
+        ->capture_default_str();
+    cmd->add_option("--rigid-tol", o->rigid_tolerance,
+                    "Reject a transform when max|R^T R - I|, |det R - 1| or its bottom row's "
+                    "distance from (0,0,0,1) exceeds this")
+        ->capture_default_str();
+    cmd->add_flag("--allow-scale", o->allow_scale,
+                  "Accept similarities s R (uniform scale, e.g. CPD with scale): the rotation "
+                  "metrics use R, the row's scale is s");
+    cmd->add_option("--threads", o->threads, "Threads the method used (recorded in rows)")
+        ->capture_default_str();
+    cmd->callback([=] {
+        ScoreOptions opts = *o;
+        if (!params->empty()) {
+            try {
+                opts.params = nlohmann::json::parse(*params);
+            } catch (const nlohmann::json::exception& e) {
+                throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
+            }
+        }
+        opts.euler = ParseEulerConvention(*euler);
+        const ScoreSummary s = ScoreTransforms(opts);
+        std::cerr << fmt::format("[score] wrote {} rows ({} missing) to {}\n", s.rows, s.missing,
+                                 opts.out_path);
+    });
+}
+
+}  // namespace regbench::app

@@ -1,0 +1,542 @@
+#include "gmm/gauss_sum.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "core/nanoflann_adaptor.hpp"
+
+namespace regbench {
+namespace {
+
+/// Float partial sums run over at most this many terms before they are added into double.
+constexpr Eigen::Index kChunk = 256;
+
+using Tree = CloudKdTree;
+
+using Range = std::pair<Eigen::Index, Eigen::Index>;
+
+/// A point leaf that may hold neighbours of a query leaf: its range and the squared
+/// distance from its sphere's centre within which a query point can reach it.
+struct Candidate {
+    Eigen::Vector3d centre;
+    double reach2;  ///< (radius + cutoff)^2
+    Eigen::Index begin, end;
+};
+
+/// Point leaves whose spheres come within `cutoff` of the `query` node's sphere, in stored
+/// order (found by walking the point tree from the root).
+void CollectCandidates(const BlockedCloud::Node& query,
+                       const BlockedCloud& points,
+                       double cutoff,
+                       std::vector<int>& stack,
+                       std::vector<Candidate>& candidates) {
+    candidates.clear();
+    stack.assign(1, 0);
+    const auto& nodes = points.nodes();
+    while (!stack.empty()) {
+        const BlockedCloud::Node& n = nodes[static_cast<size_t>(stack.back())];
+        stack.pop_back();
+        const double gap = (n.centre - query.centre).norm() - n.radius - query.radius;
+        if (gap > cutoff) continue;
+        if (n.child1 < 0) {
+            const double reach = n.radius + cutoff;
+            candidates.push_back({n.centre, reach * reach, n.begin, n.end});
+        } else {
+            stack.push_back(n.child2);  // child1 holds the lower range: pop it first
+            stack.push_back(n.child1);
+        }
+    }
+}
+
+/// Everything the inner loop needs for one query leaf.
+struct LeafJob {
+    const float* qx;
+    const float* qy;
+    const float* qz;
+    Eigen::Index q_begin, q_end;
+    const float* px;
+    const float* py;
+    const float* pz;
+    const float* w;
+    const Candidate* candidates;
+    size_t num_candidates;
+    Range* ranges;  ///< scratch, num_candidates entries
+    float neg_inv_two_sigma2;
+    float cutoff2;
+    double* m0;  ///< indexed by query stored index
+    double* m1;  ///< row-major (query, 3) or nullptr
+};
+
+struct ChunkSums {
+    float s0, s1, s2, s3;
+};
+
+/// Float SIMD sums over one chunk of <= kChunk points: sum w k, sum w k p (p = x, y, z).
+/// Only locals and restrict pointers in the loop, so it vectorises.
+template <bool kWeighted, bool kMoment>
+__attribute__((always_inline)) inline ChunkSums SumChunk(const float* __restrict px,
+                                                         const float* __restrict py,
+                                                         const float* __restrict pz,
+                                                         const float* __restrict w,
+                                                         Eigen::Index count,
+                                                         float qx,
+                                                         float qy,
+                                                         float qz,
+                                                         float neg_inv_two_sigma2,
+                                                         float cutoff2) {
+    // Eight independent lanes (one AVX register) written as plain arrays: GCC vectorises
+    // this without -ffast-math, and the lane order fixes the summation order.
+    constexpr int kLanes = 8;
+    float l0[kLanes] = {}, l1[kLanes] = {}, l2[kLanes] = {}, l3[kLanes] = {};
+    const auto lane_term = [&](Eigen::Index j, float& a0, float& a1, float& a2, float& a3) {
+        const float dx = qx - px[j];
+        const float dy = qy - py[j];
+        const float dz = qz - pz[j];
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        float k = FastExp(d2 * neg_inv_two_sigma2);
+        k = d2 <= cutoff2 ? k : 0.0f;
+        if (kWeighted) k *= w[j];
+        a0 += k;
+        if (kMoment) {
+            a1 += k * px[j];
+            a2 += k * py[j];
+            a3 += k * pz[j];
+        }
+    };
+    Eigen::Index j = 0;
+    for (; j + kLanes <= count; j += kLanes) {
+        for (int l = 0; l < kLanes; ++l) lane_term(j + l, l0[l], l1[l], l2[l], l3[l]);
+    }
+    for (int l = 0; j < count; ++j, ++l) lane_term(j, l0[l], l1[l], l2[l], l3[l]);
+    float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+    for (int l = 0; l < kLanes; ++l) {
+        s0 += l0[l];
+        s1 += l1[l];
+        s2 += l2[l];
+        s3 += l3[l];
+    }
+    return {s0, s1, s2, s3};
+}
+
+/// The kernel: for each query in the leaf, the candidate leaves its own position can reach
+/// (merged into contiguous ranges), then float SIMD sums over chunks of each range,
+/// accumulated in double. Written once, compiled for AVX2+FMA and for the baseline ISA.
+/// Returns the number of kernel evaluations.
+template <bool kWeighted, bool kMoment>
+__attribute__((always_inline)) inline std::int64_t EvaluateLeafImpl(const LeafJob& job) {
+    std::int64_t evaluated = 0;
+    for (Eigen::Index i = job.q_begin; i < job.q_end; ++i) {
+        const float qx = job.qx[i], qy = job.qy[i], qz = job.qz[i];
+        const Eigen::Vector3d q(qx, qy, qz);
+        size_t num_ranges = 0;
+        for (size_t c = 0; c < job.num_candidates; ++c) {
+            const Candidate& cand = job.candidates[c];
+            if ((q - cand.centre).squaredNorm() > cand.reach2) continue;
+            if (num_ranges > 0 && job.ranges[num_ranges - 1].second == cand.begin) {
+                job.ranges[num_ranges - 1].second = cand.end;
+            } else {
+                job.ranges[num_ranges++] = {cand.begin, cand.end};
+            }
+        }
+        double a0 = 0.0, a1 = 0.0, a2 = 0.0, a3 = 0.0;
+        for (size_t r = 0; r < num_ranges; ++r) {
+            const Range range = job.ranges[r];
+            evaluated += range.second - range.first;
+            for (Eigen::Index c0 = range.first; c0 < range.second; c0 += kChunk) {
+                const Eigen::Index c1 = std::min(range.second, c0 + kChunk);
+                const ChunkSums s = SumChunk<kWeighted, kMoment>(
+                    job.px + c0, job.py + c0, job.pz + c0, job.w ? job.w + c0 : nullptr, c1 - c0,
+                    qx, qy, qz, job.neg_inv_two_sigma2, job.cutoff2);
+                a0 += s.s0;
+                if (kMoment) {
+                    a1 += s.s1;
+                    a2 += s.s2;
+                    a3 += s.s3;
+                }
+            }
+        }
+        job.m0[i] = a0;
+        if (kMoment) {
+            job.m1[3 * i] = a1;
+            job.m1[3 * i + 1] = a2;
+            job.m1[3 * i + 2] = a3;
+        }
+    }
+    return evaluated;
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+template <bool kWeighted, bool kMoment>
+__attribute__((target("avx2,fma"))) std::int64_t EvaluateLeafAvx2(const LeafJob& job) {
+    return EvaluateLeafImpl<kWeighted, kMoment>(job);
+}
+bool HasAvx2Fma() {
+    static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    return has;
+}
+#endif
+
+template <bool kWeighted, bool kMoment>
+std::int64_t EvaluateLeafBaseline(const LeafJob& job) {
+    return EvaluateLeafImpl<kWeighted, kMoment>(job);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64-v4 (AVX-512) clone; the lane order is the same, so results match the AVX2 build
+/// up to FMA contraction. Not exercised on machines without AVX-512 (such as CI's).
+template <bool kWeighted, bool kMoment>
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) std::int64_t EvaluateLeafV4(
+    const LeafJob& job) {
+    return EvaluateLeafImpl<kWeighted, kMoment>(job);
+}
+bool HasAvx512Leaf() {
+    static const bool has =
+        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+    return has;
+}
+#endif
+
+template <bool kWeighted, bool kMoment>
+std::int64_t EvaluateLeaf(const LeafJob& job) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512Leaf()) return EvaluateLeafV4<kWeighted, kMoment>(job);
+    if (HasAvx2Fma()) return EvaluateLeafAvx2<kWeighted, kMoment>(job);
+#endif
+    return EvaluateLeafBaseline<kWeighted, kMoment>(job);
+}
+
+std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
+    if (weighted) {
+        return moment ? EvaluateLeaf<true, true>(job) : EvaluateLeaf<true, false>(job);
+    }
+    return moment ? EvaluateLeaf<false, true>(job) : EvaluateLeaf<false, false>(job);
+}
+
+/// One target's kernel column: row[i] = exp(a |q - p_i|^2) for all sources i, and its sum
+/// (8 float lanes per chunk of kChunk, chunks added in double: the same scheme as SumChunk).
+__attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
+                                                           const float* __restrict px,
+                                                           const float* __restrict py,
+                                                           const float* __restrict pz,
+                                                           Eigen::Index count,
+                                                           float qx,
+                                                           float qy,
+                                                           float qz,
+                                                           float a) {
+    constexpr int kLanes = 8;
+    double total = 0.0;
+    for (Eigen::Index c0 = 0; c0 < count; c0 += kChunk) {
+        const Eigen::Index c1 = std::min(count, c0 + kChunk);
+        float lanes[kLanes] = {};
+        Eigen::Index j = c0;
+        const auto term = [&](Eigen::Index i) {
+            const float dx = qx - px[i], dy = qy - py[i], dz = qz - pz[i];
+            const float k = FastExp((dx * dx + dy * dy + dz * dz) * a);
+            row[i] = k;
+            return k;
+        };
+        for (; j + kLanes <= c1; j += kLanes) {
+            for (int l = 0; l < kLanes; ++l) lanes[l] += term(j + l);
+        }
+        for (int l = 0; j < c1; ++j, ++l) lanes[l] += term(j);
+        float s = 0.0f;
+        for (int l = 0; l < kLanes; ++l) s += lanes[l];
+        total += s;
+    }
+    return total;
+}
+
+/// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's share of
+/// p1 and PX, w = 1 / (den + c), from its kernel column while it is still in L1.
+__attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict row,
+                                                       Eigen::Index count,
+                                                       float w,
+                                                       float wx,
+                                                       float wy,
+                                                       float wz,
+                                                       float* __restrict acc0,
+                                                       float* __restrict acc1,
+                                                       float* __restrict acc2,
+                                                       float* __restrict acc3) {
+    for (Eigen::Index i = 0; i < count; ++i) {
+        const float k = row[i];
+        acc0[i] += k * w;
+        acc1[i] += k * wx;
+        acc2[i] += k * wy;
+        acc3[i] += k * wz;
+    }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64-v4 (AVX-512) clones, chosen at run time; this project's CI machine has no AVX-512,
+/// so they are compiled but exercised only where the CPU supports them.
+#define REGBENCH_V4_TARGET "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"
+bool HasAvx512() {
+    static const bool has =
+        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+    return has;
+}
+__attribute__((target(REGBENCH_V4_TARGET))) double KernelRowV4(float* row,
+                                                               const float* px,
+                                                               const float* py,
+                                                               const float* pz,
+                                                               Eigen::Index count,
+                                                               float qx,
+                                                               float qy,
+                                                               float qz,
+                                                               float a) {
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+__attribute__((target("avx2,fma"))) double KernelRowAvx2(float* row,
+                                                         const float* px,
+                                                         const float* py,
+                                                         const float* pz,
+                                                         Eigen::Index count,
+                                                         float qx,
+                                                         float qy,
+                                                         float qz,
+                                                         float a) {
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+__attribute__((target(REGBENCH_V4_TARGET))) void AxpyRowV4(const float* row,
+                                                           Eigen::Index count,
+                                                           float w,
+                                                           float wx,
+                                                           float wy,
+                                                           float wz,
+                                                           float* acc0,
+                                                           float* acc1,
+                                                           float* acc2,
+                                                           float* acc3) {
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+__attribute__((target("avx2,fma"))) void AxpyRowAvx2(const float* row,
+                                                     Eigen::Index count,
+                                                     float w,
+                                                     float wx,
+                                                     float wy,
+                                                     float wz,
+                                                     float* acc0,
+                                                     float* acc1,
+                                                     float* acc2,
+                                                     float* acc3) {
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+#endif
+
+}  // namespace
+
+double KernelRow(float* row,
+                 const float* px,
+                 const float* py,
+                 const float* pz,
+                 Eigen::Index count,
+                 float qx,
+                 float qy,
+                 float qz,
+                 float a) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return KernelRowV4(row, px, py, pz, count, qx, qy, qz, a);
+    if (HasAvx2Fma()) return KernelRowAvx2(row, px, py, pz, count, qx, qy, qz, a);
+#endif
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+
+void AxpyRow(const float* row,
+             Eigen::Index count,
+             float w,
+             float wx,
+             float wy,
+             float wz,
+             float* acc0,
+             float* acc1,
+             float* acc2,
+             float* acc3) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return AxpyRowV4(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+    if (HasAvx2Fma()) return AxpyRowAvx2(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+#endif
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+
+namespace {
+
+/// Copies nanoflann's tree into BlockedCloud nodes (pre-order), returning the node index.
+template <class NodePtr>
+int FlattenTree(NodePtr node,
+                std::vector<BlockedCloud::Node>& nodes,
+                std::vector<int>& leaves,
+                Eigen::Index& next_begin) {
+    const int id = static_cast<int>(nodes.size());
+    nodes.emplace_back();
+    if (node->child1 == nullptr && node->child2 == nullptr) {
+        const auto begin = static_cast<Eigen::Index>(node->node_type.lr.left);
+        const auto end = static_cast<Eigen::Index>(node->node_type.lr.right);
+        nodes[static_cast<size_t>(id)].begin = begin;
+        nodes[static_cast<size_t>(id)].end = end;
+        leaves.push_back(id);
+        next_begin = end;
+        return id;
+    }
+    const int c1 = FlattenTree(node->child1, nodes, leaves, next_begin);
+    const int c2 = FlattenTree(node->child2, nodes, leaves, next_begin);
+    auto& n = nodes[static_cast<size_t>(id)];
+    n.child1 = c1;
+    n.child2 = c2;
+    n.begin = nodes[static_cast<size_t>(c1)].begin;
+    n.end = nodes[static_cast<size_t>(c2)].end;
+    return id;
+}
+
+}  // namespace
+
+BlockedCloud::BlockedCloud(const PointCloud& cloud, const Eigen::Vector3d& origin)
+    : origin_(origin) {
+    const Eigen::Index n = cloud.rows();
+    if (n == 0) throw std::invalid_argument("BlockedCloud: cloud is empty");
+    bbox_diagonal_ = (cloud.colwise().maxCoeff() - cloud.colwise().minCoeff()).norm();
+    const PointCloud shifted = cloud.rowwise() - origin.transpose();
+    CloudAdaptor adaptor{shifted};
+    Tree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(kLeafSize));
+    tree.buildIndex();
+    order_.assign(tree.vAcc.begin(), tree.vAcc.end());
+    Eigen::Index next_begin = 0;
+    FlattenTree(tree.root_node, nodes_, leaves_, next_begin);
+
+    local_.resize(n, 3);
+    for (Eigen::Index k = 0; k < n; ++k)
+        local_.row(k) = shifted.row(order_[static_cast<size_t>(k)]);
+    // Bounding sphere of each node: centre of its box, radius to the farthest point.
+    centre0_.resize(nodes_.size());
+    radius0_.resize(nodes_.size());
+    for (size_t id = 0; id < nodes_.size(); ++id) {
+        const auto& node = nodes_[id];
+        const auto block = local_.middleRows(node.begin, node.end - node.begin);
+        const Eigen::Vector3d centre =
+            0.5 * (block.colwise().maxCoeff() + block.colwise().minCoeff()).transpose();
+        centre0_[id] = centre;
+        radius0_[id] =
+            std::sqrt((block.rowwise() - centre.transpose()).rowwise().squaredNorm().maxCoeff());
+    }
+    x_.resize(static_cast<size_t>(n));
+    y_.resize(static_cast<size_t>(n));
+    z_.resize(static_cast<size_t>(n));
+    SetTransform(Transform::Identity());
+}
+
+void BlockedCloud::SetTransform(const Transform& T) {
+    const Eigen::Matrix3d sR = T.topLeftCorner<3, 3>();
+    const double s = sR.col(0).norm();
+    // T acts on absolute coordinates: T(o + p) - o = sR p + (sR o + t - o).
+    const Eigen::Vector3d shift = sR * origin_ + T.topRightCorner<3, 1>() - origin_;
+    for (Eigen::Index k = 0; k < local_.rows(); ++k) {
+        const Eigen::Vector3d p = sR * local_.row(k).transpose() + shift;
+        const auto ku = static_cast<size_t>(k);
+        x_[ku] = static_cast<float>(p.x());
+        y_[ku] = static_cast<float>(p.y());
+        z_[ku] = static_cast<float>(p.z());
+    }
+    for (size_t id = 0; id < nodes_.size(); ++id) {
+        nodes_[id].centre = sR * centre0_[id] + shift;
+        // Float rounding of the coordinates can move a point by ~1e-7 relative; pad for it.
+        nodes_[id].radius = s * radius0_[id] * (1.0 + 1e-6) + 1e-6;
+    }
+}
+
+void KernelSums(const BlockedCloud& queries,
+                const BlockedCloud& points,
+                double sigma2,
+                double cutoff_radius,
+                const float* weights,
+                bool want_first_moment,
+                KernelSumResult& out) {
+    if (!(sigma2 > 0.0) || !std::isfinite(sigma2)) {
+        throw std::invalid_argument("KernelSums: sigma2 must be positive and finite");
+    }
+    if ((queries.origin() - points.origin()).norm() != 0.0) {
+        throw std::invalid_argument("KernelSums: queries and points must share one origin");
+    }
+    const Eigen::Index nq = queries.size();
+    out.m0.resize(nq);
+    if (want_first_moment) out.m1.resize(nq, 3);
+    const double cutoff = std::min(cutoff_radius, std::sqrt(2.0 * sigma2 * -kFastExpMinArg));
+    const auto& leaves = queries.leaves();
+    const int num_leaves = static_cast<int>(leaves.size());
+    std::int64_t pairs = 0;
+    const bool parallel = omp_get_max_threads() > 1 && num_leaves > 1;
+#pragma omp parallel if (parallel) reduction(+ : pairs)
+    {
+        std::vector<int> stack;
+        std::vector<Candidate> candidates;
+        std::vector<Range> ranges;
+        LeafJob job{queries.x(),
+                    queries.y(),
+                    queries.z(),
+                    0,
+                    0,
+                    points.x(),
+                    points.y(),
+                    points.z(),
+                    weights,
+                    nullptr,
+                    0,
+                    nullptr,
+                    static_cast<float>(-0.5 / sigma2),
+                    static_cast<float>(cutoff * cutoff),
+                    out.m0.data(),
+                    want_first_moment ? out.m1.data() : nullptr};
+#pragma omp for schedule(dynamic, 1)
+        for (int l = 0; l < num_leaves; ++l) {
+            const auto& leaf = queries.nodes()[static_cast<size_t>(leaves[static_cast<size_t>(l)])];
+            CollectCandidates(leaf, points, cutoff, stack, candidates);
+            ranges.resize(candidates.size());
+            job.q_begin = leaf.begin;
+            job.q_end = leaf.end;
+            job.candidates = candidates.data();
+            job.num_candidates = candidates.size();
+            job.ranges = ranges.data();
+            pairs += Dispatch(job, weights != nullptr, want_first_moment);
+        }
+    }
+    out.evaluated_pairs = pairs;
+}
+
+namespace {
+__attribute__((always_inline)) inline double FastExpPassImpl(const float* __restrict x,
+                                                             float* __restrict y,
+                                                             std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) y[i] = FastExp(x[i]);
+    double s = 0.0;
+    for (std::size_t i = 0; i < n; i += 4096) s += y[i];  // touch, do not re-add everything
+    return s;
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) double FastExpPassV4(
+    const float* x, float* y, std::size_t n) {
+    return FastExpPassImpl(x, y, n);
+}
+__attribute__((target("avx2,fma"))) double FastExpPassAvx2(const float* x,
+                                                           float* y,
+                                                           std::size_t n) {
+    return FastExpPassImpl(x, y, n);
+}
+#endif
+}  // namespace
+
+double FastExpPass(const float* x, float* y, std::size_t n) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return FastExpPassV4(x, y, n);
+    if (HasAvx2Fma()) return FastExpPassAvx2(x, y, n);
+#endif
+    return FastExpPassImpl(x, y, n);
+}
+
+double UnderflowRadiusSigmas() { return std::sqrt(2.0 * -kFastExpMinArg); }
+
+}  // namespace regbench

@@ -1,0 +1,245 @@
+#include "ogmm/layers.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace regbench::ogmm {
+namespace {
+
+namespace nn = torch::nn;
+namespace F = torch::nn::functional;
+
+constexpr double kLeakySlope = 0.2;  // SPE's LeakyReLU slope (the authors' code)
+constexpr int64_t kSpeHidden = 64;   // SPE branch hidden width (the authors' code)
+
+nn::Conv1d Conv1x1(int64_t in, int64_t out, bool bias) {
+    return nn::Conv1d(nn::Conv1dOptions(in, out, 1).bias(bias));
+}
+
+nn::Conv2d Conv1x1_2d(int64_t in, int64_t out, bool bias) {
+    return nn::Conv2d(nn::Conv2dOptions(in, out, 1).bias(bias));
+}
+
+void CheckChannelFirst(const torch::Tensor& x, int64_t channels, const char* who) {
+    if (x.dim() != 3 || (channels > 0 && x.size(1) != channels)) {
+        throw std::runtime_error(std::string(who) + ": expected a [B, " +
+                                 (channels > 0 ? std::to_string(channels) : std::string("C")) +
+                                 ", N] tensor, got " + std::to_string(x.dim()) + " dims");
+    }
+}
+
+// The farthest-point loop shared by both starts: `distance` [B, N] is the running squared
+// distance to the chosen set, `farthest` [B] the next index to take.
+torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
+                                torch::Tensor distance,
+                                torch::Tensor farthest,
+                                int64_t n) {
+    const int64_t batch = xyz.size(0);
+    torch::Tensor chosen = torch::empty({batch, n}, farthest.options());
+    const torch::Tensor rows = torch::arange(batch, farthest.options());
+    for (int64_t i = 0; i < n; ++i) {
+        chosen.select(1, i).copy_(farthest);
+        // xyz [B, 3, N] at (b, :, farthest[b]) -> [B, 3, 1]
+        const torch::Tensor centre = xyz.permute({0, 2, 1}).index({rows, farthest}).unsqueeze(2);
+        distance = torch::minimum(distance, (xyz - centre).pow(2).sum(1));
+        farthest = std::get<1>(distance.max(1));
+    }
+    return chosen;
+}
+
+void CheckSampleCount(const torch::Tensor& xyz, int64_t n, const char* who) {
+    CheckChannelFirst(xyz, 3, who);
+    if (n < 1 || n > xyz.size(2)) {
+        throw std::runtime_error(std::string(who) + ": cannot sample " + std::to_string(n) +
+                                 " of " + std::to_string(xyz.size(2)) + " points");
+    }
+}
+
+}  // namespace
+
+Conv3Impl::Conv3Impl(int64_t in_channels, int64_t out_channels, int64_t hidden_channels) {
+    conv1_ = register_module("conv1", Conv1x1(in_channels, hidden_channels, true));
+    bn1_ = register_module("bn1", nn::BatchNorm1d(hidden_channels));
+    conv2_ = register_module("conv2", Conv1x1(hidden_channels, hidden_channels, true));
+    bn2_ = register_module("bn2", nn::BatchNorm1d(hidden_channels));
+    conv3_ = register_module("conv3", Conv1x1(hidden_channels, out_channels, true));
+}
+
+torch::Tensor Conv3Impl::forward(const torch::Tensor& x) {
+    torch::Tensor h = torch::relu(bn1_(conv1_(x)));
+    h = torch::relu(bn2_(conv2_(h)));
+    return conv3_(h);
+}
+
+Conv2Impl::Conv2Impl(int64_t in_channels, int64_t out_channels, int64_t hidden_channels) {
+    conv1_ = register_module("conv1", Conv1x1(in_channels, hidden_channels, true));
+    bn1_ = register_module("bn1", nn::BatchNorm1d(hidden_channels));
+    conv2_ = register_module("conv2", Conv1x1(hidden_channels, out_channels, true));
+}
+
+torch::Tensor Conv2Impl::forward(const torch::Tensor& x) {
+    return conv2_(torch::relu(bn1_(conv1_(x))));
+}
+
+torch::Tensor FpsRandom(const torch::Tensor& xyz,
+                        int64_t n,
+                        c10::optional<at::Generator> generator) {
+    CheckSampleCount(xyz, n, "FpsRandom");
+    torch::NoGradGuard no_grad;
+    const auto index_options = torch::TensorOptions().dtype(torch::kLong).device(xyz.device());
+    torch::Tensor start = torch::randint(xyz.size(2), {xyz.size(0)}, generator, index_options);
+    torch::Tensor distance = torch::full({xyz.size(0), xyz.size(2)}, 1e10, xyz.options());
+    return FarthestPointLoop(xyz, distance, start, n);
+}
+
+torch::Tensor FpsCentroid(const torch::Tensor& xyz, int64_t n) {
+    CheckSampleCount(xyz, n, "FpsCentroid");
+    torch::NoGradGuard no_grad;
+    torch::Tensor distance = (xyz - xyz.mean(2, true)).pow(2).sum(1);  // [B, N]
+    torch::Tensor start = std::get<1>(distance.max(1));
+    return FarthestPointLoop(xyz, distance, start, n);
+}
+
+torch::Tensor GatherColumns(const torch::Tensor& x, const torch::Tensor& idx) {
+    return torch::gather(x, 2, idx.unsqueeze(1).expand({x.size(0), x.size(1), idx.size(1)}));
+}
+
+torch::Tensor KnnIndices(const torch::Tensor& x, int64_t k) {
+    CheckChannelFirst(x, 0, "KnnIndices");
+    if (k < 1 || k > x.size(2)) {
+        throw std::runtime_error("KnnIndices: k = " + std::to_string(k) + " neighbours of " +
+                                 std::to_string(x.size(2)) + " points");
+    }
+    torch::NoGradGuard no_grad;
+    // -|xi - xj|^2 = -|xi|^2 + 2 xi.xj - |xj|^2, the largest k are the nearest.
+    const torch::Tensor inner = -2 * torch::matmul(x.transpose(2, 1), x);
+    const torch::Tensor xx = x.pow(2).sum(1, true);
+    const torch::Tensor neg_d2 = -xx - inner - xx.transpose(2, 1);
+    return std::get<1>(neg_d2.topk(k, -1));
+}
+
+torch::Tensor EdgeFeatures(const torch::Tensor& x, const torch::Tensor& idx) {
+    const int64_t batch = x.size(0), channels = x.size(1), points = x.size(2), k = idx.size(2);
+    const torch::Tensor rows = x.transpose(2, 1).contiguous();  // [B, N, C]
+    const torch::Tensor base = torch::arange(batch, idx.options()).view({-1, 1, 1}) * points;
+    const torch::Tensor flat = (idx + base).view({-1});
+    const torch::Tensor neighbours = rows.view({batch * points, channels})
+                                         .index_select(0, flat)
+                                         .view({batch, points, k, channels});
+    const torch::Tensor centre = rows.view({batch, points, 1, channels}).expand_as(neighbours);
+    return torch::cat({neighbours - centre, centre}, 3).permute({0, 3, 1, 2});
+}
+
+DgcnnImpl::DgcnnImpl(int64_t emb_dims, int64_t k) : k_(k) {
+    conv1_ = register_module("conv1", Conv1x1_2d(6, 64, false));
+    conv2_ = register_module("conv2", Conv1x1_2d(64, 64, false));
+    conv3_ = register_module("conv3", Conv1x1_2d(64, 128, false));
+    conv4_ = register_module("conv4", Conv1x1_2d(128, 256, false));
+    conv5_ = register_module("conv5", Conv1x1_2d(512, emb_dims, false));
+    bn1_ = register_module("bn1", nn::BatchNorm2d(64));
+    bn2_ = register_module("bn2", nn::BatchNorm2d(64));
+    bn3_ = register_module("bn3", nn::BatchNorm2d(128));
+    bn4_ = register_module("bn4", nn::BatchNorm2d(256));
+    bn5_ = register_module("bn5", nn::BatchNorm2d(emb_dims));
+}
+
+torch::Tensor DgcnnImpl::forward(const torch::Tensor& xyz) {
+    CheckChannelFirst(xyz, 3, "Dgcnn");
+    torch::Tensor x = EdgeFeatures(xyz, KnnIndices(xyz, k_));  // [B, 6, N, k]
+    x = torch::relu(bn1_(conv1_(x)));
+    const torch::Tensor x1 = x.amax(-1, true);
+    x = torch::relu(bn2_(conv2_(x)));
+    const torch::Tensor x2 = x.amax(-1, true);
+    x = torch::relu(bn3_(conv3_(x)));
+    const torch::Tensor x3 = x.amax(-1, true);
+    x = torch::relu(bn4_(conv4_(x)));
+    const torch::Tensor x4 = x.amax(-1, true);
+    x = torch::cat({x1, x2, x3, x4}, 1);  // [B, 512, N, 1]
+    return torch::relu(bn5_(conv5_(x))).squeeze(-1);
+}
+
+AttentionalPropagationImpl::AttentionalPropagationImpl(int64_t feature_dim, int64_t num_heads)
+    : heads_(num_heads) {
+    if (num_heads < 1 || feature_dim % num_heads != 0) {
+        throw std::runtime_error("AttentionalPropagation: feature dim " +
+                                 std::to_string(feature_dim) + " is not divisible by " +
+                                 std::to_string(num_heads) + " heads");
+    }
+    merge_ = register_module("merge", Conv1x1(feature_dim, feature_dim, true));
+    proj_ = register_module("proj", nn::ModuleList());
+    for (int i = 0; i < 3; ++i) {
+        auto conv = Conv1x1(feature_dim, feature_dim, true);
+        torch::NoGradGuard no_grad;  // deepcopy(merge) in the reference
+        conv->weight.copy_(merge_->weight);
+        conv->bias.copy_(merge_->bias);
+        proj_->push_back(conv);
+    }
+    mlp_ = register_module(
+        "mlp", nn::Sequential(Conv1x1(2 * feature_dim, 2 * feature_dim, true),
+                              nn::InstanceNorm1d(nn::InstanceNorm1dOptions(2 * feature_dim)),
+                              nn::ReLU(), Conv1x1(2 * feature_dim, feature_dim, true)));
+    torch::NoGradGuard no_grad;
+    mlp_[3]->as<nn::Conv1d>()->bias.zero_();
+}
+
+torch::Tensor AttentionalPropagationImpl::forward(const torch::Tensor& x,
+                                                  const torch::Tensor& source) {
+    const int64_t batch = x.size(0), dim = x.size(1) / heads_;
+    const auto project = [&](int which, const torch::Tensor& in) {
+        return proj_[which]->as<nn::Conv1d>()->forward(in).view({batch, dim, heads_, -1});
+    };
+    const torch::Tensor query = project(0, x);
+    const torch::Tensor key = project(1, source);
+    const torch::Tensor value = project(2, source);
+    const torch::Tensor scores =
+        torch::einsum("bdhn,bdhm->bhnm", {query, key}) / std::sqrt(static_cast<double>(dim));
+    const torch::Tensor prob = torch::softmax(scores, -1);
+    const torch::Tensor message = torch::einsum("bhnm,bdhm->bdhn", {prob, value})
+                                      .contiguous()
+                                      .view({batch, dim * heads_, -1});
+    return mlp_->forward(torch::cat({x, merge_(message)}, 1));
+}
+
+SphericalEncodingImpl::SphericalEncodingImpl(int64_t out_channels, int64_t k_angle)
+    : k_angle_(k_angle) {
+    if (out_channels % 2 != 0) {
+        throw std::runtime_error("SphericalEncoding: output channels " +
+                                 std::to_string(out_channels) + " must be even");
+    }
+    const int64_t half = out_channels / 2;
+    const auto leaky = [] {
+        return nn::LeakyReLU(nn::LeakyReLUOptions().negative_slope(kLeakySlope));
+    };
+    dist_ = register_module(
+        "dist", nn::Sequential(Conv1x1(1, kSpeHidden, false), nn::BatchNorm1d(kSpeHidden), leaky(),
+                               Conv1x1(kSpeHidden, half, false), nn::BatchNorm1d(half), leaky()));
+    angle_2d_ = register_module("angle_2d", nn::Sequential(Conv1x1_2d(1, kSpeHidden, false),
+                                                           nn::BatchNorm2d(kSpeHidden), leaky()));
+    angle_1d_ = register_module("angle_1d", nn::Sequential(Conv1x1(kSpeHidden, half, false),
+                                                           nn::BatchNorm1d(half), leaky()));
+    unused_conv_ = register_module("unused_conv", Conv1x1(out_channels, out_channels, false));
+    unused_bn_ = register_module("unused_bn", nn::BatchNorm1d(out_channels));
+}
+
+torch::Tensor SphericalEncodingImpl::forward(const torch::Tensor& xyz) {
+    CheckChannelFirst(xyz, 3, "SphericalEncoding");
+    const torch::Tensor radial = xyz - xyz.mean(2, true);  // p_i - c, [B, 3, N]
+    const torch::Tensor dist = dist_->forward(radial.pow(2).sum(1, true));
+    const torch::Tensor idx = KnnIndices(xyz, k_angle_);  // [B, N, k], self first
+    const torch::Tensor neighbours = EdgeFeatures(xyz, idx).slice(1, 0, 3);  // p_k - p_i
+    // cos angle(p_k - p_i, p_i - c); the self neighbour is a zero vector and gives 0.
+    const torch::Tensor cosines =
+        F::cosine_similarity(neighbours, radial.unsqueeze(-1).expand_as(neighbours),
+                             F::CosineSimilarityFuncOptions().dim(1));  // [B, N, k]
+    const torch::Tensor angle = angle_2d_->forward(cosines.unsqueeze(1)).amax(-1);
+    return torch::cat({dist, angle_1d_->forward(angle)}, 1);
+}
+
+int64_t CountParameters(const torch::nn::Module& module) {
+    int64_t count = 0;
+    for (const auto& p : module.parameters()) count += p.numel();
+    return count;
+}
+
+}  // namespace regbench::ogmm

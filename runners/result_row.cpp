@@ -1,0 +1,286 @@
+#include "runners/result_row.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+namespace regbench {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// NaN / Inf become null (nlohmann would write null for them anyway; this says so).
+nlohmann::json FiniteOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; }
+
+/// null reads back as NaN, so a row whose metric could not be computed stays readable.
+double NumberOrNaN(const nlohmann::json& j, const char* key) {
+    const auto it = j.find(key);
+    if (it == j.end()) throw std::invalid_argument(std::string("metrics has no '") + key + "'");
+    if (it->is_null()) return kNaN;
+    if (!it->is_number()) {
+        throw std::invalid_argument(std::string("metrics.") + key + " is not a number");
+    }
+    return it->get<double>();
+}
+
+nlohmann::json MetricsToJson(const PairMetrics& m) {
+    return {{"mae_r", FiniteOrNull(m.mae_r)},       {"mae_t", FiniteOrNull(m.mae_t)},
+            {"mse_r", FiniteOrNull(m.mse_r)},       {"mse_t", FiniteOrNull(m.mse_t)},
+            {"rre", FiniteOrNull(m.rre)},           {"rte", FiniteOrNull(m.rte)},
+            {"ccd", FiniteOrNull(m.ccd)},           {"chamfer", FiniteOrNull(m.chamfer)},
+            {"ccd_within_clip", m.ccd_within_clip}, {"overlap_rmse", FiniteOrNull(m.overlap_rmse)}};
+}
+
+PairMetrics MetricsFromJson(const nlohmann::json& j, EulerConvention euler) {
+    if (!j.is_object()) throw std::invalid_argument("metrics is not an object");
+    PairMetrics m;
+    m.euler = euler;
+    m.mae_r = NumberOrNaN(j, "mae_r");
+    m.mae_t = NumberOrNaN(j, "mae_t");
+    m.mse_r = NumberOrNaN(j, "mse_r");
+    m.mse_t = NumberOrNaN(j, "mse_t");
+    m.rre = NumberOrNaN(j, "rre");
+    m.rte = NumberOrNaN(j, "rte");
+    m.ccd = NumberOrNaN(j, "ccd");
+    m.chamfer = NumberOrNaN(j, "chamfer");
+    m.ccd_within_clip = j.value("ccd_within_clip", true);
+    // Added later than the others: older rows have none (NaN, so 3DMatch recall refuses them).
+    m.overlap_rmse = j.contains("overlap_rmse") ? NumberOrNaN(j, "overlap_rmse") : kNaN;
+    return m;
+}
+
+/// Keys ResultRow reads itself; everything else goes to `other`.
+const char* const kKnownKeys[] = {"pair",
+                                  "method",
+                                  "params",
+                                  "transform",
+                                  "seconds",
+                                  "cpu_seconds",
+                                  "cpu_scope",
+                                  "machine",
+                                  "iterations",
+                                  "status",
+                                  "message",
+                                  "stop_reason",
+                                  "scale",
+                                  "extra",
+                                  "threads",
+                                  "shape",
+                                  "category",
+                                  "source_overlap_ratio",
+                                  "target_overlap_ratio",
+                                  "euler",
+                                  "metrics",
+                                  "gt_transform",
+                                  "data"};
+
+bool IsKnownKey(const std::string& key) {
+    for (const char* k : kKnownKeys) {
+        if (key == k) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+const char* ToString(Status status) {
+    switch (status) {
+        case Status::kOk:
+            return "ok";
+        case Status::kFailed:
+            return "failed";
+        case Status::kTimeout:
+            return "timeout";
+        case Status::kCrashed:
+            return "crashed";
+        case Status::kMissing:
+            return "missing";
+    }
+    return "?";
+}
+
+Status ParseStatus(const std::string& name) {
+    for (Status s :
+         {Status::kOk, Status::kFailed, Status::kTimeout, Status::kCrashed, Status::kMissing}) {
+        if (name == ToString(s)) return s;
+    }
+    throw std::invalid_argument("unknown status '" + name +
+                                "' (expected ok, failed, timeout, crashed or missing)");
+}
+
+void to_json(nlohmann::json& j, Status status) { j = ToString(status); }
+void from_json(const nlohmann::json& j, Status& status) {
+    status = ParseStatus(j.get<std::string>());
+}
+
+void to_json(nlohmann::json& j, const DataTag& d) {
+    j = {{"pairs_file", d.pairs_file},
+         {"dataset", d.dataset},
+         {"protocol", d.protocol},
+         {"pairing", d.pairing},
+         {"seed", d.seed}};
+    if (!d.content_hash.empty()) j["content_hash"] = d.content_hash;
+}
+
+void from_json(const nlohmann::json& j, DataTag& d) {
+    d.pairs_file = j.value("pairs_file", "unknown");
+    d.dataset = j.value("dataset", "unknown");
+    d.protocol = j.value("protocol", "unknown");
+    d.pairing = j.value("pairing", "unknown");
+    d.seed = j.value("seed", nlohmann::json());
+    d.content_hash = j.value("content_hash", "");
+}
+
+nlohmann::json TransformToJson(const Transform& T) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r) rows.push_back({T(r, 0), T(r, 1), T(r, 2), T(r, 3)});
+    return rows;
+}
+
+Transform TransformFromJson(const nlohmann::json& j) {
+    if (!j.is_array() || j.size() != 4) throw std::invalid_argument("transform is not 4x4");
+    Transform T;
+    for (int r = 0; r < 4; ++r) {
+        const auto& row = j[static_cast<std::size_t>(r)];
+        if (!row.is_array() || row.size() != 4) {
+            throw std::invalid_argument("transform row " + std::to_string(r) +
+                                        " does not hold 4 numbers");
+        }
+        for (int c = 0; c < 4; ++c) {
+            const auto& v = row[static_cast<std::size_t>(c)];
+            if (!v.is_number()) {
+                throw std::invalid_argument("transform entry (" + std::to_string(r) + ", " +
+                                            std::to_string(c) + ") is not a number");
+            }
+            T(r, c) = v.get<double>();
+        }
+    }
+    return T;
+}
+
+void to_json(nlohmann::json& j, const ResultRow& row) {
+    j = row.other.is_object() ? row.other : nlohmann::json::object();
+    j["pair"] = row.pair;
+    j["method"] = row.method;
+    j["params"] = row.params;
+    j["transform"] = TransformToJson(row.transform);
+    j["seconds"] = row.seconds;
+    j["cpu_seconds"] = row.cpu_seconds;
+    j["cpu_scope"] = row.cpu_scope;
+    j["iterations"] = row.iterations;
+    j["status"] = row.status;
+    j["message"] = row.message;
+    j["stop_reason"] = row.stop_reason;
+    j["scale"] = row.scale;
+    j["extra"] = row.extra;
+    j["threads"] = row.threads;
+    j["shape"] = row.shape;
+    j["category"] = row.category;
+    j["source_overlap_ratio"] = row.source_overlap_ratio;
+    j["target_overlap_ratio"] = row.target_overlap_ratio;
+    j["euler"] = ToString(row.euler);
+    j["metrics"] = MetricsToJson(row.metrics);
+    if (row.gt_transform) j["gt_transform"] = TransformToJson(*row.gt_transform);
+    j["data"] = row.data;
+    if (!row.machine.empty()) j["machine"] = row.machine;
+}
+
+void from_json(const nlohmann::json& j, ResultRow& row) {
+    if (!j.is_object()) throw std::invalid_argument("row is not a JSON object");
+    for (const char* key : {"pair", "method", "metrics"}) {
+        if (!j.contains(key)) throw std::invalid_argument(std::string("row has no '") + key + "'");
+    }
+    row.pair = j.at("pair").get<std::size_t>();
+    row.method = j.at("method").get<std::string>();
+    row.params = j.value("params", nlohmann::json::object());
+    row.transform =
+        j.contains("transform") ? TransformFromJson(j.at("transform")) : Transform::Identity();
+    row.seconds = j.value("seconds", 0.0);
+    // Rows from before CPU timing existed read as 0 s of the calling thread.
+    row.cpu_seconds = j.value("cpu_seconds", 0.0);
+    row.cpu_scope = j.value("cpu_scope", "thread");
+    row.iterations = j.value("iterations", 0);
+    row.status = j.contains("status") ? j.at("status").get<Status>() : Status::kOk;
+    row.message = j.value("message", "");
+    row.stop_reason = j.value("stop_reason", "");
+    row.scale = j.value("scale", 1.0);
+    row.extra = j.value("extra", nlohmann::json::object());
+    row.threads = j.value("threads", 1);
+    row.shape = j.value("shape", "");
+    row.category = j.value("category", "");
+    row.source_overlap_ratio = j.value("source_overlap_ratio", 0.0);
+    row.target_overlap_ratio = j.value("target_overlap_ratio", 0.0);
+    // Rows from before the key existed were scored with the xyz decomposition.
+    row.euler = j.contains("euler") ? ParseEulerConvention(j.at("euler").get<std::string>())
+                                    : EulerConvention::kXyz;
+    row.metrics = MetricsFromJson(j.at("metrics"), row.euler);
+    row.gt_transform.reset();
+    if (j.contains("gt_transform")) row.gt_transform = TransformFromJson(j.at("gt_transform"));
+    row.data = j.contains("data") ? j.at("data").get<DataTag>() : DataTag{};
+    row.machine = j.value("machine", nlohmann::json::object());
+    row.other = nlohmann::json::object();
+    for (const auto& item : j.items()) {
+        if (!IsKnownKey(item.key())) row.other[item.key()] = item.value();
+    }
+}
+
+std::string ToJsonLine(const ResultRow& row) { return nlohmann::json(row).dump(); }
+
+std::vector<nlohmann::json> ReadJsonl(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open results file");
+    std::vector<nlohmann::json> rows;
+    std::string line;
+    std::size_t lineno = 0;
+    while (std::getline(in, line)) {
+        ++lineno;
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        try {
+            rows.push_back(nlohmann::json::parse(line));
+        } catch (const nlohmann::json::exception& e) {
+            throw std::runtime_error(path + ":" + std::to_string(lineno) +
+                                     ": not JSON: " + e.what());
+        }
+        if (!rows.back().is_object()) {
+            throw std::runtime_error(path + ":" + std::to_string(lineno) + ": not a JSON object");
+        }
+    }
+    return rows;
+}
+
+std::vector<ResultRow> ReadResultRows(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error(path + ": cannot open results file");
+    std::vector<ResultRow> rows;
+    std::string line;
+    std::size_t lineno = 0;
+    while (std::getline(in, line)) {
+        ++lineno;
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        const std::string where = path + ":" + std::to_string(lineno);
+        try {
+            ResultRow row = nlohmann::json::parse(line).get<ResultRow>();
+            row.origin = where;
+            rows.push_back(std::move(row));
+        } catch (const std::exception& e) {
+            throw std::runtime_error(where + ": not a result row: " + e.what());
+        }
+    }
+    return rows;
+}
+
+void WriteResultRows(const std::string& path, const std::vector<ResultRow>& rows) {
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::trunc);
+        if (!out) throw std::runtime_error(tmp + ": cannot write");
+        for (const auto& r : rows) out << ToJsonLine(r) << "\n";
+        out.close();
+        if (!out) throw std::runtime_error(tmp + ": write failed");
+    }
+    std::filesystem::rename(tmp, path);
+}
+
+}  // namespace regbench

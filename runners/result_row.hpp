@@ -1,0 +1,102 @@
+#pragma once
+// One typed result row: the JSONL schema that `run` and `score` write and `report` reads
+// (docs/benchmark-format.md lists the keys). Everything that reads or writes rows goes through
+// this file, so a key is spelt in one place.
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/metrics.hpp"
+#include "core/point_cloud.hpp"
+
+namespace regbench {
+
+/// Outcome of one (pair, method) call as the runner saw it.
+enum class Status {
+    kOk,       ///< the method returned a transform
+    kFailed,   ///< the method reported a failure (its transform is the identity fallback)
+    kTimeout,  ///< killed after --timeout seconds
+    kCrashed,  ///< the isolated child died (signal) or returned no result
+    kMissing,  ///< `score`: the transforms file has no transform for this pair
+};
+/// "ok", "failed", "timeout", "crashed", "missing".
+const char* ToString(Status status);
+/// Inverse of ToString; throws std::invalid_argument naming the value.
+Status ParseStatus(const std::string& name);
+void to_json(nlohmann::json& j, Status status);
+void from_json(const nlohmann::json& j, Status& status);
+
+/// Which data a row was computed on (the pair file's provenance), carried by every row.
+struct DataTag {
+    std::string pairs_file = "unknown";  ///< file name of the pair file (no directory)
+    std::string dataset = "unknown";
+    std::string protocol = "unknown";
+    std::string pairing = "unknown";
+    nlohmann::json seed;       ///< generation seed (null when unknown)
+    std::string content_hash;  ///< hash of the pair file's arrays; empty in old rows
+};
+void to_json(nlohmann::json& j, const DataTag& d);
+void from_json(const nlohmann::json& j, DataTag& d);
+
+/// One JSONL line. Keys are those rows have always had (so old files read) plus `euler`,
+/// `source_overlap_ratio`, `target_overlap_ratio`, `cpu_seconds`, `cpu_scope`, `machine`; keys this struct does not know are kept in
+/// `other` and written back, so a newer writer's columns survive a round trip.
+struct ResultRow {
+    std::size_t pair = 0;                              ///< index in the pair file
+    std::string method;                                ///< registry name (or `score --method`)
+    nlohmann::json params = nlohmann::json::object();  ///< the method's full parameters
+    Transform transform = Transform::Identity();       ///< estimated T_target_source
+    double seconds = 0.0;                              ///< wall time of the call
+    /// CPU time of the call (AlignResult::cpu_seconds); 0 in rows written before it existed.
+    double cpu_seconds = 0.0;
+    std::string cpu_scope = "thread";  ///< "thread" or "process": which clock cpu_seconds read
+    int iterations = 0;
+    Status status = Status::kOk;
+    std::string message;  ///< empty when ok
+    std::string stop_reason;
+    double scale = 1.0;                               ///< estimated scale (1 if none)
+    nlohmann::json extra = nlohmann::json::object();  ///< method diagnostics
+    int threads = 1;                                  ///< OpenMP threads of the call
+    std::string shape;                                ///< the pair's mesh / scan name
+    std::string category;
+    double source_overlap_ratio = 0.0;  ///< from the pair file (fraction labelled overlapping)
+    double target_overlap_ratio = 0.0;
+    /// Euler angles behind metrics.mae_r / mse_r. Rows written before this key existed were
+    /// computed with today's `xyz` decomposition, so a missing key reads as kXyz.
+    EulerConvention euler = EulerConvention::kZyx;
+    /// Metrics against the pair's ground truth; NaN where not finite (written as JSON null).
+    PairMetrics metrics;
+    /// Ground truth T_gt of the pair: lets `report --euler` recompute the rotation metrics in
+    /// another convention. Absent in old rows.
+    std::optional<Transform> gt_transform;
+    DataTag data;
+    /// Machine load when the run started: {"loadavg": [1, 5, 15 min], "cores", "jobs"};
+    /// empty in old rows and in `score` rows.
+    nlohmann::json machine = nlohmann::json::object();
+    nlohmann::json other = nlohmann::json::object();  ///< unknown keys, kept verbatim
+
+    /// Where the row was read from ("file:line"); empty for rows made in memory. Not written.
+    std::string origin;
+};
+void to_json(nlohmann::json& j, const ResultRow& row);
+/// Throws nlohmann::json::exception / std::invalid_argument on a missing or mistyped key.
+void from_json(const nlohmann::json& j, ResultRow& row);
+
+/// Transform as 4 rows of 4 numbers.
+nlohmann::json TransformToJson(const Transform& T);
+/// Inverse of TransformToJson; throws std::invalid_argument unless j is 4x4 numbers.
+Transform TransformFromJson(const nlohmann::json& j);
+
+/// One compact JSON line (no newline).
+std::string ToJsonLine(const ResultRow& row);
+
+/// Reads a JSONL file of objects (blank lines skipped). Throws naming file and line.
+std::vector<nlohmann::json> ReadJsonl(const std::string& path);
+/// Reads and types every row; a row that does not parse throws naming file:line and the key.
+/// Each row's `origin` is set to "path:line".
+std::vector<ResultRow> ReadResultRows(const std::string& path);
+/// Writes rows (one per line) to path via path.tmp + rename, so readers never see half a file.
+void WriteResultRows(const std::string& path, const std::vector<ResultRow>& rows);
+
+}  // namespace regbench

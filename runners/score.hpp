@@ -1,0 +1,62 @@
+#pragma once
+// `regbench score`: result rows for transforms computed anywhere (another library, Python),
+// scored on a frozen pair file exactly as `run` scores its own methods.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/point_cloud.hpp"
+#include "core/transform.hpp"
+
+namespace regbench {
+
+/// Default tolerance of the rigidity check: max |R^T R - I|, |det R - 1| and the bottom row's
+/// distance from (0, 0, 0, 1). Loose enough for float32 output, tight enough to catch a
+/// scaled, sheared or transposed-by-mistake matrix.
+constexpr double kDefaultRigidTolerance = 1e-4;
+
+struct ScoreOptions {
+    std::string pairs_path;       ///< frozen HDF5 pair file the transforms were computed on
+    std::string transforms_path;  ///< .jsonl or .csv (format by extension; see ReadTransforms)
+    std::string method;           ///< name written in every row
+    nlohmann::json params = nlohmann::json::object();  ///< recorded in every row
+    std::string out_path;                              ///< result JSONL (written atomically)
+    EulerConvention euler = EulerConvention::kZyx;     ///< Euler angles of mae_r / rmse_r
+    double rigid_tolerance = kDefaultRigidTolerance;
+    /// Accept similarities s R (uniform scale s > 0, e.g. CPD with scale): checked as R after
+    /// dividing s = cbrt(det) out; the row's `scale` is s and the rotation metrics use R.
+    bool allow_scale = false;
+    int threads = 1;  ///< recorded in rows (threads the external method used)
+};
+
+/// One transform of a transforms file.
+struct ExternalTransform {
+    std::size_t pair = 0;
+    Transform T = Transform::Identity();  ///< maps the pair's source into its target frame
+    double seconds = 0.0;                 ///< 0 when the file gives none
+    double scale = 1.0;                   ///< cbrt(det) of the 3x3 block when scale is allowed
+    std::string origin;                   ///< "file:line"
+};
+
+/// Reads a transforms file and validates it: JSONL rows {"pair": k, "transform": 4x4,
+/// "seconds": s} (a row with a "method" key other than `method` is skipped, so a `run` result
+/// file can be rescored) or CSV `pair,t00,...,t23[,seconds]` (first three rows of the 4x4,
+/// row-major; an optional header line starting with "pair"). Throws std::runtime_error naming
+/// file:line for a malformed line, a pair index outside [0, num_pairs), a pair given twice or
+/// a matrix that is not rigid (a similarity with `allow_scale`) within `rigid_tolerance`.
+std::vector<ExternalTransform> ReadTransforms(const std::string& path,
+                                              std::size_t num_pairs,
+                                              const std::string& method,
+                                              double rigid_tolerance,
+                                              bool allow_scale = false);
+
+struct ScoreSummary {
+    std::size_t rows = 0;     ///< rows written (one per pair)
+    std::size_t missing = 0;  ///< pairs without a transform (status "missing")
+};
+
+/// Scores every pair of the pair file: a row per pair, `missing` for pairs the file lacks
+/// (identity transform, counted as failed by `report`). Nothing is written on bad input.
+ScoreSummary ScoreTransforms(const ScoreOptions& options);
+
+}  // namespace regbench

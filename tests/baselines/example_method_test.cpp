@@ -1,0 +1,119 @@
+// The worked example of docs/adding-a-method.md, compiled and tested so the document cannot rot:
+// a `centroid` method (not in the registry) that only translates the source's centre onto the
+// target's. The block between the EXAMPLE markers is the document's baselines/centroid.cpp
+// body verbatim; keep the two in step.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/method_spec.hpp"
+#include "core/transform.hpp"
+
+namespace regbench {
+namespace {
+
+// EXAMPLE BEGIN
+enum class Centre { kMean, kMedian };
+NLOHMANN_JSON_SERIALIZE_ENUM(Centre, {{Centre::kMean, "mean"}, {Centre::kMedian, "median"}})
+
+struct CentroidOptions {  // each member documented once, in Spec()
+    Centre centre = Centre::kMean;
+    double step = 1.0;
+};
+
+const MethodSpec<CentroidOptions>& Spec() {
+    static const MethodSpec<CentroidOptions> spec{
+        "centroid",
+        "translation only: moves the source's centre onto the target's",
+        {
+            Param("centre", &CentroidOptions::centre,
+                  "\"mean\" or \"median\" (per axis; robust to outliers)"),
+            Param("step", &CentroidOptions::step, "fraction of the offset applied, in (0, 1]")
+                .Greater(0.0)
+                .AtMost(1.0),
+        },
+        nullptr,  // no checks across parameters
+        {}};      // no compat presets
+    return spec;
+}
+
+Eigen::Vector3d Centre3(const PointCloud& p, Centre how) {
+    if (how == Centre::kMean) return p.colwise().mean().transpose();
+    Eigen::Vector3d c;
+    for (int k = 0; k < 3; ++k) {
+        Eigen::VectorXd v = p.col(k);
+        std::sort(v.data(), v.data() + v.size());
+        c[k] = v[v.size() / 2];  // upper median for even sizes
+    }
+    return c;
+}
+
+AlignResult AlignCentroid(const CentroidOptions& o,
+                          const PointCloud& source,
+                          const PointCloud& target,
+                          const AlignContext& /*context*/) {
+    const Eigen::Vector3d offset = Centre3(target, o.centre) - Centre3(source, o.centre);
+    AlignResult r;
+    r.T_target_source = MakeTransform(Eigen::Matrix3d::Identity(), o.step * offset);
+    r.stop_reason = "closed_form";
+    return r;
+}
+
+MethodInfo CentroidMethodInfo() { return MakeMethodInfo(Spec(), AlignCentroid); }
+// EXAMPLE END
+
+/// Four points whose mean (1.5, 0, 0) and upper median (2, 0, 0) differ: x = 0, 1, 2, 3.
+PointCloud Line() {
+    PointCloud p(4, 3);
+    p << 0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0;
+    return p;
+}
+
+TEST(ExampleMethod, RegistryEntryComesFromTheTable) {
+    const MethodInfo info = CentroidMethodInfo();
+    EXPECT_EQ(info.name, "centroid");
+    ASSERT_EQ(info.param_docs.size(), 2u);
+    EXPECT_EQ(info.defaults, nlohmann::json({{"centre", "mean"}, {"step", 1.0}}));
+    auto method = info.create({{"centre", "median"}});
+    EXPECT_EQ(method->Name(), "centroid");
+    EXPECT_EQ(method->Params(), nlohmann::json({{"centre", "median"}, {"step", 1.0}}));
+}
+
+TEST(ExampleMethod, AlignsCentresByHand) {
+    // Target = source + (0, 2, -1) with the last point moved to x = 11: the mean moves by
+    // (2, 2, -1) (8 / 4 in x), the upper median (third of 0, 1, 2, 11) stays at x = 2.
+    const PointCloud source = Line();
+    PointCloud target = source.rowwise() + Eigen::RowVector3d(0, 2, -1);
+    target(3, 0) = 11.0;
+    const MethodInfo info = CentroidMethodInfo();
+    const AlignResult mean = info.create({})->Align(source, target);
+    EXPECT_TRUE(mean.T_target_source.topRightCorner<3, 1>().isApprox(Eigen::Vector3d(2, 2, -1)));
+    const AlignResult median =
+        info.create({{"centre", "median"}, {"step", 0.5}})->Align(source, target);
+    EXPECT_TRUE(
+        median.T_target_source.topRightCorner<3, 1>().isApprox(Eigen::Vector3d(0, 1, -0.5)));
+}
+
+TEST(ExampleMethod, BadParametersNameTheParameter) {
+    const MethodInfo info = CentroidMethodInfo();
+    for (const auto& [params, name] : std::vector<std::pair<nlohmann::json, std::string>>{
+             {{{"centre", "mode"}}, "'centre' must be one of \"mean\", \"median\""},
+             {{{"step", 0.0}}, "'step' must be > 0.0"},
+             {{{"step", "half"}}, "'step' expects number"},
+             {{{"stride", 1}}, "unknown parameter 'stride'"}}) {
+        try {
+            info.create(params);
+            ADD_FAILURE() << params.dump() << " was accepted";
+        } catch (const std::invalid_argument& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+            EXPECT_EQ(std::string(e.what()).rfind("centroid: ", 0), 0u) << e.what();
+        }
+    }
+}
+
+}  // namespace
+}  // namespace regbench

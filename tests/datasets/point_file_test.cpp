@@ -1,0 +1,94 @@
+#include "datasets/point_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "tests/datasets/test_files.hpp"
+
+namespace regbench {
+namespace {
+
+using testing::ExpectThrowsWith;
+using testing::FreshDir;
+using testing::WriteText;
+
+constexpr double kTol = 1e-9;
+
+constexpr const char* kPlyAscii =
+    "ply\nformat ascii 1.0\nelement vertex 3\n"
+    "property float x\nproperty float y\nproperty float z\n"
+    "property float nx\nproperty float ny\nproperty float nz\nend_header\n"
+    "0 0 0 0 0 1\n1 2 3 0 1 0\n-1 0.5 2 1 0 0\n";
+
+TEST(ReadPointFile, ReadsXyzWithCommentsAndNormals) {
+    const auto dir = FreshDir();
+    const std::string path =
+        WriteText(dir / "a.xyz", "# header comment\n1 2 3 0 0 1\n\n4,5,6,0,1,0\n7 8 9 1 0 0 # c\n");
+    Normals normals;
+    const PointCloud p = ReadPointFile(path, &normals);
+    ASSERT_EQ(p.rows(), 3);
+    EXPECT_EQ(p.row(1), Eigen::RowVector3d(4, 5, 6));
+    ASSERT_EQ(normals.rows(), 3);
+    EXPECT_EQ(normals.row(2), Eigen::RowVector3d(1, 0, 0));
+    // Without normals on every line, none are reported.
+    Normals none;
+    ReadPointFile(WriteText(dir / "b.xyz", "1 2 3\n4 5 6 0 0 1\n"), &none);
+    EXPECT_EQ(none.rows(), 0);
+}
+
+TEST(ReadPointFile, RejectsBadXyzLineWithFileAndLine) {
+    const auto dir = FreshDir();
+    const std::string bad = WriteText(dir / "bad.xyz", "1 2 3\n4 5 6\n7 eight 9\n");
+    ExpectThrowsWith([&] { ReadPointFile(bad); }, bad + ":3");
+    const std::string short_line = WriteText(dir / "short.xyz", "1 2 3\n4 5\n");
+    ExpectThrowsWith([&] { ReadPointFile(short_line); }, short_line + ":2");
+    const std::string empty = WriteText(dir / "empty.xyz", "# nothing\n");
+    ExpectThrowsWith([&] { ReadPointFile(empty); }, empty);
+    const std::string missing = (dir / "missing.xyz").string();
+    ExpectThrowsWith([&] { ReadPointFile(missing); }, missing);
+    const std::string unknown = WriteText(dir / "cloud.obj", "v 1 2 3\n");
+    ExpectThrowsWith([&] { ReadPointFile(unknown); }, unknown);
+}
+
+TEST(ReadPointFile, ReadsPlyAndPcdThroughOpen3D) {
+    const auto dir = FreshDir();
+    Normals normals;
+    const PointCloud ply = ReadPointFile(WriteText(dir / "a.ply", kPlyAscii), &normals);
+    ASSERT_EQ(ply.rows(), 3);
+    EXPECT_NEAR((ply.row(2) - Eigen::RowVector3d(-1, 0.5, 2)).norm(), 0.0, kTol);
+    ASSERT_EQ(normals.rows(), 3);
+    EXPECT_NEAR((normals.row(1) - Eigen::RowVector3d(0, 1, 0)).norm(), 0.0, kTol);
+    const PointCloud pcd = ReadPointFile(WriteText(dir / "a.pcd",
+                                                   "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\n"
+                                                   "TYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+                                                   "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\n"
+                                                   "DATA ascii\n1 2 3\n4 5 6\n"));
+    ASSERT_EQ(pcd.rows(), 2);
+    EXPECT_NEAR((pcd.row(1) - Eigen::RowVector3d(4, 5, 6)).norm(), 0.0, kTol);
+}
+
+TEST(ReadPointFile, RejectsTruncatedPlyNamingPath) {
+    const auto dir = FreshDir();
+    std::string text = kPlyAscii;
+    text = text.substr(0, text.find("1 2 3"));  // header promises 3 vertices, 1 present
+    const std::string path = WriteText(dir / "truncated.ply", text);
+    ExpectThrowsWith([&] { ReadPointFile(path); }, path);
+    const std::string garbage = WriteText(dir / "garbage.ply", "this is not a ply file\n");
+    ExpectThrowsWith([&] { ReadPointFile(garbage); }, garbage);
+}
+
+TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
+    // A hand-written triangle: the three vertices in file order, faces ignored.
+    const auto path = std::filesystem::temp_directory_path() / "regbench_cloud_tri.off";
+    std::ofstream(path) << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    const PointCloud p = ReadCloudFile(path.string());
+    ASSERT_EQ(p.rows(), 3);
+    EXPECT_EQ(p(1, 0), 1.0);
+    EXPECT_EQ(p(2, 1), 1.0);
+    std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace regbench

@@ -1,0 +1,199 @@
+#include "runners/score.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "protocols/pair_file.hpp"
+#include "runners/result_row.hpp"
+#include "runners/runner.hpp"
+#include "tests/testing/synthetic.hpp"
+
+namespace regbench {
+namespace {
+
+class ScoreTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = std::filesystem::temp_directory_path() /
+               ("regbench_score_" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        std::filesystem::remove_all(dir_);
+        std::filesystem::create_directories(dir_);
+        PairSet set;
+        set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 5}};
+        for (int k = 0; k < 4; ++k) {
+            set.pairs.push_back(testing::SyntheticPair(
+                60, 20 + k,
+                MakeTransform(RotationXyzProductDeg(4.0 * k, -3.0, 6.0), {0.02 * k, 0.01, 0})));
+        }
+        pairs_ = Path("pairs.h5");
+        WritePairFile(pairs_, set);
+    }
+    void TearDown() override { std::filesystem::remove_all(dir_); }
+
+    std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+    void Write(const std::string& name, const std::string& text) const {
+        std::ofstream(Path(name)) << text;
+    }
+    ScoreOptions Options(const std::string& transforms, const std::string& method) const {
+        ScoreOptions o;
+        o.pairs_path = pairs_;
+        o.transforms_path = Path(transforms);
+        o.method = method;
+        o.out_path = Path("scored.jsonl");
+        return o;
+    }
+    /// Runs `method` with `run` and returns its rows.
+    std::vector<nlohmann::json> RunRows(const std::string& method) const {
+        RunOptions o;
+        o.pairs_path = pairs_;
+        o.methods = ParseMethodSpecs(method, {});
+        o.out_path = Path("run.jsonl");
+        o.progress = false;
+        RunBenchmark(o);
+        return ReadJsonl(o.out_path);
+    }
+
+    std::filesystem::path dir_;
+    std::string pairs_;
+};
+
+/// The CSV line a user's script would write for one row: pair, top 3 rows, seconds.
+std::string CsvLine(const nlohmann::json& row) {
+    const Transform T = TransformFromJson(row["transform"]);
+    std::string line = std::to_string(row["pair"].get<std::size_t>());
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 4; ++c) line += fmt::format(",{:.17g}", T(r, c));
+    }
+    return line + fmt::format(",{:.17g}\n", row["seconds"].get<double>());
+}
+
+/// The keys `score` cannot know about an external method (its internals).
+void DropMethodInternals(nlohmann::json& row) {
+    for (const char* key : {"iterations", "stop_reason", "extra", "message"}) row.erase(key);
+}
+
+TEST_F(ScoreTest, ScoredCsvRowsEqualWhatRunWritesForTheSameTransforms) {
+    const auto run_rows = RunRows("icp");
+    ASSERT_EQ(run_rows.size(), 4u);
+    std::string csv = "pair,t00,t01,t02,t03,t10,t11,t12,t13,t20,t21,t22,t23,seconds\n";
+    for (auto it = run_rows.rbegin(); it != run_rows.rend(); ++it)
+        csv += CsvLine(*it);  // any order
+    Write("t.csv", csv);
+    ScoreOptions o = Options("t.csv", "icp");
+    o.params = run_rows[0]["params"];
+    const ScoreSummary s = ScoreTransforms(o);
+    EXPECT_EQ(s.rows, 4u);
+    EXPECT_EQ(s.missing, 0u);
+    const auto scored = ReadJsonl(o.out_path);
+    ASSERT_EQ(scored.size(), run_rows.size());
+    for (std::size_t k = 0; k < scored.size(); ++k) {
+        std::set<std::string> run_keys, score_keys;
+        for (const auto& item : run_rows[k].items()) run_keys.insert(item.key());
+        for (const auto& item : scored[k].items()) score_keys.insert(item.key());
+        EXPECT_EQ(run_keys, score_keys) << "row " << k;  // one schema
+        nlohmann::json a = run_rows[k];
+        nlohmann::json b = scored[k];
+        DropMethodInternals(a);
+        DropMethodInternals(b);
+        EXPECT_EQ(a, b) << "row " << k;
+    }
+}
+
+TEST_F(ScoreTest, JsonlFromAnotherLanguageAndMissingPairs) {
+    // Written by hand, as a Python script would: pair 1 rotated 90 deg about z, pair 3 absent.
+    Write("t.jsonl",
+          "{\"pair\": 0, \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \"seconds\": "
+          "0.5}\n"
+          "{\"pair\": 1, \"transform\": [[0,-1,0,0.1],[1,0,0,0],[0,0,1,0],[0,0,0,1]]}\n"
+          "{\"pair\": 2, \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \"seconds\": "
+          "0.25}\n");
+    const ScoreOptions o = Options("t.jsonl", "mine");
+    const ScoreSummary s = ScoreTransforms(o);
+    EXPECT_EQ(s.rows, 4u);
+    EXPECT_EQ(s.missing, 1u);
+    const auto rows = ReadResultRows(o.out_path);
+    ASSERT_EQ(rows.size(), 4u);
+    EXPECT_EQ(rows[0].status, Status::kOk);
+    EXPECT_EQ(rows[0].seconds, 0.5);
+    EXPECT_EQ(rows[1].method, "mine");
+    EXPECT_EQ(rows[1].transform(0, 3), 0.1);
+    EXPECT_EQ(rows[3].status, Status::kMissing);
+    EXPECT_EQ(rows[3].transform, Transform::Identity());
+    const PairSet set = ReadPairFile(pairs_);
+    // Metrics are those of the given transform against the pair's ground truth.
+    const PairMetrics m = MotionMetrics(set.pairs[1].T_gt, rows[1].transform);
+    EXPECT_DOUBLE_EQ(rows[1].metrics.mae_r, m.mae_r);
+    EXPECT_DOUBLE_EQ(rows[1].metrics.rre, m.rre);
+    EXPECT_EQ(rows[1].euler, EulerConvention::kZyx);
+}
+
+TEST_F(ScoreTest, RescoringARunResultFileKeepsOnlyTheNamedMethod) {
+    RunRows("identity");
+    std::filesystem::copy_file(Path("run.jsonl"), Path("old.jsonl"));
+    ScoreOptions o = Options("old.jsonl", "identity");
+    o.euler = EulerConvention::kXyz;
+    EXPECT_EQ(ScoreTransforms(o).missing, 0u);
+    ScoreOptions other = Options("old.jsonl", "icp");  // no icp rows in that file
+    EXPECT_EQ(ScoreTransforms(other).missing, 4u);
+}
+
+void ExpectError(const ScoreOptions& o, const std::string& needle) {
+    try {
+        ScoreTransforms(o);
+        FAIL() << "expected an error containing " << needle;
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(o.out_path)) << "half-written output";
+}
+
+TEST_F(ScoreTest, InvalidFilesAreRejectedNamingFileAndLine) {
+    const std::string id = ",1,0,0,0,0,1,0,0,0,0,1,0\n";
+    Write("dup.csv", "0" + id + "1" + id + "0" + id);
+    ExpectError(Options("dup.csv", "m"), "dup.csv:3: pair 0 given twice (first at");
+    Write("range.csv", "0" + id + "4" + id);
+    ExpectError(Options("range.csv", "m"), "range.csv:2: pair 4 is out of range");
+    Write("scaled.csv", "0,2,0,0,0,0,2,0,0,0,0,2,0\n");
+    ExpectError(Options("scaled.csv", "m"), "scaled.csv:1: transform of pair 0 is not a rotation");
+    Write("mirror.csv", "0,-1,0,0,0,0,1,0,0,0,0,1,0\n");
+    ExpectError(Options("mirror.csv", "m"), "det R = -1");
+    Write("short.csv", "0,1,0,0\n");
+    ExpectError(Options("short.csv", "m"), "short.csv:1: expected 13 or 14 fields");
+    Write("text.csv", "0,1,0,0,0,0,1,0,0,0,0,1,abc\n");
+    ExpectError(Options("text.csv", "m"), "field 13 ('abc') is not a number");
+    Write("bad.jsonl", "{\"pair\": 0, \"transform\": [[1,0,0],[0,1,0],[0,0,1]]}\n");
+    ExpectError(Options("bad.jsonl", "m"), "bad.jsonl:1: transform is not 4x4");
+    Write("t.txt", "");
+    ExpectError(Options("t.txt", "m"), "must end in .jsonl or .csv");
+}
+
+TEST_F(ScoreTest, SimilaritiesNeedAllowScale) {
+    // 2 Rz(90): rejected as rigid; with allow_scale the row has scale 2 and the rotation metrics
+    // of Rz(90) itself (computed here by MotionMetrics on the unscaled matrix).
+    Write("sim.csv", "0,0,-2,0,0,2,0,0,0,0,0,2,0\n");
+    ScoreOptions o = Options("sim.csv", "m");
+    ExpectError(o, "--allow-scale accepts s R");
+    o.allow_scale = true;
+    ScoreTransforms(o);
+    const auto rows = ReadResultRows(o.out_path);
+    EXPECT_DOUBLE_EQ(rows[0].scale, 2.0);
+    const PairSet set = ReadPairFile(pairs_);
+    const PairMetrics m = MotionMetrics(
+        set.pairs[0].T_gt, MakeTransform(RotationZyxProductDeg(90, 0, 0), Eigen::Vector3d::Zero()));
+    EXPECT_NEAR(rows[0].metrics.mae_r, m.mae_r, 1e-9);
+    EXPECT_NEAR(rows[0].metrics.rre, m.rre, 1e-6);
+}
+
+TEST_F(ScoreTest, SlightlyNonOrthonormalFloat32OutputIsAccepted) {
+    // A rotation printed with 7 significant digits (float32) is off by ~1e-7: within 1e-4.
+    Write("f32.csv", "0,0.8660254,-0.5,0,0.1,0.5,0.8660254,0,0,0,0,1,0\n");
+    EXPECT_EQ(ScoreTransforms(Options("f32.csv", "m")).missing, 3u);
+}
+
+}  // namespace
+}  // namespace regbench
