@@ -5,6 +5,7 @@
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
+#include "core/cpu_time.hpp"
 #include "runners/runner.hpp"
 
 namespace regbench::app {
@@ -67,6 +68,15 @@ void AddRunCommand(CLI::App& app) {
         ParseShard(*shard, &o.shard_index, &o.shard_count);
         o.progress = !*quiet;
         o.euler = ParseEulerConvention(*euler);
+        // Threads beyond the idle cores wait for each other: wall time balloons and the
+        // per-call timings stop meaning anything (docs/performance.md).
+        const MachineLoad load = ReadMachineLoad();
+        if (o.threads_per_call > 1 && o.threads_per_call > load.FreeCores()) {
+            std::cerr << fmt::format(
+                "[run] warning: --threads {} exceeds the {} free core(s) ({} cores, 1-min load "
+                "{:.1f}); expect wall times far above CPU times\n",
+                o.threads_per_call, load.FreeCores(), load.cores, load.load1);
+        }
         const RunSummary s = RunBenchmark(o);
         std::cerr << fmt::format("[run] wrote {} rows ({} resumed, {} failed) to {} in {:.1f} s\n",
                                  s.rows_written, s.rows_skipped, s.failures, o.out_path,

@@ -1,5 +1,7 @@
 #include "baselines/cpd.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -7,13 +9,13 @@
 
 #include "core/kabsch.hpp"
 #include "core/transform.hpp"
+#include "gmm/cell_compress.hpp"
 #include "gmm/gauss_sum.hpp"
 #include "gmm/gmm_common.hpp"
 
 namespace regbench {
 
 namespace {
-/// Centroid of the target: the shared float origin of both blocked clouds.
 Eigen::Vector3d Centroid(const PointCloud& cloud) {
     if (cloud.rows() == 0) throw std::invalid_argument("CpdEStep: target cloud is empty");
     return cloud.colwise().mean().transpose();
@@ -22,12 +24,27 @@ Eigen::Vector3d Centroid(const PointCloud& cloud) {
 
 CpdEStep::CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options)
     : options_(options),
+      source_points_(source),
+      target_points_(target),
       source_(source, Centroid(target)),
       target_blocked_(target, Centroid(target)) {
     if (!(options_.truncation_sigmas > 0.0)) {
         throw std::invalid_argument("CpdEStep: truncation_sigmas must be positive");
     }
 }
+
+bool CpdEStep::CompressionPays(Eigen::Index cells, Eigen::Index points) const {
+    return static_cast<double>(cells) < options_.cluster_max_fraction * static_cast<double>(points);
+}
+
+namespace {
+/// Float weights in a BlockedCloud's stored order from per-input-row weights.
+std::vector<float> StoredWeights(const BlockedCloud& cloud, const Eigen::VectorXd& weights) {
+    std::vector<float> w(static_cast<size_t>(cloud.size()));
+    for (size_t k = 0; k < w.size(); ++k) w[k] = static_cast<float>(weights[cloud.order()[k]]);
+    return w;
+}
+}  // namespace
 
 bool CpdEStep::UsesTruncation(double sigma2) const {
     switch (options_.mode) {
@@ -44,6 +61,70 @@ bool CpdEStep::UsesTruncation(double sigma2) const {
            r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
 }
 
+void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
+    const Eigen::Index n = target_blocked_.size();
+    const Eigen::Index m = source_.size();
+    // P_mn = K_mn / (den_n + c) normalises each target's column over all sources, so one
+    // target's column, once computed, already gives its share of p1 and PX: one pass over the
+    // targets, one exp per pair, nothing M x N stored. Targets go in fixed chunks, each with
+    // its own float accumulators, reduced in chunk order: thread-count independent.
+    constexpr Eigen::Index kTargetsPerChunk = 64;
+    const Eigen::Index num_chunks = (n + kTargetsPerChunk - 1) / kTargetsPerChunk;
+    partial_.resize(static_cast<size_t>(num_chunks * 4 * m));
+    inv_den_.resize(static_cast<size_t>(n));
+    out.pt1.resize(n);
+    const auto a = static_cast<float>(-0.5 / sigma2);
+    const float* sx = source_.x();
+    const float* sy = source_.y();
+    const float* sz = source_.z();
+    const float* tx = target_blocked_.x();
+    const float* ty = target_blocked_.y();
+    const float* tz = target_blocked_.z();
+    const auto& t_order = target_blocked_.order();
+    const bool parallel = omp_get_max_threads() > 1 && num_chunks > 1 && m * n >= 200000;
+#pragma omp parallel if (parallel)
+    {
+        std::vector<float> column(static_cast<size_t>(m));
+#pragma omp for schedule(static)
+        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+            float* acc = partial_.data() + chunk * 4 * m;
+            std::fill(acc, acc + 4 * m, 0.0f);
+            const Eigen::Index j1 = std::min(n, (chunk + 1) * kTargetsPerChunk);
+            for (Eigen::Index j = chunk * kTargetsPerChunk; j < j1; ++j) {
+                const double sum = KernelRow(column.data(), sx, sy, sz, m, tx[j], ty[j], tz[j], a);
+                const double den = sum == 0.0 ? kDenFloor : sum;
+                const double inv = 1.0 / (den + c);
+                inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
+                out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
+                const auto w = static_cast<float>(inv);
+                AxpyRow(column.data(), m, w, w * tx[j], w * ty[j], w * tz[j], acc, acc + m,
+                        acc + 2 * m, acc + 3 * m);
+            }
+        }
+    }
+    out.p1.resize(m);
+    out.px.resize(m, 3);
+    const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
+    const auto& s_order = source_.order();
+    for (Eigen::Index i = 0; i < m; ++i) {
+        double t0 = 0.0, t1 = 0.0, t2 = 0.0, t3 = 0.0;
+        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+            const float* acc = partial_.data() + chunk * 4 * m;
+            t0 += acc[i];
+            t1 += acc[m + i];
+            t2 += acc[2 * m + i];
+            t3 += acc[3 * m + i];
+        }
+        const Eigen::Index row = s_order[static_cast<size_t>(i)];
+        out.p1[row] = t0;
+        out.px.row(row) = Eigen::RowVector3d(t1, t2, t3) + t0 * origin;
+    }
+    out.np = out.p1.sum();
+    out.truncated = false;
+    out.compressed_cells = 0;
+    out.evaluated_pairs = m * n;
+}
+
 void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out) {
     if (!(c >= 0.0) || !std::isfinite(c)) {
         throw std::invalid_argument("CpdEStep: outlier constant c must be finite and >= 0");
@@ -52,11 +133,39 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     const double cutoff = truncated ? options_.truncation_sigmas * std::sqrt(sigma2)
                                     : UnderflowRadiusSigmas() * std::sqrt(sigma2);
     source_.SetTransform(T);
-
-    // Pass 1: den_n = sum_m K_mn at every target point.
-    KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
     const Eigen::Index n = target_blocked_.size();
     const Eigen::Index m = source_.size();
+    // Dense problems up to kFusedMaxEntries pairs: one fused pass, each exp computed once.
+    if (!truncated && m * n <= kFusedMaxEntries) {
+        ComputeFused(sigma2, c, out);
+        return;
+    }
+    // Compression (auto mode at scale): cells of edge kappa * sigma in each summed-over cloud.
+    const bool may_compress = options_.mode == GaussSumMode::kAuto &&
+                              options_.cluster_cell_sigmas > 0.0 &&
+                              std::max(m, n) >= options_.cluster_min_points;
+    const double cell = options_.cluster_cell_sigmas * std::sqrt(sigma2);
+    Eigen::Index cells_used = 0;
+    bool compressed = false;
+
+    // Pass 1: den_n = sum_m K_mn at every target point.
+    if (may_compress) {
+        // Cells in the source's own frame, edge cell / s, so they have edge `cell` once moved.
+        const double s = T.topLeftCorner<3, 3>().col(0).norm();
+        const CellCompressed cs = CompressToCells(source_points_, nullptr, cell / s);
+        if (CompressionPays(cs.centroids.rows(), m)) {
+            BlockedCloud cells(cs.centroids, target_blocked_.origin());
+            cells.SetTransform(T);
+            const std::vector<float> w = StoredWeights(cells, cs.weights);
+            KernelSums(target_blocked_, cells, sigma2, cutoff, w.data(), false, pass1_);
+            cells_used += cells.size();
+            compressed = true;
+        }
+    }
+    if (!compressed) {
+        KernelSums(target_blocked_, source_, sigma2, cutoff, nullptr, false, pass1_);
+        cells_used += m;
+    }
     inv_den_.resize(static_cast<size_t>(n));
     out.pt1.resize(n);
     const auto& t_order = target_blocked_.order();
@@ -69,7 +178,26 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     }
 
     // Pass 2: p1_m = sum_n K_mn / (den_n + c) and PX_m = sum_n K_mn x_n / (den_n + c).
-    KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
+    bool compressed2 = false;
+    if (may_compress) {
+        Eigen::VectorXd w_input(n);
+        for (Eigen::Index k = 0; k < n; ++k) {
+            w_input[t_order[static_cast<size_t>(k)]] = inv_den_[static_cast<size_t>(k)];
+        }
+        const CellCompressed ct = CompressToCells(target_points_, &w_input, cell);
+        if (CompressionPays(ct.centroids.rows(), n)) {
+            // Weighted centroids: sum_n w_n K(y, x_n) x_n ~ W_c K(y, xbar_c) xbar_c.
+            BlockedCloud cells(ct.centroids, target_blocked_.origin());
+            const std::vector<float> w = StoredWeights(cells, ct.weights);
+            KernelSums(source_, cells, sigma2, cutoff, w.data(), true, pass2_);
+            cells_used += cells.size();
+            compressed2 = true;
+        }
+    }
+    if (!compressed2) {
+        KernelSums(source_, target_blocked_, sigma2, cutoff, inv_den_.data(), true, pass2_);
+        cells_used += n;
+    }
     out.p1.resize(m);
     out.px.resize(m, 3);
     const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
@@ -81,6 +209,7 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
     }
     out.np = out.p1.sum();
     out.truncated = truncated;
+    out.compressed_cells = (compressed || compressed2) ? cells_used : 0;
     out.evaluated_pairs = pass1_.evaluated_pairs + pass2_.evaluated_pairs;
 }
 
@@ -167,7 +296,7 @@ const MethodSpec<CpdOptions>& Spec() {
                   "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's "
                   "sigma^2 formula unless those are given explicitly)"),
             Param("e_step", &O::e_step,
-                  "\"auto\" (dense, truncated once the switch rule holds), \"dense\" (exact up "
+                  "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" (exact up "
                   "to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"),
             Param("truncation_sigmas", &O::truncation_sigmas,
                   "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4")
@@ -176,6 +305,15 @@ const MethodSpec<CpdOptions>& Spec() {
             Param("truncation_min_points", &O::truncation_min_points,
                   "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox "
                   "diagonal")
+                .AtLeast(0),
+            Param("cluster_cell_sigmas", &O::cluster_cell_sigmas,
+                  "auto, at scale: while a cloud has under half as many cells of edge "
+                  "cluster_cell_sigmas * sigma as points, each E-step pass sums over its cells' "
+                  "weighted centroids (docs/performance.md: accuracy cost); 0 = never")
+                .AtLeast(0.0)
+                .AtMost(1.0),
+            Param("cluster_min_points", &O::cluster_min_points,
+                  "auto: compress only if max(M, N) >= this")
                 .AtLeast(0),
         },
         nullptr,
@@ -199,6 +337,8 @@ protected:
         gs.mode = options().e_step;
         gs.truncation_sigmas = options().truncation_sigmas;
         gs.truncation_min_points = options().truncation_min_points;
+        gs.cluster_cell_sigmas = options().cluster_cell_sigmas;
+        gs.cluster_min_points = options().cluster_min_points;
         CpdEStep e_step(Y, X, gs);
         const bool probreg_sigma2 = options().sigma2_formula == CpdSigma2Formula::kProbreg;
 
@@ -212,6 +352,7 @@ protected:
         conv.stop_reason = "max_iterations";
         CpdPosteriors post;
         int truncated_iterations = 0;
+        int compressed_iterations = 0;
         std::int64_t evaluated_pairs = 0;
         for (int it = 1; it <= options().maxiter; ++it) {
             // c = (2 pi sigma^2)^(D/2) w/(1-w) M/N: the uniform outlier term (CPD eq. (7)).
@@ -219,6 +360,7 @@ protected:
                              (1.0 - options().w) * m / n;
             e_step.Compute(state.T, state.sigma2, c, post);
             truncated_iterations += post.truncated ? 1 : 0;
+            compressed_iterations += post.compressed_cells > 0 ? 1 : 0;
             evaluated_pairs += post.evaluated_pairs;
             if (!(post.np > 0.0)) {
                 conv.stop_reason = "no_correspondences";  // keep the previous transform
@@ -244,6 +386,7 @@ protected:
         r.extra["sigma2"] = state.sigma2;
         r.extra["scale"] = state.scale;
         r.extra["truncated_iterations"] = truncated_iterations;
+        r.extra["compressed_iterations"] = compressed_iterations;
         r.extra["kernel_evaluations"] = evaluated_pairs;
         return r;
     }

@@ -34,30 +34,43 @@ struct CpdOptions {
     GaussSumMode e_step = GaussSumMode::kAuto;
     double truncation_sigmas = 4.0;
     int truncation_min_points = 20000;
+    double cluster_cell_sigmas = 0.25;
+    int cluster_min_points = 20000;
 };
 
 /// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
 /// clouds' input order, all in double.
 struct CpdPosteriors {
-    Eigen::VectorXd p1;                ///< P 1 (M)
-    Eigen::VectorXd pt1;               ///< P^T 1 (N)
-    PointCloud px;                     ///< P X (M x 3), in the target's input frame
-    double np = 0.0;                   ///< sum(p1)
-    bool truncated = false;            ///< whether the truncated evaluation was used
+    Eigen::VectorXd p1;      ///< P 1 (M)
+    Eigen::VectorXd pt1;     ///< P^T 1 (N)
+    PointCloud px;           ///< P X (M x 3), in the target's input frame
+    double np = 0.0;         ///< sum(p1)
+    bool truncated = false;  ///< whether the truncated evaluation was used
+    /// Cells the compressed evaluation summed over (source cells in pass 1 plus target cells
+    /// in pass 2; a pass left exact counts its points); 0 when neither pass was compressed.
+    Eigen::Index compressed_cells = 0;
     std::int64_t evaluated_pairs = 0;  ///< kernel evaluations in both passes
 };
 
-/// The fused CPD E-step, P_mn = K_mn / (den_n + c), K_mn = exp(-|T(y_m) - x_n|^2 / 2 sigma^2),
+/// The CPD E-step, P_mn = K_mn / (den_n + c), K_mn = exp(-|T(y_m) - x_n|^2 / 2 sigma^2),
 /// den_n = sum_m K_mn (0 becomes kDenFloor), in two passes and without storing P:
 ///   pass 1: den_n by kernel sums over the moved source at each target point;
 ///   pass 2: p1 and PX by kernel sums over the target, weighted by 1/(den_n + c), at each moved
 ///           source point; pt1_n = den_n / (den_n + c) follows without a second sum.
+/// Dense problems up to kFusedMaxEntries pairs run as one fused pass instead: each target's
+/// kernel column is normalised and accumulated into p1 and PX as soon as it is computed.
+/// At scale (GaussSumOptions::cluster_*), the summed-over cloud of each pass is replaced by
+/// its cell-compressed form (source cells of edge kappa sigma in pass 1, target cells weighted
+/// by 1/(den_n + c) in pass 2) while sigma is large; queries stay the exact points, so p1, pt1
+/// and PX keep one entry per point.
 /// Holds prepared copies of both clouds, so build it once per registration and call Compute
 /// every iteration. Not thread-safe (scratch buffers); Compute itself uses OpenMP.
 class CpdEStep {
 public:
     /// probreg's floor for an all-zero column: np.finfo(np.float32).eps.
     static constexpr double kDenFloor = 1.19e-7;
+    /// Dense E-steps with M N up to this run fused (per-chunk accumulators: M N / 4 bytes).
+    static constexpr Eigen::Index kFusedMaxEntries = Eigen::Index{1} << 22;
 
     CpdEStep(const PointCloud& source, const PointCloud& target, GaussSumOptions options = {});
 
@@ -69,11 +82,19 @@ public:
     bool UsesTruncation(double sigma2) const;
 
 private:
+    /// Whether a pass summing over `points` compressed into `cells` cells should use them.
+    bool CompressionPays(Eigen::Index cells, Eigen::Index points) const;
+    /// The dense E-step in one fused pass over the targets (one exp per pair, nothing M x N
+    /// stored); used while M N <= kFusedMaxEntries.
+    void ComputeFused(double sigma2, double c, CpdPosteriors& out);
+
     GaussSumOptions options_;
+    PointCloud source_points_, target_points_;  ///< input copies, for the compressed passes
     BlockedCloud source_;
     BlockedCloud target_blocked_;
     KernelSumResult pass1_, pass2_;
     std::vector<float> inv_den_;  ///< target stored order
+    std::vector<float> partial_;  ///< fused path: float p1/PX accumulators per target chunk
 };
 
 /// Parses and validates CPD options, applying the compat preset to keys absent from `j`.

@@ -14,6 +14,7 @@
 #include "baselines/open3d_adapter.hpp"
 #include "core/method_spec.hpp"
 #include "core/rng.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -38,6 +39,7 @@ struct FgrOptions {  // each member documented once, in Spec()
     int maximum_tuple_count = 1000;
     bool tuple_test = true;
     int seed = 0;
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;
 };
 
 const MethodSpec<FgrOptions>& Spec() {
@@ -93,6 +95,10 @@ const MethodSpec<FgrOptions>& Spec() {
                   "run the tuple (geometric consistency) test; true = Open3D default"),
             Param("seed", &FgrOptions::seed,
                   "seed for Open3D's global RNG, set right before each call (tuple sampling); 0"),
+            Param("scale_rule", &FgrOptions::scale_rule,
+                  "\"auto\": voxel_size scaled by the pair's unit (RMS radius / 0.6 when outside "
+                  "[0.5, 2], else 1) and voxel downsampling when a cloud has > 2048 points "
+                  "(docs/performance.md); used values in extra.resolved; \"preset\": as given"),
         },
         nullptr,
         {}};
@@ -101,19 +107,21 @@ const MethodSpec<FgrOptions>& Spec() {
 
 /// Optional voxel downsampling, then normals (FPFH needs them).
 std::shared_ptr<open3d::geometry::PointCloud> Prepare(const FgrOptions& o,
-                                                      const PointCloud& points) {
+                                                      const PointCloud& points,
+                                                      double voxel,
+                                                      bool downsample) {
     auto cloud = std::make_shared<open3d::geometry::PointCloud>(ToOpen3d(points));
-    if (o.voxel_downsample) cloud = cloud->VoxelDownSample(o.voxel_size);
-    cloud->EstimateNormals(open3d::geometry::KDTreeSearchParamHybrid(
-        o.normal_radius_voxels * o.voxel_size, o.normal_max_nn));
+    if (downsample) cloud = cloud->VoxelDownSample(voxel);
+    cloud->EstimateNormals(
+        open3d::geometry::KDTreeSearchParamHybrid(o.normal_radius_voxels * voxel, o.normal_max_nn));
     return cloud;
 }
 
 std::shared_ptr<open3d::pipelines::registration::Feature> Fpfh(
-    const FgrOptions& o, const open3d::geometry::PointCloud& cloud) {
+    const FgrOptions& o, const open3d::geometry::PointCloud& cloud, double voxel) {
     return open3d::pipelines::registration::ComputeFPFHFeature(
-        cloud, open3d::geometry::KDTreeSearchParamHybrid(o.fpfh_radius_voxels * o.voxel_size,
-                                                         o.fpfh_max_nn));
+        cloud,
+        open3d::geometry::KDTreeSearchParamHybrid(o.fpfh_radius_voxels * voxel, o.fpfh_max_nn));
 }
 
 AlignResult AlignFgr(const FgrOptions& o,
@@ -121,12 +129,15 @@ AlignResult AlignFgr(const FgrOptions& o,
                      const PointCloud& target,
                      const AlignContext& context) {
     namespace o3r = open3d::pipelines::registration;
-    const auto source_o3d = Prepare(o, source);
-    const auto target_o3d = Prepare(o, target);
-    const auto source_fpfh = Fpfh(o, *source_o3d);
-    const auto target_fpfh = Fpfh(o, *target_o3d);
+    const ScaleRule rule = ResolveScaleRule(source, target);
+    const bool automatic = o.scale_rule == ScaleRuleMode::kAuto;
+    const double voxel = o.voxel_size * (automatic ? rule.unit : 1.0);
+    const bool downsample = o.voxel_downsample || (automatic && rule.dense);
+    const auto source_o3d = Prepare(o, source, voxel, downsample);
+    const auto target_o3d = Prepare(o, target, voxel, downsample);
+    const auto source_fpfh = Fpfh(o, *source_o3d, voxel);
+    const auto target_fpfh = Fpfh(o, *target_o3d, voxel);
 
-    const double voxel = o.voxel_size;
     const o3r::FastGlobalRegistrationOption fgr_option(
         o.division_factor, o.use_absolute_scale, o.decrease_mu,
         o.max_correspondence_distance_voxels * voxel, o.iteration_number, o.tuple_scale,
@@ -156,6 +167,10 @@ AlignResult AlignFgr(const FgrOptions& o,
                     {"correspondences", reg.correspondence_set_.size()},
                     {"source_points_used", source_o3d->points_.size()},
                     {"target_points_used", target_o3d->points_.size()},
+                    {"resolved",
+                     {{"voxel_size", voxel},
+                      {"voxel_downsample", downsample},
+                      {"scale_rule", rule.ToJson()}}},
                     {kExcludedSecondsKey, waited}};
     return result;
 }

@@ -45,13 +45,18 @@ struct GmmRegOptions {  // each member documented once, in Spec()
     int gmm_max_iter = 100;
     double gmm_tol = 1e-3;
     int seed = 0;
+    L2KernelSums kernel_sums = L2KernelSums::kAuto;
+    double approx_min_pairs = 1e8;
+    double cutoff_tolerance = 1e-4;
+    double compress_cell_sigmas = 0.1;
 };
 
 const MethodSpec<GmmRegOptions>& Spec() {
     static const MethodSpec<GmmRegOptions> spec{
         kName,
         "GMMReg rigid as probreg runs it: spherical GMM features (k-means++/EM, seeded), L2 "
-        "cost, scipy-like BFGS (More-Thuente); dense exact Gauss sums instead of IFGT",
+        "cost, scipy-like BFGS (More-Thuente); exact Gauss sums instead of IFGT (approximated at "
+        "scale)",
         {
             Param("compat", &GmmRegOptions::compat,
                   "\"none\" (default, the correct algorithm: defaults become gmm=points, "
@@ -99,6 +104,22 @@ const MethodSpec<GmmRegOptions>& Spec() {
             Param("seed", &GmmRegOptions::seed,
                   "seed of the k-means++ initialisation (sklearn's is unseeded in probreg)")
                 .AtLeast(0),
+            Param("kernel_sums", &GmmRegOptions::kernel_sums,
+                  "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per "
+                  "cell of compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1 / "
+                  "cutoff_tolerance)) are skipped (docs/performance.md: accuracy cost); "
+                  "\"dense\": always exact"),
+            Param("approx_min_pairs", &GmmRegOptions::approx_min_pairs,
+                  "component pairs K_s * K_t from which kernel_sums=auto approximates")
+                .AtLeast(0.0),
+            Param("cutoff_tolerance", &GmmRegOptions::cutoff_tolerance,
+                  "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma")
+                .Greater(0.0)
+                .Below(1.0),
+            Param("compress_cell_sigmas", &GmmRegOptions::compress_cell_sigmas,
+                  "cell edge of the compression in sigmas, [0, 1]; 0 = none")
+                .AtLeast(0.0)
+                .AtMost(1.0),
         },
         nullptr,
         // compat "probreg": probreg v0.3.7's values for the keys the user did not give.

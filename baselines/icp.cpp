@@ -5,6 +5,7 @@
 
 #include "baselines/open3d_adapter.hpp"
 #include "core/method_spec.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -16,6 +17,7 @@ struct IcpOptions {  // documented once, in Spec() below
     int max_iterations = 30;
     double relative_fitness = 1e-6;
     double relative_rmse = 1e-6;
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;
 };
 
 const MethodSpec<IcpOptions>& Spec() {
@@ -32,6 +34,11 @@ const MethodSpec<IcpOptions>& Spec() {
             Param("max_iterations", &IcpOptions::max_iterations,
                   "iteration cap, >= 1; 30 = Open3D default, as the OGMM code")
                 .AtLeast(1),
+            Param("scale_rule", &IcpOptions::scale_rule,
+                  "\"auto\": max_correspondence_distance is scaled by the pair's unit (RMS radius "
+                  "/ 0.6 when outside [0.5, 2], else 1: unit-sphere objects keep the preset; "
+                  "docs/performance.md), the value used is in extra.resolved; \"preset\": as "
+                  "given"),
             Param("relative_fitness", &IcpOptions::relative_fitness,
                   "stop when the fitness change is below this (and the RMSE change too), >= 0; "
                   "1e-6 = Open3D default")
@@ -53,9 +60,15 @@ AlignResult AlignIcp(const IcpOptions& o,
     namespace o3r = open3d::pipelines::registration;
     const o3r::ICPConvergenceCriteria criteria(o.relative_fitness, o.relative_rmse,
                                                o.max_iterations);
-    return RunOpen3dIcp(ToOpen3d(source), ToOpen3d(target), o.max_correspondence_distance,
-                        o3r::TransformationEstimationPointToPoint(/*with_scaling=*/false),
-                        criteria);
+    const ScaleRule rule = ResolveScaleRule(source, target);
+    const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
+    const double distance = o.max_correspondence_distance * unit;
+    AlignResult result =
+        RunOpen3dIcp(ToOpen3d(source), ToOpen3d(target), distance,
+                     o3r::TransformationEstimationPointToPoint(/*with_scaling=*/false), criteria);
+    result.extra["resolved"] = {{"max_correspondence_distance", distance},
+                                {"scale_rule", rule.ToJson()}};
+    return result;
 }
 
 }  // namespace

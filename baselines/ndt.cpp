@@ -7,6 +7,7 @@
 
 #include "baselines/pcl_adapter.hpp"
 #include "core/method_spec.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -23,6 +24,7 @@ struct NdtOptions {  // each member documented once, in Spec()
     int max_iterations = 35;
     double transformation_epsilon = 1e-6;
     double transformation_rotation_epsilon = 0.9999995;
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;
 };
 
 using PclNdt = pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>;
@@ -47,6 +49,10 @@ const MethodSpec<NdtOptions>& Spec() {
             Param("min_points_per_voxel", &NdtOptions::min_points_per_voxel,
                   "cells with fewer points are dropped, >= 3; 6 = PCL default")
                 .AtLeast(3),
+            Param("scale_rule", &NdtOptions::scale_rule,
+                  "\"auto\": resolution and step_size scaled by the pair's unit (RMS radius / 0.6 "
+                  "when outside [0.5, 2], else 1; docs/performance.md), used values in "
+                  "extra.resolved; \"preset\": as given"),
             Param("step_size", &NdtOptions::step_size,
                   "More-Thuente maximum step length, > 0; 0.1 = PCL default")
                 .Greater(0.0),
@@ -76,18 +82,21 @@ AlignResult AlignNdt(const NdtOptions& o,
                      const PointCloud& source,
                      const PointCloud& target,
                      const AlignContext& /*context*/) {
+    const ScaleRule rule = ResolveScaleRule(source, target);
+    const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
+    const double resolution = o.resolution * unit;
     CheckedNdt ndt;
     // Order matters: PCL voxelises the target inside setInputTarget.
     ndt.setMinPointPerVoxel(static_cast<unsigned int>(o.min_points_per_voxel));
-    ndt.setResolution(static_cast<float>(o.resolution));
-    ndt.setStepSize(o.step_size);
+    ndt.setResolution(static_cast<float>(resolution));
+    ndt.setStepSize(o.step_size * unit);
     ndt.setOulierRatio(o.outlier_ratio);
     ndt.setMaximumIterations(o.max_iterations);
     ndt.setTransformationEpsilon(o.transformation_epsilon);
     ndt.setTransformationRotationEpsilon(o.transformation_rotation_epsilon);
     ndt.setInputTarget(ToPcl(target));
     if (ndt.TargetCells() == 0) {
-        throw std::runtime_error("no target voxel of side " + std::to_string(o.resolution) +
+        throw std::runtime_error("no target voxel of side " + std::to_string(resolution) +
                                  " holds >= " + std::to_string(o.min_points_per_voxel) + " points");
     }
     ndt.setInputSource(ToPcl(source));
@@ -106,7 +115,11 @@ AlignResult AlignNdt(const NdtOptions& o,
         result.stop_reason = "no_step";  // PCL: NaN Newton step, returns where it was
     }
     result.extra = {{"transformation_likelihood", ndt.getTransformationLikelihood()},
-                    {"target_cells", ndt.TargetCells()}};
+                    {"target_cells", ndt.TargetCells()},
+                    {"resolved",
+                     {{"resolution", resolution},
+                      {"step_size", o.step_size * unit},
+                      {"scale_rule", rule.ToJson()}}}};
     return result;
 }
 

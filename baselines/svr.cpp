@@ -5,9 +5,12 @@
 
 #include <libsvm/svm.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <mutex>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -40,19 +43,53 @@ struct SvrOptions {  // each member documented once, in Spec()
     int maxiter = 200;
     double gtol = 1e-6;
     double svm_tol = 1e-3;
+    int svm_max_points = 8000;
+    L2KernelSums kernel_sums = L2KernelSums::kAuto;
+    double approx_min_pairs = 1e8;
+    double cutoff_tolerance = 1e-4;
+    double compress_cell_sigmas = 0.1;
 };
 
+/// A seeded uniform random subset of `max_points` rows (all rows when the cloud is smaller),
+/// in increasing row order.
+PointCloud SubsampleRows(const PointCloud& P, Eigen::Index max_points, std::mt19937_64& rng) {
+    if (P.rows() <= max_points) return P;
+    std::vector<Eigen::Index> idx(static_cast<size_t>(P.rows()));
+    for (size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<Eigen::Index>(i);
+    // Partial Fisher-Yates with the portable UniformInt-free draw: rng() % range is fine here
+    // (range << 2^64: the bias is < 1e-13).
+    for (Eigen::Index k = 0; k < max_points; ++k) {
+        const auto range = static_cast<std::uint64_t>(P.rows() - k);
+        std::swap(idx[static_cast<size_t>(k)],
+                  idx[static_cast<size_t>(k + static_cast<Eigen::Index>(rng() % range))]);
+    }
+    idx.resize(static_cast<size_t>(max_points));
+    std::sort(idx.begin(), idx.end());
+    PointCloud out(max_points, 3);
+    for (Eigen::Index k = 0; k < max_points; ++k) out.row(k) = P.row(idx[static_cast<size_t>(k)]);
+    return out;
+}
+
 /// Mixture from an OC-SVM: mu = support vectors, phi = alpha (2 pi sigma^2)^(D/2) (probreg's
-/// features.OneClassSVM.compute; the weights are not normalised).
-MixtureFeatures SvmFeatures(
-    const PointCloud& P, double nu, double gamma, double phi_sigma, double tol) {
+/// features.OneClassSVM.compute; the weights are not normalised). Above svm_max_points the SVM
+/// is fitted on a random subsample and alpha scaled by n / subsample, so sum(alpha) = nu n as
+/// for a full fit and the two clouds' weights stay comparable.
+MixtureFeatures SvmFeatures(const PointCloud& full,
+                            double nu,
+                            double gamma,
+                            double phi_sigma,
+                            double tol,
+                            Eigen::Index max_points,
+                            std::mt19937_64& rng) {
+    const PointCloud P = SubsampleRows(full, max_points, rng);
     const OneClassSvm svm = FitOneClassSvm(P, nu, gamma, tol);
     MixtureFeatures f;
     f.means.resize(static_cast<Eigen::Index>(svm.support.size()), 3);
     for (size_t i = 0; i < svm.support.size(); ++i) {
         f.means.row(static_cast<Eigen::Index>(i)) = P.row(svm.support[i]);
     }
-    f.weights = svm.alpha * std::pow(2.0 * kPi * phi_sigma * phi_sigma, 1.5);
+    const double rescale = static_cast<double>(full.rows()) / static_cast<double>(P.rows());
+    f.weights = rescale * svm.alpha * std::pow(2.0 * kPi * phi_sigma * phi_sigma, 1.5);
     return f;
 }
 
@@ -60,7 +97,7 @@ const MethodSpec<SvrOptions>& Spec() {
     static const MethodSpec<SvrOptions> spec{
         kName,
         "Support Vector Registration rigid as probreg runs it: libsvm one-class nu-SVM per "
-        "cloud (support vectors = GMM means), L2 cost, scipy-like BFGS; dense exact Gauss sums",
+        "cloud (support vectors = GMM means), L2 cost, scipy-like BFGS; exact Gauss sums (approximated at scale)",
         {
             Param("compat", &SvrOptions::compat,
                   "\"none\" (default, correct: gradient=exact, normalize=true, gtol=1e-6, "
@@ -107,6 +144,24 @@ const MethodSpec<SvrOptions>& Spec() {
             Param("svm_tol", &SvrOptions::svm_tol,
                   "libsvm stopping tolerance eps (sklearn tol 1e-3)")
                 .Greater(0.0),
+            Param("svm_max_points", &SvrOptions::svm_max_points,
+                  "fit each one-class SVM on a seeded random subsample of this many points when "
+                  "the cloud is larger (alphas scaled by n / subsample); >= 10")
+                .AtLeast(10),
+            Param("kernel_sums", &SvrOptions::kernel_sums,
+                  "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed "
+                  "mixtures and a kd-tree cutoff (as gmmreg); \"dense\": always exact"),
+            Param("approx_min_pairs", &SvrOptions::approx_min_pairs,
+                  "S_s * S_t from which kernel_sums=auto approximates")
+                .AtLeast(0.0),
+            Param("cutoff_tolerance", &SvrOptions::cutoff_tolerance,
+                  "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma")
+                .Greater(0.0)
+                .Below(1.0),
+            Param("compress_cell_sigmas", &SvrOptions::compress_cell_sigmas,
+                  "cell edge of the compression in sigmas, [0, 1]; 0 = none")
+                .AtLeast(0.0)
+                .AtMost(1.0),
         },
         nullptr,
         // compat "probreg": probreg v0.3.7's values for the keys the user did not give.
@@ -118,7 +173,8 @@ const MethodSpec<SvrOptions>& Spec() {
 AlignResult AlignSvr(const SvrOptions& o,
                      const PointCloud& source,
                      const PointCloud& target,
-                     const AlignContext& /*context*/) {
+                     const AlignContext& context) {
+    std::mt19937_64 rng = context.MakeRng();  // the SVM subsample, when one is drawn
     double sigma = o.sigma;
     double gamma = o.gamma;
     if (o.use_estimated_sigma) {
@@ -150,8 +206,8 @@ AlignResult AlignSvr(const SvrOptions& o,
         }
         first_step = false;
         const double fs_sigma = probreg ? phi_sigma : step_sigma;
-        fs = SvmFeatures(Y, o.nu, gamma, fs_sigma, o.svm_tol);
-        ft = SvmFeatures(X, o.nu, gamma, fs_sigma, o.svm_tol);
+        fs = SvmFeatures(Y, o.nu, gamma, fs_sigma, o.svm_tol, o.svm_max_points, rng);
+        ft = SvmFeatures(X, o.nu, gamma, fs_sigma, o.svm_tol, o.svm_max_points, rng);
         sv_source = fs.means.rows();
         sv_target = ft.means.rows();
     };
@@ -160,6 +216,8 @@ AlignResult AlignSvr(const SvrOptions& o,
         AnnealedL2AlignResult(frame, MinimizeAnnealedL2(fs, ft, sigma, anneal, refit));
     result.extra["support_vectors_source"] = sv_source;
     result.extra["support_vectors_target"] = sv_target;
+    result.extra["svm_subsampled"] =
+        std::max(Y.rows(), X.rows()) > static_cast<Eigen::Index>(o.svm_max_points);
     return result;
 }
 

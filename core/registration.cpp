@@ -4,6 +4,7 @@
 #include <exception>
 #include <limits>
 
+#include "core/cpu_time.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 
@@ -40,8 +41,9 @@ std::uint64_t AlignContext::MethodSeed() const {
 }
 
 namespace {
-AlignResult Failed(std::string message, double seconds = 0.0) {
+AlignResult Failed(std::string message, double seconds = 0.0, double cpu_seconds = 0.0) {
     AlignResult r;
+    r.cpu_seconds = cpu_seconds;
     r.status = AlignStatus::kFailed;
     r.message = std::move(message);
     r.stop_reason = "error";
@@ -57,6 +59,7 @@ AlignResult RegistrationMethod::Align(const PointCloud& source,
         if (!problem.empty()) return Failed(Name() + ": " + problem);
     }
     const auto start = std::chrono::steady_clock::now();
+    const CpuStopwatch cpu(context.threads);
     AlignResult result;
     try {
         result = DoAlign(source, target, context);
@@ -67,6 +70,9 @@ AlignResult RegistrationMethod::Align(const PointCloud& source,
     }
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // Read right after the call: the checks below are not the method's time.
+    result.cpu_seconds = cpu.Elapsed();
+    result.cpu_scope = cpu.Scope();
     if (result.extra.is_object() && result.extra.contains(kExcludedSecondsKey)) {
         result.seconds -= result.extra[kExcludedSecondsKey].get<double>();
     }
@@ -76,12 +82,14 @@ AlignResult RegistrationMethod::Align(const PointCloud& source,
     }
     Eigen::Matrix3d sR = result.T_target_source.topLeftCorner<3, 3>();
     if (!result.T_target_source.allFinite()) {
-        return Failed(Name() + ": produced a non-finite transform", result.seconds);
+        return Failed(Name() + ": produced a non-finite transform", result.seconds,
+                      result.cpu_seconds);
     }
     const double s = AllowsScale() ? std::cbrt(sR.determinant()) : 1.0;
     constexpr double kRotationTol = 1e-6;
     if (!(s > 0.0) || !IsRotation(sR / s, kRotationTol)) {
-        return Failed(Name() + ": produced a non-rigid transform", result.seconds);
+        return Failed(Name() + ": produced a non-rigid transform", result.seconds,
+                      result.cpu_seconds);
     }
     if (!AllowsScale()) result.scale = 1.0;
     return result;

@@ -22,6 +22,11 @@ struct AlignResult {
     int iterations = 0;
     std::string stop_reason;  ///< e.g. "converged", "max_iterations", "line_search_failed"
     double seconds = 0.0;     ///< wall time of the DoAlign call (steady_clock)
+    /// CPU time of the DoAlign call (see CpuStopwatch): the calling thread's CPU clock when
+    /// AlignContext::threads is 1, the whole process's (getrusage) when it is more, so OpenMP
+    /// workers count. Unlike `seconds` it does not grow when other processes share the core.
+    double cpu_seconds = 0.0;
+    std::string cpu_scope = "thread";  ///< "thread" or "process": which clock cpu_seconds read
     AlignStatus status = AlignStatus::kOk;
     std::string message;  ///< empty when ok; why it failed otherwise
     double scale = 1.0;   ///< estimated scale when a method estimates one (else 1)

@@ -185,9 +185,26 @@ std::int64_t EvaluateLeafBaseline(const LeafJob& job) {
     return EvaluateLeafImpl<kWeighted, kMoment>(job);
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64-v4 (AVX-512) clone; the lane order is the same, so results match the AVX2 build
+/// up to FMA contraction. Not exercised on machines without AVX-512 (such as CI's).
+template <bool kWeighted, bool kMoment>
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) std::int64_t EvaluateLeafV4(
+    const LeafJob& job) {
+    return EvaluateLeafImpl<kWeighted, kMoment>(job);
+}
+bool HasAvx512Leaf() {
+    static const bool has =
+        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+    return has;
+}
+#endif
+
 template <bool kWeighted, bool kMoment>
 std::int64_t EvaluateLeaf(const LeafJob& job) {
 #if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512Leaf()) return EvaluateLeafV4<kWeighted, kMoment>(job);
     if (HasAvx2Fma()) return EvaluateLeafAvx2<kWeighted, kMoment>(job);
 #endif
     return EvaluateLeafBaseline<kWeighted, kMoment>(job);
@@ -199,6 +216,156 @@ std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
     }
     return moment ? EvaluateLeaf<false, true>(job) : EvaluateLeaf<false, false>(job);
 }
+
+/// One target's kernel column: row[i] = exp(a |q - p_i|^2) for all sources i, and its sum
+/// (8 float lanes per chunk of kChunk, chunks added in double: the same scheme as SumChunk).
+__attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
+                                                           const float* __restrict px,
+                                                           const float* __restrict py,
+                                                           const float* __restrict pz,
+                                                           Eigen::Index count,
+                                                           float qx,
+                                                           float qy,
+                                                           float qz,
+                                                           float a) {
+    constexpr int kLanes = 8;
+    double total = 0.0;
+    for (Eigen::Index c0 = 0; c0 < count; c0 += kChunk) {
+        const Eigen::Index c1 = std::min(count, c0 + kChunk);
+        float lanes[kLanes] = {};
+        Eigen::Index j = c0;
+        const auto term = [&](Eigen::Index i) {
+            const float dx = qx - px[i], dy = qy - py[i], dz = qz - pz[i];
+            const float k = FastExp((dx * dx + dy * dy + dz * dz) * a);
+            row[i] = k;
+            return k;
+        };
+        for (; j + kLanes <= c1; j += kLanes) {
+            for (int l = 0; l < kLanes; ++l) lanes[l] += term(j + l);
+        }
+        for (int l = 0; j < c1; ++j, ++l) lanes[l] += term(j);
+        float s = 0.0f;
+        for (int l = 0; l < kLanes; ++l) s += lanes[l];
+        total += s;
+    }
+    return total;
+}
+
+/// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's share of
+/// p1 and PX, w = 1 / (den + c), from its kernel column while it is still in L1.
+__attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict row,
+                                                       Eigen::Index count,
+                                                       float w,
+                                                       float wx,
+                                                       float wy,
+                                                       float wz,
+                                                       float* __restrict acc0,
+                                                       float* __restrict acc1,
+                                                       float* __restrict acc2,
+                                                       float* __restrict acc3) {
+    for (Eigen::Index i = 0; i < count; ++i) {
+        const float k = row[i];
+        acc0[i] += k * w;
+        acc1[i] += k * wx;
+        acc2[i] += k * wy;
+        acc3[i] += k * wz;
+    }
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+/// x86-64-v4 (AVX-512) clones, chosen at run time; this project's CI machine has no AVX-512,
+/// so they are compiled but exercised only where the CPU supports them.
+#define REGBENCH_V4_TARGET "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"
+bool HasAvx512() {
+    static const bool has =
+        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+    return has;
+}
+__attribute__((target(REGBENCH_V4_TARGET))) double KernelRowV4(float* row,
+                                                               const float* px,
+                                                               const float* py,
+                                                               const float* pz,
+                                                               Eigen::Index count,
+                                                               float qx,
+                                                               float qy,
+                                                               float qz,
+                                                               float a) {
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+__attribute__((target("avx2,fma"))) double KernelRowAvx2(float* row,
+                                                         const float* px,
+                                                         const float* py,
+                                                         const float* pz,
+                                                         Eigen::Index count,
+                                                         float qx,
+                                                         float qy,
+                                                         float qz,
+                                                         float a) {
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+__attribute__((target(REGBENCH_V4_TARGET))) void AxpyRowV4(const float* row,
+                                                           Eigen::Index count,
+                                                           float w,
+                                                           float wx,
+                                                           float wy,
+                                                           float wz,
+                                                           float* acc0,
+                                                           float* acc1,
+                                                           float* acc2,
+                                                           float* acc3) {
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+__attribute__((target("avx2,fma"))) void AxpyRowAvx2(const float* row,
+                                                     Eigen::Index count,
+                                                     float w,
+                                                     float wx,
+                                                     float wy,
+                                                     float wz,
+                                                     float* acc0,
+                                                     float* acc1,
+                                                     float* acc2,
+                                                     float* acc3) {
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+#endif
+
+}  // namespace
+
+double KernelRow(float* row,
+                 const float* px,
+                 const float* py,
+                 const float* pz,
+                 Eigen::Index count,
+                 float qx,
+                 float qy,
+                 float qz,
+                 float a) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return KernelRowV4(row, px, py, pz, count, qx, qy, qz, a);
+    if (HasAvx2Fma()) return KernelRowAvx2(row, px, py, pz, count, qx, qy, qz, a);
+#endif
+    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+}
+
+void AxpyRow(const float* row,
+             Eigen::Index count,
+             float w,
+             float wx,
+             float wy,
+             float wz,
+             float* acc0,
+             float* acc1,
+             float* acc2,
+             float* acc3) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return AxpyRowV4(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+    if (HasAvx2Fma()) return AxpyRowAvx2(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+#endif
+    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+}
+
+namespace {
 
 /// Copies nanoflann's tree into BlockedCloud nodes (pre-order), returning the node index.
 template <class NodePtr>
@@ -338,6 +505,36 @@ void KernelSums(const BlockedCloud& queries,
         }
     }
     out.evaluated_pairs = pairs;
+}
+
+namespace {
+__attribute__((always_inline)) inline double FastExpPassImpl(const float* __restrict x,
+                                                             float* __restrict y,
+                                                             std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) y[i] = FastExp(x[i]);
+    double s = 0.0;
+    for (std::size_t i = 0; i < n; i += 4096) s += y[i];  // touch, do not re-add everything
+    return s;
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) double FastExpPassV4(
+    const float* x, float* y, std::size_t n) {
+    return FastExpPassImpl(x, y, n);
+}
+__attribute__((target("avx2,fma"))) double FastExpPassAvx2(const float* x,
+                                                           float* y,
+                                                           std::size_t n) {
+    return FastExpPassImpl(x, y, n);
+}
+#endif
+}  // namespace
+
+double FastExpPass(const float* x, float* y, std::size_t n) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return FastExpPassV4(x, y, n);
+    if (HasAvx2Fma()) return FastExpPassAvx2(x, y, n);
+#endif
+    return FastExpPassImpl(x, y, n);
 }
 
 double UnderflowRadiusSigmas() { return std::sqrt(2.0 * -kFastExpMinArg); }

@@ -136,6 +136,35 @@ void KernelSums(const BlockedCloud& queries,
                 bool want_first_moment,
                 KernelSumResult& out);
 
+/// The machine's exp floor: y[i] = FastExp(x[i]) for i < n, dispatched to the same ISA clones
+/// as the kernel sums (bench/baselines/cpd_floor_bench.cpp times it against a CPD iteration).
+/// Returns the sum of y so the work cannot be optimised away.
+double FastExpPass(const float* x, float* y, std::size_t n);
+
+/// One kernel column for CPD's fused E-step: row[i] = exp(a |q - p_i|^2) over `count` points
+/// given as float coordinate arrays, returning sum_i row[i] (float lanes, chunks in double).
+double KernelRow(float* row,
+                 const float* px,
+                 const float* py,
+                 const float* pz,
+                 Eigen::Index count,
+                 float qx,
+                 float qy,
+                 float qz,
+                 float a);
+
+/// acc0[i] += w row[i], acc1[i] += wx row[i], acc2[i] += wy row[i], acc3[i] += wz row[i].
+void AxpyRow(const float* row,
+             Eigen::Index count,
+             float w,
+             float wx,
+             float wy,
+             float wz,
+             float* acc0,
+             float* acc1,
+             float* acc2,
+             float* acc3);
+
 /// Radius (in sigmas) beyond which FastExp(-d^2 / 2 sigma^2) is exactly 0: sqrt(2 * 87).
 double UnderflowRadiusSigmas();
 
@@ -159,6 +188,13 @@ struct GaussSumOptions {
     double truncation_sigmas = 4.0;              ///< r = k sigma; exp(-k^2/2) at the edge
     Eigen::Index truncation_min_points = 20000;  ///< auto: below this, always dense
     double truncation_max_diag_fraction = 0.25;  ///< auto: truncate once r < this * diagonal
+    /// auto: cell edge, in sigmas, of the cell-compressed E-step (gmm/cell_compress.hpp);
+    /// 0 disables compression. 0.25 keeps each merged term within a few percent.
+    double cluster_cell_sigmas = 0.25;
+    Eigen::Index cluster_min_points = 20000;  ///< auto: compress only if max(M, N) >= this
+    /// auto: compress a cloud only while it has fewer than this fraction as many cells as
+    /// points (late iterations, with sigma near the point spacing, stay exact).
+    double cluster_max_fraction = 0.5;
 };
 
 }  // namespace regbench

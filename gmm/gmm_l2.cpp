@@ -5,8 +5,10 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
+#include "gmm/cell_compress.hpp"
 #include "gmm/gmm_common.hpp"
 #include "gmm/simd_exp.hpp"
 
@@ -45,6 +47,35 @@ REGBENCH_SIMD_CLONES RowSums GaussRowSums(double x,
         s1z += we * tz[j];
     }
     return {s0, s1x, s1y, s1z};
+}
+
+/// GaussRowSums over only the target components within `radius` of x (kd-tree radius search,
+/// gathered in distance order into per-thread SoA buffers so the sum still vectorises).
+RowSums CutoffRowSums(const KdTree& tree,
+                      double radius,
+                      const Eigen::Vector3d& x,
+                      const double* tx,
+                      const double* ty,
+                      const double* tz,
+                      const double* tw,
+                      double neg_inv_two_sigma2) {
+    thread_local std::vector<std::pair<Eigen::Index, double>> found;
+    thread_local std::vector<double> gx, gy, gz, gw;
+    tree.Radius(x, radius, found);
+    const size_t n = found.size();
+    gx.resize(n);
+    gy.resize(n);
+    gz.resize(n);
+    gw.resize(n);
+    for (size_t k = 0; k < n; ++k) {
+        const auto j = static_cast<size_t>(found[k].first);
+        gx[k] = tx[j];
+        gy[k] = ty[j];
+        gz[k] = tz[j];
+        gw[k] = tw[j];
+    }
+    return GaussRowSums(x[0], x[1], x[2], gx.data(), gy.data(), gz.data(), gw.data(),
+                        static_cast<long>(n), neg_inv_two_sigma2);
 }
 
 }  // namespace
@@ -88,14 +119,31 @@ Eigen::VectorXd RigidGmmL2Cost::InitialTheta() {
     return theta;
 }
 
+double CutoffRadiusSigmas(double tolerance) {
+    if (!(tolerance > 0.0 && tolerance < 1.0)) {
+        throw std::invalid_argument("cutoff tolerance must be in (0, 1), got " +
+                                    std::to_string(tolerance));
+    }
+    return std::sqrt(2.0 * std::log(1.0 / tolerance));
+}
+
+RigidGmmL2Cost::~RigidGmmL2Cost() = default;
+
 RigidGmmL2Cost::RigidGmmL2Cost(const MixtureFeatures& source,
                                const MixtureFeatures& target,
                                double sigma,
-                               L2Gradient gradient)
+                               L2Gradient gradient,
+                               double cutoff_radius)
     : source_means_(source.means),
       source_weights_(source.weights),
       sigma_(sigma),
-      gradient_(gradient) {
+      gradient_(gradient),
+      cutoff_radius_(cutoff_radius),
+      target_means_(target.means) {
+    if (!(cutoff_radius > 0.0)) {
+        throw std::invalid_argument("RigidGmmL2Cost: cutoff radius must be positive");
+    }
+    if (std::isfinite(cutoff_radius)) tree_ = std::make_unique<KdTree>(target_means_);
     if (!(sigma > 0.0) || !std::isfinite(sigma)) {
         throw std::invalid_argument("RigidGmmL2Cost: sigma must be positive and finite");
     }
@@ -128,8 +176,10 @@ double RigidGmmL2Cost::operator()(const Eigen::VectorXd& theta, Eigen::VectorXd&
 #pragma omp parallel for schedule(static) if (parallel)
     for (long i = 0; i < ns; ++i) {
         const Eigen::Vector3d x = R * source_means_.row(i).transpose() + t;
-        const RowSums s = GaussRowSums(x[0], x[1], x[2], tx_.data(), ty_.data(), tz_.data(),
-                                       tw_.data(), nt, neg_inv_two_sigma2);
+        const RowSums s = tree_ ? CutoffRowSums(*tree_, cutoff_radius_, x, tx_.data(), ty_.data(),
+                                                tz_.data(), tw_.data(), neg_inv_two_sigma2)
+                                : GaussRowSums(x[0], x[1], x[2], tx_.data(), ty_.data(), tz_.data(),
+                                               tw_.data(), nt, neg_inv_two_sigma2);
         const double phi = source_weights_[i];
         f_rows[static_cast<size_t>(i)] = -phi * s.s0;
         // g_i = phi_i sum_j (phi_j / Z) e_ij (x_i - mu_j) * grad_scale
@@ -178,12 +228,36 @@ Transform L2Frame::ToInput(const Transform& T_frame) const {
     return MakeTransform(R, t);
 }
 
+MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell) {
+    const CellCompressed c = CompressToCells(mixture.means, &mixture.weights, cell);
+    return {c.centroids, c.weights};
+}
+
 BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            const MixtureFeatures& target,
                            double sigma,
                            L2Gradient gradient,
                            const Eigen::VectorXd& theta0,
-                           const BfgsOptions& options) {
+                           const BfgsOptions& options,
+                           const L2SumOptions& sums,
+                           bool* approximated) {
+    const double pairs =
+        static_cast<double>(source.means.rows()) * static_cast<double>(target.means.rows());
+    const bool approximate = sums.approximate && pairs >= sums.min_pairs;
+    if (approximated != nullptr) *approximated = approximate;
+    if (approximate) {
+        // Compress (the source in its own frame: it moves rigidly, cells stay cells), then
+        // cut off what the stated tolerance allows.
+        const bool compress = sums.compress_cell_sigmas > 0.0;
+        const double cell = sums.compress_cell_sigmas * sigma;
+        const MixtureFeatures s = compress ? CompressMixture(source, cell) : source;
+        const MixtureFeatures t = compress ? CompressMixture(target, cell) : target;
+        const RigidGmmL2Cost cost(s, t, sigma, gradient,
+                                  sigma * CutoffRadiusSigmas(sums.cutoff_tolerance));
+        return MinimizeBfgs([&cost](const Eigen::VectorXd& theta,
+                                    Eigen::VectorXd& grad) { return cost(theta, grad); },
+                            theta0, options);
+    }
     const RigidGmmL2Cost cost(source, target, sigma, gradient);
     return MinimizeBfgs(
         [&cost](const Eigen::VectorXd& theta, Eigen::VectorXd& grad) { return cost(theta, grad); },
@@ -201,8 +275,10 @@ AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source,
     int outer = 0;
     for (outer = 1; outer <= options.outer_iterations; ++outer) {
         if (refit) refit(sigma, source, target);
-        fit.last =
-            MinimizeRigidL2(source, target, sigma, options.gradient, fit.theta, options.bfgs);
+        bool approximated = false;
+        fit.last = MinimizeRigidL2(source, target, sigma, options.gradient, fit.theta,
+                                   options.bfgs, options.sums, &approximated);
+        fit.approximated = fit.approximated || approximated;
         fit.iterations += fit.last.iterations;
         fit.theta = fit.last.x;
         sigma *= options.delta;
@@ -221,6 +297,7 @@ AlignResult AnnealedL2AlignResult(const L2Frame& frame, const AnnealedL2Result& 
     result.extra = Convergence{fit.iterations, fit.last.f, fit.last.stop_reason}.ToJson();
     result.extra["outer_iterations"] = fit.outer_steps;
     result.extra["evaluations"] = fit.last.evaluations;
+    result.extra["approximated_sums"] = fit.approximated;
     return result;
 }
 

@@ -5,6 +5,8 @@
 // Notation (probabilistic-baselines.md Sec. 2): theta = (q_w, q_x, q_y, q_z, t), q unnormalised.
 #include <Eigen/Core>
 #include <array>
+#include <limits>
+#include <memory>
 #include <functional>
 #include <nlohmann/json.hpp>
 
@@ -38,16 +40,50 @@ std::array<Eigen::Matrix3d, 4> RotationDerivativeFromQuaternionWxyz(const Eigen:
 /// T(theta) = [R(q/|q|), t] for theta = (q_w, q_x, q_y, q_z, t_x, t_y, t_z).
 Transform TransformFromTheta(const Eigen::VectorXd& theta);
 
+class KdTree;
+
+/// How the L2 cost's Gaussian sums are evaluated at scale (docs/performance.md). Below
+/// `min_pairs` = K_s * K_t everything is dense and exact; at or above it:
+///  - both mixtures are cell-compressed (gmm/cell_compress.hpp) with cell edge
+///    `compress_cell_sigmas` * sigma: the cost becomes the exact L2 of the compressed mixtures,
+///    so its gradient stays consistent for BFGS;
+///  - pairs farther apart than r = sigma sqrt(2 ln(1 / cutoff_tolerance)) are skipped, found by
+///    a kd-tree radius search on the target components (gmmreg's own cutoff). Every skipped
+///    term is below cutoff_tolerance times its weight product, so
+///    |f_cutoff - f_dense| <= cutoff_tolerance * sum_ij phi_i phi_j / Z.
+/// The `kernel_sums` option of GMMReg and SVR.
+enum class L2KernelSums {
+    kAuto,   ///< approximate from L2SumOptions::min_pairs on
+    kDense,  ///< always dense and exact
+};
+NLOHMANN_JSON_SERIALIZE_ENUM(L2KernelSums,
+                             {{L2KernelSums::kAuto, "auto"}, {L2KernelSums::kDense, "dense"}})
+
+struct L2SumOptions {
+    bool approximate = true;            ///< false: always dense and exact
+    double min_pairs = 1e8;             ///< K_s * K_t at which approximation starts
+    double cutoff_tolerance = 1e-4;     ///< relative kernel value at the cutoff radius (4.29 sigma)
+    double compress_cell_sigmas = 0.1;  ///< cell edge in sigmas; 0 = no compression
+};
+
+/// Cutoff radius, in sigmas, at which exp(-r^2 / 2) = tolerance: sqrt(2 ln(1 / tolerance)).
+double CutoffRadiusSigmas(double tolerance);
+
 /// f(theta) = -sum_ij phi_s_i phi_t_j / Z exp(-|R mu_s_i + t - mu_t_j|^2 / 2 sigma^2),
 /// Z = (2 pi sigma^2)^(D/2), and its gradient w.r.t. theta (7 entries).
 /// Sums are dense (O(K_s K_t) exps per call), parallel over source components with OpenMP
 /// (thread-count independent: each row is summed alone, rows are reduced in order).
 class RigidGmmL2Cost {
 public:
+    /// `cutoff_radius` (input units; infinity = dense): pairs farther apart are skipped.
     RigidGmmL2Cost(const MixtureFeatures& source,
                    const MixtureFeatures& target,
                    double sigma,
-                   L2Gradient gradient);
+                   L2Gradient gradient,
+                   double cutoff_radius = std::numeric_limits<double>::infinity());
+    ~RigidGmmL2Cost();
+    RigidGmmL2Cost(const RigidGmmL2Cost&) = delete;  // the kd-tree references target_means_
+    RigidGmmL2Cost& operator=(const RigidGmmL2Cost&) = delete;
     /// Returns f(theta) and writes the gradient (probreg's half or exact) into grad.
     double operator()(const Eigen::VectorXd& theta, Eigen::VectorXd& grad) const;
     /// theta0 = (1, 0, 0, 0, 0, 0, 0): probreg's RigidCostFunction.initial().
@@ -60,6 +96,9 @@ private:
     Eigen::VectorXd tx_, ty_, tz_, tw_;
     double sigma_;
     L2Gradient gradient_;
+    double cutoff_radius_;
+    PointCloud target_means_;       ///< referenced by tree_
+    std::unique_ptr<KdTree> tree_;  ///< only with a finite cutoff
 };
 
 /// Where an L2 method optimises: y' = (y - c_source) / scale, x' = (x - c_target) / scale.
@@ -80,12 +119,21 @@ struct L2Frame {
 };
 
 /// One BFGS run of RigidGmmL2Cost from theta0 (probreg's minimize(..., method='BFGS')).
+/// With `sums` approximating (K_s K_t >= sums.min_pairs), the mixtures are compressed and the
+/// cost uses the cutoff; `approximated` (optional) reports whether that happened.
 BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            const MixtureFeatures& target,
                            double sigma,
                            L2Gradient gradient,
                            const Eigen::VectorXd& theta0,
-                           const BfgsOptions& options);
+                           const BfgsOptions& options,
+                           const L2SumOptions& sums = {},
+                           bool* approximated = nullptr);
+
+/// The mixture with components merged per cell of edge `cell` (weights summed, means the
+/// weight-averaged centroids): the L2 cost of compressed mixtures approximates the original
+/// to O((cell / sigma)^2).
+MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell);
 
 /// Schedule of the annealed outer loop shared by GMMReg and SVR (probreg's
 /// L2DistRegistration.registration): BFGS at bandwidth sigma, then sigma *= delta, until
@@ -96,10 +144,12 @@ struct AnnealedL2Options {
     double outer_tol = 0.0;    ///< stop when the objective changes by less than this
     L2Gradient gradient = L2Gradient::kExact;
     BfgsOptions bfgs;  ///< options of every inner BFGS run
+    L2SumOptions sums;  ///< dense or approximated Gaussian sums in every inner run
 };
 
 /// The schedule from a method's options struct: GMMReg's and SVR's options share the field
-/// names outer_iterations, delta, outer_tol, gradient, maxiter and gtol, so both read them
+/// names outer_iterations, delta, outer_tol, gradient, maxiter, gtol and the kernel-sum keys
+/// (kernel_sums, approx_min_pairs, cutoff_tolerance, compress_cell_sigmas), so both read them
 /// through this one function.
 template <class MethodOptions>
 AnnealedL2Options AnnealedL2OptionsFrom(const MethodOptions& o) {
@@ -110,6 +160,10 @@ AnnealedL2Options AnnealedL2OptionsFrom(const MethodOptions& o) {
     anneal.gradient = o.gradient;
     anneal.bfgs.maxiter = o.maxiter;
     anneal.bfgs.gtol = o.gtol;
+    anneal.sums.approximate = o.kernel_sums == L2KernelSums::kAuto;
+    anneal.sums.min_pairs = o.approx_min_pairs;
+    anneal.sums.cutoff_tolerance = o.cutoff_tolerance;
+    anneal.sums.compress_cell_sigmas = o.compress_cell_sigmas;
     return anneal;
 }
 
@@ -119,6 +173,7 @@ struct AnnealedL2Result {
     BfgsResult last;        ///< the last inner BFGS run
     int iterations = 0;     ///< BFGS iterations summed over all outer steps
     int outer_steps = 0;    ///< outer steps run
+    bool approximated = false;  ///< whether any inner run used approximated sums
 };
 
 /// Called at the start of every outer step with that step's bandwidth; refits the mixtures

@@ -22,6 +22,8 @@ nlohmann::json AlignResultToJson(const AlignResult& r) {
             {"iterations", r.iterations},
             {"stop_reason", r.stop_reason},
             {"seconds", r.seconds},
+            {"cpu_seconds", r.cpu_seconds},
+            {"cpu_scope", r.cpu_scope},
             {"status", ToString(r.status)},
             {"message", r.message},
             {"scale", r.scale},
@@ -34,6 +36,8 @@ AlignResult AlignResultFromJson(const nlohmann::json& j) {
     r.iterations = j.at("iterations").get<int>();
     r.stop_reason = j.at("stop_reason").get<std::string>();
     r.seconds = j.at("seconds").get<double>();
+    r.cpu_seconds = j.value("cpu_seconds", 0.0);
+    r.cpu_scope = j.value("cpu_scope", std::string("thread"));
     r.status =
         j.at("status") == ToString(AlignStatus::kOk) ? AlignStatus::kOk : AlignStatus::kFailed;
     r.message = j.at("message").get<std::string>();

@@ -58,6 +58,9 @@ const char* const kKnownKeys[] = {"pair",
                                   "params",
                                   "transform",
                                   "seconds",
+                                  "cpu_seconds",
+                                  "cpu_scope",
+                                  "machine",
                                   "iterations",
                                   "status",
                                   "message",
@@ -165,6 +168,8 @@ void to_json(nlohmann::json& j, const ResultRow& row) {
     j["params"] = row.params;
     j["transform"] = TransformToJson(row.transform);
     j["seconds"] = row.seconds;
+    j["cpu_seconds"] = row.cpu_seconds;
+    j["cpu_scope"] = row.cpu_scope;
     j["iterations"] = row.iterations;
     j["status"] = row.status;
     j["message"] = row.message;
@@ -180,6 +185,7 @@ void to_json(nlohmann::json& j, const ResultRow& row) {
     j["metrics"] = MetricsToJson(row.metrics);
     if (row.gt_transform) j["gt_transform"] = TransformToJson(*row.gt_transform);
     j["data"] = row.data;
+    if (!row.machine.empty()) j["machine"] = row.machine;
 }
 
 void from_json(const nlohmann::json& j, ResultRow& row) {
@@ -193,6 +199,9 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     row.transform =
         j.contains("transform") ? TransformFromJson(j.at("transform")) : Transform::Identity();
     row.seconds = j.value("seconds", 0.0);
+    // Rows from before CPU timing existed read as 0 s of the calling thread.
+    row.cpu_seconds = j.value("cpu_seconds", 0.0);
+    row.cpu_scope = j.value("cpu_scope", "thread");
     row.iterations = j.value("iterations", 0);
     row.status = j.contains("status") ? j.at("status").get<Status>() : Status::kOk;
     row.message = j.value("message", "");
@@ -211,6 +220,7 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     row.gt_transform.reset();
     if (j.contains("gt_transform")) row.gt_transform = TransformFromJson(j.at("gt_transform"));
     row.data = j.contains("data") ? j.at("data").get<DataTag>() : DataTag{};
+    row.machine = j.value("machine", nlohmann::json::object());
     row.other = nlohmann::json::object();
     for (const auto& item : j.items()) {
         if (!IsKnownKey(item.key())) row.other[item.key()] = item.value();

@@ -40,7 +40,7 @@ void to_json(nlohmann::json& j, const DataTag& d);
 void from_json(const nlohmann::json& j, DataTag& d);
 
 /// One JSONL line. Keys are those rows have always had (so old files read) plus `euler`,
-/// `source_overlap_ratio`, `target_overlap_ratio`; keys this struct does not know are kept in
+/// `source_overlap_ratio`, `target_overlap_ratio`, `cpu_seconds`, `cpu_scope`, `machine`; keys this struct does not know are kept in
 /// `other` and written back, so a newer writer's columns survive a round trip.
 struct ResultRow {
     std::size_t pair = 0;                              ///< index in the pair file
@@ -48,6 +48,9 @@ struct ResultRow {
     nlohmann::json params = nlohmann::json::object();  ///< the method's full parameters
     Transform transform = Transform::Identity();       ///< estimated T_target_source
     double seconds = 0.0;                              ///< wall time of the call
+    /// CPU time of the call (AlignResult::cpu_seconds); 0 in rows written before it existed.
+    double cpu_seconds = 0.0;
+    std::string cpu_scope = "thread";  ///< "thread" or "process": which clock cpu_seconds read
     int iterations = 0;
     Status status = Status::kOk;
     std::string message;  ///< empty when ok
@@ -68,6 +71,9 @@ struct ResultRow {
     /// another convention. Absent in old rows.
     std::optional<Transform> gt_transform;
     DataTag data;
+    /// Machine load when the run started: {"loadavg": [1, 5, 15 min], "cores", "jobs"};
+    /// empty in old rows and in `score` rows.
+    nlohmann::json machine = nlohmann::json::object();
     nlohmann::json other = nlohmann::json::object();  ///< unknown keys, kept verbatim
 
     /// Where the row was read from ("file:line"); empty for rows made in memory. Not written.

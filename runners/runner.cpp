@@ -21,6 +21,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
+#include "core/cpu_time.hpp"
 #include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -171,6 +172,8 @@ ResultRow MakeResultRow(std::size_t pair_index,
     row.params = method.params;
     row.transform = result.T_target_source;
     row.seconds = result.seconds;
+    row.cpu_seconds = result.cpu_seconds;
+    row.cpu_scope = result.cpu_scope;
     row.iterations = result.iterations;
     row.status = context.status.value_or(StatusOf(result));
     row.message = result.message;
@@ -189,6 +192,7 @@ ResultRow MakeResultRow(std::size_t pair_index,
         OverlapRmse(pair.T_gt, result.T_target_source, pair.source, pair.source_overlap);
     row.gt_transform = pair.T_gt;
     row.data = context.data;
+    row.machine = context.machine;
     return row;
 }
 
@@ -259,6 +263,12 @@ RunSummary RunBenchmark(const RunOptions& options) {
     expect.methods = options.methods;
 
     // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
+    // Timing provenance (perf): the machine's load when the run started, so a reader can tell
+    // whether wall times were taken on a busy machine (see docs/performance.md).
+    const MachineLoad load = ReadMachineLoad();
+    const nlohmann::json machine_tag = {{"loadavg", {load.load1, load.load5, load.load15}},
+                                        {"cores", load.cores},
+                                        {"jobs", options.jobs}};
     const std::uint64_t benchmark_seed = BenchmarkSeed(set);
     std::vector<std::size_t> indices;
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
@@ -339,6 +349,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
                 row_context.threads = options.threads_per_call;
                 row_context.euler = options.euler;
                 row_context.data = data_tag;
+                row_context.machine = machine_tag;
                 ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
                 if (reduce) row.other["downsampled"] = downsampled;
                 if (outcome.status != Status::kOk) failures.fetch_add(1);

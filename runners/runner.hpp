@@ -57,6 +57,8 @@ struct RowContext {
     int threads = 1;               ///< OpenMP threads of the call
     EulerConvention euler = EulerConvention::kZyx;
     DataTag data;
+    /// Load and cores of the machine when the run started (`run`); empty when not recorded.
+    nlohmann::json machine = nlohmann::json::object();
 };
 
 /// One result row: the call's outcome plus the metrics against the pair's T_gt (computed after

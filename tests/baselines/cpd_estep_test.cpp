@@ -128,3 +128,41 @@ TEST(CpdEStep, AutoSwitchRule) {
 
 }  // namespace
 }  // namespace regbench
+
+namespace regbench {
+namespace {
+
+TEST(CpdEStep, CellCompressedAgreesWithDenseWhileSigmaIsLarge) {
+    // Reference: the dense E-step (itself checked against brute force above). Compression with
+    // cells of 0.25 sigma is second order in the cell size: ~1% on p1, px and Np.
+    auto rng = MakePairRng(19, 0);
+    const PointCloud Y = SmoothBlobSurface(rng, 8000);
+    const PointCloud X = SmoothBlobSurface(rng, 8000);
+    const Transform T = MakeTransform(RotationFromAxisAngle({0, 1, 0}, 0.2), {0.05, 0, 0});
+    GaussSumOptions dense_opt, auto_opt;
+    dense_opt.mode = GaussSumMode::kDense;
+    auto_opt.cluster_min_points = 1000;
+    auto_opt.truncation_min_points = 1000;
+    CpdEStep dense(Y, X, dense_opt), approx(Y, X, auto_opt);
+    for (const double sigma2 : {0.3, 0.05}) {
+        CpdPosteriors a, b;
+        dense.Compute(T, sigma2, 1e-3, a);
+        approx.Compute(T, sigma2, 1e-3, b);
+        EXPECT_GT(b.compressed_cells, 0) << sigma2;
+        EXPECT_LT(b.evaluated_pairs, a.evaluated_pairs / 4) << sigma2;
+        EXPECT_NEAR(b.np, a.np, 0.01 * a.np) << sigma2;
+        EXPECT_LT(MaxRelDiff(b.p1, a.p1), 0.02) << sigma2;
+        EXPECT_LT(MaxRelDiff(b.pt1, a.pt1), 0.02) << sigma2;
+        // PX rows relative to their p1 (the posterior-weighted target mean of each source point).
+        const PointCloud mean_a = a.px.array().colwise() / a.p1.array();
+        const PointCloud mean_b = b.px.array().colwise() / b.p1.array();
+        EXPECT_LT((mean_a - mean_b).cwiseAbs().maxCoeff(), 0.02 * std::sqrt(sigma2)) << sigma2;
+    }
+    // Dense mode never compresses.
+    CpdPosteriors d;
+    dense.Compute(T, 0.3, 0.0, d);
+    EXPECT_EQ(d.compressed_cells, 0);
+}
+
+}  // namespace
+}  // namespace regbench

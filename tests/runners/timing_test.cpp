@@ -1,0 +1,96 @@
+// CPU time beside wall time: rows carry cpu_seconds and the machine's load; the summary for the
+// reports flags oversubscribed runs.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/cpu_time.hpp"
+#include "protocols/pair_file.hpp"
+#include "runners/runner.hpp"
+#include "runners/timing_summary.hpp"
+#include "tests/testing/synthetic.hpp"
+
+namespace regbench {
+namespace {
+
+TEST(CpuTime, ThreadClockAdvancesWithWorkAndStopwatchPicksItsScope) {
+    const double before = ThreadCpuSeconds();
+    volatile double sink = 0.0;
+    for (int i = 0; i < 2000000; ++i) sink = sink + std::sqrt(static_cast<double>(i));
+    EXPECT_GT(ThreadCpuSeconds(), before);
+    EXPECT_GE(ProcessCpuSeconds(), ThreadCpuSeconds() - 1e-3);  // the process includes us
+    EXPECT_STREQ(CpuStopwatch(1).Scope(), "thread");
+    EXPECT_STREQ(CpuStopwatch(2).Scope(), "process");
+    const MachineLoad load = ReadMachineLoad();
+    EXPECT_GE(load.cores, 1);
+    EXPECT_GE(load.load1, 0.0);  // /proc/loadavg exists on Linux
+    EXPECT_LE(load.FreeCores(), load.cores);
+}
+
+TEST(RunnerTiming, EveryOkRowHasPositiveCpuSecondsAndTheMachineLoad) {
+    const auto dir = std::filesystem::temp_directory_path() / "regbench_runner_timing";
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    PairSet set;
+    set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
+    for (int k = 0; k < 3; ++k) {
+        set.pairs.push_back(testing::SyntheticPair(
+            200, 10 + k, MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01, 0, 0})));
+    }
+    RunOptions o;
+    o.pairs_path = (dir / "pairs.h5").string();
+    WritePairFile(o.pairs_path, set);
+    o.methods = ParseMethodSpecs("cpd,icp", {});
+    o.progress = false;
+    for (const double timeout : {0.0, 60.0}) {  // in process, and in an isolated child
+        o.timeout_seconds = timeout;
+        o.out_path = (dir / ("r" + std::to_string(static_cast<int>(timeout)) + ".jsonl")).string();
+        RunBenchmark(o);
+        const auto rows = ReadJsonl(o.out_path);
+        ASSERT_EQ(rows.size(), 6u);
+        for (const auto& row : rows) {
+            ASSERT_EQ(row["status"], "ok") << row.dump();
+            EXPECT_GT(row["cpu_seconds"].get<double>(), 0.0) << row["method"];
+            EXPECT_EQ(row["cpu_scope"], "thread");
+            ASSERT_TRUE(row.contains("machine"));
+            EXPECT_EQ(row["machine"]["loadavg"].size(), 3u);
+            EXPECT_GE(row["machine"]["cores"].get<int>(), 1);
+        }
+    }
+    std::filesystem::remove_all(dir);
+}
+
+ResultRow Row(double wall, double cpu, Status status = Status::kOk) {
+    ResultRow row;
+    row.status = status;
+    row.seconds = wall;
+    row.cpu_seconds = cpu;
+    row.machine = {{"loadavg", {3.0, 2.0, 1.0}}};
+    return row;
+}
+
+TEST(TimingSummary, RatioOfMeansAndWarningAboveThreshold) {
+    // Hand values: wall 0.2 + 0.4 = 0.6, CPU 0.1 + 0.2 = 0.3 -> ratio 2; the failed row and the
+    // row without cpu_seconds are skipped.
+    ResultRow old_row;  // written before cpu_seconds existed: reads as 0
+    old_row.seconds = 5.0;
+    std::vector<ResultRow> rows = {Row(0.2, 0.1), Row(0.4, 0.2), Row(9.0, 1.0, Status::kFailed),
+                                   old_row};
+    const TimingSummary s = SummariseTiming(rows);
+    EXPECT_EQ(s.rows, 2u);
+    EXPECT_DOUBLE_EQ(s.mean_wall_seconds, 0.3);
+    EXPECT_DOUBLE_EQ(s.mean_cpu_seconds, 0.15);
+    EXPECT_DOUBLE_EQ(s.wall_cpu_ratio, 2.0);
+    EXPECT_TRUE(s.oversubscribed);
+    EXPECT_NE(s.warning.find("2.00"), std::string::npos) << s.warning;
+    EXPECT_NE(s.warning.find("load at run start: 3.0"), std::string::npos) << s.warning;
+
+    // 1.2 is below the 1.3 threshold: no warning.
+    const TimingSummary calm = SummariseTiming({Row(0.12, 0.1)});
+    EXPECT_FALSE(calm.oversubscribed);
+    EXPECT_TRUE(calm.warning.empty());
+    EXPECT_EQ(SummariseTiming({}).rows, 0u);
+}
+
+}  // namespace
+}  // namespace regbench
