@@ -4,6 +4,8 @@
 
 #include <torch/torch.h>
 
+#include <Eigen/SVD>
+
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -66,11 +68,22 @@ torch::Tensor ToTensor(const PointCloud& cloud) {
     return t.to(torch::kFloat);
 }
 
+/// The network's [4, 4] estimate as a double transform. The networks compute in float32, so
+/// their R is orthonormal only to ~1e-7; it is replaced by the nearest rotation in double
+/// (R = U diag(1, 1, det(U V^T)) V^T from the SVD, a change of the same ~1e-7 order) so the
+/// method returns an exactly rigid transform like every other method.
 Transform ToTransform(const torch::Tensor& T) {
     const torch::Tensor c = T.detach().to(torch::kCPU, torch::kDouble).contiguous();
     Eigen::Matrix<double, 4, 4, Eigen::RowMajor> m;
     std::copy(c.data_ptr<double>(), c.data_ptr<double>() + 16, m.data());
-    return m;
+    Transform out = m;
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(out.topLeftCorner<3, 3>(),
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+    out.topLeftCorner<3, 3>() = svd.matrixU() * D * svd.matrixV().transpose();
+    out.row(3) << 0.0, 0.0, 0.0, 1.0;
+    return out;
 }
 
 class LearnedMethod final : public RegistrationMethod {
