@@ -4,6 +4,7 @@
 
 #include <torch/torch.h>
 
+#include <Eigen/LU>
 #include <Eigen/SVD>
 
 #include <chrono>
