@@ -173,8 +173,11 @@ TEST_F(Reliability, ResumeKeepsValidRowsAndGivesTheUninterruptedResult) {
     for (std::size_t i = 0; i < full.size(); ++i) {
         auto a = nlohmann::json::parse(full[i]);
         auto b = nlohmann::json::parse(resumed[i]);
-        a.erase("seconds");
-        b.erase("seconds");
+        // Timing and machine-load fields differ between any two runs.
+        for (const char* key : {"seconds", "cpu_seconds", "machine"}) {
+            a.erase(key);
+            b.erase(key);
+        }
         EXPECT_EQ(a, b) << i;
     }
 }
@@ -243,8 +246,11 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     for (std::size_t i = 0; i < single.size(); ++i) {
         auto a = nlohmann::json::parse(single[i]);
         auto b = nlohmann::json::parse(merged[i]);
-        a.erase("seconds");
-        b.erase("seconds");
+        // Timing and machine-load fields differ between any two runs.
+        for (const char* key : {"seconds", "cpu_seconds", "machine"}) {
+            a.erase(key);
+            b.erase(key);
+        }
         EXPECT_EQ(a, b) << i;
     }
     fs::remove(m.out_path);
