@@ -36,9 +36,14 @@ concurrent)
   "$bin" run --pairs pairs.h5 --methods cpd --params "$slow" --out r.jsonl -q 2>first.err &
   first=$!
   wait_for_rows r.jsonl.part 1
+  # Freeze the first run while the second tries, so a fast machine cannot let the first
+  # finish (and release its lock) before the second starts.
+  kill -STOP "$first" 2>/dev/null || fail "first run ended before the check could start"
   if "$bin" run --pairs pairs.h5 --methods identity --out r.jsonl -q 2>second.err; then
-    fail "second writer was not refused"
+    kill -CONT "$first"
+    fail "second writer was not refused: $(cat second.err)"
   fi
+  kill -CONT "$first"
   grep -q "pid $first" second.err || fail "refusal does not name pid $first: $(cat second.err)"
   wait "$first" || fail "first run failed: $(cat first.err)"
   [ "$(wc -l <r.jsonl)" -eq 8 ] || fail "first run's result has $(wc -l <r.jsonl) rows, not 8"
