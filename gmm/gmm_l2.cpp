@@ -233,6 +233,35 @@ MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell) {
     return {c.centroids, c.weights};
 }
 
+L2SumsPlan PlanL2Sums(const MixtureFeatures& source,
+                      const MixtureFeatures& target,
+                      double sigma,
+                      const L2SumOptions& sums) {
+    L2SumsPlan plan{source, target};
+    const double pairs =
+        static_cast<double>(source.means.rows()) * static_cast<double>(target.means.rows());
+    if (!sums.approximate || pairs < sums.min_pairs) return plan;
+    if (sums.compress_cell_sigmas > 0.0) {
+        // The source is compressed in its own frame: it moves rigidly, cells stay cells.
+        const double cell = sums.compress_cell_sigmas * sigma;
+        MixtureFeatures s = CompressMixture(source, cell);
+        if (2 * s.means.rows() <= source.means.rows()) {
+            plan.source = std::move(s);
+            plan.compressed_source = true;
+        }
+        MixtureFeatures t = CompressMixture(target, cell);
+        if (2 * t.means.rows() <= target.means.rows()) {
+            plan.target = std::move(t);
+            plan.compressed_target = true;
+        }
+    }
+    const double radius = sigma * CutoffRadiusSigmas(sums.cutoff_tolerance);
+    const Eigen::Vector3d extent = target.means.colwise().maxCoeff().transpose() -
+                                   target.means.colwise().minCoeff().transpose();
+    if (radius < 0.25 * extent.norm()) plan.cutoff_radius = radius;
+    return plan;
+}
+
 BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            const MixtureFeatures& target,
                            double sigma,
@@ -241,24 +270,9 @@ BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            const BfgsOptions& options,
                            const L2SumOptions& sums,
                            bool* approximated) {
-    const double pairs =
-        static_cast<double>(source.means.rows()) * static_cast<double>(target.means.rows());
-    const bool approximate = sums.approximate && pairs >= sums.min_pairs;
-    if (approximated != nullptr) *approximated = approximate;
-    if (approximate) {
-        // Compress (the source in its own frame: it moves rigidly, cells stay cells), then
-        // cut off what the stated tolerance allows.
-        const bool compress = sums.compress_cell_sigmas > 0.0;
-        const double cell = sums.compress_cell_sigmas * sigma;
-        const MixtureFeatures s = compress ? CompressMixture(source, cell) : source;
-        const MixtureFeatures t = compress ? CompressMixture(target, cell) : target;
-        const RigidGmmL2Cost cost(s, t, sigma, gradient,
-                                  sigma * CutoffRadiusSigmas(sums.cutoff_tolerance));
-        return MinimizeBfgs([&cost](const Eigen::VectorXd& theta,
-                                    Eigen::VectorXd& grad) { return cost(theta, grad); },
-                            theta0, options);
-    }
-    const RigidGmmL2Cost cost(source, target, sigma, gradient);
+    const L2SumsPlan plan = PlanL2Sums(source, target, sigma, sums);
+    if (approximated != nullptr) *approximated = plan.approximated();
+    const RigidGmmL2Cost cost(plan.source, plan.target, sigma, gradient, plan.cutoff_radius);
     return MinimizeBfgs(
         [&cost](const Eigen::VectorXd& theta, Eigen::VectorXd& grad) { return cost(theta, grad); },
         theta0, options);

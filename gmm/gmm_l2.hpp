@@ -5,6 +5,7 @@
 // Notation (probabilistic-baselines.md Sec. 2): theta = (q_w, q_x, q_y, q_z, t), q unnormalised.
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <functional>
@@ -118,9 +119,35 @@ struct L2Frame {
     Transform ToInput(const Transform& T_frame) const;
 };
 
+/// What the approximated L2 sums do for one (mixtures, sigma): each part only where it pays.
+struct L2SumsPlan {
+    MixtureFeatures source;         ///< compressed, or the input mixture
+    MixtureFeatures target;         ///< compressed, or the input mixture
+    bool compressed_source = false;
+    bool compressed_target = false;
+    double cutoff_radius = std::numeric_limits<double>::infinity();  ///< infinity = dense
+
+    bool approximated() const {
+        return compressed_source || compressed_target || std::isfinite(cutoff_radius);
+    }
+};
+
+/// Decides the approximation for K_s K_t >= sums.min_pairs (otherwise: the inputs, dense):
+///  - a mixture is cell-compressed only when that at least halves its components (a cloud
+///    whose extent is large against sigma barely merges, and its compressed sums would cost
+///    as much as the dense ones while adding error);
+///  - the kd-tree cutoff is used only when its radius is below a quarter of the target's
+///    bounding-box diagonal (otherwise nearly every pair is inside it and the radius search
+///    costs more per pair than the dense SIMD row).
+/// Either part alone keeps its stated accuracy bound; with neither the sums are exact.
+L2SumsPlan PlanL2Sums(const MixtureFeatures& source,
+                      const MixtureFeatures& target,
+                      double sigma,
+                      const L2SumOptions& sums);
+
 /// One BFGS run of RigidGmmL2Cost from theta0 (probreg's minimize(..., method='BFGS')).
-/// With `sums` approximating (K_s K_t >= sums.min_pairs), the mixtures are compressed and the
-/// cost uses the cutoff; `approximated` (optional) reports whether that happened.
+/// With `sums` approximating (K_s K_t >= sums.min_pairs), PlanL2Sums decides compression and
+/// cutoff; `approximated` (optional) reports whether either was used.
 BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
                            const MixtureFeatures& target,
                            double sigma,

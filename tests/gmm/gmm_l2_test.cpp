@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <set>
 
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
@@ -155,7 +157,9 @@ TEST(MinimizeRigidL2, ApproximatedSumsLandNearDenseOptimum) {
     dense_sums.approximate = false;
     approx_sums.min_pairs = 0;
     bool approximated = false;
-    const double sigma = 0.3;
+    // sigma 0.1: the 4.29-sigma cutoff (0.43) is below a quarter of the blob's bounding-box
+    // diagonal (~0.65), so PlanL2Sums uses it.
+    const double sigma = 0.1;
     const BfgsResult a = MinimizeRigidL2(s, t, sigma, L2Gradient::kExact,
                                          RigidGmmL2Cost::InitialTheta(), bfgs, dense_sums);
     const BfgsResult b =
@@ -166,6 +170,62 @@ TEST(MinimizeRigidL2, ApproximatedSumsLandNearDenseOptimum) {
     const Eigen::Matrix3d Rb = TransformFromTheta(b.x).topLeftCorner<3, 3>();
     EXPECT_LT(RotationAngleDeg(Ra, Rb), 0.5);
     EXPECT_LT(RotationAngleDeg(Ra, R), 0.5);
+}
+
+// PlanL2Sums' rules, with the expected decisions computed here independently: occupied cells
+// counted with a std::set of floor(x / cell) triples, the bounding box from the coordinates.
+std::size_t OccupiedCells(const PointCloud& p, double cell) {
+    std::set<std::array<long, 3>> cells;
+    for (Eigen::Index i = 0; i < p.rows(); ++i) {
+        cells.insert({static_cast<long>(std::floor(p(i, 0) / cell)),
+                      static_cast<long>(std::floor(p(i, 1) / cell)),
+                      static_cast<long>(std::floor(p(i, 2) / cell))});
+    }
+    return cells.size();
+}
+
+double BoxDiagonal(const PointCloud& p) {
+    return (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm();
+}
+
+TEST(PlanL2Sums, CompressesOnlyWhenItHalvesTheComponentsAndCutsOffOnlyBelowAQuarterDiagonal) {
+    auto rng = MakePairRng(11, 0);
+    const int n = 4000;
+    MixtureFeatures s{SmoothBlobSurface(rng, n), Eigen::VectorXd::Constant(n, 1.0 / n)};
+    const MixtureFeatures t = s;
+    const double diagonal = BoxDiagonal(t.means);
+    const double radius_sigmas = CutoffRadiusSigmas(1e-4);
+    L2SumOptions sums;
+    sums.min_pairs = 0;
+    struct Case {
+        double sigma;
+        double cell_sigmas;
+    };
+    // Coarse cells at a large sigma, fine cells at a small sigma, and one sigma whose cutoff
+    // radius covers the whole cloud.
+    for (const Case c : {Case{0.3, 0.5}, Case{0.02, 0.1}, Case{1.0, 0.25}, Case{0.1, 0.25}}) {
+        sums.compress_cell_sigmas = c.cell_sigmas;
+        const L2SumsPlan plan = PlanL2Sums(s, t, c.sigma, sums);
+        const std::size_t cells = OccupiedCells(s.means, c.cell_sigmas * c.sigma);
+        const bool expect_compress = 2 * cells <= static_cast<std::size_t>(n);
+        const bool expect_cutoff = c.sigma * radius_sigmas < 0.25 * diagonal;
+        SCOPED_TRACE(testing::Message() << "sigma " << c.sigma << ", cells " << cells);
+        EXPECT_EQ(plan.compressed_source, expect_compress);
+        EXPECT_EQ(plan.compressed_target, expect_compress);
+        EXPECT_EQ(plan.source.means.rows(), expect_compress ? static_cast<Eigen::Index>(cells) : n);
+        EXPECT_EQ(std::isfinite(plan.cutoff_radius), expect_cutoff);
+        EXPECT_EQ(plan.approximated(), expect_compress || expect_cutoff);
+    }
+    // The cases above must cover both outcomes of both rules, or the test proves little.
+    sums.compress_cell_sigmas = 0.5;
+    EXPECT_TRUE(PlanL2Sums(s, t, 0.3, sums).compressed_source);
+    sums.compress_cell_sigmas = 0.1;
+    EXPECT_FALSE(PlanL2Sums(s, t, 0.02, sums).compressed_source);
+    EXPECT_TRUE(std::isfinite(PlanL2Sums(s, t, 0.02, sums).cutoff_radius));
+    EXPECT_FALSE(std::isfinite(PlanL2Sums(s, t, 1.0, sums).cutoff_radius));
+    // Below min_pairs nothing is approximated.
+    sums.min_pairs = 1e12;
+    EXPECT_FALSE(PlanL2Sums(s, t, 0.02, sums).approximated());
 }
 
 }  // namespace
