@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""Independent PyTorch implementation of regbench's OGMM blocks, for parity fixtures.
+"""Independent PyTorch implementation of regbench's OGMM and DeepGMR, for parity fixtures.
 
-Builds DGCNN, the SuperGlue-style attention and the whole OGMM forward/loss in PyTorch with the
-same module names as ogmm/layers.cpp and ogmm/ogmm_net.cpp, sets every parameter and buffer
-from a deterministic formula (no RNG), runs them on deterministic inputs and prints the
-outputs as JSON. tests/ogmm/ogmm_net_test.cpp and tests/ogmm/layers_test.cpp pin the C++
-outputs to these numbers.
+Builds DGCNN, the SuperGlue-style attention, the whole OGMM forward/loss and DeepGMR (the OGMM
+paper's variant on DGCNN features, and the original PointNet on centred xyz or RRI features)
+in PyTorch with the same module names as ogmm/layers.cpp, ogmm/ogmm_net.cpp and
+ogmm/deepgmr.cpp, sets every parameter and buffer from a deterministic formula (no RNG), runs
+them on deterministic inputs and prints the outputs as JSON. tests/ogmm/ogmm_net_test.cpp,
+tests/ogmm/layers_test.cpp and tests/ogmm/deepgmr_test.cpp pin the C++ outputs to these
+numbers. The DeepGMR part is written from the model's description (docs/learned-methods.md,
+"DeepGMR"), not from ogmm/deepgmr.cpp.
 
 Not a dependency of the product: run it by hand with Debian's python3-torch when a fixture
 changes:  /usr/bin/python3 scripts/ogmm_reference.py
@@ -316,6 +319,156 @@ class Ogmm(nn.Module):
         return terms
 
 
+
+# --------------------------------------------------------------------------------- DeepGMR
+
+
+def cbr(i, o):
+    """1x1 Conv1d without bias, BatchNorm1d, ReLU (children "0", "1" as the original)."""
+    return nn.Sequential(nn.Conv1d(i, o, 1, bias=False), nn.BatchNorm1d(o), nn.ReLU())
+
+
+def rri_features(xyz, k):
+    """RRI of each cloud of xyz [B, N, 3] (GPU-kernel orientation) -> [B, 4k, N], float64 math.
+
+    Centred cloud; per point p and its k nearest neighbours q_j (self excluded): r_p, r_q,
+    theta = acos(clip(p_hat . q / r_q)), T_j = q_j - cos(theta_j) p,
+    phi_j = min_{m != j} atan2((T_j x T_m) . p_hat, T_j . T_m) (+2 pi when negative)."""
+    out = []
+    for cloud in xyz.double():
+        c = cloud - cloud.mean(0)
+        n = c.shape[0]
+        nbr = torch.cdist(c, c).topk(k + 1, largest=False)[1][:, 1:]
+        feats = torch.empty(n, 4 * k, dtype=torch.float64)
+        for a in range(n):
+            p = c[a]
+            rp = p.norm()
+            ph = p / rp
+            q = c[nbr[a]]
+            rq = q.norm(dim=1)
+            d = ((q @ ph) / rq).clamp(-1, 1)
+            tang = q - d.unsqueeze(1) * p
+            cross = torch.cross(tang.unsqueeze(1).expand(k, k, 3), tang.unsqueeze(0).expand(k, k, 3), dim=2)
+            psi = torch.atan2(cross @ ph, tang @ tang.T)
+            psi = torch.where(psi < 0, psi + 2 * math.pi, psi)
+            psi.fill_diagonal_(float("inf"))
+            feats[a] = torch.stack([rp.expand(k), rq, torch.acos(d), psi.min(1)[0]], 1).reshape(-1)
+        out.append(feats.T)
+    return torch.stack(out).to(xyz.dtype)
+
+
+class DeepGmr(nn.Module):
+    """features "dgcnn": Dgcnn(d, k) -> Conv3(d, J, hidden) ("dgcnn", "head"); "xyz"/"rri": the
+    original PointNet segmentation net under "backbone.encoder" / "backbone.decoder"."""
+
+    def __init__(self, cfg):
+        super().__init__()
+        self.cfg = cfg
+        j = cfg["clusters"]
+        if cfg["features"] == "dgcnn":
+            self.dgcnn = Dgcnn(cfg["emb_dims"], cfg["dgcnn_k"])
+            self.head = Conv3(cfg["emb_dims"], j, cfg["head_hidden"])
+        else:
+            d_in = 4 * cfg["rri_k"] if cfg["features"] == "rri" else 3
+            self.backbone = nn.Module()
+            self.backbone.encoder = nn.Sequential(cbr(d_in, 64), cbr(64, 128), cbr(128, 256),
+                                                  cbr(256, 1024))
+            self.backbone.decoder = nn.Sequential(cbr(2048, 512), cbr(512, 256), cbr(256, 128),
+                                                  nn.Conv1d(128, j, 1))
+
+    def gamma(self, xyz):
+        f = self.cfg["features"]
+        if f == "dgcnn":
+            logits = self.head(self.dgcnn(xyz.transpose(1, 2).contiguous()))
+        else:
+            x = rri_features(xyz, self.cfg["rri_k"]) if f == "rri" else \
+                (xyz - xyz.mean(1, keepdim=True)).transpose(1, 2)
+            local = self.backbone.encoder(x)
+            glob = local.max(2, keepdim=True)[0].expand_as(local)
+            logits = self.backbone.decoder(torch.cat([local, glob], 1))
+        return F.softmax(logits, dim=1).transpose(1, 2)  # [B, N, J]
+
+    @staticmethod
+    def mixture(gamma, xyz):
+        mass = gamma.sum(1)  # [B, J]
+        mu = torch.einsum("bnj,bnc->bjc", gamma, xyz) / mass.unsqueeze(2)
+        sq = ((xyz.unsqueeze(2) - mu.unsqueeze(1)) ** 2).sum(3)  # [B, N, J]
+        return mass / xyz.shape[1], mu, (gamma * sq).sum(1) / mass
+
+    @staticmethod
+    def register(pi_s, mu_s, mu_t, s_t):
+        """Centroids weighted by pi_s, covariance weighted by pi_s / s_t, SVD with det guard."""
+        c_s = torch.einsum("bj,bjc->bc", pi_s, mu_s)
+        c_t = torch.einsum("bj,bjc->bc", pi_s, mu_t)
+        w = pi_s / s_t
+        M = torch.einsum("bj,bjr,bjc->brc", w, mu_s - c_s.unsqueeze(1), mu_t - c_t.unsqueeze(1))
+        U, _, Vh = torch.linalg.svd(M)
+        V = Vh.transpose(1, 2)
+        D = torch.diag_embed(torch.stack([torch.ones(M.shape[0]), torch.ones(M.shape[0]),
+                                          torch.det(V @ U.transpose(1, 2))], 1))
+        R = V @ D @ U.transpose(1, 2)
+        t = c_t - torch.einsum("brc,bc->br", R, c_s)
+        T = torch.eye(4).repeat(M.shape[0], 1, 1)
+        T[:, :3, :3], T[:, :3, 3] = R, t
+        return T
+
+    def forward(self, src, tgt):
+        gs, gt = self.gamma(src), self.gamma(tgt)  # two calls: BN sees each cloud alone
+        pi_s, mu_s, s_s = self.mixture(gs, src)
+        pi_t, mu_t, s_t = self.mixture(gt, tgt)
+        return self.register(pi_s, mu_s, mu_t, s_t), self.register(pi_t, mu_t, mu_s, s_s), gs, pi_t
+
+    def loss(self, T, T21, T_gt):
+        if self.cfg["loss"] == "transform":
+            eye = torch.eye(4).expand_as(T)
+            a = ((T @ torch.inverse(T_gt) - eye) ** 2).mean()
+            b = ((T21 @ T_gt - eye) ** 2).mean()
+            return {"T12": a, "T21": b, "total": a + b}
+        R, t = T[:, :3, :3], T[:, :3, 3]
+        rot = ((R.transpose(1, 2) @ T_gt[:, :3, :3] - torch.eye(3)) ** 2).mean()
+        tra = ((t - T_gt[:, :3, 3]) ** 2).mean()
+        return {"rotation": rot, "translation": tra, "total": rot + tra}
+
+
+def formula_motion(batch):
+    """T_gt of pair b: rotation 0.3 + 0.2 b rad about the axis (1, 2, 2)/3, t = (0.1, -0.2, 0.05 b)."""
+    out = torch.eye(4).repeat(batch, 1, 1)
+    for b in range(batch):
+        axis = torch.tensor([1.0, 2.0, 2.0], dtype=torch.float64) / 3
+        a = 0.3 + 0.2 * b
+        K = torch.tensor([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]],
+                         dtype=torch.float64)
+        R = torch.eye(3, dtype=torch.float64) + math.sin(a) * K + (1 - math.cos(a)) * K @ K
+        out[b, :3, :3] = R.float()
+        out[b, :3, 3] = torch.tensor([0.1, -0.2, 0.05 * b])
+    return out
+
+
+def deepgmr_run(cfg, n, m, train, dtype):
+    torch.set_default_dtype(dtype)
+    try:
+        net = DeepGmr(cfg)
+        formula_fill(net)
+        net.train(train)
+        src, tgt = formula_cloud(2, n, 0.0).to(dtype), formula_cloud(2, m, 1.0).to(dtype)
+        with torch.no_grad():
+            T, T21, gs, pi_t = net(src, tgt)
+            return T, T21, gs, pi_t, net.loss(T, T21, formula_motion(2).to(dtype))
+    finally:
+        torch.set_default_dtype(torch.float32)
+
+
+def deepgmr_case(cfg, n, m, train):
+    """float32 outputs, plus how far float32 rounding moves T (max |T32 - T64| over T, T21):
+    the scale for the C++ test's tolerance."""
+    T, T21, gs, pi_t, terms = deepgmr_run(cfg, n, m, train, torch.float32)
+    T64, T21_64 = deepgmr_run(cfg, n, m, train, torch.float64)[:2]
+    gap = max((T.double() - T64).abs().max(), (T21.double() - T21_64).abs().max())
+    return {"T": as_list(T), "T21": as_list(T21), "gamma_source_sq_sum": float((gs * gs).sum()),
+            "pi_target_sq_sum": float((pi_t * pi_t).sum()),
+            "loss": {k: float(v) for k, v in terms.items()}, "float64_gap_T": float(gap)}
+
+
 # ----------------------------------------------------------------------------- fixtures
 
 
@@ -424,6 +577,18 @@ def main():
     out["ogmm_train_unequal"] = ogmm_case(small_config(), 60, 52, True)
     out["ogmm_full_fixed_nospe"] = ogmm_case(
         small_config(attention="full", fix_overlap_index=True, spe=False), 48, 48, False)
+    # DeepGMR, batch 2, N != M: the paper's variant (small widths) in train and eval mode, the
+    # original on centred xyz and on RRI (k 6), train mode. Train mode (BatchNorm on batch
+    # statistics) gives peaked assignments and well-separated mixture means; with the formula's
+    # running statistics eval mode gives nearly uniform gamma (kept for the eval path).
+    dg_cfg = dict(features="dgcnn", clusters=8, emb_dims=32, dgcnn_k=10, head_hidden=16,
+                  rri_k=20, loss="pose")
+    out["deepgmr_dgcnn_train"] = deepgmr_case(dg_cfg, 48, 40, True)
+    out["deepgmr_dgcnn_eval"] = deepgmr_case(dg_cfg, 48, 40, False)
+    out["deepgmr_xyz_train"] = deepgmr_case(dict(dg_cfg, features="xyz", clusters=16,
+                                                 loss="transform"), 40, 36, True)
+    out["deepgmr_rri_train"] = deepgmr_case(dict(dg_cfg, features="rri", clusters=16, rri_k=6,
+                                                 loss="transform"), 40, 36, True)
     print(json.dumps(out, indent=1))
 
 
