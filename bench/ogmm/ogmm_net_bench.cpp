@@ -1,15 +1,40 @@
-// BM_OgmmForward: one batch-1 OGMM forward (no gradient, eval mode) per iteration, for the named
-// configs and the full-attention variant (paper Tab. 6 "c" vs "f"). Network only: no ICP (the
-// `ogmm` method's time, ICP included, is BM_Align/ogmm). Counters: parameters and the analytic
-// multiply-accumulate count (docs/learned-methods.md) of the configuration.
+// BM_OgmmForward / BM_DeepGmrForward: one batch-1 forward (no gradient, eval mode) per
+// iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
+// Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
+// Counters: parameters and the analytic multiply-accumulate count of one forward on the pair
+// (ogmm/cost.hpp, formulas in docs/learned-methods.md).
 #include <benchmark/benchmark.h>
 
 #include <string>
 
+#include "ogmm/cost.hpp"
 #include "ogmm/ogmm_net.hpp"
+#include "ogmm/zoo.hpp"
 
 namespace regbench::bench {
 namespace {
+
+/// Times net->Forward on a uniform random pair of state.range(0) points in [-0.5, 0.5]^3.
+void TimeForward(benchmark::State& state,
+                 ogmm::RegistrationNet& net,
+                 const nlohmann::json& config) {
+    net.eval();
+    const int64_t points = state.range(0);
+    torch::manual_seed(0);
+    ogmm::PairBatch pair;
+    pair.source = torch::rand({1, points, 3}) - 0.5;
+    pair.target = torch::rand({1, points, 3}) - 0.5;
+    torch::NoGradGuard no_grad;
+    net.Forward(pair);  // warm-up, untimed
+    for (auto _ : state) {
+        torch::manual_seed(1);  // same FPS starts every iteration
+        const ogmm::NetOutput out = net.Forward(pair);
+        benchmark::DoNotOptimize(out.T.data_ptr());
+    }
+    state.counters["parameters"] = static_cast<double>(ogmm::CountParameters(net));
+    state.counters["MACs"] =
+        static_cast<double>(ogmm::ComputeForwardCost(config, points, points).total);
+}
 
 void BM_OgmmForward(benchmark::State& state,
                     const std::string& name,
@@ -17,21 +42,13 @@ void BM_OgmmForward(benchmark::State& state,
     torch::set_num_threads(static_cast<int>(state.range(1)));
     nlohmann::json config = ogmm::OgmmNamedConfig(name);
     config["attention"] = attention;
-    const auto net = ogmm::MakeOgmmNet(config);
-    net->eval();
-    const int64_t points = state.range(0);
-    torch::manual_seed(0);
-    ogmm::PairBatch pair;
-    pair.source = torch::rand({1, points, 3}) - 0.5;
-    pair.target = torch::rand({1, points, 3}) - 0.5;
-    torch::NoGradGuard no_grad;
-    net->Forward(pair);  // warm-up, untimed
-    for (auto _ : state) {
-        torch::manual_seed(1);  // same FPS starts every iteration
-        const ogmm::NetOutput out = net->Forward(pair);
-        benchmark::DoNotOptimize(out.T.data_ptr());
-    }
-    state.counters["parameters"] = static_cast<double>(ogmm::CountParameters(*net));
+    TimeForward(state, *ogmm::MakeOgmmNet(config), config);
+}
+
+void BM_DeepGmrForward(benchmark::State& state, const std::string& name) {
+    torch::set_num_threads(static_cast<int>(state.range(1)));
+    const nlohmann::json config = ogmm::NamedConfig(name);
+    TimeForward(state, *ogmm::MakeNetFromConfig(config), config);
 }
 
 BENCHMARK_CAPTURE(BM_OgmmForward, ogmm, "ogmm", "clustered")
@@ -47,6 +64,18 @@ BENCHMARK_CAPTURE(BM_OgmmForward, ogmm_small, "ogmm-small", "clustered")
     ->ArgNames({"points", "threads"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_OgmmForward, ogmm_tiny, "ogmm-tiny", "clustered")
+    ->Args({717, 1})
+    ->ArgNames({"points", "threads"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DeepGmrForward, deepgmr, "deepgmr")
+    ->Args({717, 1})
+    ->ArgNames({"points", "threads"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DeepGmrForward, deepgmr_small, "deepgmr-small")
+    ->Args({717, 1})
+    ->ArgNames({"points", "threads"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DeepGmrForward, deepgmr_orig, "deepgmr-orig")
     ->Args({717, 1})
     ->ArgNames({"points", "threads"})
     ->Unit(benchmark::kMillisecond);
