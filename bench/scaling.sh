@@ -20,8 +20,9 @@ for n in $sizes; do
       --points "$n" --max-rotation-deg 30 --seed 1 --out "$pairs" --data-dir "$root/data" >/dev/null
   tag="$(echo "$methods$params" | md5sum | cut -c1-8)"
   rows="$out/rows_${n}_$tag.jsonl"
-  "$exe" run -q --threads 1 --jobs 1 --timeout "$timeout" --pairs "$pairs" --methods "$methods" \
-      --params "$params" --out "$rows"
+  # --max-points 0: the series measures the methods at full size (no scale guard).
+  "$exe" run -q --threads 1 --jobs 1 --timeout "$timeout" --max-points 0 --pairs "$pairs" \
+      --methods "$methods" --params "$params" --out "$rows"
   /usr/bin/python3 - "$rows" "$n" <<'PY'
 import json, sys
 for line in open(sys.argv[1]):
