@@ -102,10 +102,14 @@ double ThreadCpuSeconds() {
 
 // The issue's acceptance test "a 2-minute training in CI lowers validation MAE(R) well below the
 // identity floor": a fixed number of steps (not a wall-clock budget, so the result does not
-// depend on the machine's load) of a small DeepGMR (the paper's variant: DGCNN -> CONV3) on the
-// synthetic partial pairs of synthetic_pairs.hpp (bumpy ellipsoids, 70% crops, motions of up to
-// kMaxDeg per Euler axis and 0.5 per axis), one thread, seeded. Identity floor = the identity's
-// mean MAE(R) on the same validation pairs. Labelled "train" in CTest (tests/CMakeLists.txt).
+// depend on the machine's load) of a small DeepGMR (the paper's variant, DGCNN -> CONV3, at
+// d = 64, J = 16, k = 10) on the synthetic partial pairs of synthetic_pairs.hpp (bumpy
+// ellipsoids of 256 points, 70% crops, motions of up to 45 degrees per Euler axis and 0.5 per
+// axis), one thread, seeded. Identity floor = the identity's mean MAE(R) on the same validation
+// pairs. Measured on the development VM (docs/learned-methods.md, "CI training test"): ratios
+// 0.533 / 0.465 / 0.508 for seeds 1 / 2 / 3, about 44 s of thread CPU each, hence the bound 0.7.
+// The REGBENCH_TRAIN_CI_* variables re-measure other seeds or settings without a rebuild.
+// Runs as CTest ogmm_train_ci, label "train" (tests/CMakeLists.txt).
 TEST(TrainCi, ShortTrainingLowersValidationMaeRWellBelowTheIdentity) {
     torch::set_num_threads(1);
     const auto seed = static_cast<std::uint64_t>(Knob("REGBENCH_TRAIN_CI_SEED", 1));
