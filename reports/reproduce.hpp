@@ -15,10 +15,12 @@ struct ReproduceOptions {
     std::string sevenscenes;          ///< 7Scenes root; empty: simulated indoor scans
     std::string icl_nuim;             ///< ICL-NUIM root; empty: simulated indoor scans
     std::string out_dir = "out/reproduce";
-    std::string data_dir;              ///< where the embedded corpus lives (default: ./data)
-    int jobs = 1;                      ///< pairs in parallel
-    double timeout_seconds = 120.0;    ///< per call, in a child process (0: in-process)
-    std::size_t pairs = 0;             ///< pairs per experiment; 0: 16 with --quick, else 1000
+    std::string data_dir;            ///< where the embedded corpus lives (default: ./data)
+    int jobs = 1;                    ///< pairs in parallel
+    double timeout_seconds = 120.0;  ///< per call, in a child process (0: in-process)
+    /// Pairs per experiment; 0: 10 with --quick, else 1000 on the fallbacks and one per item
+    /// of the test split on real data.
+    std::size_t pairs = 0;
     std::uint64_t seed = 1;            ///< benchmark seed of every pair file
     std::vector<std::string> methods;  ///< empty: every registered method that can be created
     bool progress = true;              ///< progress lines on stderr
