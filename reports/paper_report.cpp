@@ -52,7 +52,8 @@ std::string DescribeSet(const ResultSet& s) {
 }
 
 /// The ground-truth CCD floor of every set's pairs under the table (the CCD the true transform
-/// itself scores: no method can go below it), or why there is none.
+/// itself scores: what a perfect registration gets; a method can only go below it by fitting
+/// the noise), or why there is none.
 void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
     bool any = false;
     for (const auto& s : sets) {
@@ -60,7 +61,7 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
         any = true;
         t->notes.push_back(
             fmt::format("Ground-truth CCD floor{}: {:.4f} (CCD of the true "
-                        "transform on these pairs; no method can go below it)",
+                        "transform on these pairs: what a perfect registration scores)",
                         s.group.empty() ? "" : " (" + s.group + ")", s.provenance.gt_ccd_floor));
     }
     if (!any) {

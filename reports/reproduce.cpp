@@ -94,8 +94,11 @@ std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
                    o.seed + 1, false});
     // Real ICL-NUIM: its test file's stored pairs, as DeepGMR's and the authors' evaluation.
     if (!o.icl_nuim.empty()) all.back().pairing = "stored";
+    // Sweep: half the pairs per level (500 of 1000); --quick 2 per level.
+    const std::size_t n_sweep =
+        o.quick && o.pairs == 0 ? 2 * kSweepGroups.size() : n * kSweepGroups.size() / 2;
     Experiment sweep = obj("supp_overlap", "supp_overlap_ratio", "", "overlap-sweep",
-                           "same_category/test", n * kSweepGroups.size() / 2);
+                           "same_category/test", n_sweep);
     sweep.sweep = true;
     all.push_back(sweep);
     all.push_back(obj("supp_c2c", "supp_complete", "c2c", "complete", "same_category/test", n));
@@ -144,7 +147,17 @@ std::vector<MethodSpec> ChooseMethods(const ReproduceOptions& o,
                                       std::ostream& log) {
     std::vector<std::string> names = o.methods;
     if (names.empty()) {
-        for (const auto& m : AllMethods()) names.push_back(m.name);
+        for (const auto& m : AllMethods()) {
+            // --quick leaves out the learned methods' "-noicp" variants: no paper row, and the
+            // network calls dominate a quick run's time (docs/reports.md).
+            const bool noicp = m.name.size() > 6 && m.name.substr(m.name.size() - 6) == "-noicp";
+            if (o.quick && noicp) {
+                log << "reproduce: --quick leaves out " << m.name
+                    << " (no paper row; the full run includes it)\n";
+                continue;
+            }
+            names.push_back(m.name);
+        }
     }
     std::vector<MethodSpec> specs;
     for (const auto& name : names) {

@@ -9,7 +9,9 @@
 namespace regbench {
 
 struct ReproduceOptions {
-    bool quick = false;               ///< few pairs per table (a smoke run of every table)
+    /// A smoke run of every table: 10 pairs per experiment (5 per indoor set, 2 per overlap
+    /// level) and the learned methods without their "-noicp" variants.
+    bool quick = false;
     std::vector<std::string> tables;  ///< table ids or prefixes ("table1", "supp"); empty: all
     std::string modelnet40;           ///< ModelNet40 root (OFF tree or HDF5); empty: fallback
     std::string sevenscenes;          ///< 7Scenes root; empty: simulated indoor scans
