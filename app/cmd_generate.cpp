@@ -24,6 +24,7 @@ struct GenerateArgs {
     ProtocolOptions flags;  ///< values of the protocol flags (applied only when given)
     std::string motion = "euler";
     std::string pairing = "independent";
+    std::string pairs;  ///< a whole number, or "all" (one pair per item of the split)
 };
 
 /// Protocol defaults, overridden by every protocol flag the user gave.
@@ -87,9 +88,11 @@ void AddGenerateCommand(CLI::App& app) {
                     "Dataset split (default: test; all for a folder or file of point clouds)");
     cmd->add_option("--data-dir", a->data_dir,
                     "Data directory for named datasets (default: ./data)");
-    cmd->add_option("--pairs", a->request.num_pairs, "Number of pairs")
+    cmd->add_option("--pairs", a->pairs,
+                    "Number of pairs (pair k uses item k mod items), or 'all': one pair per item "
+                    "of the split (per overlap-sweep level)")
         ->required()
-        ->check(WholeNumber());
+        ->check(WholeNumber() | CLI::IsMember({"all"}));
     cmd->add_option("--seed", a->request.seed, "Benchmark seed")
         ->capture_default_str()
         ->check(WholeNumber());
@@ -102,7 +105,9 @@ void AddGenerateCommand(CLI::App& app) {
     cmd->add_option("--motion", a->motion, "Motion convention: euler | axis-angle (euler)");
     cmd->add_option("--max-rotation-deg", a->flags.max_rotation_deg, "Max rotation [deg] (45)");
     cmd->add_option("--max-translation", a->flags.max_translation, "Max translation (0.5)");
-    cmd->add_option("--pairing", a->pairing, "Pairing: independent | shared (independent)");
+    cmd->add_option("--pairing", a->pairing,
+                    "Pairing: independent | shared | stored (the file's own source/target/"
+                    "transform, e.g. ICL-NUIM test) (independent)");
     cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)");
     cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)");
     cmd->add_option("--sweep-keeps", a->flags.sweep_keeps, "overlap-sweep: crop keep ratios")
@@ -110,6 +115,8 @@ void AddGenerateCommand(CLI::App& app) {
     cmd->callback([cmd, a] {
         GenerateRequest request = a->request;
         request.options = BuildOptions(*cmd, *a);
+        request.one_per_item = a->pairs == "all";
+        if (!request.one_per_item) request.num_pairs = std::stoull(a->pairs);  // validated digits
         if (cmd->get_option("--split")->count() == 0) {
             request.split = DefaultSplit(request.dataset);
         }

@@ -15,6 +15,12 @@ std::vector<ShapeSource> LoadShapeSources(const Dataset& dataset) {
         if (record.mesh) {
             shapes.push_back(
                 ShapeSource::FromMesh(std::move(*record.mesh), record.name, record.category));
+        } else if (record.target && record.T_target_points) {
+            // A stored pair (ICL-NUIM / DeepGMR test files): resampled from `points` like any
+            // cloud, or used as stored by the `stored` pairing.
+            shapes.push_back(
+                ShapeSource::FromStoredPair(std::move(record.points), std::move(*record.target),
+                                            *record.T_target_points, record.name, record.category));
         } else {
             shapes.push_back(
                 ShapeSource::FromPoints(std::move(record.points), record.name, record.category));

@@ -9,7 +9,8 @@
 namespace regbench {
 
 /// Every record of `dataset`, in dataset order: mesh records become mesh sources (sampled on
-/// the surface), point records point sources (resampled). Each record is read once.
+/// the surface), point records point sources (resampled), records with a stored target and
+/// transform stored-pair sources (ShapeSource::FromStoredPair). Each record is read once.
 std::vector<ShapeSource> LoadShapeSources(const Dataset& dataset);
 
 /// A ShapeLoader that opens (name_or_path, split) with `options` and loads every record.

@@ -15,7 +15,8 @@ void GenerateToFile(const GenerateRequest& request,
                     const ShapeLoader& load_shapes,
                     const ProgressCallback& progress) {
     ValidateProtocolOptions(request.options);
-    if (request.num_pairs < 1) throw std::invalid_argument("generate: --pairs must be >= 1");
+    if (!request.one_per_item && request.num_pairs < 1)
+        throw std::invalid_argument("generate: --pairs must be >= 1");
     // A pair file is held in memory while it is written; 10 million 1024-point pairs are
     // already ~330 GB, so more is a typo, not a benchmark.
     if (request.num_pairs > kMaxGeneratedPairs) {
@@ -37,7 +38,16 @@ void GenerateToFile(const GenerateRequest& request,
         throw std::runtime_error("dataset '" + request.dataset + "' split '" + request.split +
                                  "' has no shapes");
     }
-    PairSet set = GeneratePairs(shapes, request.options, request.seed, request.num_pairs, progress);
+    // One per item: shape k / levels at level k % levels covers every (item, level) once.
+    const std::size_t num_pairs =
+        request.one_per_item ? shapes.size() * ProtocolLevels(request.options) : request.num_pairs;
+    if (num_pairs > kMaxGeneratedPairs) {
+        throw std::invalid_argument("generate: --pairs all would make " +
+                                    std::to_string(num_pairs) + " pairs, more than the supported " +
+                                    std::to_string(kMaxGeneratedPairs));
+    }
+    PairSet set = GeneratePairs(shapes, request.options, request.seed, num_pairs, progress);
+    set.provenance["pair_selection"] = request.one_per_item ? "one-per-item" : "cycle";
     set.provenance["dataset"] = request.dataset;
     set.provenance["split"] = request.split;
     for (const auto& item : request.extra_provenance.items()) {

@@ -18,10 +18,13 @@ using ShapeLoader =
 struct GenerateRequest {
     std::string dataset = "cgal";  ///< dataset name (the embedded corpus is "cgal")
     std::string split = "test";    ///< dataset split
-    std::size_t num_pairs = 0;     ///< pairs to generate, >= 1
-    std::uint64_t seed = 0;        ///< benchmark seed: pair k uses MakePairRng(seed, k)
-    ProtocolOptions options;       ///< protocol and its parameters
-    std::string out;               ///< output HDF5 path
+    std::size_t num_pairs = 0;     ///< pairs to generate, >= 1 (ignored when one_per_item)
+    /// `--pairs all`: one pair per item of the split (per overlap-sweep level), i.e.
+    /// items * ProtocolLevels pairs, so every item is used exactly once per level.
+    bool one_per_item = false;
+    std::uint64_t seed = 0;   ///< benchmark seed: pair k uses MakePairRng(seed, k)
+    ProtocolOptions options;  ///< protocol and its parameters
+    std::string out;          ///< output HDF5 path
     /// Extra provenance merged in verbatim (e.g. {"regbench_version", "git_sha"}). Must not hold
     /// anything time- or machine-dependent: the same request must give byte-identical files.
     nlohmann::json extra_provenance = nlohmann::json::object();
@@ -30,7 +33,8 @@ struct GenerateRequest {
 /// Checks the request (options, num_pairs >= 1, output directory exists) before any work, then
 /// loads the shapes, generates the pairs and writes `out` atomically. On any failure nothing is
 /// left at `out` (an existing file there is not replaced). Provenance: ProtocolProvenance plus
-/// seed, num_pairs, num_shapes, dataset, split and extra_provenance.
+/// seed, num_pairs, num_shapes, dataset, split, pair_selection ("one-per-item" for
+/// one_per_item, else "cycle": pair k uses item k mod items) and extra_provenance.
 void GenerateToFile(const GenerateRequest& request,
                     const ShapeLoader& load_shapes,
                     const ProgressCallback& progress = nullptr);

@@ -41,6 +41,7 @@ constexpr EnumName<MotionConvention> kMotionNames[] = {
 constexpr EnumName<Pairing> kPairingNames[] = {
     {Pairing::kIndependent, "independent"},
     {Pairing::kShared, "shared"},
+    {Pairing::kStored, "stored"},
 };
 
 template <class Enum, std::size_t N>
@@ -77,10 +78,6 @@ std::pair<double, double> KeepRatios(const ProtocolOptions& o, std::size_t level
         default:
             return {o.keep, o.keep};
     }
-}
-
-std::size_t NumLevels(const ProtocolOptions& o) {
-    return o.protocol == Protocol::kOverlapSweep ? o.sweep_keeps.size() : 1;
 }
 
 double Fraction(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels) {
@@ -173,7 +170,32 @@ Pair SharedPair(const ShapeSource& shape,
     return pair;
 }
 
+/// Stored pairing: the dataset file's own source, target and transform, cut to their first
+/// `points` points as DeepGMR's loader slices [:n_points] (all of a shorter cloud). Nothing is
+/// drawn: the pair is the file's, whatever the seed.
+Pair StoredPair(const ShapeSource& shape, const ProtocolOptions& o) {
+    if (!shape.has_stored_pair()) {
+        throw std::invalid_argument(
+            "pairing 'stored' needs pairs stored in the dataset file (source, target and "
+            "transform, e.g. ICL-NUIM's test/icl_nuim.h5); shape '" +
+            shape.name() + "' stores none");
+    }
+    const auto first = [&](const PointCloud& c) -> PointCloud {
+        return c.topRows(std::min<Eigen::Index>(c.rows(), o.points));
+    };
+    Pair pair;
+    pair.source = first(shape.stored_source());
+    pair.target = first(shape.stored_target());
+    pair.T_gt = shape.stored_transform();
+    LabelOverlapByRadius(pair, o.eta);
+    return pair;
+}
+
 }  // namespace
+
+std::size_t ProtocolLevels(const ProtocolOptions& o) {
+    return o.protocol == Protocol::kOverlapSweep ? o.sweep_keeps.size() : 1;
+}
 
 std::string ToString(Protocol p) { return NameOf(kProtocolNames, p); }
 std::string ToString(MotionConvention m) { return NameOf(kMotionNames, m); }
@@ -284,6 +306,9 @@ void ValidateProtocolOptions(const ProtocolOptions& o) {
     if (o.protocol == Protocol::kOverlapSweep) {
         Require(!o.sweep_keeps.empty(), "sweep_keeps", "must list at least one keep ratio");
         for (double k : o.sweep_keeps) check_keep(k, "sweep_keeps");
+        // Stored pairs have no crop to sweep: every level would repeat the same pair.
+        Require(o.pairing != Pairing::kStored, "pairing",
+                "'stored' cannot sweep overlap (the stored pairs are not cropped)");
     }
 }
 
@@ -393,25 +418,41 @@ Pair GeneratePair(const std::vector<ShapeSource>& shapes,
                   std::uint64_t seed,
                   std::uint64_t pair_index) {
     if (shapes.empty()) throw std::invalid_argument("no shapes to generate pairs from");
-    const std::size_t levels = NumLevels(options);
+    const std::size_t levels = ProtocolLevels(options);
     const auto level = static_cast<std::size_t>(pair_index % levels);
     const ShapeSource& shape =
         shapes[static_cast<std::size_t>((pair_index / levels) % shapes.size())];
     const auto [keep_source, keep_target] = KeepRatios(options, level);
-    std::mt19937_64 rng = MakePairRng(seed, pair_index);
-    Pair pair = options.pairing == Pairing::kShared
-                    ? SharedPair(shape, options, keep_source, keep_target, rng)
-                    : IndependentPair(shape, options, keep_source, keep_target, rng);
+    Pair pair;
+    if (options.pairing == Pairing::kStored) {
+        pair = StoredPair(shape, options);
+        pair.meta = {{"stored", true}};
+    } else {
+        std::mt19937_64 rng = MakePairRng(seed, pair_index);
+        pair = options.pairing == Pairing::kShared
+                   ? SharedPair(shape, options, keep_source, keep_target, rng)
+                   : IndependentPair(shape, options, keep_source, keep_target, rng);
+        pair.meta = {{"source_keep", keep_source}, {"target_keep", keep_target}};
+    }
     pair.shape = shape.name();
     pair.category = shape.category();
-    pair.meta = {{"source_keep", keep_source}, {"target_keep", keep_target}};
     return pair;
 }
 
 nlohmann::json ProtocolProvenance(const ProtocolOptions& options) {
-    return {{"protocol", ToString(options.protocol)},
-            {"params", options},
-            {"overlap_labels", options.pairing == Pairing::kShared ? "shared-index" : "radius"}};
+    const bool stored = options.pairing == Pairing::kStored;
+    nlohmann::json j = {
+        {"protocol", ToString(options.protocol)},
+        {"params", options},
+        {"pairing", ToString(options.pairing)},
+        {"noise_sigma", ProtocolAddsNoise(options.protocol) && !stored ? options.noise_sigma : 0.0},
+        {"overlap_labels", options.pairing == Pairing::kShared ? "shared-index" : "radius"}};
+    if (stored) {
+        j["stored_pairs"] =
+            "source, target and transform as stored in the dataset file (first `points` points "
+            "of each cloud); crop, motion and noise parameters not applied";
+    }
+    return j;
 }
 
 PairSet GeneratePairs(const std::vector<ShapeSource>& shapes,

@@ -35,6 +35,10 @@ enum class MotionConvention {
 enum class Pairing {
     kIndependent,  ///< paper: two independent samples; motion on the target; labels by eta
     kShared,       ///< authors' code: crops of one sample; motion on the source; labels by index
+    /// The dataset file's own source, target and transform (ICL-NUIM's test file, as DeepGMR's
+    /// and the OGMM authors' evaluation use it): no resampling, crop, motion or noise; the
+    /// first `points` points of each stored cloud; labels by eta.
+    kStored,
 };
 
 std::string ToString(Protocol p);
@@ -121,13 +125,20 @@ void LabelOverlapByRadius(Pair& pair, double eta);
 // ---- Pairs ----
 
 /// Pair `pair_index` of a benchmark with seed `seed`, drawn from MakePairRng(seed, pair_index)
-/// only. The shape is shapes[(pair_index / L) % shapes.size()] and the overlap-sweep level
-/// pair_index % L (L = number of sweep levels, 1 for other protocols), so pair k never depends
-/// on how many pairs are generated. `options` must be valid (ValidateProtocolOptions).
+/// only (the stored pairing draws nothing; it throws std::invalid_argument naming the shape
+/// when the shape stores no pair). The shape is shapes[(pair_index / L) % shapes.size()] and the
+/// overlap-sweep level pair_index % L (L = number of sweep levels, 1 for other protocols), so pair
+/// k never depends on how many pairs are generated. `options` must be valid
+/// (ValidateProtocolOptions).
 Pair GeneratePair(const std::vector<ShapeSource>& shapes,
                   const ProtocolOptions& options,
                   std::uint64_t seed,
                   std::uint64_t pair_index);
+
+/// Number of pair levels: the overlap-sweep's keep ratios, 1 for every other protocol. Pair k
+/// uses level k % levels and shape (k / levels) % shapes, so levels * shapes pairs use every
+/// shape once per level (`generate --pairs all`).
+std::size_t ProtocolLevels(const ProtocolOptions& options);
 
 /// Called after each generated pair with (done, total).
 using ProgressCallback = std::function<void(std::size_t, std::size_t)>;
@@ -140,7 +151,9 @@ PairSet GeneratePairs(const std::vector<ShapeSource>& shapes,
                       std::size_t num_pairs,
                       const ProgressCallback& progress = nullptr);
 
-/// {"protocol", "params" (every option), "overlap_labels": "radius" | "shared-index"}.
+/// {"protocol", "params" (every option), "pairing", "noise_sigma" (0 when the protocol adds
+/// none), "overlap_labels": "radius" | "shared-index"}; stored pairing adds "stored_pairs"
+/// saying which parameters were not applied.
 nlohmann::json ProtocolProvenance(const ProtocolOptions& options);
 
 }  // namespace regbench

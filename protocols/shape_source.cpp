@@ -1,6 +1,7 @@
 #include "protocols/shape_source.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -48,6 +49,65 @@ ShapeSource ShapeSource::FromPoints(PointCloud points, std::string name, std::st
     s.category_ = std::move(category);
     s.points_ = std::make_shared<const PointCloud>(std::move(points));
     return s;
+}
+
+namespace {
+
+/// Rigid within `tol` (float32 files), then with R replaced by its nearest rotation (SVD), so
+/// the pair file's stricter rigidity check holds.
+Transform CheckedRigid(const Transform& T, const std::string& name) {
+    constexpr double kStoredRigidTolerance = 1e-4;
+    const auto fail = [&](const std::string& why) {
+        throw std::invalid_argument("shape '" + name + "': stored transform " + why);
+    };
+    if (!T.allFinite()) fail("has a non-finite entry");
+    if ((T.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > kStoredRigidTolerance) {
+        fail("has a last row other than 0 0 0 1");
+    }
+    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() >
+        kStoredRigidTolerance) {
+        fail("is not rigid (R^T R differs from I by more than 1e-4)");
+    }
+    if (R.determinant() < 0) fail("is a reflection (det R < 0)");
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Transform out = Transform::Identity();
+    out.topLeftCorner<3, 3>() = svd.matrixU() * svd.matrixV().transpose();
+    out.topRightCorner<3, 1>() = T.topRightCorner<3, 1>();
+    return out;
+}
+
+}  // namespace
+
+ShapeSource ShapeSource::FromStoredPair(PointCloud source,
+                                        PointCloud target,
+                                        const Transform& target_from_source,
+                                        std::string name,
+                                        std::string category) {
+    if (target.rows() == 0) throw std::invalid_argument("shape '" + name + "': empty target");
+    if (!target.allFinite()) {
+        throw std::invalid_argument("shape '" + name + "': non-finite target point");
+    }
+    const Transform T = CheckedRigid(target_from_source, name);
+    ShapeSource s = FromPoints(std::move(source), std::move(name), std::move(category));
+    s.stored_target_ = std::make_shared<const PointCloud>(std::move(target));
+    s.stored_transform_ = T;
+    return s;
+}
+
+const PointCloud& ShapeSource::stored_source() const {
+    if (!has_stored_pair()) throw std::logic_error("shape '" + name_ + "' stores no pair");
+    return *points_;
+}
+
+const PointCloud& ShapeSource::stored_target() const {
+    if (!has_stored_pair()) throw std::logic_error("shape '" + name_ + "' stores no pair");
+    return *stored_target_;
+}
+
+const Transform& ShapeSource::stored_transform() const {
+    if (!has_stored_pair()) throw std::logic_error("shape '" + name_ + "' stores no pair");
+    return stored_transform_;
 }
 
 Eigen::Index ShapeSource::size() const { return is_mesh() ? mesh_->faces.rows() : points_->rows(); }

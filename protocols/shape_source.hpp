@@ -25,6 +25,17 @@ public:
     /// Point-cloud source. Throws std::invalid_argument naming `name` when `points` is empty
     /// or holds a non-finite coordinate.
     static ShapeSource FromPoints(PointCloud points, std::string name, std::string category);
+    /// A pair stored in a dataset file (DeepGMR-style test files such as ICL-NUIM's
+    /// test/icl_nuim.h5: `source`, `target` and the transform mapping source onto target).
+    /// Sample() resamples `source` as FromPoints does; the `stored` pairing uses the three as
+    /// stored. The rotation block is re-orthonormalised (float32 files store it to ~1e-7).
+    /// Throws std::invalid_argument naming `name` when a cloud is empty or non-finite or the
+    /// transform is not rigid within 1e-4 (last row, R^T R = I, det R = +1).
+    static ShapeSource FromStoredPair(PointCloud source,
+                                      PointCloud target,
+                                      const Transform& target_from_source,
+                                      std::string name,
+                                      std::string category);
 
     /// n points. Mesh: area-weighted triangle choice (binary search in the cumulative area
     /// table), uniform barycentric coordinates (r1 = sqrt(u1): Osada et al. 2002, eq. 1).
@@ -38,6 +49,13 @@ public:
     bool is_mesh() const { return mesh_ != nullptr; }
     /// Number of points (point source) or triangles (mesh source).
     Eigen::Index size() const;
+    /// True for FromStoredPair sources.
+    bool has_stored_pair() const { return stored_target_ != nullptr; }
+    /// The stored source cloud, target cloud and source-to-target transform; throw
+    /// std::logic_error naming the shape when has_stored_pair() is false.
+    const PointCloud& stored_source() const;
+    const PointCloud& stored_target() const;
+    const Transform& stored_transform() const;
 
 private:
     ShapeSource() = default;
@@ -49,6 +67,8 @@ private:
     std::shared_ptr<const Mesh> mesh_;
     std::shared_ptr<const std::vector<double>> cumulative_area_;  ///< running sum of face areas
     std::shared_ptr<const PointCloud> points_;
+    std::shared_ptr<const PointCloud> stored_target_;  ///< FromStoredPair only
+    Transform stored_transform_ = Transform::Identity();
 };
 
 }  // namespace regbench

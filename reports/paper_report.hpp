@@ -28,7 +28,14 @@ struct PaperTableSpec {
     std::vector<std::string> metrics;  ///< per group
     bool rows_are_methods = true;      ///< false: ablation variants (rows from ResultSet labels)
     std::string paper_data;            ///< what the paper measured on, e.g. "ModelNet40"
+    /// Groups regbench adds beside the paper's, and the paper group their paper column shows
+    /// (e.g. "c2c_clean" -> "c2c": the noise-free shared-sample variant of the noisy c2c).
+    std::map<std::string, std::string> paper_group_of = {};
 };
+
+/// The paper group whose published cells sit beside group `g` of `spec` (g itself unless
+/// spec.paper_group_of maps it).
+std::string PaperGroupOf(const PaperTableSpec& spec, const std::string& g);
 
 /// Every table of the paper this module knows, in the paper's order.
 const std::vector<PaperTableSpec>& PaperTableSpecs();

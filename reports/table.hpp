@@ -47,6 +47,10 @@ struct Provenance {
     std::string version;   ///< regbench version / git sha that wrote the pair file
     std::string fallback;  ///< non-empty when the paper's dataset was replaced, and by what
     double gt_ccd_floor = std::nan("");  ///< mean CCD of the ground-truth alignment
+    /// Which items the pairs use: "one-per-item" (`generate --pairs all`), "cycle" (pair k
+    /// uses item k mod items), "" when the pair file does not say (older files).
+    std::string selection;
+    double noise_sigma = std::nan("");  ///< jitter sigma applied (0: noise-free; NaN: unknown)
 };
 
 struct TableRow {

@@ -84,12 +84,12 @@ std::string CsvField(const std::string& s) {
 std::string Num(double v) { return std::isfinite(v) ? fmt::format("{:.10g}", v) : ""; }
 
 const std::vector<std::string> kCsvHeader = {
-    "table",       "row",        "column",           "header",
-    "source",      "value",      "ci95_half_width",  "text",
-    "pairs",       "pairs_file", "pairs_hash",       "dataset",
-    "split",       "protocol",   "pairing",          "seed",
-    "points",      "keep",       "regbench_version", "fallback",
-    "gt_ccd_floor"};
+    "table",        "row",        "column",           "header",
+    "source",       "value",      "ci95_half_width",  "text",
+    "pairs",        "pairs_file", "pairs_hash",       "dataset",
+    "split",        "protocol",   "pairing",          "seed",
+    "points",       "keep",       "regbench_version", "fallback",
+    "gt_ccd_floor", "selection",  "noise_sigma"};
 
 }  // namespace
 
@@ -197,28 +197,29 @@ nlohmann::json TablesToJson(const std::vector<Table>& tables) {
                 const auto num = [](double v) -> nlohmann::json {
                     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
                 };
-                nlohmann::json rec = {
-                    {"table", t.id},
-                    {"row", row.label},
-                    {"column", col.key},
-                    {"header", col.header},
-                    {"source", SourceName(col.source)},
-                    {"value", num(cell.value)},
-                    {"ci95_half_width", num(cell.half_width)},
-                    {"text", cell.text},
-                    {"pairs", cell.pairs},
-                    {"pairs_file", p ? p->pairs_file : ""},
-                    {"pairs_hash", p ? p->pairs_hash : ""},
-                    {"dataset", p ? p->dataset : ""},
-                    {"split", p ? p->split : ""},
-                    {"protocol", p ? p->protocol : ""},
-                    {"pairing", p ? p->pairing : ""},
-                    {"seed", p ? p->seed : nlohmann::json()},
-                    {"points", p ? p->points : 0},
-                    {"keep", p ? num(p->keep) : nlohmann::json()},
-                    {"regbench_version", p ? p->version : ""},
-                    {"fallback", p ? p->fallback : ""},
-                    {"gt_ccd_floor", p ? num(p->gt_ccd_floor) : nlohmann::json()}};
+                nlohmann::json rec = {{"table", t.id},
+                                      {"row", row.label},
+                                      {"column", col.key},
+                                      {"header", col.header},
+                                      {"source", SourceName(col.source)},
+                                      {"value", num(cell.value)},
+                                      {"ci95_half_width", num(cell.half_width)},
+                                      {"text", cell.text},
+                                      {"pairs", cell.pairs},
+                                      {"pairs_file", p ? p->pairs_file : ""},
+                                      {"pairs_hash", p ? p->pairs_hash : ""},
+                                      {"dataset", p ? p->dataset : ""},
+                                      {"split", p ? p->split : ""},
+                                      {"protocol", p ? p->protocol : ""},
+                                      {"pairing", p ? p->pairing : ""},
+                                      {"seed", p ? p->seed : nlohmann::json()},
+                                      {"points", p ? p->points : 0},
+                                      {"keep", p ? num(p->keep) : nlohmann::json()},
+                                      {"regbench_version", p ? p->version : ""},
+                                      {"fallback", p ? p->fallback : ""},
+                                      {"gt_ccd_floor", p ? num(p->gt_ccd_floor) : nlohmann::json()},
+                                      {"selection", p ? p->selection : ""},
+                                      {"noise_sigma", p ? num(p->noise_sigma) : nlohmann::json()}};
                 out.push_back(rec);
             }
         }

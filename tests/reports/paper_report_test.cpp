@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "reports/paper_tables.hpp"
@@ -193,6 +194,65 @@ TEST(PaperReport, TimingTableMeanAndMedianByHand) {
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "paper:seconds")].value, 4.347);  // Tab. 6 CPD
     EXPECT_NE(t.caption.find("Test CPU"), std::string::npos);
     EXPECT_NE(t.caption.find("OpenBLAS"), std::string::npos);
+    // The timing table carries the CCD floor of its pairs too.
+    ASSERT_EQ(t.notes.size(), 1u);
+    EXPECT_NE(t.notes[0].find("0.1041"), std::string::npos) << t.notes[0];
+}
+
+TEST(PaperReport, CompleteTableOffersTheCleanSharedVariantBesideThePapersC2c) {
+    Provenance noisy = Prov("c2c.h5");
+    noisy.protocol = "complete";
+    noisy.selection = "cycle";
+    noisy.noise_sigma = 0.01;
+    noisy.gt_ccd_floor = 0.0512;
+    Provenance clean = noisy;
+    clean.pairs_file = "c2c_clean.h5";
+    clean.pairing = "shared";
+    clean.noise_sigma = 0.0;
+    clean.gt_ccd_floor = 0.0;
+    const ResultSet a{"c2c", {Row(0, "cpd", 2.0), Row(1, "cpd", 4.0)}, noisy, ""};
+    const ResultSet b{"c2c_clean", {Row(0, "cpd", 0.5), Row(1, "cpd", 1.5)}, clean, ""};
+    const Table t = BuildPaperTable(FindPaperTableSpec("supp_complete"), {a, b},
+                                    LoadPaperTables(DefaultPaperTablesPath()), {});
+    const auto& cpd = RowNamed(t, "CPD").cells;
+    // Hand: (2 + 4) / 2 = 3 and (0.5 + 1.5) / 2 = 1.
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "c2c.mae_r")].value, 3.0);
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "c2c_clean.mae_r")].value, 1.0);
+    // The clean columns sit beside the paper's c2c cells (CPD 0.8171 deg, CCD 0.0037 as
+    // transcribed in data/paper/ogmm_wacv2023_tables.json), and say so in the header.
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:c2c_clean.mae_r")].value, 0.8171);
+    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:c2c_clean.ccd")].value, 0.0037);
+    EXPECT_EQ(t.columns[Col(t, "paper:c2c_clean.mae_r")].header, "paper MAE(R) c2c");
+    EXPECT_FALSE(cpd[Col(t, "c2p.mae_r")].HasValue());  // no c2p rows given
+    // Caption: each group's pairing and noise; notes: each group's floor.
+    EXPECT_NE(t.caption.find("pairing shared"), std::string::npos) << t.caption;
+    EXPECT_NE(t.caption.find("noise-free"), std::string::npos) << t.caption;
+    EXPECT_NE(t.caption.find("noise sigma 0.01"), std::string::npos) << t.caption;
+    ASSERT_EQ(t.notes.size(), 2u);
+    EXPECT_NE(t.notes[0].find("(c2c): 0.0512"), std::string::npos) << t.notes[0];
+    EXPECT_NE(t.notes[1].find("(c2c_clean): 0.0000"), std::string::npos) << t.notes[1];
+    // CSV / JSON carry the selection and the noise of the pairs behind each measured cell.
+    const nlohmann::json j = TablesToJson({t});
+    bool seen = false;
+    for (const auto& rec : j) {
+        if (rec["row"] == "CPD" && rec["column"] == "c2c_clean.mae_r") {
+            seen = true;
+            EXPECT_EQ(rec["selection"], "cycle");
+            EXPECT_EQ(rec["noise_sigma"], 0.0);
+            EXPECT_EQ(rec["pairing"], "shared");
+        }
+    }
+    EXPECT_TRUE(seen);
+    const auto csv = ParseCsv(TablesToCsv({t}));
+    EXPECT_NE(std::find(csv[0].begin(), csv[0].end(), "noise_sigma"), csv[0].end());
+    EXPECT_NE(std::find(csv[0].begin(), csv[0].end(), "selection"), csv[0].end());
+}
+
+TEST(PaperReport, TableWithoutPairsSaysItsFloorIsUnknown) {
+    const Table t = BuildPaperTable(FindPaperTableSpec("table4_ablation_components"), {},
+                                    LoadPaperTables(DefaultPaperTablesPath()), {});
+    ASSERT_EQ(t.notes.size(), 1u);
+    EXPECT_NE(t.notes[0].find("CCD floor: not known"), std::string::npos) << t.notes[0];
 }
 
 }  // namespace

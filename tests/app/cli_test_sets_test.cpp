@@ -1,0 +1,167 @@
+// The CLI's test sets as the authors evaluate them: `generate --pairs all` and `reproduce` on a
+// tiny ICL-NUIM test file (pairing `stored`). Expected values come from the files the tests
+// write themselves (the stored clouds round-trip unchanged) and from counting items by hand.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "protocols/pair_file.hpp"
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliResult {
+    int exit_code = -1;  ///< -1: killed by a signal
+    std::string output;  ///< stdout and stderr
+};
+
+CliResult RunCli(const std::string& args) {
+    const std::string cmd = std::string(REGBENCH_CLI) + " " + args + " 2>&1";
+    CliResult r;
+    FILE* p = popen(cmd.c_str(), "r");
+    char buf[4096];
+    std::size_t n = 0;
+    while ((n = fread(buf, 1, sizeof(buf), p)) > 0) r.output.append(buf, n);
+    const int status = pclose(p);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+fs::path FreshDir(const std::string& name) {
+    const fs::path dir = fs::temp_directory_path() / ("regbench_cli_sets_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// n points of a 3D grid with spacing 0.1 written as `x y z` lines.
+void WriteXyz(const fs::path& path, int n, double offset) {
+    std::ofstream f(path);
+    for (int i = 0; i < n; ++i) {
+        f << offset + 0.1 * (i % 7) << " " << 0.1 * ((i / 7) % 7) << " " << 0.1 * (i / 49) << "\n";
+    }
+}
+
+/// One float dataset of the given shape in an open HDF5 file.
+void WriteDataset(hid_t file,
+                  const char* name,
+                  const std::vector<hsize_t>& dims,
+                  const std::vector<double>& values,
+                  hid_t type) {
+    const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+    const hid_t ds = H5Dcreate2(file, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+    H5Dclose(ds);
+    H5Sclose(space);
+}
+
+TEST(CliTestSets, PairsAllMakesOnePairPerItem) {
+    // A folder of 3 point files is a dataset of 3 items (split `all`).
+    const fs::path dir = FreshDir("pairs_all");
+    fs::create_directories(dir / "clouds");
+    for (int k = 0; k < 3; ++k)
+        WriteXyz(dir / "clouds" / ("c" + std::to_string(k) + ".xyz"), 60, k);
+    const std::string out = (dir / "all.h5").string();
+    const CliResult r =
+        RunCli("generate --protocol partial --dataset " + (dir / "clouds").string() +
+               " --points 50 --pairs all --seed 1 --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const PairSet set = ReadPairFile(out);
+    ASSERT_EQ(set.pairs.size(), 3u);
+    EXPECT_EQ(set.provenance.at("pair_selection"), "one-per-item");
+    EXPECT_NE(set.pairs[0].shape, set.pairs[1].shape);
+    EXPECT_NE(set.pairs[1].shape, set.pairs[2].shape);
+    EXPECT_NE(set.pairs[0].shape, set.pairs[2].shape);
+    // Anything but a whole number or `all` is refused, naming the option, with no file left.
+    const std::string bad = (dir / "bad.h5").string();
+    const CliResult refused = RunCli("generate --protocol partial --dataset " +
+                                     (dir / "clouds").string() + " --pairs every --out " + bad);
+    EXPECT_GT(refused.exit_code, 0);
+    EXPECT_NE(refused.output.find("--pairs"), std::string::npos) << refused.output;
+    EXPECT_FALSE(fs::exists(bad));
+    fs::remove_all(dir);
+}
+
+TEST(CliTestSets, ReproduceUsesTheStoredIclNuimPairs) {
+    const fs::path dir = FreshDir("reproduce_icl");
+    // ICL-NUIM root: test/icl_nuim.h5 with 2 stored pairs of 6 points; the transform is a
+    // translation by (0.5 s, 0, 0) with the identity rotation, so target = source + t is exact.
+    std::vector<double> source, target, transform;
+    for (int s = 0; s < 2; ++s) {
+        for (int i = 0; i < 6; ++i) {
+            const std::vector<double> p = {0.125 * i, 0.25 * (i % 2) + s, 0.5 * (i % 3)};
+            source.insert(source.end(), p.begin(), p.end());
+            target.insert(target.end(), {p[0] + 0.5 * s, p[1], p[2]});
+        }
+        const std::vector<double> T = {1, 0, 0, 0.5 * s, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        transform.insert(transform.end(), T.begin(), T.end());
+    }
+    fs::create_directories(dir / "icl" / "test");
+    const hid_t file = H5Fcreate((dir / "icl" / "test" / "icl_nuim.h5").c_str(), H5F_ACC_TRUNC,
+                                 H5P_DEFAULT, H5P_DEFAULT);
+    WriteDataset(file, "source", {2, 6, 3}, source, H5T_IEEE_F32LE);
+    WriteDataset(file, "target", {2, 6, 3}, target, H5T_IEEE_F32LE);
+    WriteDataset(file, "transform", {2, 4, 4}, transform, H5T_IEEE_F64LE);
+    H5Fclose(file);
+    // 7Scenes root with one test (office) scan of 2100 points (the protocol samples 2048).
+    fs::create_directories(dir / "7s" / "7-scenes-office");
+    {
+        std::ofstream ply(dir / "7s" / "7-scenes-office" / "frame0.ply");
+        ply << "ply\nformat ascii 1.0\nelement vertex 2100\nproperty float x\nproperty float y\n"
+               "property float z\nend_header\n";
+        for (int i = 0; i < 2100; ++i) {
+            ply << 0.05 * (i % 30) << " " << 0.05 * ((i / 30) % 10) << " " << 0.05 * (i / 300)
+                << "\n";
+        }
+    }
+    const fs::path out = dir / "report";
+    const CliResult r = RunCli(
+        "reproduce --tables table3 --methods identity --pairs 4 --jobs 1 "
+        "--icl-nuim " +
+        (dir / "icl").string() + " --7scenes " + (dir / "7s").string() + " --out " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("report folder: " + out.string()), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("HTML report:   " + (out / "report.html").string()), std::string::npos)
+        << r.output;
+    EXPECT_TRUE(fs::exists(out / "report.html"));
+    // --pairs 4 on --tables table3 gives max(4, 4 / 2) = 4 indoor pairs: the 2 stored pairs,
+    // cycled. Each is exactly the file's (float32 values widened; the transform as stored).
+    const PairSet set = ReadPairFile((out / "pairs" / "tab3_icl_nuim.h5").string());
+    EXPECT_EQ(set.provenance.at("pairing"), "stored");
+    ASSERT_EQ(set.pairs.size(), 4u);
+    for (std::size_t k = 0; k < 4; ++k) {
+        const std::size_t s = k % 2;
+        ASSERT_EQ(set.pairs[k].source.rows(), 6);
+        for (int i = 0; i < 6; ++i) {
+            for (int d = 0; d < 3; ++d) {
+                EXPECT_EQ(set.pairs[k].source(i, d), source[s * 18 + i * 3 + d]);
+                EXPECT_EQ(set.pairs[k].target(i, d), target[s * 18 + i * 3 + d]);
+            }
+        }
+        EXPECT_EQ(set.pairs[k].T_gt(0, 3), 0.5 * static_cast<double>(s));
+    }
+    // 7Scenes keeps the resampling protocol.
+    EXPECT_EQ(ReadPairFile((out / "pairs" / "tab3_7scenes.h5").string()).provenance.at("pairing"),
+              "independent");
+    // The table says which pairing each column used and prints both floors. The stored pairs
+    // are exact (target = T source), so the icl_nuim floor is 0.
+    std::ifstream md(out / "tables.md");
+    const std::string tables((std::istreambuf_iterator<char>(md)),
+                             std::istreambuf_iterator<char>());
+    EXPECT_NE(tables.find("pairing stored"), std::string::npos);
+    EXPECT_NE(tables.find("Ground-truth CCD floor (icl_nuim): 0.0000"), std::string::npos)
+        << tables;
+    EXPECT_NE(tables.find("Ground-truth CCD floor (7scenes)"), std::string::npos);
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace regbench
