@@ -10,6 +10,7 @@
 #include <ostream>
 #include <set>
 
+#include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
@@ -21,10 +22,6 @@
 #include "reports/paper_tables.hpp"
 #include "runners/registry.hpp"
 #include "runners/runner.hpp"
-
-#ifndef REGBENCH_VERSION
-#define REGBENCH_VERSION "unknown"
-#endif
 
 namespace regbench {
 namespace {
@@ -162,7 +159,7 @@ bool EnsurePairs(const Experiment& e,
     request.seed = e.seed;
     request.options = DefaultProtocolOptions(ParseProtocol(e.protocol));
     request.out = path.string();
-    request.extra_provenance = {{"regbench_version", REGBENCH_VERSION},
+    request.extra_provenance = {{"regbench_version", RegbenchVersion()},
                                 {"reproduce_experiment", e.id}};
     if (!e.fallback.empty()) request.extra_provenance["fallback"] = e.fallback;
     DatasetOptions dataset_options;
@@ -315,7 +312,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     const std::string intro = fmt::format(
         "regbench {} reproduce{}: {} experiments, seed {}, {} jobs, per-call timeout {} s, "
         "one thread per call; CPU {}.",
-        REGBENCH_VERSION, o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
+        RegbenchVersion(), o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
         o.timeout_seconds, CpuModel());
     WriteText(out / "tables.md", "# regbench: the OGMM paper's tables\n\n" + intro + "\n\n" +
                                      Join(tables, TableToMarkdown));
