@@ -10,6 +10,7 @@
 #include <ostream>
 #include <set>
 
+#include "core/atomic_file.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
@@ -104,15 +105,9 @@ std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
     return out;
 }
 
-/// Writes `text` to `path` atomically (temporary file, then rename).
+/// Writes `text` to `path` atomically and checked (core/atomic_file).
 void WriteText(const fs::path& path, const std::string& text) {
-    const fs::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream f(tmp);
-        f << text;
-        if (!f) throw std::runtime_error(tmp.string() + ": cannot write");
-    }
-    fs::rename(tmp, path);
+    WriteFileAtomic(path.string(), text);
 }
 
 /// Methods to run, and the reasons the wanted ones that cannot run are left out.
