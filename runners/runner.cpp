@@ -281,6 +281,7 @@ Resumed LoadResume(const RunOptions& options,
 
 /// Everything the workers read, fixed for the whole run.
 struct RunPlan {
+    RunPlan(const RunOptions& o, const PairSet& s) : options(o), set(s) {}
     const RunOptions& options;
     const PairSet& set;
     std::vector<std::size_t> indices;  ///< pairs of this shard
@@ -291,6 +292,7 @@ struct RunPlan {
 
 /// What the workers share while they run: the output and the counters.
 struct RunState {
+    RunState(PartFile& p, ProgressMeter& m) : part(p), progress(m) {}
     PartFile& part;
     ProgressMeter& progress;
     std::mutex out_mutex;  ///< guards `part`, `error` and the rows_safe increment
@@ -424,7 +426,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
     const PairSet set = ReadPairFile(options.pairs_path);  // throws naming the file
     // Select pairs. The scale guard refuses before any output exists (or says what it will
     // downsample).
-    RunPlan plan{options, set, ShardPairs(set.pairs.size(), options)};
+    RunPlan plan(options, set);
+    plan.indices = ShardPairs(set.pairs.size(), options);
     const std::string notice =
         CheckScale(set, plan.indices, options.methods, options.max_points, options.downsample);
     if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
@@ -454,7 +457,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
     const std::size_t total_calls = plan.indices.size() * options.methods.size();
     ProgressMeter progress("run", total_calls, options.progress);
     progress.Advance(std::min(plan.done.size(), total_calls));
-    RunState state{part, progress};
+    RunState state(part, progress);
     state.rows_safe = resumed.rows.size();
     // setenv is not thread-safe: set the process-wide part once, before any worker starts.
     SetOmpThreads(options.threads_per_call);
