@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/metrics.hpp"
@@ -62,14 +63,7 @@ void AddAlignCommand(CLI::App& app) {
     cmd->add_option("--seed", *seed, "Seed of the method's random stream")->capture_default_str();
     cmd->add_option("--threads", *threads, "Threads inside the method")->capture_default_str();
     cmd->callback([=] {
-        nlohmann::json p = nlohmann::json::object();
-        if (!params->empty()) {
-            try {
-                p = nlohmann::json::parse(*params);
-            } catch (const nlohmann::json::exception& e) {
-                throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
-            }
-        }
+        const nlohmann::json p = ParseParamsOption(*params);
         const auto reg = CreateMethod(*method, p);  // validates name and params
         const PointCloud source = ReadCloudFile(*src);
         const PointCloud target = ReadCloudFile(*tgt);

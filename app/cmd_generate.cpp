@@ -10,6 +10,7 @@
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
+#include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
 #include "runners/progress.hpp"
@@ -120,8 +121,8 @@ void AddGenerateCommand(CLI::App& app) {
         if (cmd->get_option("--split")->count() == 0) {
             request.split = DefaultSplit(request.dataset);
         }
-        request.extra_provenance = {{"regbench_version", REGBENCH_VERSION},
-                                    {"git_sha", REGBENCH_GIT_SHA}};
+        request.extra_provenance = {{"regbench_version", RegbenchVersion()},
+                                    {"git_sha", RegbenchGitSha()}};
         DatasetOptions dataset_options;
         dataset_options.data_dir = a->data_dir;
         GenerateToFile(

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "runners/merge.hpp"
 
@@ -23,14 +24,7 @@ void AddMergeCommand(CLI::App& app) {
     cmd->add_option("--params", *params, "The --params the shards ran with (JSON)");
     cmd->callback([o, methods, params] {
         MergeOptions options = *o;
-        nlohmann::json p = nlohmann::json::object();
-        if (!params->empty()) {
-            try {
-                p = nlohmann::json::parse(*params);
-            } catch (const nlohmann::json::exception& e) {
-                throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
-            }
-        }
+        const nlohmann::json p = ParseParamsOption(*params);
         options.methods = ParseMethodSpecs(*methods, p);
         const std::size_t n = MergeResults(options);
         std::cerr << "merge: wrote " << n << " rows from " << options.inputs.size() << " files to "

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "app/commands.hpp"
+#include "core/version.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
 #include "protocols/pair_protocols.hpp"
@@ -68,8 +69,8 @@ void AddImportCommand(CLI::App& app) {
     cmd->add_option("--eta", *eta, "Overlap label radius")->capture_default_str();
     cmd->callback([dir, out, eta] {
         PairSet set = ImportXyzDir(*dir, *eta);
-        set.provenance["regbench_version"] = REGBENCH_VERSION;
-        set.provenance["git_sha"] = REGBENCH_GIT_SHA;
+        set.provenance["regbench_version"] = RegbenchVersion();
+        set.provenance["git_sha"] = RegbenchGitSha();
         set.provenance["content_hash"] = PairSetContentHash(set);
         WritePairFile(*out, set);
         std::cerr << "import: wrote " << set.pairs.size() << " pairs to " << *out << "\n";

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "app/cli_numbers.hpp"
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/cpu_time.hpp"
 #include "runners/runner.hpp"
@@ -56,14 +57,7 @@ void AddRunCommand(CLI::App& app) {
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");
     cmd->callback([=] {
         RunOptions o = *opts;
-        nlohmann::json p = nlohmann::json::object();
-        if (!params->empty()) {
-            try {
-                p = nlohmann::json::parse(*params);
-            } catch (const nlohmann::json::exception& e) {
-                throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
-            }
-        }
+        const nlohmann::json p = ParseParamsOption(*params);
         o.methods = ParseMethodSpecs(*methods, p);
         ParseShard(*shard, &o.shard_index, &o.shard_count);
         o.progress = !*quiet;

@@ -4,6 +4,7 @@
 
 #include <iostream>
 
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "runners/score.hpp"
 
@@ -42,13 +43,7 @@ void AddScoreCommand(CLI::App& app) {
         ->capture_default_str();
     cmd->callback([=] {
         ScoreOptions opts = *o;
-        if (!params->empty()) {
-            try {
-                opts.params = nlohmann::json::parse(*params);
-            } catch (const nlohmann::json::exception& e) {
-                throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
-            }
-        }
+        opts.params = ParseParamsOption(*params);
         opts.euler = ParseEulerConvention(*euler);
         const ScoreSummary s = ScoreTransforms(opts);
         std::cerr << fmt::format("[score] wrote {} rows ({} missing) to {}\n", s.rows, s.missing,

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "app/commands.hpp"
+#include "core/version.hpp"
 
 namespace {
 
@@ -30,8 +31,8 @@ void EnsurePassiveOmpWaitPolicy(char** argv) {
 int main(int argc, char** argv) {
     EnsurePassiveOmpWaitPolicy(argv);
     CLI::App app{"regbench: reproducible benchmarks for rigid point-cloud registration"};
-    app.set_version_flag("--version", std::string("regbench ") + REGBENCH_VERSION + " (git " +
-                                          REGBENCH_GIT_SHA + ")");
+    app.set_version_flag("--version", std::string("regbench ") + regbench::RegbenchVersion() +
+                                          " (git " + regbench::RegbenchGitSha() + ")");
     app.require_subcommand(1);
     regbench::app::AddMethodsCommand(app);
     regbench::app::AddRunCommand(app);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/kabsch.hpp"
+#include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "gmm/cell_compress.hpp"
 #include "gmm/gauss_sum.hpp"
@@ -74,9 +75,7 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     inv_den_.resize(static_cast<size_t>(n));
     out.pt1.resize(n);
     const auto a = static_cast<float>(-0.5 / sigma2);
-    const float* sx = source_.x();
-    const float* sy = source_.y();
-    const float* sz = source_.z();
+    const FloatPoints source_points{source_.x(), source_.y(), source_.z(), m};
     const float* tx = target_blocked_.x();
     const float* ty = target_blocked_.y();
     const float* tz = target_blocked_.z();
@@ -91,14 +90,15 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
             std::fill(acc, acc + 4 * m, 0.0f);
             const Eigen::Index j1 = std::min(n, (chunk + 1) * kTargetsPerChunk);
             for (Eigen::Index j = chunk * kTargetsPerChunk; j < j1; ++j) {
-                const double sum = KernelRow(column.data(), sx, sy, sz, m, tx[j], ty[j], tz[j], a);
+                const double sum = KernelRow(source_points, Eigen::Vector3f(tx[j], ty[j], tz[j]), a,
+                                             column.data());
                 const double den = sum == 0.0 ? kDenFloor : sum;
                 const double inv = 1.0 / (den + c);
                 inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
                 out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
                 const auto w = static_cast<float>(inv);
-                AxpyRow(column.data(), m, w, w * tx[j], w * ty[j], w * tz[j], acc, acc + m,
-                        acc + 2 * m, acc + 3 * m);
+                AxpyRow(column.data(), m, {w, w * tx[j], w * ty[j], w * tz[j]},
+                        {acc, acc + m, acc + 2 * m, acc + 3 * m});
             }
         }
     }
@@ -296,7 +296,8 @@ const MethodSpec<CpdOptions>& Spec() {
                   "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's "
                   "sigma^2 formula unless those are given explicitly)"),
             Param("e_step", &O::e_step,
-                  "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" (exact up "
+                  "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), "
+                  "\"dense\" (exact up "
                   "to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"),
             Param("truncation_sigmas", &O::truncation_sigmas,
                   "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4")
@@ -356,7 +357,7 @@ protected:
         std::int64_t evaluated_pairs = 0;
         for (int it = 1; it <= options().maxiter; ++it) {
             // c = (2 pi sigma^2)^(D/2) w/(1-w) M/N: the uniform outlier term (CPD eq. (7)).
-            const double c = std::pow(2.0 * M_PI * state.sigma2, 0.5 * kDim) * options().w /
+            const double c = std::pow(2.0 * kPi * state.sigma2, 0.5 * kDim) * options().w /
                              (1.0 - options().w) * m / n;
             e_step.Compute(state.T, state.sigma2, c, post);
             truncated_iterations += post.truncated ? 1 : 0;

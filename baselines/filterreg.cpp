@@ -11,6 +11,7 @@
 
 #include "core/kabsch.hpp"
 #include "core/kd_tree.hpp"
+#include "core/math_constants.hpp"
 #include "core/normals.hpp"
 #include "core/transform.hpp"
 #include "gmm/gmm_common.hpp"
@@ -391,7 +392,7 @@ AlignResult AlignFilterReg(const FilterRegOptions& o,
         const PointCloud moved = (source * R.transpose()).rowwise() + t.transpose();
         const FilterRegMoments mom = estimator.Compute(moved, sigma2);
         // Outlier term c = w/(1-w) N/M (2 pi sigma2)^(D/2).
-        const double c = o.w / (1.0 - o.w) * n / m * std::pow(2.0 * M_PI * sigma2, 1.5);
+        const double c = o.w / (1.0 - o.w) * n / m * std::pow(2.0 * kPi * sigma2, 1.5);
         const Selection sel = Select(moved, mom, sigma2, c);
         if (sel.index.empty()) {
             conv.stop_reason = "no_overlap";  // probreg: stop and keep the previous transform

@@ -6,6 +6,8 @@
 #include <string>
 #include <thread>
 
+#include "core/version.hpp"
+
 namespace {
 std::string CpuModel() {
     std::ifstream in("/proc/cpuinfo");
@@ -22,7 +24,7 @@ int main(int argc, char** argv) {
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::AddCustomContext("cpu_model", CpuModel());
     benchmark::AddCustomContext("compiler", __VERSION__);
-    benchmark::AddCustomContext("git_sha", REGBENCH_GIT_SHA);
+    benchmark::AddCustomContext("git_sha", regbench::RegbenchGitSha());
     benchmark::AddCustomContext("hardware_threads",
                                 std::to_string(std::thread::hardware_concurrency()));
     benchmark::AddCustomContext("omp_max_threads", std::to_string(omp_get_max_threads()));

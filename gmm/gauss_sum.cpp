@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -170,44 +171,49 @@ __attribute__((always_inline)) inline std::int64_t EvaluateLeafImpl(const LeafJo
 }
 
 #if defined(__x86_64__) && defined(__GNUC__)
-template <bool kWeighted, bool kMoment>
-__attribute__((target("avx2,fma"))) std::int64_t EvaluateLeafAvx2(const LeafJob& job) {
-    return EvaluateLeafImpl<kWeighted, kMoment>(job);
-}
+/// x86-64-v4 (AVX-512) clones: the lane order is the same, so results match the AVX2 build up
+/// to FMA contraction. Not exercised on machines without AVX-512 (such as CI's).
+#define REGBENCH_V4_TARGET "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"
+
 bool HasAvx2Fma() {
     static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
     return has;
 }
-#endif
-
-template <bool kWeighted, bool kMoment>
-std::int64_t EvaluateLeafBaseline(const LeafJob& job) {
-    return EvaluateLeafImpl<kWeighted, kMoment>(job);
-}
-
-#if defined(__x86_64__) && defined(__GNUC__)
-/// x86-64-v4 (AVX-512) clone; the lane order is the same, so results match the AVX2 build
-/// up to FMA contraction. Not exercised on machines without AVX-512 (such as CI's).
-template <bool kWeighted, bool kMoment>
-__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) std::int64_t EvaluateLeafV4(
-    const LeafJob& job) {
-    return EvaluateLeafImpl<kWeighted, kMoment>(job);
-}
-bool HasAvx512Leaf() {
+bool HasAvx512() {
     static const bool has =
         __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
         __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
     return has;
 }
+
+// One clone of `body` per instruction set. `body` must be an always_inline lambda calling
+// always_inline kernels, so its whole loop is compiled with the clone's target.
+template <class Body>
+__attribute__((target(REGBENCH_V4_TARGET))) auto RunV4(const Body& body) {
+    return body();
+}
+template <class Body>
+__attribute__((target("avx2,fma"))) auto RunAvx2(const Body& body) {
+    return body();
+}
 #endif
+
+/// Runs `body` compiled for the best instruction set this CPU has (AVX-512, AVX2+FMA or the
+/// baseline), chosen at run time: every SIMD kernel in this file is dispatched through here.
+template <class Body>
+auto RunBestIsa(const Body& body) {
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) return RunV4(body);
+    if (HasAvx2Fma()) return RunAvx2(body);
+#endif
+    return body();
+}
 
 template <bool kWeighted, bool kMoment>
 std::int64_t EvaluateLeaf(const LeafJob& job) {
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (HasAvx512Leaf()) return EvaluateLeafV4<kWeighted, kMoment>(job);
-    if (HasAvx2Fma()) return EvaluateLeafAvx2<kWeighted, kMoment>(job);
-#endif
-    return EvaluateLeafBaseline<kWeighted, kMoment>(job);
+    return RunBestIsa([&]() __attribute__((always_inline)) {
+        return EvaluateLeafImpl<kWeighted, kMoment>(job);
+    });
 }
 
 std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
@@ -272,97 +278,22 @@ __attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict r
     }
 }
 
-#if defined(__x86_64__) && defined(__GNUC__)
-/// x86-64-v4 (AVX-512) clones, chosen at run time; this project's CI machine has no AVX-512,
-/// so they are compiled but exercised only where the CPU supports them.
-#define REGBENCH_V4_TARGET "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"
-bool HasAvx512() {
-    static const bool has =
-        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
-    return has;
-}
-__attribute__((target(REGBENCH_V4_TARGET))) double KernelRowV4(float* row,
-                                                               const float* px,
-                                                               const float* py,
-                                                               const float* pz,
-                                                               Eigen::Index count,
-                                                               float qx,
-                                                               float qy,
-                                                               float qz,
-                                                               float a) {
-    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
-}
-__attribute__((target("avx2,fma"))) double KernelRowAvx2(float* row,
-                                                         const float* px,
-                                                         const float* py,
-                                                         const float* pz,
-                                                         Eigen::Index count,
-                                                         float qx,
-                                                         float qy,
-                                                         float qz,
-                                                         float a) {
-    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
-}
-__attribute__((target(REGBENCH_V4_TARGET))) void AxpyRowV4(const float* row,
-                                                           Eigen::Index count,
-                                                           float w,
-                                                           float wx,
-                                                           float wy,
-                                                           float wz,
-                                                           float* acc0,
-                                                           float* acc1,
-                                                           float* acc2,
-                                                           float* acc3) {
-    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
-}
-__attribute__((target("avx2,fma"))) void AxpyRowAvx2(const float* row,
-                                                     Eigen::Index count,
-                                                     float w,
-                                                     float wx,
-                                                     float wy,
-                                                     float wz,
-                                                     float* acc0,
-                                                     float* acc1,
-                                                     float* acc2,
-                                                     float* acc3) {
-    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
-}
-#endif
-
 }  // namespace
 
-double KernelRow(float* row,
-                 const float* px,
-                 const float* py,
-                 const float* pz,
-                 Eigen::Index count,
-                 float qx,
-                 float qy,
-                 float qz,
-                 float a) {
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (HasAvx512()) return KernelRowV4(row, px, py, pz, count, qx, qy, qz, a);
-    if (HasAvx2Fma()) return KernelRowAvx2(row, px, py, pz, count, qx, qy, qz, a);
-#endif
-    return KernelRowImpl(row, px, py, pz, count, qx, qy, qz, a);
+double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float a, float* row) {
+    return RunBestIsa([&]() __attribute__((always_inline)) {
+        return KernelRowImpl(row, points.x, points.y, points.z, points.count, q.x(), q.y(), q.z(),
+                             a);
+    });
 }
 
 void AxpyRow(const float* row,
              Eigen::Index count,
-             float w,
-             float wx,
-             float wy,
-             float wz,
-             float* acc0,
-             float* acc1,
-             float* acc2,
-             float* acc3) {
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (HasAvx512()) return AxpyRowV4(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
-    if (HasAvx2Fma()) return AxpyRowAvx2(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
-#endif
-    AxpyRowImpl(row, count, w, wx, wy, wz, acc0, acc1, acc2, acc3);
+             const std::array<float, 4>& w,
+             const std::array<float*, 4>& acc) {
+    RunBestIsa([&]() __attribute__((always_inline)) {
+        AxpyRowImpl(row, count, w[0], w[1], w[2], w[3], acc[0], acc[1], acc[2], acc[3]);
+    });
 }
 
 namespace {
@@ -516,25 +447,10 @@ __attribute__((always_inline)) inline double FastExpPassImpl(const float* __rest
     for (std::size_t i = 0; i < n; i += 4096) s += y[i];  // touch, do not re-add everything
     return s;
 }
-#if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((target("avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"))) double FastExpPassV4(
-    const float* x, float* y, std::size_t n) {
-    return FastExpPassImpl(x, y, n);
-}
-__attribute__((target("avx2,fma"))) double FastExpPassAvx2(const float* x,
-                                                           float* y,
-                                                           std::size_t n) {
-    return FastExpPassImpl(x, y, n);
-}
-#endif
 }  // namespace
 
 double FastExpPass(const float* x, float* y, std::size_t n) {
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (HasAvx512()) return FastExpPassV4(x, y, n);
-    if (HasAvx2Fma()) return FastExpPassAvx2(x, y, n);
-#endif
-    return FastExpPassImpl(x, y, n);
+    return RunBestIsa([&]() __attribute__((always_inline)) { return FastExpPassImpl(x, y, n); });
 }
 
 double UnderflowRadiusSigmas() { return std::sqrt(2.0 * -kFastExpMinArg); }

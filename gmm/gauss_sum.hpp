@@ -22,6 +22,7 @@
 // so results are bitwise identical for any thread count.
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -141,29 +142,25 @@ void KernelSums(const BlockedCloud& queries,
 /// Returns the sum of y so the work cannot be optimised away.
 double FastExpPass(const float* x, float* y, std::size_t n);
 
-/// One kernel column for CPD's fused E-step: row[i] = exp(a |q - p_i|^2) over `count` points
-/// given as float coordinate arrays, returning sum_i row[i] (float lanes, chunks in double).
-double KernelRow(float* row,
-                 const float* px,
-                 const float* py,
-                 const float* pz,
-                 Eigen::Index count,
-                 float qx,
-                 float qy,
-                 float qz,
-                 float a);
+/// `count` points as three float coordinate arrays (structure of arrays, as BlockedCloud keeps
+/// them), the layout the SIMD kernels read.
+struct FloatPoints {
+    const float* x;
+    const float* y;
+    const float* z;
+    Eigen::Index count;
+};
 
-/// acc0[i] += w row[i], acc1[i] += wx row[i], acc2[i] += wy row[i], acc3[i] += wz row[i].
+/// One kernel column for CPD's fused E-step: row[i] = exp(a |q - p_i|^2) over `points`,
+/// returning sum_i row[i] (float lanes, chunks in double).
+double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float a, float* row);
+
+/// acc[c][i] += w[c] row[i] for c = 0..3 and i < count: one target's share of CPD's p1 and PX
+/// with w = (1, x, y, z) / (den + c).
 void AxpyRow(const float* row,
              Eigen::Index count,
-             float w,
-             float wx,
-             float wy,
-             float wz,
-             float* acc0,
-             float* acc1,
-             float* acc2,
-             float* acc3);
+             const std::array<float, 4>& w,
+             const std::array<float*, 4>& acc);
 
 /// Radius (in sigmas) beyond which FastExp(-d^2 / 2 sigma^2) is exactly 0: sqrt(2 * 87).
 double UnderflowRadiusSigmas();

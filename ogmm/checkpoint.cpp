@@ -4,14 +4,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "core/version.hpp"
 #include "ogmm/zoo.hpp"
-
-#ifndef REGBENCH_GIT_SHA
-#define REGBENCH_GIT_SHA "unknown"
-#endif
-#ifndef REGBENCH_VERSION
-#define REGBENCH_VERSION "unknown"
-#endif
 
 namespace regbench::ogmm {
 namespace fs = std::filesystem;
@@ -21,8 +15,8 @@ constexpr char kFormat[] = "regbench-checkpoint";
 constexpr int kFormatVersion = 1;
 }  // namespace
 
-std::string BuildVersion() { return REGBENCH_VERSION; }
-std::string BuildGitSha() { return REGBENCH_GIT_SHA; }
+std::string BuildVersion() { return RegbenchVersion(); }
+std::string BuildGitSha() { return RegbenchGitSha(); }
 
 void SaveCheckpoint(const std::string& dir,
                     RegistrationNet& net,

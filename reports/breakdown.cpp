@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <iterator>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "reports/row_access.hpp"
@@ -146,6 +148,31 @@ Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOption
     return t;
 }
 
+namespace {
+
+/// Adds one row per method to `t`, whose columns are already set: each cell averages
+/// o.key_metric over that method's rows which `column_of` puts in the cell's column (nullopt:
+/// in none; rows without the metric count in none either).
+template <class ColumnOf>
+void AddMeanRows(Table& t,
+                 const std::vector<nlohmann::json>& rows,
+                 const BreakdownOptions& o,
+                 const ColumnOf& column_of) {
+    for (const auto& method : MethodOrder(rows)) {
+        std::vector<std::vector<double>> cells(t.columns.size());
+        for (const auto* r : RowsOf(rows, method)) {
+            const std::optional<std::size_t> column = column_of(*r);
+            if (!column) continue;
+            if (const auto x = RowMetric(*r, o.key_metric)) cells[*column].push_back(*x);
+        }
+        TableRow row{method, {}};
+        for (const auto& v : cells) row.cells.push_back(Value(SampleMean(v), v.size()));
+        t.rows.push_back(row);
+    }
+}
+
+}  // namespace
+
 Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
     Table t;
     t.id = "category";
@@ -156,18 +183,10 @@ Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOpti
     for (const auto& c : categories) {
         t.columns.push_back({c, c, CellSource::kMeasured, Better::kLower, 3});
     }
-    for (const auto& method : MethodOrder(rows)) {
-        std::map<std::string, std::vector<double>> by;
-        for (const auto* r : RowsOf(rows, method)) {
-            if (const auto x = RowMetric(*r, o.key_metric)) {
-                by[r->value("category", std::string("?"))].push_back(*x);
-            }
-        }
-        TableRow row{method, {}};
-        for (const auto& c : categories)
-            row.cells.push_back(Value(SampleMean(by[c]), by[c].size()));
-        t.rows.push_back(row);
-    }
+    AddMeanRows(t, rows, o, [&](const nlohmann::json& r) -> std::optional<std::size_t> {
+        const auto it = categories.find(r.value("category", std::string("?")));
+        return static_cast<std::size_t>(std::distance(categories.begin(), it));
+    });
     return t;
 }
 
@@ -187,27 +206,17 @@ Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptio
                              CellSource::kMeasured, Better::kLower, 3});
     }
     std::size_t missing = 0;
-    for (const auto& method : MethodOrder(rows)) {
-        std::vector<std::vector<double>> bins(t.columns.size());
-        for (const auto* r : RowsOf(rows, method)) {
-            const auto ov = MinOverlap(*r);
-            const auto x = RowMetric(*r, o.key_metric);
-            if (!ov) {
-                ++missing;
-                continue;
-            }
-            if (!x) continue;
-            for (std::size_t b = 0; b < bins.size(); ++b) {
-                if (*ov >= o.overlap_edges[b] && *ov < o.overlap_edges[b + 1]) {
-                    bins[b].push_back(*x);
-                    break;
-                }
-            }
+    AddMeanRows(t, rows, o, [&](const nlohmann::json& r) -> std::optional<std::size_t> {
+        const auto ov = MinOverlap(r);
+        if (!ov) {
+            ++missing;
+            return std::nullopt;
         }
-        TableRow row{method, {}};
-        for (const auto& v : bins) row.cells.push_back(Value(SampleMean(v), v.size()));
-        t.rows.push_back(row);
-    }
+        for (std::size_t b = 0; b < t.columns.size(); ++b) {
+            if (*ov >= o.overlap_edges[b] && *ov < o.overlap_edges[b + 1]) return b;
+        }
+        return std::nullopt;
+    });
     if (missing > 0) {
         t.notes.push_back(fmt::format(
             "{} rows carry no overlap ratios (written before rows recorded them) and are left "

@@ -9,57 +9,23 @@
 #include <stdexcept>
 
 #include "core/metrics.hpp"
-#include "core/rng.hpp"
+#include "reports/statistics.hpp"
 
 namespace regbench {
 namespace {
 
 constexpr std::uint64_t kBootstrapSeed = 20230103;
 
-/// FNV-1a 64: a stable hash of a string, so bootstrap streams depend on what a row of the table
-/// is (data, method, params, metric), never on where it stands or how the input was ordered.
-std::uint64_t Fnv1a(const std::string& s) {
-    std::uint64_t h = 1469598103934665603ull;
-    for (unsigned char c : s) {
-        h ^= c;
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
-double Mean(const std::vector<double>& v) {
-    if (v.empty()) return std::nan("");
-    double s = 0.0;
-    for (double x : v) s += x;
-    return s / static_cast<double>(v.size());
-}
-
-double Median(std::vector<double> v) {
-    if (v.empty()) return std::nan("");
-    const std::size_t mid = v.size() / 2;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
-    double m = v[mid];
-    if (v.size() % 2 == 0) {
-        m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid)));
-    }
-    return m;
-}
-
-/// Percentile bootstrap (Efron): resample pairs with replacement, 2.5 / 97.5 percentiles. `v`
-/// is in pair order (rows are sorted by pair first), so the CI does not depend on row order.
+/// The report table's CI: percentile bootstrap of the mean over pairs, 2.5 / 97.5 percentiles
+/// taken at the floor index (the tables' convention since their first release, so published
+/// numbers do not move; BootstrapMean rounds to the nearest index). `v` is in pair order (rows
+/// are sorted by pair first), so the CI does not depend on row order.
 Estimate Bootstrap(const std::vector<double>& v, int samples, std::uint64_t stream) {
     Estimate e;
-    e.mean = Mean(v);
+    e.mean = SampleMean(v);
     e.lo = e.hi = e.mean;
-    if (v.size() < 2 || samples < 2) return e;
-    auto rng = MakePairRng(kBootstrapSeed, stream);
-    std::vector<double> means(static_cast<std::size_t>(samples));
-    for (auto& m : means) {
-        double s = 0.0;
-        for (std::size_t i = 0; i < v.size(); ++i) s += v[UniformIndex(rng, v.size())];
-        m = s / static_cast<double>(v.size());
-    }
-    std::sort(means.begin(), means.end());
+    const std::vector<double> means = SortedBootstrapMeans(v, samples, kBootstrapSeed, stream);
+    if (means.empty()) return e;
     const auto at = [&](double q) {
         return means[static_cast<std::size_t>(q * static_cast<double>(samples - 1))];
     };
@@ -158,22 +124,22 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
     }
     const std::string id = data_key + "\n" + s.method + "\n" + s.params.dump() + "\n";
     const auto boot = [&](const std::vector<double>& v, const char* metric) {
-        return Bootstrap(v, o.bootstrap_samples, Fnv1a(id + metric));
+        return Bootstrap(v, o.bootstrap_samples, StreamId(id + metric));
     };
     s.mae_r = boot(mae_r, "mae_r");
     s.mae_t = boot(mae_t, "mae_t");
     s.ccd = boot(ccd, "ccd");
     s.rre = boot(rre, "rre");
     s.rte = boot(rte, "rte");
-    s.rmse_r = std::sqrt(Mean(mse_r));
-    s.rmse_t = std::sqrt(Mean(mse_t));
-    s.chamfer = Mean(chamfer);
+    s.rmse_r = std::sqrt(SampleMean(mse_r));
+    s.rmse_t = std::sqrt(SampleMean(mse_t));
+    s.chamfer = SampleMean(chamfer);
     const double n = static_cast<double>(group.size());
     s.recall = static_cast<double>(recalled) / n;
     s.success = static_cast<double>(succeeded) / n;
     s.recall_3dmatch = static_cast<double>(recalled_3dm) / n;
-    s.median_seconds = Median(secs);
-    s.mean_seconds = Mean(secs);
+    s.median_seconds = SampleMedian(secs);
+    s.mean_seconds = SampleMean(secs);
     return s;
 }
 

@@ -10,6 +10,8 @@
 #include <ostream>
 #include <set>
 
+#include "core/atomic_file.hpp"
+#include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
@@ -21,10 +23,6 @@
 #include "reports/paper_tables.hpp"
 #include "runners/registry.hpp"
 #include "runners/runner.hpp"
-
-#ifndef REGBENCH_VERSION
-#define REGBENCH_VERSION "unknown"
-#endif
 
 namespace regbench {
 namespace {
@@ -130,15 +128,9 @@ std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
     return out;
 }
 
-/// Writes `text` to `path` atomically (temporary file, then rename).
+/// Writes `text` to `path` atomically and checked (core/atomic_file).
 void WriteText(const fs::path& path, const std::string& text) {
-    const fs::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream f(tmp);
-        f << text;
-        if (!f) throw std::runtime_error(tmp.string() + ": cannot write");
-    }
-    fs::rename(tmp, path);
+    WriteFileAtomic(path.string(), text);
 }
 
 /// Methods to run, and the reasons the wanted ones that cannot run are left out.
@@ -198,7 +190,7 @@ bool EnsurePairs(const Experiment& e,
     if (e.noise_free) request.options.noise_sigma = 0.0;
     request.one_per_item = e.one_per_item;
     request.out = path.string();
-    request.extra_provenance = {{"regbench_version", REGBENCH_VERSION},
+    request.extra_provenance = {{"regbench_version", RegbenchVersion()},
                                 {"reproduce_experiment", e.id}};
     if (!e.fallback.empty()) request.extra_provenance["fallback"] = e.fallback;
     DatasetOptions dataset_options;
@@ -357,7 +349,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     const std::string intro = fmt::format(
         "regbench {} reproduce{}: {} experiments, seed {}, {} jobs, per-call timeout {} s, "
         "one thread per call; CPU {}.",
-        REGBENCH_VERSION, o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
+        RegbenchVersion(), o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
         o.timeout_seconds, CpuModel());
     WriteText(out / "tables.md", "# regbench: the OGMM paper's tables\n\n" + intro + "\n\n" +
                                      Join(tables, TableToMarkdown));

@@ -28,15 +28,11 @@ double SampleStd(const std::vector<double>& v) {
     return std::sqrt(s / static_cast<double>(v.size() - 1));
 }
 
-BootstrapCi BootstrapMean(const std::vector<double>& v,
-                          int samples,
-                          std::uint64_t seed,
-                          std::uint64_t stream,
-                          double level) {
-    BootstrapCi e;
-    e.mean = SampleMean(v);
-    e.lo = e.hi = e.mean;
-    if (v.size() < 2 || samples < 2) return e;
+std::vector<double> SortedBootstrapMeans(const std::vector<double>& v,
+                                         int samples,
+                                         std::uint64_t seed,
+                                         std::uint64_t stream) {
+    if (v.size() < 2 || samples < 2) return {};
     auto rng = MakePairRng(seed, stream);
     std::vector<double> means(static_cast<std::size_t>(samples));
     for (auto& m : means) {
@@ -45,6 +41,19 @@ BootstrapCi BootstrapMean(const std::vector<double>& v,
         m = s / static_cast<double>(v.size());
     }
     std::sort(means.begin(), means.end());
+    return means;
+}
+
+BootstrapCi BootstrapMean(const std::vector<double>& v,
+                          int samples,
+                          std::uint64_t seed,
+                          std::uint64_t stream,
+                          double level) {
+    BootstrapCi e;
+    e.mean = SampleMean(v);
+    e.lo = e.hi = e.mean;
+    const std::vector<double> means = SortedBootstrapMeans(v, samples, seed, stream);
+    if (means.empty()) return e;
     const double tail = 0.5 * (1.0 - level);
     const auto at = [&](double q) {
         return means[static_cast<std::size_t>(std::lround(q * static_cast<double>(samples - 1)))];

@@ -23,6 +23,14 @@ struct BootstrapCi {
     double hi = 0.0;
 };
 
+/// The `samples` means of resamples of `v` drawn with replacement from the stream
+/// (seed, stream), sorted ascending: the bootstrap distribution every CI here is read from.
+/// Empty when `v` has fewer than two values or `samples` < 2.
+std::vector<double> SortedBootstrapMeans(const std::vector<double>& v,
+                                         int samples,
+                                         std::uint64_t seed,
+                                         std::uint64_t stream);
+
 /// Percentile bootstrap (Efron) of the mean: `samples` resamples with replacement drawn from
 /// the stream (seed, stream); [lo, hi] holds the central `level` mass. The stream should be
 /// derived from what is being estimated (StreamId), not from the position in a table, so a CI

@@ -29,36 +29,24 @@ void AddRows(const std::string& path,
              const RowExpectation& expect,
              const std::map<std::string, std::size_t>& method_index,
              std::map<RowKey, Located>* rows) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error(path + ": cannot open results file");
-    std::string line;
-    std::size_t line_no = 0;
-    while (std::getline(in, line)) {
-        ++line_no;
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        const std::string where = path + ":" + std::to_string(line_no);
-        nlohmann::json row;
-        try {
-            row = nlohmann::json::parse(line);
-        } catch (const nlohmann::json::exception& e) {
-            throw std::runtime_error(where + ": not JSON: " + e.what());
-        }
-        ResultRow typed = CheckResultRow(row, expect, where);
-        // Shards of one run score in one Euler convention; a mix would split the report.
-        if (!rows->empty() && typed.euler != rows->begin()->second.row.euler) {
-            const Located& first = rows->begin()->second;
-            throw std::runtime_error(where + ": row scored with --euler " + ToString(typed.euler) +
-                                     " but " + first.where + " with --euler " +
-                                     ToString(first.row.euler));
-        }
-        const RowKey key{typed.pair, method_index.at(typed.method)};
-        const auto [it, inserted] = rows->emplace(key, Located{std::move(typed), where});
-        if (!inserted) {
-            throw std::runtime_error(
-                where + ": duplicate row for pair " + std::to_string(key.first) + ", method '" +
-                expect.methods[key.second].name + "' (also at " + it->second.where + ")");
-        }
-    }
+    ForEachJsonlLine(
+        path, TornLastLine::kRefuse, [&](const std::string& where, const nlohmann::json& row) {
+            ResultRow typed = CheckResultRow(row, expect, where);
+            // Shards of one run score in one Euler convention; a mix would split the report.
+            if (!rows->empty() && typed.euler != rows->begin()->second.row.euler) {
+                const Located& first = rows->begin()->second;
+                throw std::runtime_error(where + ": row scored with --euler " +
+                                         ToString(typed.euler) + " but " + first.where +
+                                         " with --euler " + ToString(first.row.euler));
+            }
+            const RowKey key{typed.pair, method_index.at(typed.method)};
+            const auto [it, inserted] = rows->emplace(key, Located{std::move(typed), where});
+            if (!inserted) {
+                throw std::runtime_error(
+                    where + ": duplicate row for pair " + std::to_string(key.first) + ", method '" +
+                    expect.methods[key.second].name + "' (also at " + it->second.where + ")");
+            }
+        });
 }
 
 }  // namespace

@@ -229,46 +229,53 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
 
 std::string ToJsonLine(const ResultRow& row) { return nlohmann::json(row).dump(); }
 
-std::vector<nlohmann::json> ReadJsonl(const std::string& path) {
+void ForEachJsonlLine(
+    const std::string& path,
+    TornLastLine torn,
+    const std::function<void(const std::string& where, const nlohmann::json& value)>& visit) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open results file");
-    std::vector<nlohmann::json> rows;
-    std::string line;
-    std::size_t lineno = 0;
-    while (std::getline(in, line)) {
-        ++lineno;
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        try {
-            rows.push_back(nlohmann::json::parse(line));
-        } catch (const nlohmann::json::exception& e) {
-            throw std::runtime_error(path + ":" + std::to_string(lineno) +
-                                     ": not JSON: " + e.what());
-        }
-        if (!rows.back().is_object()) {
-            throw std::runtime_error(path + ":" + std::to_string(lineno) + ": not a JSON object");
-        }
-    }
-    return rows;
-}
-
-std::vector<ResultRow> ReadResultRows(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error(path + ": cannot open results file");
-    std::vector<ResultRow> rows;
     std::string line;
     std::size_t lineno = 0;
     while (std::getline(in, line)) {
         ++lineno;
         if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
         const std::string where = path + ":" + std::to_string(lineno);
+        nlohmann::json value;
         try {
-            ResultRow row = nlohmann::json::parse(line).get<ResultRow>();
-            row.origin = where;
-            rows.push_back(std::move(row));
-        } catch (const std::exception& e) {
-            throw std::runtime_error(where + ": not a result row: " + e.what());
+            value = nlohmann::json::parse(line);
+        } catch (const nlohmann::json::exception& e) {
+            // getline sets eof only when the last line ended without a newline.
+            if (torn == TornLastLine::kSkip && in.eof()) break;
+            throw std::runtime_error(where + ": not JSON: " + e.what());
         }
+        visit(where, value);
     }
+}
+
+std::vector<nlohmann::json> ReadJsonl(const std::string& path) {
+    std::vector<nlohmann::json> rows;
+    ForEachJsonlLine(path, TornLastLine::kRefuse,
+                     [&](const std::string& where, const nlohmann::json& value) {
+                         if (!value.is_object()) {
+                             throw std::runtime_error(where + ": not a JSON object");
+                         }
+                         rows.push_back(value);
+                     });
+    return rows;
+}
+
+std::vector<ResultRow> ReadResultRows(const std::string& path) {
+    std::vector<ResultRow> rows;
+    ForEachJsonlLine(path, TornLastLine::kRefuse,
+                     [&](const std::string& where, const nlohmann::json& value) {
+                         try {
+                             rows.push_back(value.get<ResultRow>());
+                         } catch (const std::exception& e) {
+                             throw std::runtime_error(where + ": not a result row: " + e.what());
+                         }
+                         rows.back().origin = where;
+                     });
     return rows;
 }
 

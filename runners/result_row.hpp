@@ -2,6 +2,7 @@
 // One typed result row: the JSONL schema that `run` and `score` write and `report` reads
 // (docs/benchmark-format.md lists the keys). Everything that reads or writes rows goes through
 // this file, so a key is spelt in one place.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -40,8 +41,9 @@ void to_json(nlohmann::json& j, const DataTag& d);
 void from_json(const nlohmann::json& j, DataTag& d);
 
 /// One JSONL line. Keys are those rows have always had (so old files read) plus `euler`,
-/// `source_overlap_ratio`, `target_overlap_ratio`, `cpu_seconds`, `cpu_scope`, `machine`; keys this struct does not know are kept in
-/// `other` and written back, so a newer writer's columns survive a round trip.
+/// `source_overlap_ratio`, `target_overlap_ratio`, `cpu_seconds`, `cpu_scope`, `machine`; keys this
+/// struct does not know are kept in `other` and written back, so a newer writer's columns survive a
+/// round trip.
 struct ResultRow {
     std::size_t pair = 0;                              ///< index in the pair file
     std::string method;                                ///< registry name (or `score --method`)
@@ -90,6 +92,20 @@ Transform TransformFromJson(const nlohmann::json& j);
 
 /// One compact JSON line (no newline).
 std::string ToJsonLine(const ResultRow& row);
+
+/// What a JSONL reader does with a last line that has no newline and does not parse.
+enum class TornLastLine {
+    kRefuse,  ///< a damaged file: throw like any other bad line
+    kSkip,    ///< the write a kill cut short (a run's .part file): drop it, it is redone
+};
+
+/// The one JSONL line scanner every reader here and in merge/resume uses: calls
+/// visit(where, value) for each non-blank line in order, `where` being "path:line". Throws
+/// "path: cannot open results file" or "where: not JSON: ..." (see TornLastLine).
+void ForEachJsonlLine(
+    const std::string& path,
+    TornLastLine torn,
+    const std::function<void(const std::string& where, const nlohmann::json& value)>& visit);
 
 /// Reads a JSONL file of objects (blank lines skipped). Throws naming file and line.
 std::vector<nlohmann::json> ReadJsonl(const std::string& path);

@@ -88,36 +88,19 @@ ResultRow CheckResultRow(const nlohmann::json& json,
 }
 
 std::vector<ResultRow> ReadResumableRows(const std::string& path, const RowExpectation& expect) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error(path + ": cannot open");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::vector<ResultRow> rows;
     std::set<std::pair<std::size_t, std::string>> seen;
-    std::size_t begin = 0;
-    std::size_t line_no = 0;
-    while (begin < text.size()) {
-        ++line_no;
-        const std::size_t end = text.find('\n', begin);
-        const bool terminated = end != std::string::npos;
-        const std::string line = text.substr(begin, terminated ? end - begin : std::string::npos);
-        begin = terminated ? end + 1 : text.size();
-        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-        const std::string where = path + ":" + std::to_string(line_no);
-        nlohmann::json row;
-        try {
-            row = nlohmann::json::parse(line);
-        } catch (const nlohmann::json::exception& e) {
-            if (!terminated) break;  // the write a kill cut short: redone
-            Refuse(where, std::string("not JSON: ") + e.what());
-        }
-        ResultRow typed = CheckResultRow(row, expect, where);
-        const auto key = std::make_pair(typed.pair, typed.method);
-        if (!seen.insert(key).second) {
-            Refuse(where, "duplicate row for pair " + std::to_string(key.first) + ", method '" +
-                              key.second + "'");
-        }
-        rows.push_back(std::move(typed));
-    }
+    // A torn last line is the write a kill cut short: it is redone.
+    ForEachJsonlLine(path, TornLastLine::kSkip,
+                     [&](const std::string& where, const nlohmann::json& row) {
+                         ResultRow typed = CheckResultRow(row, expect, where);
+                         const auto key = std::make_pair(typed.pair, typed.method);
+                         if (!seen.insert(key).second) {
+                             Refuse(where, "duplicate row for pair " + std::to_string(key.first) +
+                                               ", method '" + key.second + "'");
+                         }
+                         rows.push_back(std::move(typed));
+                     });
     return rows;
 }
 

@@ -20,8 +20,8 @@
 #include <thread>
 
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
 #include "core/cpu_time.hpp"
+#include "core/file_lock.hpp"
 #include "core/threads.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -225,7 +225,9 @@ std::uint64_t BenchmarkSeed(const PairSet& set) {
     return 0;
 }
 
-RunSummary RunBenchmark(const RunOptions& options) {
+namespace {
+
+void ValidateRunOptions(const RunOptions& options) {
     if (options.methods.empty()) throw std::invalid_argument("no methods to run");
     if (options.jobs < 1) throw std::invalid_argument("--jobs must be >= 1");
     if (options.threads_per_call < 1) throw std::invalid_argument("--threads must be >= 1");
@@ -234,21 +236,201 @@ RunSummary RunBenchmark(const RunOptions& options) {
         throw std::invalid_argument("--shard must be i/n with 0 <= i < n");
     }
     if (options.out_path.empty()) throw std::invalid_argument("--out is required");
+}
+
+/// The pair indices of this run's shard: every shard_count-th pair from shard_index.
+std::vector<std::size_t> ShardPairs(std::size_t num_pairs, const RunOptions& options) {
+    std::vector<std::size_t> indices;
+    for (std::size_t k = 0; k < num_pairs; ++k) {
+        if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
+            options.shard_index) {
+            indices.push_back(k);
+        }
+    }
+    return indices;
+}
+
+/// The rows an interrupted run already wrote (with --resume) and their (pair, method) keys.
+struct Resumed {
+    std::vector<ResultRow> rows;
+    std::set<std::string> done;
+};
+
+/// Reads the kept rows of an interrupted run (its .part file, else the finished output).
+/// Every kept row is checked against this run; a foreign row is refused, never mixed.
+Resumed LoadResume(const RunOptions& options,
+                   const std::string& part_path,
+                   const RowExpectation& expect) {
+    Resumed resumed;
+    if (!options.resume) return resumed;
+    const bool have_part = std::filesystem::exists(part_path);
+    const bool have_out = std::filesystem::exists(options.out_path);
+    const std::string& kept = have_part ? part_path : options.out_path;
+    if (have_part || have_out) resumed.rows = ReadResumableRows(kept, expect);
+    for (const auto& r : resumed.rows) {
+        // One file, one convention: resumed rows scored otherwise would split the report.
+        if (r.euler != options.euler) {
+            throw std::runtime_error(r.origin + ": rows were scored with --euler " +
+                                     ToString(r.euler) + "; resume with --euler " +
+                                     ToString(r.euler) + " or start a new file");
+        }
+        resumed.done.insert(RowKey(r.pair, r.method));
+    }
+    return resumed;
+}
+
+/// Everything the workers read, fixed for the whole run.
+struct RunPlan {
+    RunPlan(const RunOptions& o, const PairSet& s) : options(o), set(s) {}
+    const RunOptions& options;
+    const PairSet& set;
+    std::vector<std::size_t> indices;  ///< pairs of this shard
+    std::set<std::string> done;        ///< (pair, method) keys resumed from a previous run
+    std::uint64_t benchmark_seed = 0;  ///< methods' per-pair RNG streams derive from it
+    RowContext row_context;            ///< threads, euler, data and machine tags of every row
+};
+
+/// What the workers share while they run: the output and the counters.
+struct RunState {
+    RunState(PartFile& p, ProgressMeter& m) : part(p), progress(m) {}
+    PartFile& part;
+    ProgressMeter& progress;
+    std::mutex out_mutex;  ///< guards `part`, `error` and the rows_safe increment
+    std::atomic<std::size_t> next{0};
+    std::atomic<std::size_t> failures{0};
+    std::atomic<std::size_t> written{0};
+    std::atomic<std::size_t> rows_safe{0};
+    std::atomic<bool> stop{false};
+    std::exception_ptr error;  ///< first failure in a worker (a write error), rethrown after join
+};
+
+/// One (pair, method) call, isolated when a timeout is set, turned into its row.
+ResultRow RunCall(const RunPlan& plan,
+                  RegistrationMethod& method,
+                  const MethodSpec& spec,
+                  const AlignContext& context) {
+    const RunOptions& options = plan.options;
+    const std::size_t k = context.pair_index;
+    const Pair& pair = plan.set.pairs[k];
+    // Scale guard: an O(N*M) method on a large cloud runs on the recorded stride-downsampled
+    // pair; metrics still compare against the full pair.
+    nlohmann::json downsampled;
+    const bool reduce = options.downsample && NeedsScaleGuard(spec.name, pair, options.max_points);
+    const Pair reduced =
+        reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
+    const Pair& input = reduce ? reduced : pair;
+    const CallOutcome outcome = options.timeout_seconds > 0.0
+                                    ? AlignIsolated(method, input, context, options.timeout_seconds,
+                                                    options.threads_per_call)
+                                    : AlignInProcess(method, input, context);
+    RowContext row_context = plan.row_context;
+    row_context.status = outcome.status;
+    ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
+    if (reduce) row.other["downsampled"] = downsampled;
+    return row;
+}
+
+/// One worker: takes the next pair until none is left or the run stops, runs every method
+/// not yet done on it and appends the rows as they come.
+void WorkOnPairs(const RunPlan& plan, RunState& state) {
+    const RunOptions& options = plan.options;
+    // Each worker owns its method instances: methods keep scratch buffers.
+    omp_set_num_threads(options.threads_per_call);
+    std::vector<std::unique_ptr<RegistrationMethod>> methods;
+    for (const auto& spec : options.methods)
+        methods.push_back(CreateMethod(spec.name, spec.params));
+    for (;;) {
+        if (state.stop.load()) return;
+        const std::size_t i = state.next.fetch_add(1);
+        if (i >= plan.indices.size()) return;
+        AlignContext context;
+        context.seed = plan.benchmark_seed;
+        context.pair_index = plan.indices[i];
+        context.threads = options.threads_per_call;
+        for (std::size_t m = 0; m < methods.size(); ++m) {
+            const auto& spec = options.methods[m];
+            if (plan.done.count(RowKey(context.pair_index, spec.name))) continue;
+            const ResultRow row = RunCall(plan, *methods[m], spec, context);
+            if (row.status != Status::kOk) state.failures.fetch_add(1);
+            {
+                std::lock_guard<std::mutex> guard(state.out_mutex);
+                if (state.stop.load()) return;
+                state.part.Append(row);  // throws on a write error: RunWorkers stops the run
+                state.rows_safe.fetch_add(1);
+            }
+            state.written.fetch_add(1);
+            state.progress.Advance();
+        }
+    }
+}
+
+/// Runs `jobs` workers (this thread is one of them) until every call is done. An exception
+/// must not escape a std::thread (std::terminate): the first one stops all workers and is kept
+/// in state.error for the caller to rethrow after they joined.
+void RunWorkers(const RunPlan& plan, RunState& state) {
+    const auto worker = [&] {
+        try {
+            WorkOnPairs(plan, state);
+        } catch (...) {
+            std::lock_guard<std::mutex> guard(state.out_mutex);
+            if (!state.error) state.error = std::current_exception();
+            state.stop = true;
+        }
+    };
+    const RunOptions& options = plan.options;
+    const int jobs =
+        std::max(1, std::min<int>(options.jobs, static_cast<int>(plan.indices.size())));
+    std::vector<std::thread> threads;
+    for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
+    worker();
+    for (auto& t : threads) t.join();
+}
+
+/// The final file: rows sorted by (pair, method order), so its order does not depend on
+/// --jobs; written atomically, then the .part file is removed.
+void WriteSortedRows(const RunOptions& options,
+                     const std::string& part_path,
+                     const RowExpectation& expect) {
+    std::vector<ResultRow> all = ReadResumableRows(part_path, expect);
+    std::map<std::string, std::size_t> order;
+    for (std::size_t m = 0; m < options.methods.size(); ++m) order[options.methods[m].name] = m;
+    std::stable_sort(all.begin(), all.end(), [&](const ResultRow& a, const ResultRow& b) {
+        return std::make_pair(a.pair, order[a.method]) < std::make_pair(b.pair, order[b.method]);
+    });
+    std::string text;
+    for (const auto& r : all) text += ToJsonLine(r) + "\n";
+    WriteFileAtomic(options.out_path, text, {options.pairs_path});
+    std::filesystem::remove(part_path);
+}
+
+/// The row tags every call of this run shares. The machine's load when the run started is
+/// timing provenance: a reader can tell whether wall times were taken on a busy machine
+/// (docs/performance.md).
+RowContext RunRowContext(const RunOptions& options, const DataTag& data_tag) {
+    const MachineLoad load = ReadMachineLoad();
+    RowContext context;
+    context.threads = options.threads_per_call;
+    context.euler = options.euler;
+    context.data = data_tag;
+    context.machine = {{"loadavg", {load.load1, load.load5, load.load15}},
+                       {"cores", load.cores},
+                       {"jobs", options.jobs}};
+    return context;
+}
+
+}  // namespace
+
+RunSummary RunBenchmark(const RunOptions& options) {
+    ValidateRunOptions(options);
     const auto start = std::chrono::steady_clock::now();
     const PairSet set = ReadPairFile(options.pairs_path);  // throws naming the file
-    // The scale guard refuses before any output exists (or says what it will downsample).
-    {
-        std::vector<std::size_t> shard;
-        for (std::size_t k = 0; k < set.pairs.size(); ++k) {
-            if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
-                options.shard_index) {
-                shard.push_back(k);
-            }
-        }
-        const std::string notice =
-            CheckScale(set, shard, options.methods, options.max_points, options.downsample);
-        if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
-    }
+    // Select pairs. The scale guard refuses before any output exists (or says what it will
+    // downsample).
+    RunPlan plan(options, set);
+    plan.indices = ShardPairs(set.pairs.size(), options);
+    const std::string notice =
+        CheckScale(set, plan.indices, options.methods, options.max_points, options.downsample);
+    if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
     const std::string part_path = options.out_path + ".part";
     CheckOutputPath(options.out_path, {options.pairs_path});
     CheckOutputPath(part_path, {options.pairs_path});
@@ -261,145 +443,36 @@ RunSummary RunBenchmark(const RunOptions& options) {
     expect.shard_index = options.shard_index;
     expect.shard_count = options.shard_count;
     expect.methods = options.methods;
+    plan.benchmark_seed = BenchmarkSeed(set);
+    plan.row_context = RunRowContext(options, data_tag);
 
-    // Methods' per-pair RNG streams derive from the pair file's seed and the pair index.
-    // Timing provenance (perf): the machine's load when the run started, so a reader can tell
-    // whether wall times were taken on a busy machine (see docs/performance.md).
-    const MachineLoad load = ReadMachineLoad();
-    const nlohmann::json machine_tag = {{"loadavg", {load.load1, load.load5, load.load15}},
-                                        {"cores", load.cores},
-                                        {"jobs", options.jobs}};
-    const std::uint64_t benchmark_seed = BenchmarkSeed(set);
-    std::vector<std::size_t> indices;
-    for (std::size_t k = 0; k < set.pairs.size(); ++k) {
-        if (static_cast<int>(k % static_cast<std::size_t>(options.shard_count)) ==
-            options.shard_index) {
-            indices.push_back(k);
-        }
-    }
-    std::vector<ResultRow> rows;
-    std::set<std::string> done;
-    if (options.resume) {
-        const bool have_part = std::filesystem::exists(part_path);
-        const bool have_out = std::filesystem::exists(options.out_path);
-        const std::string& kept = have_part ? part_path : options.out_path;
-        // Every kept row is checked against this run; a foreign row is refused, never mixed.
-        if (have_part || have_out) rows = ReadResumableRows(kept, expect);
-        for (const auto& r : rows) {
-            // One file, one convention: resumed rows scored otherwise would split the report.
-            if (r.euler != options.euler) {
-                throw std::runtime_error(r.origin + ": rows were scored with --euler " +
-                                         ToString(r.euler) + "; resume with --euler " +
-                                         ToString(r.euler) + " or start a new file");
-            }
-            done.insert(RowKey(r.pair, r.method));
-        }
-    }
-    RunSummary summary;
-    summary.rows_skipped = rows.size();
-    // Rewrite the kept rows so a torn last line from the interrupted run disappears.
+    // Load resume, and rewrite the kept rows so a torn last line from the interrupted run
+    // disappears.
+    Resumed resumed = LoadResume(options, part_path, expect);
+    plan.done = std::move(resumed.done);
     PartFile part(part_path);
-    for (const auto& r : rows) part.Append(r);
+    for (const auto& r : resumed.rows) part.Append(r);
 
-    const std::size_t total_calls = indices.size() * options.methods.size();
+    // Run workers.
+    const std::size_t total_calls = plan.indices.size() * options.methods.size();
     ProgressMeter progress("run", total_calls, options.progress);
-    progress.Advance(std::min(done.size(), total_calls));
-    std::mutex out_mutex;
-    std::atomic<std::size_t> next{0};
-    std::atomic<std::size_t> failures{0};
-    std::atomic<std::size_t> written{0};
-    std::atomic<std::size_t> rows_safe{rows.size()};
-    std::atomic<bool> stop{false};
-    std::exception_ptr error;  // first failure in a worker (a write error), rethrown after join
-
-    auto work = [&] {
-        // Each worker owns its method instances: methods keep scratch buffers.
-        omp_set_num_threads(options.threads_per_call);
-        std::vector<std::unique_ptr<RegistrationMethod>> methods;
-        for (const auto& spec : options.methods)
-            methods.push_back(CreateMethod(spec.name, spec.params));
-        for (;;) {
-            if (stop.load()) return;
-            const std::size_t i = next.fetch_add(1);
-            if (i >= indices.size()) return;
-            const std::size_t k = indices[i];
-            const Pair& pair = set.pairs[k];
-            AlignContext context;
-            context.seed = benchmark_seed;
-            context.pair_index = k;
-            context.threads = options.threads_per_call;
-            for (std::size_t m = 0; m < methods.size(); ++m) {
-                const auto& spec = options.methods[m];
-                if (done.count(RowKey(k, spec.name))) continue;
-                // Scale guard: an O(N*M) method on a large cloud runs on the recorded
-                // stride-downsampled pair; metrics still compare against the full pair.
-                nlohmann::json downsampled;
-                const bool reduce =
-                    options.downsample && NeedsScaleGuard(spec.name, pair, options.max_points);
-                const Pair reduced =
-                    reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
-                const Pair& input = reduce ? reduced : pair;
-                CallOutcome outcome =
-                    options.timeout_seconds > 0.0
-                        ? AlignIsolated(*methods[m], input, context, options.timeout_seconds,
-                                        options.threads_per_call)
-                        : AlignInProcess(*methods[m], input, context);
-                RowContext row_context;
-                row_context.status = outcome.status;
-                row_context.threads = options.threads_per_call;
-                row_context.euler = options.euler;
-                row_context.data = data_tag;
-                row_context.machine = machine_tag;
-                ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
-                if (reduce) row.other["downsampled"] = downsampled;
-                if (outcome.status != Status::kOk) failures.fetch_add(1);
-                {
-                    std::lock_guard<std::mutex> guard(out_mutex);
-                    if (stop.load()) return;
-                    part.Append(row);  // throws on a write error: `worker` stops the run
-                    rows_safe.fetch_add(1);
-                }
-                written.fetch_add(1);
-                progress.Advance();
-            }
-        }
-    };
-    // An exception must not escape a std::thread (std::terminate): the first one stops all
-    // workers and is rethrown here after they joined.
-    auto worker = [&] {
-        try {
-            work();
-        } catch (...) {
-            std::lock_guard<std::mutex> guard(out_mutex);
-            if (!error) error = std::current_exception();
-            stop = true;
-        }
-    };
+    progress.Advance(std::min(plan.done.size(), total_calls));
+    RunState state(part, progress);
+    state.rows_safe = resumed.rows.size();
     // setenv is not thread-safe: set the process-wide part once, before any worker starts.
     SetOmpThreads(options.threads_per_call);
-    const InterruptNotice notice(&rows_safe, part_path, ResumeCommand(options));
-    const int jobs = std::max(1, std::min<int>(options.jobs, static_cast<int>(indices.size())));
-    std::vector<std::thread> threads;
-    for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
-    worker();
-    for (auto& t : threads) t.join();
+    const InterruptNotice interrupt(&state.rows_safe, part_path, ResumeCommand(options));
+    RunWorkers(plan, state);
     progress.Finish();
-    if (error) std::rethrow_exception(error);
+    if (state.error) std::rethrow_exception(state.error);
     part.Close();
 
-    // Final file: rows sorted by (pair, method order), so output order does not depend on --jobs.
-    std::vector<ResultRow> all = ReadResumableRows(part_path, expect);
-    std::map<std::string, std::size_t> order;
-    for (std::size_t m = 0; m < options.methods.size(); ++m) order[options.methods[m].name] = m;
-    std::stable_sort(all.begin(), all.end(), [&](const ResultRow& a, const ResultRow& b) {
-        return std::make_pair(a.pair, order[a.method]) < std::make_pair(b.pair, order[b.method]);
-    });
-    std::string text;
-    for (const auto& r : all) text += ToJsonLine(r) + "\n";
-    WriteFileAtomic(options.out_path, text, {options.pairs_path});
-    std::filesystem::remove(part_path);
-    summary.rows_written = written.load();
-    summary.failures = failures.load();
+    // Write sorted.
+    WriteSortedRows(options, part_path, expect);
+    RunSummary summary;
+    summary.rows_skipped = resumed.rows.size();
+    summary.rows_written = state.written.load();
+    summary.failures = state.failures.load();
     summary.wall_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return summary;

@@ -14,13 +14,9 @@ if [ "${REGBENCH_SKIP_EXTRA:-0}" = 1 ]; then
   exit 0
 fi
 build="${REGBENCH_SAN_BUILD_DIR:-$root/build-san}"
-jobs="${REGBENCH_BUILD_JOBS:-$(nproc)}"
 seconds="${REGBENCH_FUZZ_SECONDS:-20}"
-launcher=()
-if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
-  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$root")}"
-fi
+# shellcheck source=scripts/build_env.sh
+source "$root/scripts/build_env.sh"
 start=$(date +%s)
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ "${launcher[@]}" \

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "core/math_constants.hpp"
 #include "core/metrics.hpp"
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
@@ -85,7 +86,7 @@ Shape MovedBlob(std::uint64_t seed, const Eigen::Matrix3d& R, const Eigen::Vecto
 }
 
 TEST(Cpd, RecoversThirtyDegreesOnCleanPair) {
-    const Shape s = MovedBlob(21, RotationFromAxisAngle({1, 1, 0}, M_PI / 6), {0.05, 0.02, -0.03});
+    const Shape s = MovedBlob(21, RotationFromAxisAngle({1, 1, 0}, kPi / 6), {0.05, 0.02, -0.03});
     const AlignResult r = RunCpd(s.Y, s.X);
     const PairMetrics m = MotionMetrics(MakeTransform(s.R, s.t), r.T_target_source);
     EXPECT_LT(m.rre, 1.0);
@@ -95,7 +96,7 @@ TEST(Cpd, RecoversThirtyDegreesOnCleanPair) {
 
 TEST(Cpd, SpecTargetInProbregCompat) {
     // Spec required test 5: target = R(30 deg about z) Y + (0.1, -0.05, 0.2), defaults.
-    const Shape s = MovedBlob(22, RotationFromAxisAngle({0, 0, 1}, M_PI / 6), {0.1, -0.05, 0.2});
+    const Shape s = MovedBlob(22, RotationFromAxisAngle({0, 0, 1}, kPi / 6), {0.1, -0.05, 0.2});
     const AlignResult r = RunCpd(s.Y, s.X, {{"compat", "probreg"}});
     EXPECT_LT(RotErrDeg(r, s.R), 0.5);
     EXPECT_LT(std::abs(r.scale - 1.0), 1e-3);
@@ -112,8 +113,8 @@ TEST(Cpd, ProbregOwnTestEulerAngles) {
             MovedBlob(100 + static_cast<std::uint64_t>(trial), R, Eigen::Vector3d::Zero());
         const AlignResult r = RunCpd(s.Y, s.X, {{"compat", "probreg"}});
         const Eigen::Matrix3d R_est = r.T_target_source.topLeftCorner<3, 3>() / r.scale;
-        const Eigen::Vector3d e_gt = EulerZyxDegFromRotation(R) * M_PI / 180.0;
-        const Eigen::Vector3d e_est = EulerZyxDegFromRotation(R_est) * M_PI / 180.0;
+        const Eigen::Vector3d e_gt = EulerZyxDegFromRotation(R) * kPi / 180.0;
+        const Eigen::Vector3d e_est = EulerZyxDegFromRotation(R_est) * kPi / 180.0;
         EXPECT_LT((e_gt - e_est).cwiseAbs().maxCoeff(), 1e-2) << "trial " << trial;
         const Eigen::Vector3d t_est = r.T_target_source.topRightCorner<3, 1>();
         EXPECT_LT(t_est.cwiseAbs().maxCoeff(), 1e-4);

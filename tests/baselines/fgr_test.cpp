@@ -9,6 +9,7 @@
 namespace regbench {
 namespace {
 
+using testing::AlignOk;
 using testing::CleanCompletePair;
 using testing::RreDeg;
 
@@ -16,8 +17,7 @@ TEST(Fgr, RecoversLargeMotionOnCleanCompletePair) {
     // Global: no initial guess needed, identical points give identical FPFH descriptors.
     constexpr double kRreTolDeg = 1.0;
     const auto pair = CleanCompletePair(60.0);
-    const AlignResult r = CreateMethod("fgr")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("fgr", pair);
     EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
     EXPECT_EQ(r.iterations, 64);
 }

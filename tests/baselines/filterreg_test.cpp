@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/math_constants.hpp"
 #include "core/metrics.hpp"
 #include "core/normals.hpp"
 #include "core/rng.hpp"
@@ -18,7 +19,6 @@
 namespace regbench {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kEulerTolRad = 0.2;        // spec test 5/6 and probreg's own test
 constexpr double kUpdateSigmaTolDeg = 2.0;  // spec test 5 with update_sigma2
 constexpr double kCleanRreTolDeg = 1.0;     // issue: clean complete pair, 30 deg

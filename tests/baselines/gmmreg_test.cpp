@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
 #include "tests/testing/method_params.hpp"
@@ -43,7 +44,7 @@ TEST(GmmReg, ProbregModeRecoversThirtyDegreesAboutZ) {
 
 TEST(GmmReg, ProbregModeOnACleanCompletePair) {
     const PointCloud Y = LumpyEllipsoid(kPoints, 2);
-    const Transform T = MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 0), M_PI / 6),
+    const Transform T = MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 0), kPi / 6),
                                       Eigen::Vector3d(0.2, 0.1, -0.1));
     const AlignResult r = RunGmmReg({}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;

@@ -6,6 +6,7 @@
 namespace regbench {
 namespace {
 
+using testing::AlignOk;
 using testing::CleanCompletePair;
 using testing::RreDeg;
 
@@ -13,17 +14,14 @@ constexpr double kRreTolDeg = 0.5;
 
 TEST(Icp, RecoversTenDegreesOnCleanCompletePair) {
     const auto pair = CleanCompletePair(10.0);
-    const AlignResult r = CreateMethod("icp")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("icp", pair);
     EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
     EXPECT_GT(r.iterations, 1);
 }
 
 TEST(Icp, MaxIterationsIsApplied) {
     const auto pair = CleanCompletePair(10.0);
-    const AlignResult r =
-        CreateMethod("icp", {{"max_iterations", 1}})->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("icp", pair, {{"max_iterations", 1}});
     EXPECT_EQ(r.iterations, 1);
     EXPECT_EQ(r.stop_reason, "max_iterations");
     EXPECT_GT(RreDeg(pair, r.T_target_source), kRreTolDeg);  // one step is not enough
@@ -32,8 +30,7 @@ TEST(Icp, MaxIterationsIsApplied) {
 TEST(Icp, DistantCloudsHaveNoCorrespondences) {
     auto pair = CleanCompletePair(0.0);
     pair.target.col(0).array() += 10.0;
-    const AlignResult r = CreateMethod("icp")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("icp", pair);
     EXPECT_EQ(r.stop_reason, "no_correspondences");
     EXPECT_TRUE(r.T_target_source.isIdentity());
     EXPECT_EQ(r.extra.at("correspondences"), 0);
@@ -51,8 +48,7 @@ TEST(Icp, OutOfRangeParameterIsNamed) {
 
 TEST(IcpPl, RecoversTenDegreesOnCleanCompletePair) {
     const auto pair = CleanCompletePair(10.0);
-    const AlignResult r = CreateMethod("icp-pl")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("icp-pl", pair);
     EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
 #include "tests/testing/shapes.hpp"
@@ -34,7 +35,7 @@ protected:
 
 TEST_P(L2Method, CorrectModeIsAccurateOnACleanCompletePair) {
     const PointCloud Y = LumpyEllipsoid(717, GetParam().clean_seed);
-    const Transform T = MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 0), M_PI / 6),
+    const Transform T = MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 0), kPi / 6),
                                       Eigen::Vector3d(0.2, 0.1, -0.1));
     const AlignResult r = Run({{"compat", "none"}}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 
+#include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/zoo.hpp"
@@ -55,7 +56,7 @@ TEST(Learned, IcpRefineStartsFromTheGivenEstimate) {
     // which it could not from an estimate composed the wrong way round.
     const auto pair = testing::CleanCompletePair(60.0);
     const Transform off =
-        MakeTransform(RotationFromAxisAngle({0, 0, 1}, 3.0 * M_PI / 180), {0.01, 0, 0});
+        MakeTransform(RotationFromAxisAngle({0, 0, 1}, 3.0 * kPi / 180), {0.01, 0, 0});
     const Transform init = off * pair.T_gt;
     const Transform refined = IcpRefine(pair.source, pair.target, init);
     EXPECT_LT(testing::RreDeg(pair, refined), 0.05);

@@ -7,14 +7,14 @@
 namespace regbench {
 namespace {
 
+using testing::AlignOk;
 using testing::CleanCompletePair;
 using testing::RreDeg;
 
 TEST(Gicp, RecoversTenDegreesOnCleanCompletePair) {
     constexpr double kRreTolDeg = 0.5;
     const auto pair = CleanCompletePair(10.0);
-    const AlignResult r = CreateMethod("gicp")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("gicp", pair);
     EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
     EXPECT_EQ(r.stop_reason, "converged");
 }
@@ -32,8 +32,7 @@ TEST(Gicp, DistantCloudsStopWithOptimizerError) {
     // the identity and says why instead of claiming convergence.
     auto pair = CleanCompletePair(0.0);
     pair.target.col(0).array() += 10.0;
-    const AlignResult r = CreateMethod("gicp")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("gicp", pair);
     EXPECT_EQ(r.stop_reason, "optimizer_error");
     EXPECT_TRUE(r.T_target_source.isIdentity(1e-12));
 }
@@ -41,8 +40,7 @@ TEST(Gicp, DistantCloudsStopWithOptimizerError) {
 TEST(Ndt, RecoversFiveDegreesOnCleanCompletePair) {
     constexpr double kRreTolDeg = 1.0;
     const auto pair = CleanCompletePair(5.0);
-    const AlignResult r = CreateMethod("ndt")->Align(pair.source, pair.target);
-    ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+    const AlignResult r = AlignOk("ndt", pair);
     EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
 }
 

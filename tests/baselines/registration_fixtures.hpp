@@ -1,7 +1,13 @@
 #pragma once
 // Test-only pairs with known motion for the per-method tests.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "core/math_constants.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
+#include "runners/registry.hpp"
 #include "tests/baselines/synthetic_shape.hpp"
 
 namespace regbench::testing {
@@ -18,8 +24,7 @@ inline KnownPair CleanCompletePair(double angle_deg, std::uint64_t seed = 11) {
     auto rng = MakePairRng(seed, 0);
     KnownPair pair;
     pair.source = SampleBumpyEllipsoid(rng, 1024);
-    const Eigen::Matrix3d R =
-        RotationFromAxisAngle({1.0, 0.5, -0.3}, angle_deg * 3.14159265358979323846 / 180.0);
+    const Eigen::Matrix3d R = RotationFromAxisAngle({1.0, 0.5, -0.3}, angle_deg * kPi / 180.0);
     pair.T_gt = MakeTransform(R, {0.03, -0.02, 0.01});
     pair.target = Apply(pair.T_gt, pair.source);
     return pair;
@@ -28,6 +33,16 @@ inline KnownPair CleanCompletePair(double angle_deg, std::uint64_t seed = 11) {
 /// Rotation error in degrees of an estimate against the pair's ground truth.
 inline double RreDeg(const KnownPair& pair, const Transform& T_est) {
     return RotationAngleDeg(pair.T_gt.topLeftCorner<3, 3>(), T_est.topLeftCorner<3, 3>());
+}
+
+/// Aligns the pair with a fresh `method` built from `params`, and fails the test (naming the
+/// method's message) unless the call returned a transform.
+inline AlignResult AlignOk(const std::string& method,
+                           const KnownPair& pair,
+                           const nlohmann::json& params = nlohmann::json::object()) {
+    const AlignResult r = CreateMethod(method, params)->Align(pair.source, pair.target);
+    EXPECT_EQ(r.status, AlignStatus::kOk) << method << ": " << r.message;
+    return r;
 }
 
 }  // namespace regbench::testing

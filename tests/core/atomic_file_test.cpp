@@ -13,32 +13,12 @@
 #include <string>
 
 #include "core/file_lock.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
 
 namespace fs = std::filesystem;
-
-fs::path FreshDir(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / ("regbench_atomic_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
-}
-
-std::string Slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-std::string ErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "";
-}
 
 /// Runs `write` in a forked child under RLIMIT_FSIZE = `limit` bytes with SIGXFSZ ignored (so a
 /// write past the limit fails with EFBIG instead of killing the process, as on a full disk).
@@ -65,18 +45,18 @@ int RunUnderFileSizeLimit(rlim_t limit,
 }
 
 TEST(AtomicFile, WritesAndReplacesAtomically) {
-    const fs::path dir = FreshDir("replace");
+    const fs::path dir = testing::FreshTempDir("replace");
     const std::string path = (dir / "out.txt").string();
     WriteFileAtomic(path, "first\n");
     WriteFileAtomic(path, "second\n");
-    EXPECT_EQ(Slurp(path), "second\n");
+    EXPECT_EQ(testing::ReadBytes(path), "second\n");
     // Only the final file remains: no temporaries.
     EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 1);
     fs::remove_all(dir);
 }
 
 TEST(AtomicFile, FileSizeLimitLeavesNoFileAndNoSignal) {
-    const fs::path dir = FreshDir("fsize");
+    const fs::path dir = testing::FreshTempDir("fsize");
     const std::string path = (dir / "big.txt").string();
     const int status =
         RunUnderFileSizeLimit(4096, path, [&] { WriteFileAtomic(path, std::string(100000, 'x')); });
@@ -88,36 +68,38 @@ TEST(AtomicFile, FileSizeLimitLeavesNoFileAndNoSignal) {
 }
 
 TEST(AtomicFile, FailedWriteKeepsThePreviousFile) {
-    const fs::path dir = FreshDir("keep");
+    const fs::path dir = testing::FreshTempDir("keep");
     const std::string path = (dir / "r.txt").string();
     WriteFileAtomic(path, "old\n");
     const int status =
         RunUnderFileSizeLimit(1024, path, [&] { WriteFileAtomic(path, std::string(50000, 'y')); });
     ASSERT_TRUE(WIFEXITED(status));
     EXPECT_EQ(WEXITSTATUS(status), 3);
-    EXPECT_EQ(Slurp(path), "old\n");
+    EXPECT_EQ(testing::ReadBytes(path), "old\n");
     fs::remove_all(dir);
 }
 
 TEST(CheckOutputPath, RefusesDirectoriesDevicesInputsAndMissingDirs) {
-    const fs::path dir = FreshDir("check");
+    const fs::path dir = testing::FreshTempDir("check");
     const std::string input = (dir / "in.h5").string();
     WriteFileAtomic(input, "data");
-    EXPECT_NE(ErrorOf([&] { CheckOutputPath(dir.string()); }).find("is a directory"),
+    EXPECT_NE(testing::ErrorOf([&] { CheckOutputPath(dir.string()); }).find("is a directory"),
               std::string::npos);
-    EXPECT_NE(ErrorOf([&] { CheckOutputPath("/dev/null"); }).find("not a regular file"),
+    EXPECT_NE(testing::ErrorOf([&] { CheckOutputPath("/dev/null"); }).find("not a regular file"),
               std::string::npos);
-    EXPECT_NE(ErrorOf([&] { CheckOutputPath(input, {input}); }).find("same file as the input"),
-              std::string::npos);
+    EXPECT_NE(
+        testing::ErrorOf([&] { CheckOutputPath(input, {input}); }).find("same file as the input"),
+        std::string::npos);
     // Another name for the same inode is the same file.
     const std::string link = (dir / "link.h5").string();
     fs::create_hard_link(input, link);
-    EXPECT_NE(ErrorOf([&] { CheckOutputPath(link, {input}); }).find("same file"),
+    EXPECT_NE(testing::ErrorOf([&] { CheckOutputPath(link, {input}); }).find("same file"),
               std::string::npos);
-    EXPECT_NE(
-        ErrorOf([&] { CheckOutputPath((dir / "no/such/out").string()); }).find("does not exist"),
-        std::string::npos);
-    EXPECT_EQ(ErrorOf([&] { CheckOutputPath((dir / "new.txt").string(), {input}); }), "");
+    EXPECT_NE(testing::ErrorOf([&] {
+                  CheckOutputPath((dir / "no/such/out").string());
+              }).find("does not exist"),
+              std::string::npos);
+    EXPECT_EQ(testing::ErrorOf([&] { CheckOutputPath((dir / "new.txt").string(), {input}); }), "");
     // The writer itself refuses too, and /dev/null is left alone.
     EXPECT_THROW(WriteFileAtomic("/dev/null", "x"), std::runtime_error);
     EXPECT_TRUE(fs::is_character_file("/dev/null"));
@@ -125,11 +107,11 @@ TEST(CheckOutputPath, RefusesDirectoriesDevicesInputsAndMissingDirs) {
 }
 
 TEST(OutputLock, SecondHolderIsRefusedWithThePid) {
-    const fs::path dir = FreshDir("lock");
+    const fs::path dir = testing::FreshTempDir("lock");
     const std::string out = (dir / "r.jsonl").string();
     {
         const OutputLock first(out);
-        const std::string err = ErrorOf([&] { OutputLock second(out); });
+        const std::string err = testing::ErrorOf([&] { OutputLock second(out); });
         EXPECT_NE(err.find("pid " + std::to_string(getpid())), std::string::npos) << err;
         // Another process is refused as well (flock locks are per open file description).
         const pid_t pid = fork();

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/rng.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -106,22 +107,11 @@ TEST(ReadOff, RejectsCorruptFilesNamingPath) {
     ExpectThrowsNaming([&] { ReadOff(missing); }, missing);
 }
 
-/// The message of the std::runtime_error `fn` throws ("" if none).
-template <typename Fn>
-std::string ErrorOf(Fn fn) {
-    try {
-        fn();
-    } catch (const std::runtime_error& e) {
-        return e.what();
-    }
-    return "";
-}
-
 TEST(ReadOff, RefusesCountsTheFileCannotHoldBeforeAllocating) {
     // 2e9 vertices need at least 6 bytes each ("0 0 0\n"); this file has 33 bytes, so the
     // header is refused before 2e9 x 3 doubles (48 GB) are allocated.
     const std::string path = WriteFile("huge.off", "OFF\n2000000000 1 0\n0 0 0\n3 0 0 0\n");
-    const std::string err = ErrorOf([&] { ReadOff(path); });
+    const std::string err = testing::ErrorOf([&] { ReadOff(path); });
     EXPECT_NE(err.find(path), std::string::npos) << err;
     EXPECT_NE(err.find("header declares 2000000000 vertices and 1 faces, more than the file's 33 "
                        "bytes can hold"),
@@ -134,7 +124,7 @@ TEST(ReadOff, RefusesCoordinatesBeyondFloatRange) {
     // convert to float, so the vertex is refused at line 3 of the file.
     const std::string path =
         WriteFile("overflow.off", "OFF\n3 1 0\n0 0 1e300\n1 0 0\n1 1 0\n3 0 1 2\n");
-    const std::string err = ErrorOf([&] { ReadOff(path); });
+    const std::string err = testing::ErrorOf([&] { ReadOff(path); });
     EXPECT_NE(
         err.find(path + ":3: OFF: vertex coordinate is not finite or does not fit in a float"),
         std::string::npos)

@@ -7,6 +7,7 @@
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_summary.hpp"
 #include "tests/protocols/test_shapes.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -32,7 +33,7 @@ GenerateRequest Request(const std::string& out) {
 }
 
 TEST(Generate, WritesOneFileWithProvenanceAndProgress) {
-    const std::string dir = test::FreshTempDir("generate_ok");
+    const std::string dir = testing::FreshTempDir("generate_ok");
     int calls = 0;
     std::size_t last = 0;
     GenerateToFile(Request(dir + "/p.h5"), CountingLoader{&calls},
@@ -55,7 +56,7 @@ TEST(Generate, WritesOneFileWithProvenanceAndProgress) {
 }
 
 TEST(Generate, BadRequestsFailBeforeWorkAndLeaveNoFile) {
-    const std::string dir = test::FreshTempDir("generate_bad");
+    const std::string dir = testing::FreshTempDir("generate_bad");
     const std::string out = dir + "/p.h5";
     int calls = 0;
     const auto fails = [&](GenerateRequest r, const std::string& needle) {

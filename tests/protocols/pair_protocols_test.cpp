@@ -13,6 +13,7 @@
 #include "core/transform.hpp"
 #include "protocols/pair_file.hpp"
 #include "tests/protocols/test_shapes.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -249,15 +250,15 @@ TEST(Reproducibility, PairKDoesNotChangeWhenMorePairsAreGenerated) {
 
 TEST(Reproducibility, SameSeedGivesByteIdenticalFiles) {
     const auto shapes = test::TestShapes();
-    const std::string dir = test::FreshTempDir("bytes");
+    const std::string dir = testing::FreshTempDir("bytes");
     const ProtocolOptions o = DefaultProtocolOptions(Protocol::kJitter);
     WritePairFile(dir + "/a.h5", GeneratePairs(shapes, o, 5, 4));
     WritePairFile(dir + "/b.h5", GeneratePairs(shapes, o, 5, 4));
     WritePairFile(dir + "/c.h5", GeneratePairs(shapes, o, 6, 4));
-    const std::string a = test::ReadBytes(dir + "/a.h5");
+    const std::string a = testing::ReadBytes(dir + "/a.h5");
     ASSERT_GT(a.size(), 1000u);
-    EXPECT_EQ(a, test::ReadBytes(dir + "/b.h5"));
-    EXPECT_NE(a, test::ReadBytes(dir + "/c.h5"));
+    EXPECT_EQ(a, testing::ReadBytes(dir + "/b.h5"));
+    EXPECT_NE(a, testing::ReadBytes(dir + "/c.h5"));
     const PairSet back = ReadPairFile(dir + "/a.h5");
     EXPECT_EQ(back.provenance.at("params").at("eta").get<double>(), 0.1);
     EXPECT_EQ(back.provenance.at("params").at("pairing").get<std::string>(), "independent");

@@ -48,17 +48,4 @@ inline std::vector<ShapeSource> TestShapes() {
     return shapes;
 }
 
-inline std::string ReadBytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-/// A fresh empty directory under the system temp dir.
-inline std::string FreshTempDir(const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() / ("regbench_test_" + name);
-    std::filesystem::remove_all(dir);
-    std::filesystem::create_directories(dir);
-    return dir.string();
-}
-
 }  // namespace regbench::test

@@ -7,25 +7,13 @@
 
 #include "protocols/pair_protocols.hpp"
 #include "tests/protocols/test_shapes.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
 
-void WriteText(const std::string& path, const std::string& text) {
-    std::ofstream(path, std::ios::binary) << text;
-}
-
-std::string ErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "";
-}
-
 TEST(XyzIo, ExportThenImportRoundTripsExactly) {
-    const std::string dir = test::FreshTempDir("xyz_round_trip");
+    const std::string dir = testing::FreshTempDir("xyz_round_trip");
     const PairSet set =
         GeneratePairs(test::TestShapes(), DefaultProtocolOptions(Protocol::kJitter), 3, 3);
     ExportXyz(set, dir);
@@ -46,7 +34,7 @@ TEST(XyzIo, ExportThenImportRoundTripsExactly) {
 }
 
 TEST(XyzIo, PlyExportHasHeaderAndAllPoints) {
-    const std::string dir = test::FreshTempDir("ply_export");
+    const std::string dir = testing::FreshTempDir("ply_export");
     const PairSet set = GeneratePairs(test::TestShapes(), ProtocolOptions{}, 3, 1);
     ExportPly(set, dir);
     std::ifstream in(dir + "/0000_src.ply");
@@ -64,41 +52,47 @@ TEST(XyzIo, PlyExportHasHeaderAndAllPoints) {
 }
 
 TEST(XyzIo, MalformedFilesAreRejectedWithFileAndLine) {
-    const std::string dir = test::FreshTempDir("xyz_bad");
-    WriteText(dir + "/0000_src.xyz", "0 0 0\n1 0 0\n0 1 zero\n");
-    WriteText(dir + "/0000_tgt.xyz", "0 0 0\n1 0 0\n0 1 0\n");
-    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_src.xyz:3: not a number"),
-              std::string::npos)
-        << ErrorOf([&] { ImportXyzDir(dir, 0.1); });
+    const std::string dir = testing::FreshTempDir("xyz_bad");
+    testing::WriteBytes(dir + "/0000_src.xyz", "0 0 0\n1 0 0\n0 1 zero\n");
+    testing::WriteBytes(dir + "/0000_tgt.xyz", "0 0 0\n1 0 0\n0 1 0\n");
+    testing::WriteBytes(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    EXPECT_NE(
+        testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_src.xyz:3: not a number"),
+        std::string::npos)
+        << testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); });
 
-    WriteText(dir + "/0000_src.xyz", "0 0 0\n1 0 0 5\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_src.xyz:2: expected 3 numbers"),
+    testing::WriteBytes(dir + "/0000_src.xyz", "0 0 0\n1 0 0 5\n");
+    EXPECT_NE(testing::ErrorOf([&] {
+                  ImportXyzDir(dir, 0.1);
+              }).find("0000_src.xyz:2: expected 3 numbers"),
               std::string::npos);
 
-    WriteText(dir + "/0000_src.xyz", "# comment\n\n0 0 0\n1 0 0\n0 1 0\n");
+    testing::WriteBytes(dir + "/0000_src.xyz", "# comment\n\n0 0 0\n1 0 0\n0 1 0\n");
     EXPECT_NO_THROW(ImportXyzDir(dir, 0.1));
 
-    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_gt.txt:3: expected 4 rows"),
+    testing::WriteBytes(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n");
+    EXPECT_NE(
+        testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_gt.txt:3: expected 4 rows"),
+        std::string::npos);
+    testing::WriteBytes(dir + "/0000_gt.txt", "2 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    EXPECT_NE(testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("not a rotation"),
               std::string::npos);
-    WriteText(dir + "/0000_gt.txt", "2 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("not a rotation"), std::string::npos);
-    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_gt.txt:4: last row"),
+    testing::WriteBytes(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 1 1\n");
+    EXPECT_NE(testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0000_gt.txt:4: last row"),
               std::string::npos);
 
     // A pair number with a missing partner file, and a gap in the numbering.
-    WriteText(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
-    WriteText(dir + "/0001_src.xyz", "0 0 0\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0001_tgt.xyz: no such file"),
+    testing::WriteBytes(dir + "/0000_gt.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+    testing::WriteBytes(dir + "/0001_src.xyz", "0 0 0\n");
+    EXPECT_NE(testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0001_tgt.xyz: no such file"),
               std::string::npos);
     std::filesystem::remove(dir + "/0001_src.xyz");
-    WriteText(dir + "/0002_src.xyz", "0 0 0\n");
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0001_src.xyz: missing"),
+    testing::WriteBytes(dir + "/0002_src.xyz", "0 0 0\n");
+    EXPECT_NE(testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("0001_src.xyz: missing"),
               std::string::npos);
     std::filesystem::remove_all(dir);
-    EXPECT_NE(ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("not a directory"), std::string::npos);
+    EXPECT_NE(testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); }).find("not a directory"),
+              std::string::npos);
 }
 
 }  // namespace

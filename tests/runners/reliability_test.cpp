@@ -18,26 +18,13 @@
 #include "runners/resume.hpp"
 #include "runners/runner.hpp"
 #include "runners/scale_guard.hpp"
+#include "tests/testing/files.hpp"
 #include "tests/testing/synthetic.hpp"
 
 namespace regbench {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string ErrorOf(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const std::exception& e) {
-        return e.what();
-    }
-    return "";
-}
-
-std::string Slurp(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 class Reliability : public ::testing::Test {
 protected:
@@ -93,7 +80,7 @@ protected:
             }
         }
         o.resume = true;
-        return ErrorOf([&] { RunBenchmark(o); });
+        return testing::ErrorOf([&] { RunBenchmark(o); });
     }
     fs::path dir_;
     std::string pairs_;
@@ -185,20 +172,20 @@ TEST_F(Reliability, ResumeKeepsValidRowsAndGivesTheUninterruptedResult) {
 TEST_F(Reliability, SecondWriterOfOneOutputIsRefusedAndTheFirstResultSurvives) {
     const RunOptions o = Options("r.jsonl", pairs_);
     RunBenchmark(o);
-    const std::string before = Slurp(o.out_path);
+    const std::string before = testing::ReadBytes(o.out_path);
     const OutputLock holder(o.out_path);  // as if another run were writing it now
-    const std::string err = ErrorOf([&] { RunBenchmark(o); });
+    const std::string err = testing::ErrorOf([&] { RunBenchmark(o); });
     EXPECT_NE(err.find("pid " + std::to_string(getpid())), std::string::npos) << err;
-    EXPECT_EQ(Slurp(o.out_path), before);
+    EXPECT_EQ(testing::ReadBytes(o.out_path), before);
 }
 
 TEST_F(Reliability, OutputThatIsThePairFileIsRefused) {
     RunOptions o = Options("r.jsonl", pairs_);
     o.out_path = pairs_;
-    const std::string before = Slurp(pairs_);
-    const std::string err = ErrorOf([&] { RunBenchmark(o); });
+    const std::string before = testing::ReadBytes(pairs_);
+    const std::string err = testing::ErrorOf([&] { RunBenchmark(o); });
     EXPECT_NE(err.find("same file as the input"), std::string::npos) << err;
-    EXPECT_EQ(Slurp(pairs_), before);
+    EXPECT_EQ(testing::ReadBytes(pairs_), before);
     EXPECT_FALSE(fs::exists(pairs_ + ".part"));
 }
 
@@ -259,7 +246,7 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     MergeOptions three = m;
     three.inputs.erase(
         std::find(three.inputs.begin(), three.inputs.end(), (dir_ / "shard2.jsonl").string()));
-    std::string err = ErrorOf([&] { MergeResults(three); });
+    std::string err = testing::ErrorOf([&] { MergeResults(three); });
     EXPECT_NE(err.find("2 of 8 rows missing (pair 2 identity, pair 2 icp)"), std::string::npos)
         << err;
     EXPECT_FALSE(fs::exists(m.out_path));
@@ -267,7 +254,7 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     // A shard given twice: the duplicate is named with both places.
     MergeOptions twice = m;
     twice.inputs.push_back(m.inputs[0]);
-    err = ErrorOf([&] { MergeResults(twice); });
+    err = testing::ErrorOf([&] { MergeResults(twice); });
     EXPECT_NE(
         err.find("duplicate row for pair 3, method 'identity' (also at " + m.inputs[0] + ":1)"),
         std::string::npos)
@@ -276,7 +263,7 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     // Shards run with other parameters are not merged.
     MergeOptions other = m;
     other.methods = ParseMethodSpecs("identity,icp", {{"icp", {{"max_iterations", 5}}}});
-    err = ErrorOf([&] { MergeResults(other); });
+    err = testing::ErrorOf([&] { MergeResults(other); });
     EXPECT_NE(err.find("other parameters"), std::string::npos) << err;
 
     // A shard scored in another Euler convention is not merged with the others.
@@ -287,7 +274,7 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     RunBenchmark(xyz);
     MergeOptions mixed = m;
     mixed.inputs = {(dir_ / "shard1.jsonl").string(), xyz.out_path};
-    err = ErrorOf([&] { MergeResults(mixed); });
+    err = testing::ErrorOf([&] { MergeResults(mixed); });
     EXPECT_NE(err.find(xyz.out_path + ":1: row scored with --euler xyz"), std::string::npos) << err;
 }
 
@@ -295,7 +282,7 @@ TEST_F(Reliability, ScaleGuardRefusesQuadraticMethodsOnLargeCloudsOrDownsamplesT
     RunOptions o = Options("guard.jsonl", pairs_);
     o.methods = ParseMethodSpecs("icp,cpd", {});
     o.max_points = 30;  // the fixture's clouds have 40 points
-    const std::string err = ErrorOf([&] { RunBenchmark(o); });
+    const std::string err = testing::ErrorOf([&] { RunBenchmark(o); });
     EXPECT_NE(err.find("cpd is O(N*M): 4 pair(s) have a cloud above --max-points 30"),
               std::string::npos)
         << err;

@@ -76,7 +76,8 @@ std::string CsvLine(const nlohmann::json& row) {
 /// What only the method's own call knows (internals) or only a run measures (CPU time of the
 /// call, the machine's load): a transform file carries neither, so score leaves them empty.
 void DropMethodInternals(nlohmann::json& row) {
-    for (const char* key : {"iterations", "stop_reason", "extra", "message", "cpu_seconds", "machine"}) {
+    for (const char* key :
+         {"iterations", "stop_reason", "extra", "message", "cpu_seconds", "machine"}) {
         row.erase(key);
     }
 }
@@ -160,22 +161,28 @@ void ExpectError(const ScoreOptions& o, const std::string& needle) {
 
 TEST_F(ScoreTest, InvalidFilesAreRejectedNamingFileAndLine) {
     const std::string id = ",1,0,0,0,0,1,0,0,0,0,1,0\n";
-    Write("dup.csv", "0" + id + "1" + id + "0" + id);
-    ExpectError(Options("dup.csv", "m"), "dup.csv:3: pair 0 given twice (first at");
-    Write("range.csv", "0" + id + "4" + id);
-    ExpectError(Options("range.csv", "m"), "range.csv:2: pair 4 is out of range");
-    Write("scaled.csv", "0,2,0,0,0,0,2,0,0,0,0,2,0\n");
-    ExpectError(Options("scaled.csv", "m"), "scaled.csv:1: transform of pair 0 is not a rotation");
-    Write("mirror.csv", "0,-1,0,0,0,0,1,0,0,0,0,1,0\n");
-    ExpectError(Options("mirror.csv", "m"), "det R = -1");
-    Write("short.csv", "0,1,0,0\n");
-    ExpectError(Options("short.csv", "m"), "short.csv:1: expected 13 or 14 fields");
-    Write("text.csv", "0,1,0,0,0,0,1,0,0,0,0,1,abc\n");
-    ExpectError(Options("text.csv", "m"), "field 13 ('abc') is not a number");
-    Write("bad.jsonl", "{\"pair\": 0, \"transform\": [[1,0,0],[0,1,0],[0,0,1]]}\n");
-    ExpectError(Options("bad.jsonl", "m"), "bad.jsonl:1: transform is not 4x4");
-    Write("t.txt", "");
-    ExpectError(Options("t.txt", "m"), "must end in .jsonl or .csv");
+    struct Case {
+        const char* file;
+        std::string text;
+        const char* needle;  ///< part of the expected error
+    };
+    const Case cases[] = {
+        {"dup.csv", "0" + id + "1" + id + "0" + id, "dup.csv:3: pair 0 given twice (first at"},
+        {"range.csv", "0" + id + "4" + id, "range.csv:2: pair 4 is out of range"},
+        {"scaled.csv", "0,2,0,0,0,0,2,0,0,0,0,2,0\n",
+         "scaled.csv:1: transform of pair 0 is not a rotation"},
+        {"mirror.csv", "0,-1,0,0,0,0,1,0,0,0,0,1,0\n", "det R = -1"},
+        {"short.csv", "0,1,0,0\n", "short.csv:1: expected 13 or 14 fields"},
+        {"text.csv", "0,1,0,0,0,0,1,0,0,0,0,1,abc\n", "field 13 ('abc') is not a number"},
+        {"bad.jsonl", "{\"pair\": 0, \"transform\": [[1,0,0],[0,1,0],[0,0,1]]}\n",
+         "bad.jsonl:1: transform is not 4x4"},
+        {"t.txt", "", "must end in .jsonl or .csv"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.file);
+        Write(c.file, c.text);
+        ExpectError(Options(c.file, "m"), c.needle);
+    }
 }
 
 TEST_F(ScoreTest, SimilaritiesNeedAllowScale) {

@@ -1,0 +1,21 @@
+#pragma once
+// The `--params` option shared by run, merge, align and score: a JSON object of method
+// parameters given on the command line.
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+
+namespace regbench::app {
+
+/// Parses the text of `--params`; an empty text (option not given) is an empty object.
+/// Malformed JSON is refused naming the option.
+inline nlohmann::json ParseParamsOption(const std::string& text) {
+    if (text.empty()) return nlohmann::json::object();
+    try {
+        return nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+        throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
+    }
+}
+
+}  // namespace regbench::app

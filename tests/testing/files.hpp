@@ -1,0 +1,46 @@
+#pragma once
+// File helpers the tests share: a fresh temporary folder, whole-file read and write, and the
+// message of an expected exception. Standard library only, so every test folder can use it.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+
+namespace regbench::testing {
+
+/// An empty folder `<temp>/regbench_test_<name>_<pid>` (emptied if it exists): the pid keeps
+/// two test binaries that ctest runs at once apart.
+inline std::filesystem::path FreshTempDir(const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("regbench_test_" + name + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+/// The whole file as bytes; empty if it cannot be opened.
+inline std::string ReadBytes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+/// Writes `text` as the whole file (binary, truncating).
+inline void WriteBytes(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream(path, std::ios::binary) << text;
+}
+
+/// The what() of the std::exception `f` throws, or "" if it returns normally.
+inline std::string ErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+}  // namespace regbench::testing
