@@ -13,6 +13,7 @@
 #include "protocols/pair_protocols.hpp"
 #include "protocols/pair_summary.hpp"
 #include "tests/protocols/test_shapes.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -32,7 +33,7 @@ Transform KnownMotion() {
 }
 
 TEST(PairsAll, OnePairPerItemUsesEveryShapeOnce) {
-    const std::string dir = test::FreshTempDir("pairs_all");
+    const std::string dir = testing::FreshTempDir("pairs_all").string();
     GenerateRequest r;
     r.dataset = "test";
     r.one_per_item = true;
@@ -62,7 +63,7 @@ TEST(PairsAll, OnePairPerItemUsesEveryShapeOnce) {
 }
 
 TEST(PairsAll, OverlapSweepGetsEveryShapeAtEveryLevel) {
-    const std::string dir = test::FreshTempDir("pairs_all_sweep");
+    const std::string dir = testing::FreshTempDir("pairs_all_sweep").string();
     GenerateRequest r;
     r.dataset = "test";
     r.one_per_item = true;
