@@ -14,9 +14,9 @@
 #include "app/commands.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
+#include "datasets/dataset_shapes.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
-#include "datasets/dataset_shapes.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_protocols.hpp"
 #endif
@@ -288,7 +288,9 @@ void AddTrainCommand(CLI::App& app) {
     cmd->add_option("--epochs", a->epochs, "Epochs (default: the model's recipe)");
     cmd->add_option("--pairs-per-epoch", a->pairs_per_epoch, "Pairs per epoch (default: recipe)");
     cmd->add_option("--lr", a->lr, "Learning rate (default: recipe)");
-    cmd->add_option("--minutes", a->minutes, "Wall-clock budget per run; ends with a checkpoint");
+    cmd->add_option("--minutes", a->minutes,
+                    "Wall-clock budget of the run directory, summed over --resume sessions; ends "
+                    "with a checkpoint");
     cmd->add_option("--max-steps", a->max_steps, "Stop after this many steps in total");
     cmd->add_flag("--resume", a->resume, "Continue from OUT/last");
     cmd->add_option("--threads", a->threads, "Torch threads")->capture_default_str();
