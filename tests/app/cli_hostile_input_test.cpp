@@ -12,28 +12,15 @@
 #include <vector>
 
 #include "tests/testing/hostile_pair_files.hpp"
+#include "tests/testing/cli.hpp"
 
 namespace regbench {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliResult {
-    int exit_code = -1;  ///< -1: killed by a signal
-    std::string output;  ///< stdout and stderr
-};
-
-CliResult RunCli(const std::string& args) {
-    const std::string cmd = std::string(REGBENCH_CLI) + " " + args + " 2>&1";
-    CliResult r;
-    FILE* p = popen(cmd.c_str(), "r");
-    char buf[4096];
-    std::size_t n = 0;
-    while ((n = fread(buf, 1, sizeof(buf), p)) > 0) r.output.append(buf, n);
-    const int status = pclose(p);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using testing::CliResult;
+using testing::RunCli;
 
 /// A refusal: non-zero exit (not a signal), names `name`, and no bare library exception text.
 void ExpectCleanRefusal(const CliResult& r, const std::string& name) {
