@@ -203,6 +203,12 @@ void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw std::runtime_error(path + ": cannot stat: " + ec.message());
+    // A header whose end marker is the file's last bytes without a newline ends "past" the
+    // file (found by fuzz_ply: the negative body size then overflowed a conversion).
+    if (d.body_offset > size) {
+        throw std::runtime_error(path + ": the header ends past the end of the file (truncated "
+                                 "or corrupt file)");
+    }
     const double body = static_cast<double>(size) - static_cast<double>(d.body_offset);
     const auto refuse = [&](const std::string& why) {
         throw std::runtime_error(path + ": header declares " +

@@ -79,6 +79,16 @@ TEST(ReadPointFile, RejectsTruncatedPlyNamingPath) {
     ExpectThrowsWith([&] { ReadPointFile(garbage); }, garbage);
 }
 
+// Regression for a fuzz_ply find (UBSan: a negative body size converted to long long): a header
+// whose "end_header" is the file's last bytes, without a newline, with a body-less vertex count.
+TEST(ReadPointFile, RefusesAHeaderEndingAtTheEndOfTheFile) {
+    const auto dir = FreshDir();
+    const std::string path = WriteText(
+        dir / "header_only.ply", "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\n"
+                                 "property float y\nproperty float z\nend_header");
+    ExpectThrowsWith([&] { ReadPointFile(path); }, path);
+}
+
 TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
     // A hand-written triangle: the three vertices in file order, faces ignored.
     const auto path = std::filesystem::temp_directory_path() / "regbench_cloud_tri.off";
