@@ -155,6 +155,12 @@ DeclaredCloud ReadPlyHeader(const std::string& path) {
             in_vertex = w[1] == "vertex";
             if (in_vertex) d.points = HeaderCount(path, n, w[2]);
         }
+        // A property line without type and name crashes Open3D's PLY reader (found by
+        // fuzz_ply): refuse it here, before Open3D sees the file.
+        if (!w.empty() && w[0] == "property" && w.size() < 3) {
+            throw std::runtime_error(path + ":" + std::to_string(n) +
+                                     ": PLY property line needs a type and a name");
+        }
         if (in_vertex && w.size() >= 3 && w[0] == "property") {
             if (w[1] == "list") list_property = true;
             d.point_bytes += PlyTypeBytes(w[1]);

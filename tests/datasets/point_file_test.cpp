@@ -89,6 +89,16 @@ TEST(ReadPointFile, RefusesAHeaderEndingAtTheEndOfTheFile) {
     ExpectThrowsWith([&] { ReadPointFile(path); }, path);
 }
 
+// Regression for a fuzz_ply find (SEGV inside Open3D's PLY reader): a property line with no
+// type and name is refused by regbench's own header check, naming the file and line.
+TEST(ReadPointFile, RefusesAPlyPropertyWithoutTypeAndName) {
+    const auto dir = FreshDir();
+    const std::string path = WriteText(
+        dir / "bare_property.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                   "property float y\nproperty\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+    ExpectThrowsWith([&] { ReadPointFile(path); }, path + ":6");
+}
+
 TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
     // A hand-written triangle: the three vertices in file order, faces ignored.
     const auto path = std::filesystem::temp_directory_path() / "regbench_cloud_tri.off";
