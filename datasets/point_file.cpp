@@ -173,10 +173,24 @@ DeclaredCloud ReadPlyHeader(const std::string& path) {
 DeclaredCloud ReadPcdHeader(const std::string& path) {
     DeclaredCloud d;
     std::vector<double> sizes, counts;
+    std::size_t fields = 0, types = 0;
+    int fields_line = 0;
     double width = 0, height = 1;
     bool have_points = false;
     d.body_offset = ReadHeader(path, "DATA", [&](int n, const std::vector<std::string>& w) {
         if (w.empty()) return;
+        if (w[0] == "FIELDS") {
+            fields = w.size() - 1;
+            fields_line = n;
+        }
+        if (w[0] == "TYPE") {
+            types = w.size() - 1;
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                if (w[i] != "F" && w[i] != "I" && w[i] != "U") {
+                    HeaderError(path, n, "PCD TYPE must be F, I or U, got '" + w[i] + "'");
+                }
+            }
+        }
         if (w[0] == "POINTS" && w.size() >= 2) {
             d.points = HeaderCount(path, n, w[1]);
             have_points = true;
@@ -184,16 +198,48 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
         if (w[0] == "WIDTH" && w.size() >= 2) width = HeaderCount(path, n, w[1]);
         if (w[0] == "HEIGHT" && w.size() >= 2) height = HeaderCount(path, n, w[1]);
         if (w[0] == "SIZE") {
-            for (std::size_t i = 1; i < w.size(); ++i) sizes.push_back(HeaderCount(path, n, w[i]));
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                sizes.push_back(HeaderCount(path, n, w[i]));
+                const double b = sizes.back();
+                if (b != 1 && b != 2 && b != 4 && b != 8) {
+                    HeaderError(path, n, "PCD SIZE must be 1, 2, 4 or 8, got '" + w[i] + "'");
+                }
+            }
         }
+        // COUNT 0 (a field of no values) crashes Open3D's PCD reader (found by fuzz_pcd):
+        // every field holds at least one value.
         if (w[0] == "COUNT") {
-            for (std::size_t i = 1; i < w.size(); ++i) counts.push_back(HeaderCount(path, n, w[i]));
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                counts.push_back(HeaderCount(path, n, w[i]));
+                if (counts.back() < 1) {
+                    HeaderError(path, n, "PCD COUNT must be at least 1, got '" + w[i] + "'");
+                }
+            }
         }
-        if (w[0] == "DATA" && w.size() >= 2) {
-            d.ascii = w[1] == "ascii";
-            d.compressed = w[1] == "binary_compressed";
+        if (w[0] == "DATA") {
+            const std::string kind = w.size() >= 2 ? w[1] : "";
+            if (kind != "ascii" && kind != "binary" && kind != "binary_compressed") {
+                HeaderError(path, n,
+                            "PCD DATA must be ascii, binary or binary_compressed, got '" + kind +
+                                "'");
+            }
+            d.ascii = kind == "ascii";
+            d.compressed = kind == "binary_compressed";
         }
     });
+    // Open3D indexes SIZE, TYPE and COUNT by field: lists of another length than FIELDS are
+    // refused here rather than read out of bounds there.
+    if (fields == 0) throw std::runtime_error(path + ": PCD header has no FIELDS line");
+    const auto same_length = [&](const char* key, std::size_t got, bool required) {
+        if ((required || got > 0) && got != fields) {
+            HeaderError(path, fields_line,
+                        "PCD header lists " + std::to_string(fields) + " FIELDS but " +
+                            std::to_string(got) + " " + key + " values");
+        }
+    };
+    same_length("SIZE", sizes.size(), true);
+    same_length("TYPE", types, true);
+    same_length("COUNT", counts.size(), false);
     if (!have_points) d.points = width * height;
     for (std::size_t i = 0; i < sizes.size(); ++i) {
         d.point_bytes += sizes[i] * (i < counts.size() ? counts[i] : 1.0);

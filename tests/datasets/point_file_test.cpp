@@ -4,6 +4,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <tuple>
+#include <vector>
 
 #include "tests/datasets/test_files.hpp"
 
@@ -97,6 +99,34 @@ TEST(ReadPointFile, RefusesAPlyPropertyWithoutTypeAndName) {
         dir / "bare_property.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                                    "property float y\nproperty\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
     ExpectThrowsWith([&] { ReadPointFile(path); }, path + ":6");
+}
+
+// Regression for a fuzz_pcd find (SEGV inside Open3D's PCD reader on a field with COUNT 0,
+// fuzz/corpus/pcd/count-zero.pcd): regbench's own PCD header check refuses it and the other
+// per-field inconsistencies Open3D would index out of bounds, naming the file and line. The
+// expected lines are counted by hand in the literals below.
+TEST(ReadPointFile, RefusesInconsistentPcdFieldLists) {
+    const auto dir = FreshDir();
+    const std::string body = "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n";
+    const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+        {"count0.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 0\n", ":4: PCD COUNT must"},
+        {"size3.pcd", "FIELDS x y z\nSIZE 4 3 4\nTYPE F F F\nCOUNT 1 1 1\n", ":2: PCD SIZE must"},
+        {"typeq.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F Q F\nCOUNT 1 1 1\n", ":3: PCD TYPE must"},
+        {"short_size.pcd", "FIELDS x y z\nSIZE 4 4\nTYPE F F F\nCOUNT 1 1 1\n",
+         ":1: PCD header lists 3 FIELDS but 2 SIZE"},
+        {"long_count.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1 1\n",
+         ":1: PCD header lists 3 FIELDS but 4 COUNT"},
+        {"no_type.pcd", "FIELDS x y z\nSIZE 4 4 4\n", ":1: PCD header lists 3 FIELDS but 0 TYPE"},
+        {"no_fields.pcd", "SIZE 4 4 4\nTYPE F F F\n", ": PCD header has no FIELDS line"},
+    };
+    for (const auto& [name, header, reason] : cases) {
+        SCOPED_TRACE(name);
+        const std::string path = WriteText(dir / name, header + body);
+        ExpectThrowsWith([&] { ReadPointFile(path); }, path + reason);
+    }
+    const std::string bad_data = WriteText(
+        dir / "data.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA binaqy\n1234");
+    ExpectThrowsWith([&] { ReadPointFile(bad_data); }, bad_data + ":5: PCD DATA must");
 }
 
 TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
