@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -83,22 +84,37 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     const bool parallel = omp_get_max_threads() > 1 && num_chunks > 1 && m * n >= 200000;
 #pragma omp parallel if (parallel)
     {
-        std::vector<float> column(static_cast<size_t>(m));
+        // Four kernel columns (4 x 717 floats stay in L1), then one accumulation pass over
+        // them (AxpyRows4: a quarter of the accumulator traffic, same bits as one by one).
+        constexpr Eigen::Index kBlock = 4;
+        std::vector<float> columns(static_cast<size_t>(kBlock * m));
+        std::array<std::array<float, 4>, kBlock> weights{};
 #pragma omp for schedule(static)
         for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
             float* acc = partial_.data() + chunk * 4 * m;
             std::fill(acc, acc + 4 * m, 0.0f);
+            const std::array<float*, 4> accs{acc, acc + m, acc + 2 * m, acc + 3 * m};
             const Eigen::Index j1 = std::min(n, (chunk + 1) * kTargetsPerChunk);
-            for (Eigen::Index j = chunk * kTargetsPerChunk; j < j1; ++j) {
-                const double sum = KernelRow(source_points, Eigen::Vector3f(tx[j], ty[j], tz[j]), a,
-                                             column.data());
-                const double den = sum == 0.0 ? kDenFloor : sum;
-                const double inv = 1.0 / (den + c);
-                inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
-                out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
-                const auto w = static_cast<float>(inv);
-                AxpyRow(column.data(), m, {w, w * tx[j], w * ty[j], w * tz[j]},
-                        {acc, acc + m, acc + 2 * m, acc + 3 * m});
+            for (Eigen::Index j0 = chunk * kTargetsPerChunk; j0 < j1; j0 += kBlock) {
+                const Eigen::Index block = std::min(kBlock, j1 - j0);
+                for (Eigen::Index t = 0; t < block; ++t) {
+                    const Eigen::Index j = j0 + t;
+                    const double sum = KernelRow(source_points, Eigen::Vector3f(tx[j], ty[j], tz[j]),
+                                                 a, columns.data() + t * m);
+                    const double den = sum == 0.0 ? kDenFloor : sum;
+                    const double inv = 1.0 / (den + c);
+                    inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
+                    out.pt1[t_order[static_cast<size_t>(j)]] = den * inv;
+                    const auto w = static_cast<float>(inv);
+                    weights[static_cast<size_t>(t)] = {w, w * tx[j], w * ty[j], w * tz[j]};
+                }
+                if (block == kBlock) {
+                    AxpyRows4(columns.data(), m, m, weights, accs);
+                } else {
+                    for (Eigen::Index t = 0; t < block; ++t) {
+                        AxpyRow(columns.data() + t * m, m, weights[static_cast<size_t>(t)], accs);
+                    }
+                }
             }
         }
     }

@@ -278,6 +278,46 @@ __attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict r
     }
 }
 
+/// Four AxpyRowImpl calls fused: each accumulator element is loaded and stored once and gets
+/// the four targets' terms in target order (the same operations, hence the same bits).
+__attribute__((always_inline)) inline void AxpyRows4Impl(const float* __restrict rows,
+                                                         Eigen::Index stride,
+                                                         Eigen::Index count,
+                                                         const float* __restrict w,
+                                                         float* __restrict acc0,
+                                                         float* __restrict acc1,
+                                                         float* __restrict acc2,
+                                                         float* __restrict acc3) {
+    const float* __restrict r0 = rows;
+    const float* __restrict r1 = rows + stride;
+    const float* __restrict r2 = rows + 2 * stride;
+    const float* __restrict r3 = rows + 3 * stride;
+    for (Eigen::Index i = 0; i < count; ++i) {
+        float a0 = acc0[i], a1 = acc1[i], a2 = acc2[i], a3 = acc3[i];
+        const float k0 = r0[i], k1 = r1[i], k2 = r2[i], k3 = r3[i];
+        a0 += k0 * w[0];
+        a1 += k0 * w[1];
+        a2 += k0 * w[2];
+        a3 += k0 * w[3];
+        a0 += k1 * w[4];
+        a1 += k1 * w[5];
+        a2 += k1 * w[6];
+        a3 += k1 * w[7];
+        a0 += k2 * w[8];
+        a1 += k2 * w[9];
+        a2 += k2 * w[10];
+        a3 += k2 * w[11];
+        a0 += k3 * w[12];
+        a1 += k3 * w[13];
+        a2 += k3 * w[14];
+        a3 += k3 * w[15];
+        acc0[i] = a0;
+        acc1[i] = a1;
+        acc2[i] = a2;
+        acc3[i] = a3;
+    }
+}
+
 }  // namespace
 
 double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float a, float* row) {
@@ -293,6 +333,16 @@ void AxpyRow(const float* row,
              const std::array<float*, 4>& acc) {
     RunBestIsa([&]() __attribute__((always_inline)) {
         AxpyRowImpl(row, count, w[0], w[1], w[2], w[3], acc[0], acc[1], acc[2], acc[3]);
+    });
+}
+
+void AxpyRows4(const float* rows,
+               Eigen::Index stride,
+               Eigen::Index count,
+               const std::array<std::array<float, 4>, 4>& w,
+               const std::array<float*, 4>& acc) {
+    RunBestIsa([&]() __attribute__((always_inline)) {
+        AxpyRows4Impl(rows, stride, count, w[0].data(), acc[0], acc[1], acc[2], acc[3]);
     });
 }
 
