@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -225,6 +226,11 @@ std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
 
 /// One target's kernel column: row[i] = exp(a |q - p_i|^2) for all sources i, and its sum
 /// (8 float lanes per chunk of kChunk, chunks added in double: the same scheme as SumChunk).
+/// Two plain loops rather than one: the first has no loop-carried state and vectorises at the
+/// full vector width like a raw exp pass; the second sums the L1-resident row with the lanes in
+/// a vector register. (Summing inside the first loop made GCC keep the lanes on the stack and
+/// stall on store forwarding: 2.6x the raw exp pass instead of ~1.5x.) Same additions in the
+/// same order as summing term by term, so the same bits.
 __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
                                                            const float* __restrict px,
                                                            const float* __restrict py,
@@ -234,22 +240,23 @@ __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row
                                                            float qy,
                                                            float qz,
                                                            float a) {
+    for (Eigen::Index i = 0; i < count; ++i) {
+        const float dx = qx - px[i], dy = qy - py[i], dz = qz - pz[i];
+        row[i] = FastExp((dx * dx + dy * dy + dz * dz) * a);
+    }
     constexpr int kLanes = 8;
+    using Lanes = float __attribute__((vector_size(kLanes * sizeof(float))));
     double total = 0.0;
     for (Eigen::Index c0 = 0; c0 < count; c0 += kChunk) {
         const Eigen::Index c1 = std::min(count, c0 + kChunk);
-        float lanes[kLanes] = {};
+        Lanes lanes = {};
         Eigen::Index j = c0;
-        const auto term = [&](Eigen::Index i) {
-            const float dx = qx - px[i], dy = qy - py[i], dz = qz - pz[i];
-            const float k = FastExp((dx * dx + dy * dy + dz * dz) * a);
-            row[i] = k;
-            return k;
-        };
         for (; j + kLanes <= c1; j += kLanes) {
-            for (int l = 0; l < kLanes; ++l) lanes[l] += term(j + l);
+            Lanes v;
+            std::memcpy(&v, row + j, sizeof(v));
+            lanes += v;
         }
-        for (int l = 0; j < c1; ++j, ++l) lanes[l] += term(j);
+        for (int l = 0; j < c1; ++j, ++l) lanes[l] += row[j];
         float s = 0.0f;
         for (int l = 0; l < kLanes; ++l) s += lanes[l];
         total += s;
