@@ -3,9 +3,14 @@
 #  1. an AddressSanitizer + UndefinedBehaviorSanitizer build with clang in build-san/ (no
 #     LibTorch, no benchmarks) and its test suite: core, protocols, baselines, runners, reports,
 #     app and the CLI reliability scenarios (the Slurm test runs in the main build only);
-#  2. every libFuzzer target (fuzz/) for REGBENCH_FUZZ_SECONDS (default 20) on a copy of its
-#     seed corpus fuzz/corpus/<name>/. A crash stops CI and leaves the input in
-#     build-san/fuzz-artifacts/; turn it into a regression test (tests/protocols/ or tests/datasets/).
+#  2. every libFuzzer target (fuzz/) on a copy of its seed corpus fuzz/corpus/<name>/, with a
+#     fixed seed and a fixed number of inputs (REGBENCH_FUZZ_RUNS, default 20000) capped at
+#     REGBENCH_FUZZ_SECONDS (default 60) of wall time: the same binary explores the same inputs on
+#     every machine, so CI is a reproducible regression gate, not a lottery. For exploratory
+#     fuzzing set REGBENCH_FUZZ_RUNS=-1 (unbounded; then only the time cap applies) and
+#     REGBENCH_FUZZ_SEED to anything else. A crash stops CI and leaves the input in
+#     build-san/fuzz-artifacts/; turn it into a regression test (tests/protocols/ or
+#     tests/datasets/) and add the input to the seed corpus.
 # REGBENCH_SKIP_EXTRA=1 skips all of it.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -14,7 +19,9 @@ if [ "${REGBENCH_SKIP_EXTRA:-0}" = 1 ]; then
   exit 0
 fi
 build="${REGBENCH_SAN_BUILD_DIR:-$root/build-san}"
-seconds="${REGBENCH_FUZZ_SECONDS:-20}"
+seconds="${REGBENCH_FUZZ_SECONDS:-60}"
+runs="${REGBENCH_FUZZ_RUNS:-20000}"
+fuzz_seed="${REGBENCH_FUZZ_SEED:-1}"
 # shellcheck source=scripts/build_env.sh
 source "$root/scripts/build_env.sh"
 start=$(date +%s)
@@ -44,8 +51,9 @@ mkdir -p "$artifacts"
 for name in off ply pcd xyz xyz_import pair_file; do
   corpus="$(mktemp -d)"
   cp -r "$root/fuzz/corpus/$name/." "$corpus/"
-  echo "[ci_extra] fuzz_$name for ${seconds}s"
-  if ! "$build/fuzz/fuzz_$name" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  echo "[ci_extra] fuzz_$name: seed $fuzz_seed, $runs inputs, at most ${seconds}s"
+  if ! "$build/fuzz/fuzz_$name" -seed="$fuzz_seed" -runs="$runs" -max_total_time="$seconds" \
+    -timeout=10 -rss_limit_mb=2048 \
     -artifact_prefix="$artifacts/${name}-" -print_final_stats=1 "$corpus" \
     >"$artifacts/$name.log" 2>&1; then
     tail -40 "$artifacts/$name.log"

@@ -3,7 +3,9 @@
 # --reference also installs what scripts/probreg_reference.py needs to run probreg (Python
 # modules for /usr/bin/python3 and pybind11 to build probreg's extensions; see
 # docs/probreg-equivalence.md). The C++ build and tests do not need them. chromium renders the
-# HTML report headless in its test (docs/reports.md).
+# HTML report headless in its test (docs/reports.md). clang + libclang-rt-14-dev build the
+# sanitizer + libFuzzer stage of the test command (scripts/ci_extra.sh); ccache makes rebuilds
+# (that stage, worktrees, re-runs) cheap.
 set -euo pipefail
 
 PACKAGES=(
@@ -13,6 +15,7 @@ PACKAGES=(
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
   chromium zlib1g-dev
+  clang libclang-rt-14-dev ccache
   slurmctld slurmd slurm-client munge
 )
 if [ "${1:-}" = "--reference" ]; then
