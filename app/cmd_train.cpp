@@ -180,11 +180,11 @@ nlohmann::json BuildConfig(const TrainArgs& a,
 
 /// Variants of the paper's ablation tables (config overrides of the small OGMM config).
 std::vector<std::pair<std::string, nlohmann::json>> AblationVariants(const std::string& which) {
-    if (which == "components") {  // Tab. 4
+    if (which == "components") {  // Tab. 4; variant names are the paper's row names
         return {{"full", nlohmann::json::object()},
-                {"no_spe", {{"spe", false}}},
-                {"no_csa", {{"csa", false}}},
-                {"no_osp", {{"osp", false}}}};
+                {"no_SPE", {{"spe", false}}},
+                {"no_CSA", {{"csa", false}}},
+                {"no_OSP", {{"osp", false}}}};
     }
     if (which == "losses") {  // Tab. 5: GR = 10 L_pose + 0.01 L_W, CL = NT-Xent, OS = overlap MSE
         std::vector<std::pair<std::string, nlohmann::json>> v;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +24,9 @@
 #include "reports/paper_tables.hpp"
 #include "runners/registry.hpp"
 #include "runners/runner.hpp"
+#ifdef REGBENCH_HAVE_LEARNED
+#include "baselines/learned.hpp"
+#endif
 
 namespace regbench {
 namespace {
@@ -119,9 +123,12 @@ std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
     }
     std::vector<Experiment> out;
     for (const auto& e : all) {
-        // Tab. 6 times the Tab. 1 same-category runs.
+        // Tab. 6 times the Tab. 1 same-category runs; the ablations (Tab. 4, 5) run their
+        // variants on the same pairs.
         if (Wanted(o.tables, e.table) ||
-            (e.id == "tab1_same" && Wanted(o.tables, "table6_inference_time"))) {
+            (e.id == "tab1_same" && (Wanted(o.tables, "table6_inference_time") ||
+                                     Wanted(o.tables, "table4_ablation_components") ||
+                                     Wanted(o.tables, "table5_ablation_losses")))) {
             out.push_back(e);
         }
     }
@@ -312,6 +319,45 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
 
     // The paper's tables.
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
+
+    // Ablation rows (Tab. 4, 5): every variant with a shipped checkpoint
+    // (data/models/ablation/<kind>/<paper row>, written by `regbench train --ablation`) runs as
+    // `ogmm` on the Tab. 1 same-category pairs; variants without one say "not trained".
+    std::map<std::string, std::vector<ResultSet>> ablation_sets;
+#ifdef REGBENCH_HAVE_LEARNED
+    const bool ogmm_runs = std::any_of(methods.begin(), methods.end(),
+                                       [](const MethodSpec& m) { return m.name == "ogmm"; });
+    for (const auto& [table, kind] :
+         {std::pair<std::string, std::string>{"table4_ablation_components", "components"},
+          {"table5_ablation_losses", "losses"}}) {
+        if (!Wanted(o.tables, table) || !rows_of.count("tab1_same")) continue;
+        if (!ogmm_runs) {
+            log << "reproduce: " << table << ": ogmm cannot run, its variants are not run\n";
+            continue;
+        }
+        for (const auto& [row, cells] : paper["tables"][table]["rows"].items()) {
+            (void)cells;
+            const std::string dir = ShippedCheckpointDir("ablation/" + kind + "/" + row);
+            if (!fs::exists(fs::path(dir) / "checkpoint.json")) continue;
+            MethodSpec spec{"ogmm", FindMethod("ogmm").defaults};
+            spec.params["checkpoint"] = dir;
+            std::string stem = "ablation_" + kind + "_" + row;
+            std::replace(stem.begin(), stem.end(), '+', '_');
+            RunOptions run;
+            run.pairs_path = (out / "pairs" / "tab1_same.h5").string();
+            run.methods = {spec};
+            run.out_path = (out / "results" / (stem + ".jsonl")).string();
+            run.jobs = o.jobs;
+            run.resume = true;
+            run.timeout_seconds = o.timeout_seconds;
+            run.progress = o.progress;
+            log << "reproduce: " << table << ": variant " << row << " (checkpoint " << dir << ")\n";
+            summary.rows_run += RunBenchmark(run).rows_written;
+            ablation_sets[table].push_back(
+                {"", ReadJsonl(run.out_path), provenance_of["tab1_same"], row});
+        }
+    }
+#endif
     PaperTableOptions table_options;
     table_options.unavailable = unavailable;
     std::vector<Table> tables;
@@ -328,10 +374,15 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
         }
         PaperTableOptions to = table_options;
         if (!spec.rows_are_methods) {
-            // Ablation variants need their own checkpoints, which regbench does not ship.
-            for (const auto& row :
-                 paper["tables"][spec.id].value("row_order", std::vector<std::string>{}))
-                to.unavailable[row] = "not trained";
+            // Ablation variants run only where a checkpoint of theirs is shipped.
+            for (const auto& s : ablation_sets[spec.id]) sets.push_back(s);
+            for (const auto& [row, cells] : paper["tables"][spec.id]["rows"].items()) {
+                (void)cells;
+                const bool measured =
+                    std::any_of(sets.begin(), sets.end(),
+                                [&row = row](const ResultSet& s) { return s.row_label == row; });
+                if (!measured) to.unavailable[row] = "not trained";
+            }
         }
         tables.push_back(BuildPaperTable(spec, sets, paper, to));
         if (sets.empty()) {

@@ -6,8 +6,10 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -147,6 +149,54 @@ TEST(CliTestSets, ReproduceUsesTheStoredIclNuimPairs) {
     EXPECT_NE(tables.find("Ground-truth CCD floor (icl_nuim): 0.0000"), std::string::npos)
         << tables;
     EXPECT_NE(tables.find("Ground-truth CCD floor (7scenes)"), std::string::npos);
+    fs::remove_all(dir);
+}
+
+TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
+    // Tab. 4 rows come from checkpoints under $REGBENCH_MODELS/ablation/components/<paper row>.
+    // Here only no_SPE has one (any OGMM checkpoint will do: the row is named by its folder),
+    // so no_SPE is measured on the Tab. 1 same-category pairs and the other rows say
+    // "not trained". A build without LibTorch has no ogmm: every row says "not trained".
+    const fs::path dir = FreshDir("reproduce_ablation");
+    const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
+    const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";
+    ASSERT_TRUE(fs::exists(shipped / "checkpoint.json")) << shipped;
+    fs::create_directories(dir / "models" / "ablation" / "components");
+    fs::create_directory_symlink(shipped, dir / "models" / "ogmm");
+    fs::create_directory_symlink(shipped, dir / "models" / "ablation" / "components" / "no_SPE");
+    const bool learned = RunCli("methods").output.find("ogmm") != std::string::npos;
+    ::setenv("REGBENCH_MODELS", (dir / "models").c_str(), 1);
+    const fs::path out = dir / "report";
+    const CliResult r = RunCli(
+        "reproduce --tables table4 --methods identity,ogmm --pairs 2 "
+        "--jobs 1 --out " +
+        out.string());
+    ::unsetenv("REGBENCH_MODELS");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream f(out / "tables.json");
+    const nlohmann::json cells = nlohmann::json::parse(f);
+    int measured_no_spe = 0, not_trained = 0;
+    for (const auto& c : cells) {
+        if (c.at("table") != "table4_ablation_components") continue;
+        if (c.at("source") != "measured") continue;
+        if (c.at("row") == "no_SPE" && learned) {
+            EXPECT_TRUE(c.at("value").is_number()) << c.dump();
+            EXPECT_EQ(c.at("pairs"), 2) << c.dump();
+            EXPECT_EQ(c.at("pairs_file"), "tab1_same.h5") << c.dump();
+            ++measured_no_spe;
+        } else {
+            EXPECT_EQ(c.at("text"), "not trained") << c.dump();
+            ++not_trained;
+        }
+    }
+    // 3 metrics per row: no_SPE measured, the other three rows (all four without LibTorch) not.
+    EXPECT_EQ(measured_no_spe, learned ? 3 : 0);
+    EXPECT_EQ(not_trained, learned ? 9 : 12);
+    if (learned) {
+        EXPECT_TRUE(fs::exists(out / "results" / "ablation_components_no_SPE.jsonl"));
+        EXPECT_FALSE(fs::exists(out / "results" / "ablation_components_full.jsonl"));
+    }
     fs::remove_all(dir);
 }
 
