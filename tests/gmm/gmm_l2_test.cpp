@@ -6,6 +6,7 @@
 #include <cmath>
 #include <set>
 
+#include "core/math_constants.hpp"
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
@@ -118,7 +119,6 @@ TEST(RigidGmmL2Cost, CutoffSumsEqualDenseWithinTheStatedTolerance) {
     // (hand derivation). Its translation gradient term (exact mode) is
     // phi_i phi_j / Z e_ij (x_i - mu_j) / sigma^2, of size <= tol * r / sigma^2 * phi phi / Z for
     // d >= r > sigma, giving the gradient bound below.
-    constexpr double kPi = 3.14159265358979323846;
     for (const std::uint64_t seed : {1u, 2u, 3u}) {
         auto rng = MakePairRng(seed, 0);
         const MixtureFeatures s = RandomMixture(rng, 600);
