@@ -175,7 +175,6 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
     std::vector<double> sizes, counts;
     std::size_t fields = 0, types = 0;
     int fields_line = 0;
-    double width = 0, height = 1;
     bool have_points = false;
     d.body_offset = ReadHeader(path, "DATA", [&](int n, const std::vector<std::string>& w) {
         if (w.empty()) return;
@@ -195,8 +194,6 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
             d.points = HeaderCount(path, n, w[1]);
             have_points = true;
         }
-        if (w[0] == "WIDTH" && w.size() >= 2) width = HeaderCount(path, n, w[1]);
-        if (w[0] == "HEIGHT" && w.size() >= 2) height = HeaderCount(path, n, w[1]);
         if (w[0] == "SIZE") {
             for (std::size_t i = 1; i < w.size(); ++i) {
                 sizes.push_back(HeaderCount(path, n, w[i]));
@@ -240,7 +237,9 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
     same_length("SIZE", sizes.size(), true);
     same_length("TYPE", types, true);
     same_length("COUNT", counts.size(), false);
-    if (!have_points) d.points = width * height;
+    // Open3D takes the point count from POINTS only and reads garbage without one (fuzz_pcd: a
+    // 33 GB allocation), so the line is required, as the PCD v0.7 format says.
+    if (!have_points) throw std::runtime_error(path + ": PCD header has no POINTS line");
     for (std::size_t i = 0; i < sizes.size(); ++i) {
         d.point_bytes += sizes[i] * (i < counts.size() ? counts[i] : 1.0);
     }

@@ -127,6 +127,13 @@ TEST(ReadPointFile, RefusesInconsistentPcdFieldLists) {
     const std::string bad_data = WriteText(
         dir / "data.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA binaqy\n1234");
     ExpectThrowsWith([&] { ReadPointFile(bad_data); }, bad_data + ":5: PCD DATA must");
+    // No POINTS line (fuzz_pcd: Open3D then allocated from an uninitialised count, 33 GB).
+    const std::string no_points =
+        WriteText(dir / "no_points.pcd",
+                  "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\n"
+                  "HEIGHT 1\nDATA ascii\n0 0 0\n1 0 0\n0 1 0\n");
+    ExpectThrowsWith([&] { ReadPointFile(no_points); },
+                     no_points + ": PCD header has no POINTS line");
 }
 
 TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
