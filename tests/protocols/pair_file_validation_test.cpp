@@ -84,16 +84,22 @@ TEST(PairFileValidation, FileSizeLimitLeavesNoPairFileAndNoSignal) {
     fs::remove_all(dir);
 }
 
+/// `read` must throw std::runtime_error whose message names `path` (fuzz regressions).
+template <class Read>
+void ExpectRefusedNamingFile(const Read& read, const std::string& path) {
+    try {
+        read();
+        ADD_FAILURE() << "fuzz regression accepted: " << path;
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+}
+
 TEST(PairFileValidation, FuzzFindingHugeMetadataAllocationIsRefused) {
     // Found by fuzz_pair_file (libFuzzer): a flipped header field makes HDF5 itself ask for a
     // 2^53-byte metadata buffer. The reader must refuse the file by name, not crash.
     const std::string path = "fuzz/corpus/pair_file/regression_hdf5_huge_metadata_alloc.h5";
-    try {
-        ReadPairFile(path);
-        FAIL() << "fuzz regression accepted";
-    } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-    }
+    ExpectRefusedNamingFile([&] { ReadPairFile(path); }, path);
 }
 
 TEST(PairFileValidation, FuzzFindingUseAfterFreeInsideHdf5IsRefused) {
@@ -102,18 +108,8 @@ TEST(PairFileValidation, FuzzFindingUseAfterFreeInsideHdf5IsRefused) {
     // sanitizer build the child's death is what refuses it; in a plain build HDF5 reports an
     // error instead. Either way: an exception naming the file, never a crash of the caller.
     const std::string path = "fuzz/corpus/pair_file/regression_hdf5_use_after_free.h5";
-    try {
-        ReadPairFile(path);
-        FAIL() << "fuzz regression accepted";
-    } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-    }
-    try {
-        CountPairs(path);
-        FAIL() << "fuzz regression accepted by CountPairs";
-    } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-    }
+    ExpectRefusedNamingFile([&] { ReadPairFile(path); }, path);
+    ExpectRefusedNamingFile([&] { CountPairs(path); }, path);
 }
 
 TEST(PairFileValidation, OutputThatIsADirectoryIsRefused) {
