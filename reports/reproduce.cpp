@@ -223,6 +223,23 @@ std::vector<ResultSet> SweepSets(const std::vector<nlohmann::json>& rows, const 
     return sets;
 }
 
+/// How `reproduce` runs methods on one pair file: its jobs, per-call timeout and progress,
+/// resuming the finished rows of a previous invocation.
+RunOptions ExperimentRun(const ReproduceOptions& o,
+                         const fs::path& pairs,
+                         std::vector<MethodSpec> methods,
+                         const fs::path& results) {
+    RunOptions run;
+    run.pairs_path = pairs.string();
+    run.methods = std::move(methods);
+    run.out_path = results.string();
+    run.jobs = o.jobs;
+    run.resume = true;
+    run.timeout_seconds = o.timeout_seconds;
+    run.progress = o.progress;
+    return run;
+}
+
 std::string Join(const std::vector<Table>& tables, std::string (*fn)(const Table&)) {
     std::string s;
     for (const auto& t : tables) s += fn(t) + "\n";
@@ -301,14 +318,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
         const fs::path pairs = out / "pairs" / (e.id + ".h5");
         const fs::path results = out / "results" / (e.id + ".jsonl");
         summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
-        RunOptions run;
-        run.pairs_path = pairs.string();
-        run.methods = methods;
-        run.out_path = results.string();
-        run.jobs = o.jobs;
-        run.resume = true;  // keeps finished rows of a previous invocation
-        run.timeout_seconds = o.timeout_seconds;
-        run.progress = o.progress;
+        const RunOptions run = ExperimentRun(o, pairs, methods, results);
         log << "reproduce: " << e.id << ": running " << methods.size() << " methods\n";
         summary.rows_run += RunBenchmark(run).rows_written;
         rows_of[e.id] = ReadJsonl(results.string());
@@ -343,14 +353,8 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
             spec.params["checkpoint"] = dir;
             std::string stem = "ablation_" + kind + "_" + row;
             std::replace(stem.begin(), stem.end(), '+', '_');
-            RunOptions run;
-            run.pairs_path = (out / "pairs" / "tab1_same.h5").string();
-            run.methods = {spec};
-            run.out_path = (out / "results" / (stem + ".jsonl")).string();
-            run.jobs = o.jobs;
-            run.resume = true;
-            run.timeout_seconds = o.timeout_seconds;
-            run.progress = o.progress;
+            const RunOptions run = ExperimentRun(o, out / "pairs" / "tab1_same.h5", {spec},
+                                                 out / "results" / (stem + ".jsonl"));
             log << "reproduce: " << table << ": variant " << row << " (checkpoint " << dir << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
             ablation_sets[table].push_back(
