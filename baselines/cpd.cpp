@@ -75,8 +75,20 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     partial_.resize(static_cast<size_t>(num_chunks * 4 * m));
     inv_den_.resize(static_cast<size_t>(n));
     out.pt1.resize(n);
-    const auto a = static_cast<float>(-0.5 / sigma2);
-    const FloatPoints source_points{source_.x(), source_.y(), source_.z(), m};
+    // Both clouds scaled by sqrt(log2(e) / (2 sigma^2)): KernelRow's 2^-|q' - p'|^2 is then
+    // exp(-|q - p|^2 / (2 sigma^2)) with no per-pair multiply for either constant (targets are
+    // scaled as they are visited). Sources padded to KernelRow's multiple, far away (kernel 0).
+    constexpr double kLog2e = 1.4426950408889634074;
+    const auto scale = static_cast<float>(std::sqrt(kLog2e / (2.0 * sigma2)));
+    const Eigen::Index m_pad = (m + kKernelRowPad - 1) / kKernelRowPad * kKernelRowPad;
+    scaled_source_.assign(static_cast<size_t>(3 * m_pad), kKernelRowFar);
+    for (Eigen::Index i = 0; i < m; ++i) {
+        scaled_source_[static_cast<size_t>(i)] = scale * source_.x()[i];
+        scaled_source_[static_cast<size_t>(m_pad + i)] = scale * source_.y()[i];
+        scaled_source_[static_cast<size_t>(2 * m_pad + i)] = scale * source_.z()[i];
+    }
+    const FloatPoints source_points{scaled_source_.data(), scaled_source_.data() + m_pad,
+                                    scaled_source_.data() + 2 * m_pad, m_pad};
     const float* tx = target_blocked_.x();
     const float* ty = target_blocked_.y();
     const float* tz = target_blocked_.z();
@@ -87,7 +99,7 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
         // Four kernel columns (4 x 717 floats stay in L1), then one accumulation pass over
         // them (AxpyRows4: a quarter of the accumulator traffic, same bits as one by one).
         constexpr Eigen::Index kBlock = 4;
-        std::vector<float> columns(static_cast<size_t>(kBlock * m));
+        std::vector<float> columns(static_cast<size_t>(kBlock * m_pad));
         std::array<std::array<float, 4>, kBlock> weights{};
 #pragma omp for schedule(static)
         for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
@@ -99,8 +111,9 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
                 const Eigen::Index block = std::min(kBlock, j1 - j0);
                 for (Eigen::Index t = 0; t < block; ++t) {
                     const Eigen::Index j = j0 + t;
-                    const double sum = KernelRow(source_points, Eigen::Vector3f(tx[j], ty[j], tz[j]),
-                                                 a, columns.data() + t * m);
+                    const double sum = KernelRow(
+                        source_points, scale * Eigen::Vector3f(tx[j], ty[j], tz[j]),
+                        columns.data() + t * m_pad);
                     const double den = sum == 0.0 ? kDenFloor : sum;
                     const double inv = 1.0 / (den + c);
                     inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
@@ -109,31 +122,35 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
                     weights[static_cast<size_t>(t)] = {w, w * tx[j], w * ty[j], w * tz[j]};
                 }
                 if (block == kBlock) {
-                    AxpyRows4(columns.data(), m, m, weights, accs);
+                    AxpyRows4(columns.data(), m_pad, m, weights, accs);
                 } else {
                     for (Eigen::Index t = 0; t < block; ++t) {
-                        AxpyRow(columns.data() + t * m, m, weights[static_cast<size_t>(t)], accs);
+                        AxpyRow(columns.data() + t * m_pad, m, weights[static_cast<size_t>(t)],
+                                accs);
                     }
                 }
             }
         }
+    }
+    // Chunks reduced in chunk order, in double: element-wise passes over the four m-long
+    // accumulators (vectorisable, unlike a per-source loop over chunks; same additions).
+    totals_.assign(static_cast<size_t>(4 * m), 0.0);
+    for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
+        const float* acc = partial_.data() + chunk * 4 * m;
+        for (Eigen::Index k = 0; k < 4 * m; ++k) totals_[static_cast<size_t>(k)] += acc[k];
     }
     out.p1.resize(m);
     out.px.resize(m, 3);
     const Eigen::RowVector3d origin = target_blocked_.origin().transpose();
     const auto& s_order = source_.order();
     for (Eigen::Index i = 0; i < m; ++i) {
-        double t0 = 0.0, t1 = 0.0, t2 = 0.0, t3 = 0.0;
-        for (Eigen::Index chunk = 0; chunk < num_chunks; ++chunk) {
-            const float* acc = partial_.data() + chunk * 4 * m;
-            t0 += acc[i];
-            t1 += acc[m + i];
-            t2 += acc[2 * m + i];
-            t3 += acc[3 * m + i];
-        }
+        const double t0 = totals_[static_cast<size_t>(i)];
         const Eigen::Index row = s_order[static_cast<size_t>(i)];
         out.p1[row] = t0;
-        out.px.row(row) = Eigen::RowVector3d(t1, t2, t3) + t0 * origin;
+        out.px.row(row) = Eigen::RowVector3d(totals_[static_cast<size_t>(m + i)],
+                                             totals_[static_cast<size_t>(2 * m + i)],
+                                             totals_[static_cast<size_t>(3 * m + i)]) +
+                          t0 * origin;
     }
     out.np = out.p1.sum();
     out.truncated = false;

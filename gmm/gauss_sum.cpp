@@ -5,13 +5,29 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "core/nanoflann_adaptor.hpp"
 
 namespace regbench {
+
+SimdLevel SimdCap() {
+    static const SimdLevel cap = [] {
+        const char* value = std::getenv("REGBENCH_SIMD");
+        const std::string name = value == nullptr ? "" : value;
+        if (name.empty() || name == "avx512") return SimdLevel::kAvx512;
+        if (name == "avx2") return SimdLevel::kAvx2;
+        if (name == "baseline") return SimdLevel::kBaseline;
+        throw std::invalid_argument("REGBENCH_SIMD='" + name +
+                                    "' is not one of avx512, avx2, baseline");
+    }();
+    return cap;
+}
+
 namespace {
 
 /// Float partial sums run over at most this many terms before they are added into double.
@@ -173,17 +189,20 @@ __attribute__((always_inline)) inline std::int64_t EvaluateLeafImpl(const LeafJo
 
 #if defined(__x86_64__) && defined(__GNUC__)
 /// x86-64-v4 (AVX-512) clones: the lane order is the same, so results match the AVX2 build up
-/// to FMA contraction. Not exercised on machines without AVX-512 (such as CI's).
+/// to FMA contraction. REGBENCH_SIMD caps the choice, so one machine can run every clone (the
+/// `simd_*` tests in tests/CMakeLists.txt do).
 #define REGBENCH_V4_TARGET "avx512f,avx512vl,avx512bw,avx512dq,avx2,fma"
 
 bool HasAvx2Fma() {
-    static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    static const bool has = SimdCap() >= SimdLevel::kAvx2 && __builtin_cpu_supports("avx2") &&
+                            __builtin_cpu_supports("fma");
     return has;
 }
 bool HasAvx512() {
     static const bool has =
-        __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-        __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq");
+        SimdCap() >= SimdLevel::kAvx512 && __builtin_cpu_supports("avx512f") &&
+        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
+        __builtin_cpu_supports("avx512dq");
     return has;
 }
 
@@ -224,13 +243,69 @@ std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
     return moment ? EvaluateLeaf<false, true>(job) : EvaluateLeaf<false, false>(job);
 }
 
-/// One target's kernel column: row[i] = exp(a |q - p_i|^2) for all sources i, and its sum
-/// (8 float lanes per chunk of kChunk, chunks added in double: the same scheme as SumChunk).
-/// Two plain loops rather than one: the first has no loop-carried state and vectorises at the
-/// full vector width like a raw exp pass; the second sums the L1-resident row with the lanes in
-/// a vector register. (Summing inside the first loop made GCC keep the lanes on the stack and
-/// stall on store forwarding: 2.6x the raw exp pass instead of ~1.5x.) Same additions in the
-/// same order as summing term by term, so the same bits.
+// GCC vector types of kLanes floats: the kernel below is instantiated with the register width
+// of each clone (16 lanes for AVX-512, 8 for AVX2, 4 for the SSE2 baseline; a type wider than
+// the clone's registers is split badly: 16 lanes under AVX2 ran 11x the floor). They never
+// cross a function boundary (all always_inline in this file), so GCC's note that passing them
+// by value changes the ABI does not apply.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+// Spelled out per width: GCC 12 silently drops a template-dependent vector_size (the "vector"
+// becomes one float).
+template <int kLanes>
+struct Lanes;
+template <>
+struct Lanes<16> {
+    using Floats = float __attribute__((vector_size(64)));
+    using Ints = std::int32_t __attribute__((vector_size(64)));
+};
+template <>
+struct Lanes<8> {
+    using Floats = float __attribute__((vector_size(32)));
+    using Ints = std::int32_t __attribute__((vector_size(32)));
+};
+template <>
+struct Lanes<4> {
+    using Floats = float __attribute__((vector_size(16)));
+    using Ints = std::int32_t __attribute__((vector_size(16)));
+};
+
+/// 2^y for y <= 0 on kLanes lanes: FastExp's polynomial and 2^n scaling, with the reduction
+/// done in base 2. The argument already carries log2(e) (folded into the caller's coordinate
+/// scaling), so y = n + f splits with two additions (f = y - n is exact) and r = f ln 2 takes
+/// one multiply where FastExp spends three FMAs; no upper clamp, since y <= 0. Exactly 0 below
+/// the same underflow point as FastExp.
+template <int kLanes>
+__attribute__((always_inline)) inline typename Lanes<kLanes>::Floats Exp2NonPositive(
+    typename Lanes<kLanes>::Floats y) {
+    using Floats = typename Lanes<kLanes>::Floats;
+    using Ints = typename Lanes<kLanes>::Ints;
+    constexpr float kShifter = 12582912.0f;  // 1.5 * 2^23: adding it rounds to an integer
+    constexpr std::int32_t kShifterBits = 0x4B400000;
+    constexpr float kLn2 = 0.693147180559945309f;
+    constexpr float kMinArg = kFastExpMinArg * 1.44269504088896341f;  // FastExp's floor, base 2
+    const Floats yc = y < kMinArg ? kMinArg : y;
+    const Floats t = yc + kShifter;  // its low mantissa bits hold n = round(y)
+    const Floats n = t - kShifter;
+    const Floats r = (yc - n) * kLn2;
+    Floats p = r * 1.9875691500e-4f + 1.3981999507e-3f;
+    p = p * r + 8.3334519073e-3f;
+    p = p * r + 4.1665795894e-2f;
+    p = p * r + 1.6666665459e-1f;
+    p = p * r + 5.0000001201e-1f;
+    p = p * (r * r) + r + 1.0f;
+    const Ints scale_bits = ((Ints)t - (kShifterBits - 127)) << 23;  // 2^n
+    const Floats out = p * (Floats)scale_bits;
+    return y < kMinArg ? Floats{} : out;
+}
+
+/// One target's kernel column over points pre-scaled by sqrt(log2(e) / (2 sigma^2)):
+/// row[i] = 2^-|q - p_i|^2 = exp(-|q - p_i|^2 / (2 sigma^2)) in unscaled units, and its
+/// sum (kLanes float lanes per chunk of kChunk, chunks added in double). One loop: exp, store
+/// and sum with the lanes in registers; `count` is a multiple of kKernelRowPad (callers pad),
+/// so no scalar or masked tail.
+template <int kLanes>
 __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
                                                            const float* __restrict px,
                                                            const float* __restrict py,
@@ -238,50 +313,30 @@ __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row
                                                            Eigen::Index count,
                                                            float qx,
                                                            float qy,
-                                                           float qz,
-                                                           float a) {
-    const auto kernels = [&](float* __restrict out, const float* __restrict x,
-                             const float* __restrict y, const float* __restrict z,
-                             Eigen::Index n) __attribute__((always_inline)) {
-        for (Eigen::Index i = 0; i < n; ++i) {
-            const float dx = qx - x[i], dy = qy - y[i], dz = qz - z[i];
-            out[i] = FastExp((dx * dx + dy * dy + dz * dz) * a);
-        }
+                                                           float qz) {
+    static_assert(kKernelRowPad % kLanes == 0, "the padding must fill whole vectors");
+    using Floats = typename Lanes<kLanes>::Floats;
+    static_assert(sizeof(Floats) == kLanes * sizeof(float), "a vector of kLanes floats");
+    const auto load = [](const float* p) __attribute__((always_inline)) {
+        Floats v;
+        std::memcpy(&v, p, sizeof v);
+        return v;
     };
-    // The last count % 16 points go through a padded copy, so they are vector lanes too, not
-    // a scalar epilogue (13 of 717 points cost ~15% of the row in scalar code).
-    constexpr Eigen::Index kTail = 16;
-    const Eigen::Index body = count - count % kTail;
-    kernels(row, px, py, pz, body);
-    if (body < count) {
-        alignas(64) float tx[kTail], ty[kTail], tz[kTail], tr[kTail];
-        for (Eigen::Index i = 0; i < kTail; ++i) {
-            const bool real = body + i < count;
-            tx[i] = real ? px[body + i] : qx;
-            ty[i] = real ? py[body + i] : qy;
-            tz[i] = real ? pz[body + i] : qz;
-        }
-        kernels(tr, tx, ty, tz, kTail);
-        std::memcpy(row + body, tr, static_cast<std::size_t>(count - body) * sizeof(float));
-    }
-    constexpr int kLanes = 8;
-    using Lanes = float __attribute__((vector_size(kLanes * sizeof(float))));
-    double total = 0.0;
+    double total[kLanes] = {};
     for (Eigen::Index c0 = 0; c0 < count; c0 += kChunk) {
         const Eigen::Index c1 = std::min(count, c0 + kChunk);
-        Lanes lanes = {};
-        Eigen::Index j = c0;
-        for (; j + kLanes <= c1; j += kLanes) {
-            Lanes v;
-            std::memcpy(&v, row + j, sizeof(v));
-            lanes += v;
+        Floats sum = {};
+        for (Eigen::Index i = c0; i < c1; i += kLanes) {
+            const Floats dx = qx - load(px + i), dy = qy - load(py + i), dz = qz - load(pz + i);
+            const Floats k = Exp2NonPositive<kLanes>(-(dx * dx) - dy * dy - dz * dz);
+            std::memcpy(row + i, &k, sizeof k);
+            sum += k;
         }
-        for (int l = 0; j < c1; ++j, ++l) lanes[l] += row[j];
-        float s = 0.0f;
-        for (int l = 0; l < kLanes; ++l) s += lanes[l];
-        total += s;
+        for (int l = 0; l < kLanes; ++l) total[l] += sum[l];
     }
-    return total;
+    double s = 0.0;
+    for (int l = 0; l < kLanes; ++l) s += total[l];
+    return s;
 }
 
 /// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's share of
@@ -347,11 +402,27 @@ __attribute__((always_inline)) inline void AxpyRows4Impl(const float* __restrict
 
 }  // namespace
 
-double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float a, float* row) {
-    return RunBestIsa([&]() __attribute__((always_inline)) {
-        return KernelRowImpl(row, points.x, points.y, points.z, points.count, q.x(), q.y(), q.z(),
-                             a);
-    });
+double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float* row) {
+    if (points.count % kKernelRowPad != 0) {
+        throw std::invalid_argument("KernelRow: point count must be a multiple of " +
+                                    std::to_string(kKernelRowPad) + " (pad the arrays)");
+    }
+    // Not RunBestIsa: each clone gets the vector width of its registers.
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (HasAvx512()) {
+        return RunV4([&]() __attribute__((always_inline)) {
+            return KernelRowImpl<16>(row, points.x, points.y, points.z, points.count, q.x(), q.y(),
+                                     q.z());
+        });
+    }
+    if (HasAvx2Fma()) {
+        return RunAvx2([&]() __attribute__((always_inline)) {
+            return KernelRowImpl<8>(row, points.x, points.y, points.z, points.count, q.x(), q.y(),
+                                    q.z());
+        });
+    }
+#endif
+    return KernelRowImpl<4>(row, points.x, points.y, points.z, points.count, q.x(), q.y(), q.z());
 }
 
 void AxpyRow(const float* row,

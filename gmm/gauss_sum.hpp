@@ -151,9 +151,28 @@ struct FloatPoints {
     Eigen::Index count;
 };
 
-/// One kernel column for CPD's fused E-step: row[i] = exp(a |q - p_i|^2) over `points`,
-/// returning sum_i row[i] (float lanes, chunks in double).
-double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float a, float* row);
+/// Instruction sets the kernel sums below are compiled for, picked at run time.
+enum class SimdLevel { kBaseline, kAvx2, kAvx512 };
+
+/// The highest SimdLevel the kernels may use: REGBENCH_SIMD=avx2|baseline lowers it (so one
+/// machine can test every clone, or time like with like across machines); unset or avx512
+/// leaves the choice to the CPU. Read once; an unknown value throws std::invalid_argument.
+SimdLevel SimdCap();
+
+/// Point arrays for KernelRow are padded to a multiple of this many entries.
+constexpr Eigen::Index kKernelRowPad = 16;
+
+/// A coordinate for KernelRow's padding entries: far enough from any scaled point that its
+/// kernel is exactly 0, small enough that its squared distance stays finite in float.
+constexpr float kKernelRowFar = 1e18f;
+
+/// One kernel column for CPD's fused E-step: row[i] = 2^-|q - p_i|^2 for all `points`,
+/// returning sum_i row[i] (float lanes, chunks in double). Points and q come scaled by
+/// sqrt(log2(e) / (2 sigma^2)), which makes row[i] = exp(-|q - p_i|^2 / (2 sigma^2)) in the
+/// unscaled coordinates with neither the bandwidth nor log2(e) costing a multiply per pair.
+/// points.count must be a multiple of kKernelRowPad (pad with kKernelRowFar: the padding's
+/// entries come out exactly 0); row holds points.count floats.
+double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float* row);
 
 /// acc[c][i] += w[c] row[i] for c = 0..3 and i < count: one target's share of CPD's p1 and PX
 /// with w = (1, x, y, z) / (den + c).

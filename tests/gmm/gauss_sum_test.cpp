@@ -31,6 +31,47 @@ TEST(FastExp, MatchesStdExpWithinBound) {
     EXPECT_FLOAT_EQ(FastExp(0.0f), 1.0f);
 }
 
+// KernelRow works in pre-scaled coordinates: row[i] = 2^-|q - p_i|^2. Reference: std::exp2
+// in double of the squared distance computed in double from the same float inputs; the
+// tolerance is FastExp's polynomial bound plus float rounding of the argument (a few ulps
+// of |d|^2, times ln 2).
+TEST(KernelRow, MatchesStdExp2AndZeroesThePadding) {
+    constexpr Eigen::Index kReal = 1000;
+    const Eigen::Index count = (kReal + kKernelRowPad - 1) / kKernelRowPad * kKernelRowPad;
+    std::vector<float> x(static_cast<size_t>(count), kKernelRowFar), y(x), z(x);
+    auto rng = MakePairRng(7, 0);
+    const PointCloud p = UniformBox(rng, kReal, {-8, -8, -8}, {8, 8, 8});
+    for (Eigen::Index i = 0; i < kReal; ++i) {
+        x[static_cast<size_t>(i)] = static_cast<float>(p(i, 0));
+        y[static_cast<size_t>(i)] = static_cast<float>(p(i, 1));
+        z[static_cast<size_t>(i)] = static_cast<float>(p(i, 2));
+    }
+    const Eigen::Vector3f q(0.5f, -0.25f, 1.0f);
+    std::vector<float> row(static_cast<size_t>(count), -1.0f);
+    const double sum = KernelRow({x.data(), y.data(), z.data(), count}, q, row.data());
+    double ref_sum = 0.0;
+    int underflowed = 0;
+    for (Eigen::Index i = 0; i < kReal; ++i) {
+        const auto k = static_cast<size_t>(i);
+        const double d2 = std::pow(double{q.x()} - x[k], 2) + std::pow(double{q.y()} - y[k], 2) +
+                          std::pow(double{q.z()} - z[k], 2);
+        const double ref = std::exp2(-d2);
+        if (d2 > 125.6) {  // FastExp's underflow point, -87 in base e
+            EXPECT_EQ(row[k], 0.0f) << "d2 " << d2;
+            ++underflowed;
+            continue;
+        }
+        ref_sum += ref;
+        EXPECT_NEAR(row[k], ref, ref * (kFastExpRelTol + 4 * 6e-8 * d2 * std::log(2.0)))
+            << "d2 " << d2;
+    }
+    EXPECT_GT(underflowed, 0);  // the box reaches past the underflow radius
+    for (Eigen::Index i = kReal; i < count; ++i) EXPECT_EQ(row[static_cast<size_t>(i)], 0.0f);
+    EXPECT_NEAR(sum, ref_sum, kSumRelTol * ref_sum);
+    EXPECT_THROW(KernelRow({x.data(), y.data(), z.data(), count - 1}, q, row.data()),
+                 std::invalid_argument);
+}
+
 TEST(KernelSums, MatchesBruteForceWithWeightsAndMoments) {
     auto rng = MakePairRng(3, 0);
     const PointCloud q = UniformBox(rng, 300, {-1, -1, -1}, {1, 1, 1});
