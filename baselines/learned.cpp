@@ -14,12 +14,9 @@
 #include <mutex>
 
 #include "baselines/icp.hpp"
+#include "core/data_dir.hpp"
 #include "core/options.hpp"
 #include "ogmm/checkpoint.hpp"
-
-#ifndef REGBENCH_SOURCE_DIR
-#define REGBENCH_SOURCE_DIR "."
-#endif
 
 namespace regbench {
 
@@ -27,7 +24,7 @@ std::string ShippedCheckpointDir(const std::string& name) {
     if (const char* env = std::getenv("REGBENCH_MODELS"); env != nullptr && *env != '\0') {
         return (std::filesystem::path(env) / name).string();
     }
-    return (std::filesystem::path(REGBENCH_SOURCE_DIR) / "data" / "models" / name).string();
+    return (std::filesystem::path(DataDir()) / "models" / name).string();
 }
 
 Transform IcpRefine(const PointCloud& source,

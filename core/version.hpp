@@ -11,4 +11,7 @@ const char* RegbenchVersion();
 /// `git rev-parse --short=12 HEAD` at configure time; "unknown" outside a git checkout.
 const char* RegbenchGitSha();
 
+/// The source tree this binary was built from (absolute path at configure time).
+const char* RegbenchSourceDir();
+
 }  // namespace regbench

@@ -28,8 +28,8 @@ struct ShapeRecord {
 };
 
 struct DatasetOptions {
-    /// Directory holding corpus.json and meshes/ for "cgal". Empty: $REGBENCH_DATA_DIR, else
-    /// $REGBENCH_SOURCE_DIR/data, else ./data.
+    /// Directory holding corpus.json and meshes/ for "cgal". Empty: regbench::DataDir()
+    /// ($REGBENCH_DATA_DIR, else the source tree's data/; core/data_dir.hpp).
     std::string data_dir;
     bool normalize = true;             ///< mesh datasets: centre and scale into the unit sphere
     std::uint64_t seed = 0;            ///< "procedural": generator seed

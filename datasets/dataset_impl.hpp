@@ -43,8 +43,8 @@ struct Entry {
 using EntryLoader = std::function<ShapeRecord(const Entry&)>;
 
 /// A dataset that is a list of entries plus a loader (which must be safe to call concurrently).
-/// The data folder for named datasets: options.data_dir, else $REGBENCH_DATA_DIR, else
-/// $REGBENCH_SOURCE_DIR/data, else ./data.
+/// The data folder for named datasets: options.data_dir, else regbench::DataDir()
+/// (core/data_dir.hpp).
 std::string DataDir(const DatasetOptions& options);
 
 std::unique_ptr<Dataset> MakeListDataset(std::string kind,

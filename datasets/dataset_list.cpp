@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/data_dir.hpp"
 #include "datasets/dataset_impl.hpp"
 
 namespace regbench {
@@ -112,12 +113,7 @@ std::unique_ptr<Dataset> MakeListDataset(std::string kind,
 }
 
 std::string DataDir(const DatasetOptions& options) {
-    if (!options.data_dir.empty()) return options.data_dir;
-    if (const char* d = std::getenv("REGBENCH_DATA_DIR"); d != nullptr && *d != '\0') return d;
-    if (const char* s = std::getenv("REGBENCH_SOURCE_DIR"); s != nullptr && *s != '\0') {
-        return (fs::path(s) / "data").string();
-    }
-    return "data";
+    return options.data_dir.empty() ? regbench::DataDir() : options.data_dir;
 }
 
 }  // namespace detail

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "core/data_dir.hpp"
+
 namespace regbench {
 
 nlohmann::json LoadPaperTables(const std::string& path) {
@@ -29,12 +31,7 @@ nlohmann::json LoadPaperTables(const std::string& path) {
     }
 }
 
-std::string DefaultPaperTablesPath() {
-    if (const char* dir = std::getenv("REGBENCH_DATA_DIR")) {
-        return std::string(dir) + "/paper/ogmm_wacv2023_tables.json";
-    }
-    return std::string(REGBENCH_SOURCE_DIR) + "/data/paper/ogmm_wacv2023_tables.json";
-}
+std::string DefaultPaperTablesPath() { return DataDir() + "/paper/ogmm_wacv2023_tables.json"; }
 
 std::optional<std::string> PaperRowName(const std::string& method) {
     static const std::map<std::string, std::string> kNames = {

@@ -13,7 +13,7 @@ namespace regbench {
 /// Loads the paper's tables; throws naming the path when missing or malformed.
 nlohmann::json LoadPaperTables(const std::string& path);
 
-/// Default location: $REGBENCH_DATA_DIR/paper/... or <source dir>/data/paper/...
+/// Default location: DataDir()/paper/ogmm_wacv2023_tables.json (core/data_dir.hpp).
 std::string DefaultPaperTablesPath();
 
 /// The paper's row name for a regbench method name (icp -> ICP, cpd -> CPD, ...), if any.
