@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/enum_names.hpp"
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
 #include "core/rng.hpp"
@@ -18,12 +19,6 @@ namespace {
 constexpr Eigen::Index kMinCloudPoints = 3;
 /// Indoor (Tab. 3) samples 2048 points per scan; the ModelNet protocols 1024.
 constexpr int kIndoorPoints = 2048;
-
-template <class Enum>
-struct EnumName {
-    Enum value;
-    const char* name;
-};
 
 constexpr EnumName<Protocol> kProtocolNames[] = {
     {Protocol::kPartial, "partial"},
@@ -43,24 +38,6 @@ constexpr EnumName<Pairing> kPairingNames[] = {
     {Pairing::kShared, "shared"},
     {Pairing::kStored, "stored"},
 };
-
-template <class Enum, std::size_t N>
-std::string NameOf(const EnumName<Enum> (&table)[N], Enum v) {
-    for (const auto& e : table) {
-        if (e.value == v) return e.name;
-    }
-    throw std::logic_error("enum value without a name");
-}
-
-template <class Enum, std::size_t N>
-Enum ValueOf(const EnumName<Enum> (&table)[N], const std::string& what, const std::string& name) {
-    std::string known;
-    for (const auto& e : table) {
-        if (name == e.name) return e.value;
-        known += (known.empty() ? "" : ", ") + std::string(e.name);
-    }
-    throw std::invalid_argument("unknown " + what + " '" + name + "' (known: " + known + ")");
-}
 
 void Require(bool ok, const std::string& name, const std::string& why) {
     if (!ok) throw std::invalid_argument("protocol parameter '" + name + "' " + why);
@@ -197,16 +174,16 @@ std::size_t ProtocolLevels(const ProtocolOptions& o) {
     return o.protocol == Protocol::kOverlapSweep ? o.sweep_keeps.size() : 1;
 }
 
-std::string ToString(Protocol p) { return NameOf(kProtocolNames, p); }
-std::string ToString(MotionConvention m) { return NameOf(kMotionNames, m); }
-std::string ToString(Pairing p) { return NameOf(kPairingNames, p); }
+std::string ToString(Protocol p) { return EnumToString(kProtocolNames, p); }
+std::string ToString(MotionConvention m) { return EnumToString(kMotionNames, m); }
+std::string ToString(Pairing p) { return EnumToString(kPairingNames, p); }
 Protocol ParseProtocol(const std::string& name) {
-    return ValueOf(kProtocolNames, "protocol", name);
+    return ParseEnum(kProtocolNames, "protocol", name);
 }
 MotionConvention ParseMotionConvention(const std::string& name) {
-    return ValueOf(kMotionNames, "motion convention", name);
+    return ParseEnum(kMotionNames, "motion convention", name);
 }
-Pairing ParsePairing(const std::string& name) { return ValueOf(kPairingNames, "pairing", name); }
+Pairing ParsePairing(const std::string& name) { return ParseEnum(kPairingNames, "pairing", name); }
 
 std::vector<std::string> ProtocolNames() {
     std::vector<std::string> names;
