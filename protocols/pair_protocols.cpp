@@ -62,6 +62,13 @@ double Fraction(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels) {
     return labels.cast<double>().sum() / static_cast<double>(labels.size());
 }
 
+/// The protocol's clipped Gaussian noise, source first then target, if it adds any.
+void AddProtocolNoise(Pair& pair, const ProtocolOptions& o, std::mt19937_64& rng) {
+    if (!ProtocolAddsNoise(o.protocol)) return;
+    AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
+    AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
+}
+
 /// Paper pairing: two independent samples, each cropped; the motion moves the target.
 /// Draw order: source sample, target sample, source crop, target crop, density, motion, noise.
 Pair IndependentPair(const ShapeSource& shape,
@@ -80,10 +87,7 @@ Pair IndependentPair(const ShapeSource& shape,
     }
     pair.T_gt = DrawMotion(o.motion, o.max_rotation_deg, o.max_translation, rng);
     pair.target = Apply(pair.T_gt, target);
-    if (ProtocolAddsNoise(o.protocol)) {
-        AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
-        AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
-    }
+    AddProtocolNoise(pair, o, rng);
     LabelOverlapByRadius(pair, o.eta);
     return pair;
 }
@@ -136,10 +140,7 @@ Pair SharedPair(const ShapeSource& shape,
     pair.source = Apply(motion, Gather(full, source_index));
     pair.target = Gather(full, target_index);
     pair.T_gt = InvertRigid(motion);
-    if (ProtocolAddsNoise(o.protocol)) {
-        AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
-        AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
-    }
+    AddProtocolNoise(pair, o, rng);
     pair.source_overlap = SurvivesIn(source_index, in_target);
     pair.target_overlap = SurvivesIn(target_index, in_source);
     pair.source_overlap_ratio = Fraction(pair.source_overlap);
