@@ -11,10 +11,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class DatasetLayoutTest : public testing::TempDirTest {
-protected:
-    DatasetLayoutTest() : TempDirTest("layout") {}
-};
+using DatasetLayoutTest = testing::TempDirTest;
 
 TEST_F(DatasetLayoutTest, RootWithSeveralDatasetsIsRefusedListingThem) {
     // The authors' data root: ModelNet40 (OFF tree), 7Scenes and ICL-NUIM side by side.

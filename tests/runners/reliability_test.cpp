@@ -29,7 +29,6 @@ namespace fs = std::filesystem;
 
 class Reliability : public testing::TempDirTest {
 protected:
-    Reliability() : TempDirTest("rel") {}
     void SetUp() override {
         TempDirTest::SetUp();
         pairs_ = WritePairs("pairs.h5", 0);

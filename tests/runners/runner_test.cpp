@@ -18,7 +18,6 @@ namespace {
 
 class RunnerTest : public testing::TempDirTest {
 protected:
-    RunnerTest() : TempDirTest("runner") {}
     void SetUp() override {
         TempDirTest::SetUp();
         pairs_ = Path("pairs.h5");

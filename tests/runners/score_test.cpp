@@ -18,7 +18,6 @@ namespace {
 
 class ScoreTest : public testing::TempDirTest {
 protected:
-    ScoreTest() : TempDirTest("score") {}
     void SetUp() override {
         TempDirTest::SetUp();
         pairs_ = Path("pairs.h5");

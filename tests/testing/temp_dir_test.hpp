@@ -7,16 +7,15 @@
 
 namespace regbench::testing {
 
-/// dir_ = `<temp>/regbench_<prefix>_<test name>`, created empty before each test and removed
-/// after it. A fixture that overrides SetUp calls TempDirTest::SetUp() first.
+/// dir_ = `<temp>/regbench_<test suite>_<test name>`, created empty before each test and
+/// removed after it. A fixture that overrides SetUp calls TempDirTest::SetUp() first; one that
+/// adds nothing can be an alias (using MyTest = testing::TempDirTest).
 class TempDirTest : public ::testing::Test {
 protected:
-    explicit TempDirTest(std::string prefix) : prefix_(std::move(prefix)) {}
-
     void SetUp() override {
+        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
         dir_ = std::filesystem::temp_directory_path() /
-               ("regbench_" + prefix_ + "_" +
-                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+               (std::string("regbench_") + test->test_suite_name() + "_" + test->name());
         std::filesystem::remove_all(dir_);
         std::filesystem::create_directories(dir_);
     }
@@ -26,9 +25,6 @@ protected:
     std::string Path(const std::string& name) const { return (dir_ / name).string(); }
 
     std::filesystem::path dir_;
-
-private:
-    std::string prefix_;
 };
 
 }  // namespace regbench::testing
