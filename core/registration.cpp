@@ -5,20 +5,20 @@
 #include <limits>
 
 #include "core/cpu_time.hpp"
+#include "core/enum_names.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 
 namespace regbench {
 
-const char* ToString(AlignStatus status) {
-    switch (status) {
-        case AlignStatus::kOk:
-            return "ok";
-        case AlignStatus::kFailed:
-            return "failed";
-    }
-    return "failed";
-}
+namespace {
+constexpr EnumName<AlignStatus> kAlignStatusNames[] = {
+    {AlignStatus::kOk, "ok"},
+    {AlignStatus::kFailed, "failed"},
+};
+}  // namespace
+
+const char* ToString(AlignStatus status) { return EnumToString(kAlignStatusNames, status); }
 
 std::string ValidateCloud(const PointCloud& cloud, const std::string& which) {
     constexpr Eigen::Index kMinPoints = 3;

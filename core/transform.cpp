@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/enum_names.hpp"
+
 namespace regbench {
 namespace {
 constexpr double kDegPerRad = 180.0 / M_PI;
@@ -11,6 +13,10 @@ constexpr double kRadPerDeg = M_PI / 180.0;
 /// |cos| of the middle angle below which the decomposition is treated as gimbal-locked. scipy
 /// uses an angle tolerance of 1e-7 rad around +-90 deg; cos of such an angle is ~1e-7.
 constexpr double kGimbalCos = 1e-7;
+constexpr EnumName<EulerConvention> kEulerNames[] = {
+    {EulerConvention::kZyx, "zyx"},
+    {EulerConvention::kXyz, "xyz"},
+};
 }  // namespace
 
 Transform MakeTransform(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
@@ -36,19 +42,10 @@ PointCloud Apply(const Transform& T, const PointCloud& points) {
     return out;
 }
 
-const char* ToString(EulerConvention convention) {
-    switch (convention) {
-        case EulerConvention::kZyx:
-            return "zyx";
-        case EulerConvention::kXyz:
-            return "xyz";
-    }
-    return "?";
-}
+const char* ToString(EulerConvention convention) { return EnumToString(kEulerNames, convention); }
 
 EulerConvention ParseEulerConvention(const std::string& name) {
-    if (name == "zyx") return EulerConvention::kZyx;
-    if (name == "xyz") return EulerConvention::kXyz;
+    if (const auto convention = FindEnum(kEulerNames, name)) return *convention;
     throw std::invalid_argument("unknown Euler convention '" + name +
                                 "' (expected 'zyx' -- the paper's -- or 'xyz' -- RPMNet's)");
 }

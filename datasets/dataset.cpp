@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/enum_names.hpp"
 #include "datasets/dataset_impl.hpp"
 #include "datasets/off_reader.hpp"
 #include "datasets/point_file.hpp"
@@ -351,19 +352,14 @@ struct Layout {
     fs::path dir;
 };
 
-const char* LayoutName(LayoutKind kind) {
-    switch (kind) {
-        case LayoutKind::kModelNetH5:
-            return "ModelNet40 HDF5";
-        case LayoutKind::kIclNuim:
-            return "ICL-NUIM";
-        case LayoutKind::kSevenScenes:
-            return "7Scenes";
-        case LayoutKind::kModelNetOff:
-            return "ModelNet40 OFF tree";
-    }
-    return "?";
-}
+constexpr EnumName<LayoutKind> kLayoutNames[] = {
+    {LayoutKind::kModelNetH5, "ModelNet40 HDF5"},
+    {LayoutKind::kIclNuim, "ICL-NUIM"},
+    {LayoutKind::kSevenScenes, "7Scenes"},
+    {LayoutKind::kModelNetOff, "ModelNet40 OFF tree"},
+};
+
+const char* LayoutName(LayoutKind kind) { return EnumToString(kLayoutNames, kind); }
 
 /// The known layout `dir` itself has, if any. The OFF-tree test (class folders holding train/
 /// or test/) is loose, so callers try it last: a data root's `icl_nuim/{train,test}` would pass.

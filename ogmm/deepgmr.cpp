@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "core/enum_names.hpp"
 #include "ogmm/gmm_head.hpp"
 
 namespace regbench::ogmm {
@@ -9,31 +10,26 @@ namespace {
 
 using torch::indexing::Slice;
 
-std::string ToString(DeepGmrFeatures f) {
-    switch (f) {
-        case DeepGmrFeatures::kRri:
-            return "rri";
-        case DeepGmrFeatures::kXyz:
-            return "xyz";
-        case DeepGmrFeatures::kDgcnn:
-            return "dgcnn";
-    }
-    return "?";
-}
+constexpr EnumName<DeepGmrFeatures> kFeatureNames[] = {
+    {DeepGmrFeatures::kRri, "rri"},
+    {DeepGmrFeatures::kXyz, "xyz"},
+    {DeepGmrFeatures::kDgcnn, "dgcnn"},
+};
+constexpr EnumName<DeepGmrLoss> kLossNames[] = {
+    {DeepGmrLoss::kTransform, "transform"},
+    {DeepGmrLoss::kPose, "pose"},
+};
+
+std::string ToString(DeepGmrFeatures f) { return EnumToString(kFeatureNames, f); }
 
 DeepGmrFeatures ParseFeatures(const std::string& s) {
-    if (s == "rri") return DeepGmrFeatures::kRri;
-    if (s == "xyz") return DeepGmrFeatures::kXyz;
-    if (s == "dgcnn") return DeepGmrFeatures::kDgcnn;
-    throw std::invalid_argument("deepgmr: unknown features '" + s + "' (known: rri, xyz, dgcnn)");
+    return ParseEnum(kFeatureNames, "features", s, "deepgmr: ");
 }
 
-std::string ToString(DeepGmrLoss l) { return l == DeepGmrLoss::kTransform ? "transform" : "pose"; }
+std::string ToString(DeepGmrLoss l) { return EnumToString(kLossNames, l); }
 
 DeepGmrLoss ParseLoss(const std::string& s) {
-    if (s == "transform") return DeepGmrLoss::kTransform;
-    if (s == "pose") return DeepGmrLoss::kPose;
-    throw std::invalid_argument("deepgmr: unknown loss '" + s + "' (known: transform, pose)");
+    return ParseEnum(kLossNames, "loss", s, "deepgmr: ");
 }
 
 /// CBR(i, o): 1x1 Conv1d without bias -> BatchNorm1d -> ReLU (the original's building block).

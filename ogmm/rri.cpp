@@ -7,16 +7,24 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/enum_names.hpp"
 #include "core/kd_tree.hpp"
 
 namespace regbench::ogmm {
 
-std::string ToString(RriVariant v) { return v == RriVariant::kCuda ? "cuda" : "numpy"; }
+namespace {
+
+constexpr EnumName<RriVariant> kVariantNames[] = {
+    {RriVariant::kCuda, "cuda"},
+    {RriVariant::kNumpy, "numpy"},
+};
+
+}  // namespace
+
+std::string ToString(RriVariant v) { return EnumToString(kVariantNames, v); }
 
 RriVariant ParseRriVariant(const std::string& name) {
-    if (name == "cuda") return RriVariant::kCuda;
-    if (name == "numpy") return RriVariant::kNumpy;
-    throw std::invalid_argument("unknown rri_variant '" + name + "' (known: cuda, numpy)");
+    return ParseEnum(kVariantNames, "rri_variant", name);
 }
 
 namespace {

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/enum_names.hpp"
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
 #include "core/rng.hpp"
@@ -18,12 +19,6 @@ namespace {
 constexpr Eigen::Index kMinCloudPoints = 3;
 /// Indoor (Tab. 3) samples 2048 points per scan; the ModelNet protocols 1024.
 constexpr int kIndoorPoints = 2048;
-
-template <class Enum>
-struct EnumName {
-    Enum value;
-    const char* name;
-};
 
 constexpr EnumName<Protocol> kProtocolNames[] = {
     {Protocol::kPartial, "partial"},
@@ -43,24 +38,6 @@ constexpr EnumName<Pairing> kPairingNames[] = {
     {Pairing::kShared, "shared"},
     {Pairing::kStored, "stored"},
 };
-
-template <class Enum, std::size_t N>
-std::string NameOf(const EnumName<Enum> (&table)[N], Enum v) {
-    for (const auto& e : table) {
-        if (e.value == v) return e.name;
-    }
-    throw std::logic_error("enum value without a name");
-}
-
-template <class Enum, std::size_t N>
-Enum ValueOf(const EnumName<Enum> (&table)[N], const std::string& what, const std::string& name) {
-    std::string known;
-    for (const auto& e : table) {
-        if (name == e.name) return e.value;
-        known += (known.empty() ? "" : ", ") + std::string(e.name);
-    }
-    throw std::invalid_argument("unknown " + what + " '" + name + "' (known: " + known + ")");
-}
 
 void Require(bool ok, const std::string& name, const std::string& why) {
     if (!ok) throw std::invalid_argument("protocol parameter '" + name + "' " + why);
@@ -85,6 +62,13 @@ double Fraction(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels) {
     return labels.cast<double>().sum() / static_cast<double>(labels.size());
 }
 
+/// The protocol's clipped Gaussian noise, source first then target, if it adds any.
+void AddProtocolNoise(Pair& pair, const ProtocolOptions& o, std::mt19937_64& rng) {
+    if (!ProtocolAddsNoise(o.protocol)) return;
+    AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
+    AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
+}
+
 /// Paper pairing: two independent samples, each cropped; the motion moves the target.
 /// Draw order: source sample, target sample, source crop, target crop, density, motion, noise.
 Pair IndependentPair(const ShapeSource& shape,
@@ -103,10 +87,7 @@ Pair IndependentPair(const ShapeSource& shape,
     }
     pair.T_gt = DrawMotion(o.motion, o.max_rotation_deg, o.max_translation, rng);
     pair.target = Apply(pair.T_gt, target);
-    if (ProtocolAddsNoise(o.protocol)) {
-        AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
-        AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
-    }
+    AddProtocolNoise(pair, o, rng);
     LabelOverlapByRadius(pair, o.eta);
     return pair;
 }
@@ -159,10 +140,7 @@ Pair SharedPair(const ShapeSource& shape,
     pair.source = Apply(motion, Gather(full, source_index));
     pair.target = Gather(full, target_index);
     pair.T_gt = InvertRigid(motion);
-    if (ProtocolAddsNoise(o.protocol)) {
-        AddClippedNoise(pair.source, o.noise_sigma, o.noise_clip, rng);
-        AddClippedNoise(pair.target, o.noise_sigma, o.noise_clip, rng);
-    }
+    AddProtocolNoise(pair, o, rng);
     pair.source_overlap = SurvivesIn(source_index, in_target);
     pair.target_overlap = SurvivesIn(target_index, in_source);
     pair.source_overlap_ratio = Fraction(pair.source_overlap);
@@ -197,16 +175,16 @@ std::size_t ProtocolLevels(const ProtocolOptions& o) {
     return o.protocol == Protocol::kOverlapSweep ? o.sweep_keeps.size() : 1;
 }
 
-std::string ToString(Protocol p) { return NameOf(kProtocolNames, p); }
-std::string ToString(MotionConvention m) { return NameOf(kMotionNames, m); }
-std::string ToString(Pairing p) { return NameOf(kPairingNames, p); }
+std::string ToString(Protocol p) { return EnumToString(kProtocolNames, p); }
+std::string ToString(MotionConvention m) { return EnumToString(kMotionNames, m); }
+std::string ToString(Pairing p) { return EnumToString(kPairingNames, p); }
 Protocol ParseProtocol(const std::string& name) {
-    return ValueOf(kProtocolNames, "protocol", name);
+    return ParseEnum(kProtocolNames, "protocol", name);
 }
 MotionConvention ParseMotionConvention(const std::string& name) {
-    return ValueOf(kMotionNames, "motion convention", name);
+    return ParseEnum(kMotionNames, "motion convention", name);
 }
-Pairing ParsePairing(const std::string& name) { return ValueOf(kPairingNames, "pairing", name); }
+Pairing ParsePairing(const std::string& name) { return ParseEnum(kPairingNames, "pairing", name); }
 
 std::vector<std::string> ProtocolNames() {
     std::vector<std::string> names;

@@ -217,26 +217,32 @@ std::string PairStem(std::size_t k) {
     return buf;
 }
 
-void ExportXyz(const PairSet& set, const std::string& dir) {
+namespace {
+
+/// Writes pair k as <stem>_src.<ext> and <stem>_tgt.<ext> (the clouds as `cloud_text` writes
+/// them) and <stem>_gt.txt into `dir`, committed together at the end.
+void ExportPairs(const PairSet& set,
+                 const std::string& dir,
+                 const std::string& ext,
+                 std::string (*cloud_text)(const PointCloud&)) {
     ExportDir out(dir);
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
         const std::string stem = PairStem(k);
-        WriteTextFile(out.File(stem + "_src.xyz"), XyzText(set.pairs[k].source));
-        WriteTextFile(out.File(stem + "_tgt.xyz"), XyzText(set.pairs[k].target));
+        WriteTextFile(out.File(stem + "_src." + ext), cloud_text(set.pairs[k].source));
+        WriteTextFile(out.File(stem + "_tgt." + ext), cloud_text(set.pairs[k].target));
         WriteTextFile(out.File(stem + "_gt.txt"), TransformText(set.pairs[k].T_gt));
     }
     out.Commit();
 }
 
+}  // namespace
+
+void ExportXyz(const PairSet& set, const std::string& dir) {
+    ExportPairs(set, dir, "xyz", XyzText);
+}
+
 void ExportPly(const PairSet& set, const std::string& dir) {
-    ExportDir out(dir);
-    for (std::size_t k = 0; k < set.pairs.size(); ++k) {
-        const std::string stem = PairStem(k);
-        WriteTextFile(out.File(stem + "_src.ply"), PlyText(set.pairs[k].source));
-        WriteTextFile(out.File(stem + "_tgt.ply"), PlyText(set.pairs[k].target));
-        WriteTextFile(out.File(stem + "_gt.txt"), TransformText(set.pairs[k].T_gt));
-    }
-    out.Commit();
+    ExportPairs(set, dir, "ply", PlyText);
 }
 
 PairSet ImportXyzDir(const std::string& dir, double eta) {

@@ -2,22 +2,19 @@
 
 #include <sstream>
 
+#include "core/enum_names.hpp"
 #include "reports/table.hpp"
 
 namespace regbench {
 namespace {
 
-const char* SourceName(CellSource s) {
-    switch (s) {
-        case CellSource::kLabel:
-            return "label";
-        case CellSource::kMeasured:
-            return "measured";
-        case CellSource::kPaper:
-            return "paper";
-    }
-    return "?";
-}
+constexpr EnumName<CellSource> kSourceNames[] = {
+    {CellSource::kLabel, "label"},
+    {CellSource::kMeasured, "measured"},
+    {CellSource::kPaper, "paper"},
+};
+
+const char* SourceName(CellSource s) { return EnumToString(kSourceNames, s); }
 
 /// A cell's number as text with `decimals`, "-" when empty.
 std::string Number(const Cell& c, int decimals) {

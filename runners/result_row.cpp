@@ -6,11 +6,17 @@
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/enum_names.hpp"
 
 namespace regbench {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+constexpr EnumName<Status> kStatusNames[] = {
+    {Status::kOk, "ok"},           {Status::kFailed, "failed"},   {Status::kTimeout, "timeout"},
+    {Status::kCrashed, "crashed"}, {Status::kMissing, "missing"},
+};
 
 /// NaN / Inf become null (nlohmann would write null for them anyway; this says so).
 nlohmann::json FiniteOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; }
@@ -86,29 +92,12 @@ bool IsKnownKey(const std::string& key) {
 
 }  // namespace
 
-const char* ToString(Status status) {
-    switch (status) {
-        case Status::kOk:
-            return "ok";
-        case Status::kFailed:
-            return "failed";
-        case Status::kTimeout:
-            return "timeout";
-        case Status::kCrashed:
-            return "crashed";
-        case Status::kMissing:
-            return "missing";
-    }
-    return "?";
-}
+const char* ToString(Status status) { return EnumToString(kStatusNames, status); }
 
 Status ParseStatus(const std::string& name) {
-    for (Status s :
-         {Status::kOk, Status::kFailed, Status::kTimeout, Status::kCrashed, Status::kMissing}) {
-        if (name == ToString(s)) return s;
-    }
-    throw std::invalid_argument("unknown status '" + name +
-                                "' (expected ok, failed, timeout, crashed or missing)");
+    if (const auto status = FindEnum(kStatusNames, name)) return *status;
+    throw std::invalid_argument("unknown status '" + name + "' (expected " +
+                                EnumNameList(kStatusNames, ", ", " or ") + ")");
 }
 
 void to_json(nlohmann::json& j, Status status) { j = ToString(status); }

@@ -3,7 +3,6 @@
 // The pair is built before the timed loop; counters iterations and rre_deg prove the timed
 // run was right.
 #include <benchmark/benchmark.h>
-#include <omp.h>
 
 #include "bench/baselines/prob_pair.hpp"
 #include "runners/registry.hpp"
@@ -12,19 +11,9 @@ namespace regbench {
 namespace {
 
 void BM_ProbAlign(benchmark::State& state, const std::string& method_name) {
-    const auto points = static_cast<Eigen::Index>(state.range(0));
-    const int threads = static_cast<int>(state.range(1));
-    const BenchPair pair = MakeBenchPair(points);
+    const BenchPair pair = MakeBenchPair(static_cast<Eigen::Index>(state.range(0)));
     auto method = CreateMethod(method_name);
-    const int saved = omp_get_max_threads();
-    omp_set_num_threads(threads);
-    AlignResult r;
-    for (auto _ : state) {
-        r = method->Align(pair.source, pair.target);
-        benchmark::DoNotOptimize(r);
-    }
-    omp_set_num_threads(saved);
-    ReportAlign(state, pair, r);
+    TimeAlign(state, *method, pair);
 }
 
 /// Registers BM_ProbAlign/<method> for each probabilistic method present in the registry.

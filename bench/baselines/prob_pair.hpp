@@ -1,6 +1,7 @@
 #pragma once
 // The synthetic pair the probabilistic-method benchmarks share.
 #include <benchmark/benchmark.h>
+#include <omp.h>
 
 #include <string>
 
@@ -38,6 +39,25 @@ inline void ReportAlign(benchmark::State& state, const BenchPair& pair, const Al
     state.counters["rre_deg"] = m.rre;
     state.counters["rte"] = m.rte;
     state.counters["ok"] = r.status == AlignStatus::kOk ? 1 : 0;
+}
+
+/// The timed loop of the probabilistic-method benchmarks: aligns `pair` with `method` on
+/// state.range(1) OpenMP threads (restored afterwards), sets ReportAlign's counters and returns
+/// the last result.
+inline AlignResult TimeAlign(benchmark::State& state,
+                             RegistrationMethod& method,
+                             const BenchPair& pair) {
+    const int threads = static_cast<int>(state.range(1));
+    const int saved = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    AlignResult r;
+    for (auto _ : state) {
+        r = method.Align(pair.source, pair.target);
+        benchmark::DoNotOptimize(r);
+    }
+    omp_set_num_threads(saved);
+    ReportAlign(state, pair, r);
+    return r;
 }
 
 }  // namespace regbench

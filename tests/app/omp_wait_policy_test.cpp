@@ -8,9 +8,8 @@
 #include <string>
 
 #include "core/transform.hpp"
-#include "protocols/pair_file.hpp"
 #include "runners/runner.hpp"
-#include "tests/testing/synthetic.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
 
 namespace regbench {
 namespace {
@@ -47,14 +46,10 @@ TEST(OmpWaitPolicy, ThreadedRunsGiveIdenticalTransformsUnderEveryPolicy) {
     const auto dir = std::filesystem::temp_directory_path() / "regbench_omp_wait_policy";
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
-    PairSet set;
-    set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 5}};
-    for (int k = 0; k < 3; ++k) {
-        set.pairs.push_back(testing::SyntheticPair(
-            400, 20 + k, MakeTransform(RotationFromEulerZyxDeg(10.0 * k, 5, 0), {0.05, 0, 0})));
-    }
     const std::string pairs = (dir / "pairs.h5").string();
-    WritePairFile(pairs, set);
+    testing::WriteSyntheticPairFile(pairs, 3, 400, 20, 5, [](int k) {
+        return MakeTransform(RotationFromEulerZyxDeg(10.0 * k, 5, 0), {0.05, 0, 0});
+    });
     std::vector<std::vector<nlohmann::json>> runs;
     for (const std::string env :
          {"env -u OMP_WAIT_POLICY", "env OMP_WAIT_POLICY=PASSIVE", "env OMP_WAIT_POLICY=ACTIVE"}) {

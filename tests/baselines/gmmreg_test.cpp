@@ -9,12 +9,14 @@
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
+#include "tests/baselines/registration_fixtures.hpp"
 #include "tests/testing/method_params.hpp"
 #include "tests/testing/shapes.hpp"
 
 namespace regbench {
 namespace {
 
+using testing::AlignWith;
 using testing::LumpyEllipsoid;
 using testing::RotationErrorDeg;
 using testing::ThirtyDegreesAboutZ;
@@ -24,16 +26,10 @@ constexpr int kPoints = 717;
 constexpr double kRotTolDeg = 1.0;
 constexpr double kTransTol = 0.01;
 
-AlignResult RunGmmReg(const nlohmann::json& params,
-                      const PointCloud& source,
-                      const PointCloud& target) {
-    return CreateMethod("gmmreg", params)->Align(source, target);
-}
-
 TEST(GmmReg, ProbregModeRecoversThirtyDegreesAboutZ) {
     const PointCloud Y = LumpyEllipsoid(kPoints, 1);
     const Transform T = ThirtyDegreesAboutZ();
-    const AlignResult r = RunGmmReg({{"compat", "probreg"}}, Y, Apply(T, Y));
+    const AlignResult r = AlignWith("gmmreg", {{"compat", "probreg"}}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(RotationErrorDeg(r.T_target_source, T), kRotTolDeg);
     EXPECT_GT(r.iterations, 0);
@@ -46,7 +42,7 @@ TEST(GmmReg, ProbregModeOnACleanCompletePair) {
     const PointCloud Y = LumpyEllipsoid(kPoints, 2);
     const Transform T = MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 0), kPi / 6),
                                       Eigen::Vector3d(0.2, 0.1, -0.1));
-    const AlignResult r = RunGmmReg({}, Y, Apply(T, Y));
+    const AlignResult r = AlignWith("gmmreg", {}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(RotationErrorDeg(r.T_target_source, T), kRotTolDeg);
     EXPECT_LT(TranslationError(r.T_target_source, T), kTransTol);
@@ -57,21 +53,22 @@ TEST(GmmReg, SameSeedSameResultAndThreadCountInvariant) {
     const PointCloud X = Apply(ThirtyDegreesAboutZ(), Y);
     const int threads = omp_get_max_threads();
     omp_set_num_threads(1);
-    const AlignResult a = RunGmmReg({{"seed", 5}, {"compat", "probreg"}}, Y, X);
+    const AlignResult a = AlignWith("gmmreg", {{"seed", 5}, {"compat", "probreg"}}, Y, X);
     omp_set_num_threads(2);
-    const AlignResult b = RunGmmReg({{"seed", 5}, {"compat", "probreg"}}, Y, X);
+    const AlignResult b = AlignWith("gmmreg", {{"seed", 5}, {"compat", "probreg"}}, Y, X);
     omp_set_num_threads(threads);
     ASSERT_EQ(a.status, AlignStatus::kOk);
     EXPECT_LT((a.T_target_source - b.T_target_source).cwiseAbs().maxCoeff(), 1e-9);
-    const AlignResult c = RunGmmReg({{"seed", 6}, {"compat", "probreg"}}, Y, X);
+    const AlignResult c = AlignWith("gmmreg", {{"seed", 6}, {"compat", "probreg"}}, Y, X);
     EXPECT_NE((a.T_target_source - c.T_target_source).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(GmmReg, PointFeaturesAndScheduleWork) {
     const PointCloud Y = LumpyEllipsoid(400, 5);
     const Transform T = ThirtyDegreesAboutZ();
-    const AlignResult r = RunGmmReg(
-        {{"gmm", "points"}, {"gradient", "exact"}, {"outer_iterations", 3}}, Y, Apply(T, Y));
+    const AlignResult r =
+        AlignWith("gmmreg", {{"gmm", "points"}, {"gradient", "exact"}, {"outer_iterations", 3}}, Y,
+                  Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(RotationErrorDeg(r.T_target_source, T), kRotTolDeg);
     EXPECT_EQ(r.extra.at("components_source").get<int>(), 400);

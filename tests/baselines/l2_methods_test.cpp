@@ -9,11 +9,13 @@
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "runners/registry.hpp"
+#include "tests/baselines/registration_fixtures.hpp"
 #include "tests/testing/shapes.hpp"
 
 namespace regbench {
 namespace {
 
+using testing::AlignWith;
 using testing::LumpyEllipsoid;
 using testing::RotationErrorDeg;
 using testing::ThirtyDegreesAboutZ;
@@ -26,18 +28,13 @@ struct L2Case {
     bool reports_converged;        ///< BFGS ends on gtol on the clean pair
 };
 
-class L2Method : public ::testing::TestWithParam<L2Case> {
-protected:
-    AlignResult Run(const nlohmann::json& params, const PointCloud& Y, const PointCloud& X) {
-        return CreateMethod(GetParam().method, params)->Align(Y, X);
-    }
-};
+using L2Method = ::testing::TestWithParam<L2Case>;
 
 TEST_P(L2Method, CorrectModeIsAccurateOnACleanCompletePair) {
     const PointCloud Y = LumpyEllipsoid(717, GetParam().clean_seed);
     const Transform T = MakeTransform(RotationFromAxisAngle(Eigen::Vector3d(1, 1, 0), kPi / 6),
                                       Eigen::Vector3d(0.2, 0.1, -0.1));
-    const AlignResult r = Run({{"compat", "none"}}, Y, Apply(T, Y));
+    const AlignResult r = AlignWith(GetParam().method, {{"compat", "none"}}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(RotationErrorDeg(r.T_target_source, T), 1.0);
     EXPECT_LT(TranslationError(r.T_target_source, T), 0.01);
@@ -47,7 +44,7 @@ TEST_P(L2Method, CorrectModeIsAccurateOnACleanCompletePair) {
 TEST_P(L2Method, IdenticalCloudsGiveIdentity) {
     const PointCloud Y = LumpyEllipsoid(300, GetParam().identical_seed);
     for (const char* compat : {"probreg", "none"}) {
-        const AlignResult r = Run({{"compat", compat}}, Y, Y);
+        const AlignResult r = AlignWith(GetParam().method, {{"compat", compat}}, Y, Y);
         ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
         EXPECT_LT(RotationErrorDeg(r.T_target_source, Transform::Identity()), 0.05) << compat;
         EXPECT_LT(TranslationError(r.T_target_source, Transform::Identity()), 1e-3) << compat;
@@ -60,7 +57,7 @@ TEST_P(L2Method, CropProtocolOutputsAreFiniteAndBeatIdentity) {
     const PointCloud source = testing::CropAndJitter(Y, 0.7, 0.01, 1);
     const PointCloud target = testing::CropAndJitter(Apply(T, Y), 0.7, 0.01, 2);
     for (const char* compat : {"probreg", "none"}) {
-        const AlignResult r = Run({{"compat", compat}}, source, target);
+        const AlignResult r = AlignWith(GetParam().method, {{"compat", compat}}, source, target);
         ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
         EXPECT_TRUE(r.T_target_source.allFinite()) << compat;
         EXPECT_TRUE(std::isfinite(r.extra.at("objective").get<double>())) << compat;
@@ -78,7 +75,7 @@ TEST_P(L2Method, CorrectModeIsUnitAndOffsetInvariant) {
         (kScale * LumpyEllipsoid(400, 22)).rowwise() + Eigen::RowVector3d(5000, -2000, 300);
     const Transform T =
         MakeTransform(RotationFromEulerZyxDeg(30.0, 0.0, 0.0), Eigen::Vector3d(100, -50, 200));
-    const AlignResult r = Run({{"compat", "none"}}, Y, Apply(T, Y));
+    const AlignResult r = AlignWith(GetParam().method, {{"compat", "none"}}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(RotationErrorDeg(r.T_target_source, T), 1.0);
     EXPECT_LT(TranslationError(r.T_target_source, T), 0.01 * kScale);

@@ -9,12 +9,14 @@
 #include "core/transform.hpp"
 #include "gmm/gmm_common.hpp"
 #include "runners/registry.hpp"
+#include "tests/baselines/registration_fixtures.hpp"
 #include "tests/testing/method_params.hpp"
 #include "tests/testing/shapes.hpp"
 
 namespace regbench {
 namespace {
 
+using testing::AlignWith;
 using testing::LumpyEllipsoid;
 using testing::RotationErrorDeg;
 using testing::ThirtyDegreesAboutZ;
@@ -22,12 +24,6 @@ using testing::TranslationError;
 
 constexpr int kPoints = 717;
 constexpr double kEulerTolRad = 0.1;  // probreg's own SVR test tolerance
-
-AlignResult RunSvr(const nlohmann::json& params,
-                   const PointCloud& source,
-                   const PointCloud& target) {
-    return CreateMethod("svr", params)->Align(source, target);
-}
 
 void ExpectEulerWithin(const Transform& est, const Transform& gt, double tol_rad) {
     const Eigen::Vector3d e = EulerZyxDegFromRotation(est.topLeftCorner<3, 3>());
@@ -74,7 +70,7 @@ TEST(OneClassSvm, RejectsBadNu) {
 TEST(Svr, DefaultsRecoverThirtyDegreesAboutZ) {
     const PointCloud Y = LumpyEllipsoid(kPoints, 12);
     const Transform T = ThirtyDegreesAboutZ();
-    const AlignResult r = RunSvr({}, Y, Apply(T, Y));
+    const AlignResult r = AlignWith("svr", {}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     ExpectEulerWithin(r.T_target_source, T, kEulerTolRad);
     EXPECT_GT(r.iterations, 0);
@@ -86,7 +82,7 @@ TEST(Svr, ProbregEulerTestAnglesInZeroTo45Degrees) {
     const PointCloud Y = LumpyEllipsoid(kPoints, 13);
     const Transform T =
         MakeTransform(RotationFromEulerZyxDeg(37.0, 12.0, 25.0), Eigen::Vector3d::Zero());
-    const AlignResult r = RunSvr({}, Y, Apply(T, Y));
+    const AlignResult r = AlignWith("svr", {}, Y, Apply(T, Y));
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     ExpectEulerWithin(r.T_target_source, T, kEulerTolRad);
     EXPECT_LT(TranslationError(r.T_target_source, T), 1e-2);
@@ -96,8 +92,9 @@ TEST(Svr, OuterScheduleRunsInBothModes) {
     const PointCloud Y = LumpyEllipsoid(300, 15);
     const Transform T = ThirtyDegreesAboutZ();
     for (const char* compat : {"probreg", "none"}) {
-        const AlignResult r = RunSvr(
-            {{"compat", compat}, {"outer_iterations", 3}, {"outer_tol", 0.0}}, Y, Apply(T, Y));
+        const AlignResult r =
+            AlignWith("svr", {{"compat", compat}, {"outer_iterations", 3}, {"outer_tol", 0.0}}, Y,
+                      Apply(T, Y));
         ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
         EXPECT_EQ(r.extra.at("outer_iterations").get<int>(), 3) << compat;
         EXPECT_TRUE(r.T_target_source.allFinite());

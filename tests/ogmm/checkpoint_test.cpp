@@ -6,27 +6,15 @@
 #include <fstream>
 
 #include "ogmm/zoo.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench::ogmm {
 namespace {
 namespace fs = std::filesystem;
 
-fs::path TempDir(const std::string& name) {
-    const fs::path d =
-        fs::temp_directory_path() / ("regbench_ckpt_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+using testing::ErrorOf;
 
-std::string ThrowMessage(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const std::runtime_error& e) {
-        return e.what();
-    }
-    return "";
-}
+fs::path TempDir(const std::string& name) { return testing::FreshTempDir("ckpt_" + name); }
 
 TEST(Checkpoint, RoundTripIsBitExact) {
     torch::set_num_threads(1);
@@ -65,7 +53,7 @@ TEST(Checkpoint, RefusesAnotherConfigNamingTheFile) {
     auto a = MakeNet("deepgmr-orig-xyz");
     SaveCheckpoint((dir / "ck").string(), *a, {});
     auto b = MakeNet("deepgmr-orig-xyz", {{"clusters", 8}});
-    const std::string msg = ThrowMessage([&] { LoadCheckpoint((dir / "ck").string(), *b); });
+    const std::string msg = ErrorOf([&] { LoadCheckpoint((dir / "ck").string(), *b); });
     EXPECT_NE(msg.find((dir / "ck" / "checkpoint.json").string()), std::string::npos) << msg;
     fs::remove_all(dir);
 }
@@ -77,7 +65,7 @@ TEST(Checkpoint, RefusesCorruptWeightsNamingTheFile) {
     const fs::path weights = dir / "ck" / "weights.pt";
     const auto size = fs::file_size(weights);
     fs::resize_file(weights, size / 2);  // truncated write
-    const std::string msg = ThrowMessage([&] { LoadCheckpoint((dir / "ck").string(), *a); });
+    const std::string msg = ErrorOf([&] { LoadCheckpoint((dir / "ck").string(), *a); });
     EXPECT_NE(msg.find(weights.string()), std::string::npos) << msg;
     fs::remove_all(dir);
 }
@@ -88,10 +76,9 @@ TEST(Checkpoint, RefusesCorruptJsonNamingTheFile) {
     SaveCheckpoint((dir / "ck").string(), *a, {});
     const fs::path json = dir / "ck" / "checkpoint.json";
     std::ofstream(json) << "{\"format\": \"regbench-checkpoint\", ";
-    const std::string msg = ThrowMessage([&] { LoadNetFromCheckpoint((dir / "ck").string()); });
+    const std::string msg = ErrorOf([&] { LoadNetFromCheckpoint((dir / "ck").string()); });
     EXPECT_NE(msg.find(json.string()), std::string::npos) << msg;
-    const std::string missing =
-        ThrowMessage([&] { LoadNetFromCheckpoint((dir / "nowhere").string()); });
+    const std::string missing = ErrorOf([&] { LoadNetFromCheckpoint((dir / "nowhere").string()); });
     EXPECT_NE(missing.find("nowhere"), std::string::npos) << missing;
     fs::remove_all(dir);
 }

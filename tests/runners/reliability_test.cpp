@@ -19,36 +19,29 @@
 #include "runners/runner.hpp"
 #include "runners/scale_guard.hpp"
 #include "tests/testing/files.hpp"
-#include "tests/testing/synthetic.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/temp_dir_test.hpp"
 
 namespace regbench {
 namespace {
 
 namespace fs = std::filesystem;
 
-class Reliability : public ::testing::Test {
+class Reliability : public testing::TempDirTest {
 protected:
     void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("regbench_rel_" +
-                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
+        TempDirTest::SetUp();
         pairs_ = WritePairs("pairs.h5", 0);
         other_pairs_ = WritePairs("other.h5", 100);
     }
-    void TearDown() override { fs::remove_all(dir_); }
 
     std::string WritePairs(const std::string& name, int seed_offset) {
-        PairSet set;
-        set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
-        for (int k = 0; k < 4; ++k) {
-            set.pairs.push_back(testing::SyntheticPair(
-                40, static_cast<std::uint64_t>(10 + k + seed_offset),
-                MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
-        }
-        const std::string path = (dir_ / name).string();
-        WritePairFile(path, set);
+        const auto motion = [](int k) {
+            return MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0});
+        };
+        const std::string path = Path(name);
+        testing::WriteSyntheticPairFile(path, 4, 40, static_cast<std::uint64_t>(10 + seed_offset),
+                                        3, motion);
         return path;
     }
     RunOptions Options(const std::string& out, const std::string& pairs) const {
@@ -82,7 +75,6 @@ protected:
         o.resume = true;
         return testing::ErrorOf([&] { RunBenchmark(o); });
     }
-    fs::path dir_;
     std::string pairs_;
     std::string other_pairs_;
 };

@@ -10,35 +10,27 @@
 
 #include "protocols/pair_file.hpp"
 #include "runners/registry.hpp"
-#include "tests/testing/synthetic.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/temp_dir_test.hpp"
 
 namespace regbench {
 namespace {
 
-class RunnerTest : public ::testing::Test {
+class RunnerTest : public testing::TempDirTest {
 protected:
     void SetUp() override {
-        dir_ = std::filesystem::temp_directory_path() /
-               ("regbench_runner_" +
-                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        std::filesystem::remove_all(dir_);
-        std::filesystem::create_directories(dir_);
-        PairSet set;
-        set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
-        for (int k = 0; k < 6; ++k) {
-            set.pairs.push_back(testing::SyntheticPair(
-                50, 10 + k, MakeTransform(RotationZyxProductDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0})));
-        }
-        pairs_ = (dir_ / "pairs.h5").string();
-        WritePairFile(pairs_, set);
+        TempDirTest::SetUp();
+        pairs_ = Path("pairs.h5");
+        testing::WriteSyntheticPairFile(pairs_, 6, 50, 10, 3, [](int k) {
+            return MakeTransform(RotationZyxProductDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0});
+        });
     }
-    void TearDown() override { std::filesystem::remove_all(dir_); }
 
     RunOptions Options(const std::string& out) const {
         RunOptions o;
         o.pairs_path = pairs_;
         o.methods = ParseMethodSpecs("identity", {});
-        o.out_path = (dir_ / out).string();
+        o.out_path = Path(out);
         o.progress = false;
         return o;
     }
@@ -58,7 +50,6 @@ protected:
         }
         return rb;
     }
-    std::filesystem::path dir_;
     std::string pairs_;
 };
 

@@ -10,32 +10,21 @@
 #include "protocols/pair_file.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
-#include "tests/testing/synthetic.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/temp_dir_test.hpp"
 
 namespace regbench {
 namespace {
 
-class ScoreTest : public ::testing::Test {
+class ScoreTest : public testing::TempDirTest {
 protected:
     void SetUp() override {
-        dir_ = std::filesystem::temp_directory_path() /
-               ("regbench_score_" +
-                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        std::filesystem::remove_all(dir_);
-        std::filesystem::create_directories(dir_);
-        PairSet set;
-        set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 5}};
-        for (int k = 0; k < 4; ++k) {
-            set.pairs.push_back(testing::SyntheticPair(
-                60, 20 + k,
-                MakeTransform(RotationXyzProductDeg(4.0 * k, -3.0, 6.0), {0.02 * k, 0.01, 0})));
-        }
+        TempDirTest::SetUp();
         pairs_ = Path("pairs.h5");
-        WritePairFile(pairs_, set);
+        testing::WriteSyntheticPairFile(pairs_, 4, 60, 20, 5, [](int k) {
+            return MakeTransform(RotationXyzProductDeg(4.0 * k, -3.0, 6.0), {0.02 * k, 0.01, 0});
+        });
     }
-    void TearDown() override { std::filesystem::remove_all(dir_); }
-
-    std::string Path(const std::string& name) const { return (dir_ / name).string(); }
     void Write(const std::string& name, const std::string& text) const {
         std::ofstream(Path(name)) << text;
     }
@@ -58,7 +47,6 @@ protected:
         return ReadJsonl(o.out_path);
     }
 
-    std::filesystem::path dir_;
     std::string pairs_;
 };
 

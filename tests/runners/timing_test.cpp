@@ -5,10 +5,9 @@
 #include <filesystem>
 
 #include "core/cpu_time.hpp"
-#include "protocols/pair_file.hpp"
 #include "runners/runner.hpp"
 #include "runners/timing_summary.hpp"
-#include "tests/testing/synthetic.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
 
 namespace regbench {
 namespace {
@@ -31,15 +30,11 @@ TEST(RunnerTiming, EveryOkRowHasPositiveCpuSecondsAndTheMachineLoad) {
     const auto dir = std::filesystem::temp_directory_path() / "regbench_runner_timing";
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
-    PairSet set;
-    set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", 3}};
-    for (int k = 0; k < 3; ++k) {
-        set.pairs.push_back(testing::SyntheticPair(
-            200, 10 + k, MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01, 0, 0})));
-    }
     RunOptions o;
     o.pairs_path = (dir / "pairs.h5").string();
-    WritePairFile(o.pairs_path, set);
+    testing::WriteSyntheticPairFile(o.pairs_path, 3, 200, 10, 3, [](int k) {
+        return MakeTransform(RotationFromEulerZyxDeg(5.0 * k, 0, 0), {0.01, 0, 0});
+    });
     o.methods = ParseMethodSpecs("cpd,icp", {});
     o.progress = false;
     for (const double timeout : {0.0, 60.0}) {  // in process, and in an isolated child
