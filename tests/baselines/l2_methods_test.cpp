@@ -38,7 +38,9 @@ TEST_P(L2Method, CorrectModeIsAccurateOnACleanCompletePair) {
     ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
     EXPECT_LT(RotationErrorDeg(r.T_target_source, T), 1.0);
     EXPECT_LT(TranslationError(r.T_target_source, T), 0.01);
-    if (GetParam().reports_converged) EXPECT_EQ(r.stop_reason, "converged");
+    if (GetParam().reports_converged) {
+        EXPECT_EQ(r.stop_reason, "converged");
+    }
 }
 
 TEST_P(L2Method, IdenticalCloudsGiveIdentity) {
