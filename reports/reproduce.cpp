@@ -10,6 +10,7 @@
 #include <memory>
 #include <ostream>
 #include <set>
+#include <utility>
 
 #include "core/atomic_file.hpp"
 #include "core/version.hpp"
@@ -63,15 +64,32 @@ bool Wanted(const std::vector<std::string>& wanted, const std::string& table) {
     return false;
 }
 
+/// Every experiment of the paper's tables, in the paper's order, then those the wanted tables
+/// need. Long because it is the list itself: one entry (and its stand-in data) per table part.
 std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
     const std::size_t n = o.pairs > 0 ? o.pairs : (o.quick ? 10 : 1000);
     const bool mn = !o.modelnet40.empty();
     const std::string objects = mn ? o.modelnet40 : "cgal";
     const std::string object_fallback = mn ? "" : "embedded CGAL mesh corpus instead of ModelNet40";
+    const auto make = [&](std::string id, std::string table, std::string group,
+                          std::string protocol, std::string dataset, std::string split,
+                          std::string fallback, std::size_t pairs, std::uint64_t seed) {
+        Experiment e;
+        e.id = std::move(id);
+        e.table = std::move(table);
+        e.group = std::move(group);
+        e.protocol = std::move(protocol);
+        e.dataset = std::move(dataset);
+        e.split = std::move(split);
+        e.fallback = std::move(fallback);
+        e.pairs = pairs;
+        e.seed = seed;
+        return e;
+    };
     const auto obj = [&](std::string id, std::string table, std::string group, std::string protocol,
                          std::string split, std::size_t pairs) {
-        return Experiment{id,    table,           group, protocol, objects,
-                          split, object_fallback, pairs, o.seed,   false};
+        return make(std::move(id), std::move(table), std::move(group), std::move(protocol),
+                    objects, std::move(split), object_fallback, pairs, o.seed);
     };
     std::vector<Experiment> all = {
         obj("tab1_same", "table1_modelnet_partial", "same_category", "partial",
@@ -86,14 +104,14 @@ std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
     // Indoor scenes: real data when given, else the indoor simulation (different seeds so
     // the two columns are not the same pairs).
     const std::size_t n_indoor = std::max<std::size_t>(4, n / 2);
-    all.push_back({"tab3_7scenes", "table3_indoor", "7scenes", "indoor",
-                   o.sevenscenes.empty() ? "indoor-sim" : o.sevenscenes, "test",
-                   o.sevenscenes.empty() ? "simulated indoor scans instead of 7Scenes" : "",
-                   n_indoor, o.seed, false});
-    all.push_back({"tab3_icl_nuim", "table3_indoor", "icl_nuim", "indoor",
-                   o.icl_nuim.empty() ? "indoor-sim" : o.icl_nuim, "test",
-                   o.icl_nuim.empty() ? "simulated indoor scans instead of ICL-NUIM" : "", n_indoor,
-                   o.seed + 1, false});
+    all.push_back(make("tab3_7scenes", "table3_indoor", "7scenes", "indoor",
+                       o.sevenscenes.empty() ? "indoor-sim" : o.sevenscenes, "test",
+                       o.sevenscenes.empty() ? "simulated indoor scans instead of 7Scenes" : "",
+                       n_indoor, o.seed));
+    all.push_back(make("tab3_icl_nuim", "table3_indoor", "icl_nuim", "indoor",
+                       o.icl_nuim.empty() ? "indoor-sim" : o.icl_nuim, "test",
+                       o.icl_nuim.empty() ? "simulated indoor scans instead of ICL-NUIM" : "",
+                       n_indoor, o.seed + 1));
     // Real ICL-NUIM: its test file's stored pairs, as DeepGMR's and the authors' evaluation.
     if (!o.icl_nuim.empty()) all.back().pairing = "stored";
     // Sweep: half the pairs per level (500 of 1000); --quick 2 per level.
@@ -280,8 +298,11 @@ std::vector<std::string> ReproducibleTables() {
     return ids;
 }
 
-ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
-    const auto start = std::chrono::steady_clock::now();
+namespace {
+
+/// Refuses table names that match no table and dataset paths that do not exist, before any
+/// work starts.
+void ValidateOptions(const ReproduceOptions& o) {
     for (const auto& t : o.tables) {
         bool known = false;
         for (const auto& id : ReproducibleTables()) known |= id.rfind(t, 0) == 0;
@@ -300,20 +321,23 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
                                         ": no such file or folder");
         }
     }
-    ReproduceSummary summary;
-    const fs::path out = fs::absolute(o.out_dir);
-    fs::create_directories(out / "pairs");
-    fs::create_directories(out / "results");
-    summary.out_dir = out.string();
-    std::map<std::string, std::string> unavailable;
-    const auto methods = ChooseMethods(o, &unavailable, log);
-    const auto experiments = PlanExperiments(o);
-    summary.experiments = experiments.size();
+}
 
-    // Generate and run every experiment; each step is skipped or resumed when done before.
-    std::map<std::string, std::vector<nlohmann::json>> rows_of;
-    std::map<std::string, Provenance> provenance_of;
-    std::map<std::string, PairSet> pairs_of;
+/// Each experiment's result rows, pair-file provenance and pairs, by experiment id.
+struct ExperimentOutputs {
+    std::map<std::string, std::vector<nlohmann::json>> rows;
+    std::map<std::string, Provenance> provenance;
+    std::map<std::string, PairSet> pairs;
+};
+
+/// Generates and runs every experiment; each step is skipped or resumed when done before.
+ExperimentOutputs RunExperiments(const std::vector<Experiment>& experiments,
+                                 const std::vector<MethodSpec>& methods,
+                                 const ReproduceOptions& o,
+                                 const fs::path& out,
+                                 ReproduceSummary& summary,
+                                 std::ostream& log) {
+    ExperimentOutputs x;
     for (const auto& e : experiments) {
         const fs::path pairs = out / "pairs" / (e.id + ".h5");
         const fs::path results = out / "results" / (e.id + ".jsonl");
@@ -321,18 +345,26 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
         const RunOptions run = ExperimentRun(o, pairs, methods, results);
         log << "reproduce: " << e.id << ": running " << methods.size() << " methods\n";
         summary.rows_run += RunBenchmark(run).rows_written;
-        rows_of[e.id] = ReadJsonl(results.string());
-        provenance_of[e.id] = ProvenanceOfPairFile(pairs.string());
-        provenance_of[e.id].fallback = e.fallback;
-        pairs_of[e.id] = ReadPairFile(pairs.string());
+        x.rows[e.id] = ReadJsonl(results.string());
+        x.provenance[e.id] = ProvenanceOfPairFile(pairs.string());
+        x.provenance[e.id].fallback = e.fallback;
+        x.pairs[e.id] = ReadPairFile(pairs.string());
     }
+    return x;
+}
 
-    // The paper's tables.
-    const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
-
-    // Ablation rows (Tab. 4, 5): every variant with a shipped checkpoint
-    // (data/models/ablation/<kind>/<paper row>, written by `regbench train --ablation`) runs as
-    // `ogmm` on the Tab. 1 same-category pairs; variants without one say "not trained".
+/// Ablation rows (Tab. 4, 5): every variant with a shipped checkpoint
+/// (data/models/ablation/<kind>/<paper row>, written by `regbench train --ablation`) runs as
+/// `ogmm` on the Tab. 1 same-category pairs; variants without one say "not trained" (in
+/// BuildTables). Returns the variants' result sets by table id.
+std::map<std::string, std::vector<ResultSet>> RunAblations(
+    [[maybe_unused]] const std::vector<MethodSpec>& methods,
+    [[maybe_unused]] const ExperimentOutputs& x,
+    [[maybe_unused]] const nlohmann::json& paper,
+    [[maybe_unused]] const ReproduceOptions& o,
+    [[maybe_unused]] const fs::path& out,
+    [[maybe_unused]] ReproduceSummary& summary,
+    [[maybe_unused]] std::ostream& log) {
     std::map<std::string, std::vector<ResultSet>> ablation_sets;
 #ifdef REGBENCH_HAVE_LEARNED
     const bool ogmm_runs = std::any_of(methods.begin(), methods.end(),
@@ -340,7 +372,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     for (const auto& [table, kind] :
          {std::pair<std::string, std::string>{"table4_ablation_components", "components"},
           {"table5_ablation_losses", "losses"}}) {
-        if (!Wanted(o.tables, table) || !rows_of.count("tab1_same")) continue;
+        if (!Wanted(o.tables, table) || !x.rows.count("tab1_same")) continue;
         if (!ogmm_runs) {
             log << "reproduce: " << table << ": ogmm cannot run, its variants are not run\n";
             continue;
@@ -358,10 +390,21 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
             log << "reproduce: " << table << ": variant " << row << " (checkpoint " << dir << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
             ablation_sets[table].push_back(
-                {"", ReadJsonl(run.out_path), provenance_of["tab1_same"], row});
+                {"", ReadJsonl(run.out_path), x.provenance.at("tab1_same"), row});
         }
     }
 #endif
+    return ablation_sets;
+}
+
+/// The paper's tables filled from the experiments (and the ablation variants), in the
+/// paper's order, with Tab. 6 (timing) after Tab. 5.
+std::vector<Table> BuildTables(const std::vector<Experiment>& experiments,
+                               ExperimentOutputs& x,
+                               std::map<std::string, std::vector<ResultSet>>& ablation_sets,
+                               const std::map<std::string, std::string>& unavailable,
+                               const nlohmann::json& paper,
+                               const ReproduceOptions& o) {
     PaperTableOptions table_options;
     table_options.unavailable = unavailable;
     std::vector<Table> tables;
@@ -371,9 +414,9 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
         for (const auto& e : experiments) {
             if (e.table != spec.id) continue;
             if (e.sweep) {
-                for (auto& s : SweepSets(rows_of[e.id], provenance_of[e.id])) sets.push_back(s);
+                for (auto& s : SweepSets(x.rows[e.id], x.provenance[e.id])) sets.push_back(s);
             } else {
-                sets.push_back({e.group, rows_of[e.id], provenance_of[e.id], ""});
+                sets.push_back({e.group, x.rows[e.id], x.provenance[e.id], ""});
             }
         }
         PaperTableOptions to = table_options;
@@ -395,25 +438,31 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
                 "this build; the paper's numbers are shown for reference.");
         }
         if (spec.id == "table5_ablation_losses" && Wanted(o.tables, "table6_inference_time") &&
-            rows_of.count("tab1_same")) {
+            x.rows.count("tab1_same")) {
             tables.push_back(BuildTimingTable(
-                {{"", rows_of["tab1_same"], provenance_of["tab1_same"], ""}}, paper, CpuModel(),
+                {{"", x.rows["tab1_same"], x.provenance["tab1_same"], ""}}, paper, CpuModel(),
                 "none (Eigen's own kernels; the classical methods link no BLAS)"));
         }
     }
-    const std::string intro = fmt::format(
-        "regbench {} reproduce{}: {} experiments, seed {}, {} jobs, per-call timeout {} s, "
-        "one thread per call; CPU {}.",
-        RegbenchVersion(), o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
-        o.timeout_seconds, CpuModel());
+    return tables;
+}
+
+/// tables.{md,tex,csv,json}.
+void WriteTables(const fs::path& out, const std::string& intro, const std::vector<Table>& tables) {
     WriteText(out / "tables.md", "# regbench: the OGMM paper's tables\n\n" + intro + "\n\n" +
                                      Join(tables, TableToMarkdown));
     WriteText(out / "tables.tex",
               "% " + intro + "\n% needs \\usepackage{booktabs}\n" + Join(tables, TableToLatex));
     WriteText(out / "tables.csv", TablesToCsv(tables));
     WriteText(out / "tables.json", TablesToJson(tables).dump(1) + "\n");
+}
 
-    // Breakdowns and the HTML report, one section per experiment.
+/// breakdowns.md and report.html: the tables, then one section per experiment.
+void WriteBreakdownsAndHtml(const fs::path& out,
+                            const std::string& intro,
+                            const std::vector<Table>& tables,
+                            const std::vector<Experiment>& experiments,
+                            ExperimentOutputs& x) {
     HtmlReportOptions html;
     html.title = "regbench: reproducing the OGMM paper";
     html.intro = {intro,
@@ -423,19 +472,19 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     std::string breakdowns = "# regbench: breakdowns per experiment\n\n";
     BreakdownOptions bo;
     for (const auto& e : experiments) {
-        const auto& rows = rows_of[e.id];
-        const Provenance& p = provenance_of[e.id];
+        const auto& rows = x.rows[e.id];
+        const Provenance& p = x.provenance[e.id];
         HtmlSection sec;
         sec.title = fmt::format("{}: {} on {} ({})", e.id, e.protocol, p.dataset, e.split);
         sec.description = fmt::format(
             "{} pairs, pairing {}, seed {}, {} points, keep {:g}{}; ground-truth CCD floor "
             "{:.4f}.",
-            pairs_of[e.id].pairs.size(), p.pairing, p.seed.dump(), p.points, p.keep,
+            x.pairs[e.id].pairs.size(), p.pairing, p.seed.dump(), p.points, p.keep,
             e.fallback.empty() ? "" : "; " + e.fallback, p.gt_ccd_floor);
         sec.rows = rows;
         sec.tables = {DistributionTable(rows, bo), StatusTable(rows), RecallTable(rows, bo),
                       CategoryTable(rows, bo), OverlapTable(rows, bo)};
-        const PairSet* set = &pairs_of[e.id];
+        const PairSet* set = &x.pairs[e.id];
         sec.pair_lookup = [set](const nlohmann::json& row) -> const Pair* {
             const auto k = row.value("pair", static_cast<std::size_t>(-1));
             return k < set->pairs.size() ? &set->pairs[k] : nullptr;
@@ -446,6 +495,36 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     }
     WriteText(out / "breakdowns.md", breakdowns);
     WriteText(out / "report.html", RenderHtmlReport(html));
+}
+
+}  // namespace
+
+ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
+    const auto start = std::chrono::steady_clock::now();
+    ValidateOptions(o);
+    ReproduceSummary summary;
+    const fs::path out = fs::absolute(o.out_dir);
+    fs::create_directories(out / "pairs");
+    fs::create_directories(out / "results");
+    summary.out_dir = out.string();
+    std::map<std::string, std::string> unavailable;
+    const auto methods = ChooseMethods(o, &unavailable, log);
+    const auto experiments = PlanExperiments(o);
+    summary.experiments = experiments.size();
+
+    ExperimentOutputs x = RunExperiments(experiments, methods, o, out, summary, log);
+    const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
+    auto ablation_sets = RunAblations(methods, x, paper, o, out, summary, log);
+    const std::vector<Table> tables =
+        BuildTables(experiments, x, ablation_sets, unavailable, paper, o);
+
+    const std::string intro = fmt::format(
+        "regbench {} reproduce{}: {} experiments, seed {}, {} jobs, per-call timeout {} s, "
+        "one thread per call; CPU {}.",
+        RegbenchVersion(), o.quick ? " --quick" : "", experiments.size(), o.seed, o.jobs,
+        o.timeout_seconds, CpuModel());
+    WriteTables(out, intro, tables);
+    WriteBreakdownsAndHtml(out, intro, tables, experiments, x);
     summary.markdown_path = (out / "tables.md").string();
     summary.html_path = (out / "report.html").string();
     const double secs =
