@@ -158,6 +158,9 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     out.evaluated_pairs = m * n;
 }
 
+// Small dense problems go to ComputeFused; the rest is two kd-tree passes (den_n, then p1 and
+// PX), each choosing between cell-compressed and exact sums. Kept in one function so both
+// passes visibly share the cutoff, the cell size and the den floor.
 void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosteriors& out) {
     if (!(c >= 0.0) || !std::isfinite(c)) {
         throw std::invalid_argument("CpdEStep: outlier constant c must be finite and >= 0");

@@ -118,6 +118,8 @@ std::vector<Eigen::Vector3i> ReadOffFaces(
 
 }  // namespace
 
+// OFF and its variants in one pass over the file (header keyword, counts, vertices, faces),
+// each step refusing bad input with the file and line: long because every field is checked.
 Mesh ReadOff(const std::string& path) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open OFF file");

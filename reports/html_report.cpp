@@ -289,6 +289,8 @@ std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int m
     return s + "</svg>";
 }
 
+// The page top to bottom (head and style, the paper tables, one section per experiment):
+// long because it is the document, each part a few lines of markup.
 std::string RenderHtmlReport(const HtmlReportOptions& o) {
     std::string s =
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" +
