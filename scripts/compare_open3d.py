@@ -43,21 +43,8 @@ def to_o3d(points):
     return cloud
 
 
-def open3d_icp(source, target, p):
-    reg = o3d.pipelines.registration
-    criteria = reg.ICPConvergenceCriteria(
-        relative_fitness=p["relative_fitness"],
-        relative_rmse=p["relative_rmse"],
-        max_iteration=p["max_iterations"],
-    )
-    t0 = time.process_time()
-    result = reg.registration_icp(
-        to_o3d(source), to_o3d(target), p["max_correspondence_distance"], np.eye(4),
-        reg.TransformationEstimationPointToPoint(False), criteria)
-    return time.process_time() - t0, np.asarray(result.transformation)
-
-
-def open3d_icp_pl(source, target, p):
+def open3d_icp(source, target, p, point_to_plane=False):
+    """Open3D's ICP as regbench's `icp` (point_to_plane: `icp-pl`, target normals timed too)."""
     reg = o3d.pipelines.registration
     criteria = reg.ICPConvergenceCriteria(
         relative_fitness=p["relative_fitness"],
@@ -66,12 +53,19 @@ def open3d_icp_pl(source, target, p):
     )
     t0 = time.process_time()
     tgt = to_o3d(target)
-    tgt.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(
-        radius=p["normal_radius"], max_nn=p["normal_max_nn"]))
-    result = reg.registration_icp(
-        to_o3d(source), tgt, p["max_correspondence_distance"], np.eye(4),
-        reg.TransformationEstimationPointToPlane(), criteria)
+    if point_to_plane:
+        tgt.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(
+            radius=p["normal_radius"], max_nn=p["normal_max_nn"]))
+        estimation = reg.TransformationEstimationPointToPlane()
+    else:
+        estimation = reg.TransformationEstimationPointToPoint(False)
+    result = reg.registration_icp(to_o3d(source), tgt, p["max_correspondence_distance"],
+                                  np.eye(4), estimation, criteria)
     return time.process_time() - t0, np.asarray(result.transformation)
+
+
+def open3d_icp_pl(source, target, p):
+    return open3d_icp(source, target, p, point_to_plane=True)
 
 
 # Why the other methods have no peer figure on this machine.
