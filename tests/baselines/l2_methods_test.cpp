@@ -15,11 +15,7 @@
 namespace regbench {
 namespace {
 
-using testing::AlignWith;
-using testing::LumpyEllipsoid;
-using testing::RotationErrorDeg;
-using testing::ThirtyDegreesAboutZ;
-using testing::TranslationError;
+using namespace testing;  // the shared fixtures and checks (tests/testing, registration_fixtures.hpp)
 
 struct L2Case {
     std::string method;

@@ -16,11 +16,7 @@
 namespace regbench {
 namespace {
 
-using testing::AlignWith;
-using testing::LumpyEllipsoid;
-using testing::RotationErrorDeg;
-using testing::ThirtyDegreesAboutZ;
-using testing::TranslationError;
+using namespace testing;  // the shared fixtures and checks (tests/testing, registration_fixtures.hpp)
 
 constexpr int kPoints = 717;
 constexpr double kEulerTolRad = 0.1;  // probreg's own SVR test tolerance
