@@ -113,7 +113,9 @@ protected:
         ogmm::PairBatch batch;
         batch.source = ToTensor(source);
         batch.target = ToTensor(target);
-        torch::manual_seed(context.IntSeed());  // FPS starts etc. depend on the pair only
+        // FPS starts etc. depend on the pair only: a generator of this call's own, since the
+        // runner's threads share this method (the global RNG made --jobs 2 runs differ).
+        batch.generator = at::detail::createCPUGenerator(context.IntSeed());
         const auto t0 = std::chrono::steady_clock::now();
         const ogmm::NetOutput out = net_->Forward(batch);
         const Transform T_net = ToTransform(out.T[0]);
@@ -143,7 +145,9 @@ protected:
 private:
     /// Loads the checkpoint on first use; a failure fails this and every later pair with the
     /// same message instead of crashing the run.
+    /// Runner threads share the method, so the first use is serialised.
     bool Load(AlignResult& result) {
+        const std::lock_guard<std::mutex> lock(load_mutex_);
         if (!net_ && load_error_.empty()) {
             try {
                 if (!std::filesystem::exists(checkpoint_)) {
@@ -167,6 +171,7 @@ private:
     bool icp_;
     LearnedOptions options_;
     std::string checkpoint_;
+    std::mutex load_mutex_;
     std::shared_ptr<ogmm::RegistrationNet> net_;
     std::string load_error_;
 };

@@ -19,6 +19,10 @@ struct PairBatch {
     torch::Tensor T_gt;            ///< [B, 4, 4] float32, maps source into target (training only)
     torch::Tensor source_overlap;  ///< [B, N] float32 0/1 labels (training only, may be undefined)
     torch::Tensor target_overlap;  ///< [B, M] float32 0/1 labels (training only, may be undefined)
+    /// Random choices (FPS starts) draw from this generator; unset: torch's global RNG (which
+    /// training seeds per step). Inference sets one per pair, since several runner threads
+    /// share a network and a process-wide RNG would make the draws depend on their timing.
+    c10::optional<at::Generator> generator;
 };
 
 /// What a forward pass returns: the estimated transform plus whatever the network's loss needs.
@@ -32,8 +36,8 @@ using LossTerms = std::map<std::string, torch::Tensor>;
 
 class RegistrationNet : public torch::nn::Module {
 public:
-    /// Forward pass on a batch. Uses the torch global RNG for random choices (FPS starts):
-    /// callers seed it (torch::manual_seed) from the pair before inference.
+    /// Forward pass on a batch. Random choices (FPS starts) draw from batch.generator, else the
+    /// torch global RNG.
     virtual NetOutput Forward(const PairBatch& batch) = 0;
     /// Training loss from a forward output and the batch's ground truth.
     virtual LossTerms Loss(const PairBatch& batch, const NetOutput& output) = 0;

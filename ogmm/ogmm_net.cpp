@@ -231,18 +231,21 @@ OgmmNet::OgmmNet(const OgmmConfig& config) : config_(config) {
 
 nlohmann::json OgmmNet::Config() const { return OgmmConfigToJson(config_); }
 
-torch::Tensor OgmmNet::Anchors(const torch::Tensor& features, const torch::Tensor& xyz) {
+torch::Tensor OgmmNet::Anchors(const torch::Tensor& features,
+                               const torch::Tensor& xyz,
+                               const c10::optional<at::Generator>& generator) {
     if (config_.attention == "full") return features;
     // Clouds smaller than `anchors` use every point (an FPS of all N is a permutation).
     const int64_t n = std::min<int64_t>(config_.anchors, xyz.size(2));
-    return GatherColumns(features, FpsRandom(xyz, n));
+    return GatherColumns(features, FpsRandom(xyz, n, generator));
 }
 
 torch::Tensor OgmmNet::SelfAttention(AttentionalPropagation& block,
                                      const torch::Tensor& x,
                                      const torch::Tensor& keys,
-                                     const torch::Tensor& xyz) {
-    return block->forward(x, Anchors(keys, xyz)) + x;
+                                     const torch::Tensor& xyz,
+                                     const c10::optional<at::Generator>& generator) {
+    return block->forward(x, Anchors(keys, xyz, generator)) + x;
 }
 
 std::pair<torch::Tensor, torch::Tensor> OgmmNet::OverlapScores(const torch::Tensor& gp,
@@ -280,14 +283,16 @@ NetOutput OgmmNet::Forward(const PairBatch& batch) {
     torch::Tensor xq = config_.spe ? fq + spe_(q) : fq;
     // 4-5: clustered self-attention; its anchors are taken from F, not X.
     if (config_.csa) {
-        const torch::Tensor ap = Anchors(fp, p), aq = Anchors(fq, q);
+        const torch::Tensor ap = Anchors(fp, p, batch.generator),
+                            aq = Anchors(fq, q, batch.generator);
         xp = att_s1_(xp, ap) + xp;
         xq = att_s1_(xq, aq) + xq;
     }
     xp = conv3_a_(xp);
     xq = conv3_a_(xq);
     // 6: cross-attention to the other cloud's anchors (one module, both directions).
-    const torch::Tensor bp = Anchors(xp, p), bq = Anchors(xq, q);
+    const torch::Tensor bp = Anchors(xp, p, batch.generator),
+                        bq = Anchors(xq, q, batch.generator);
     const torch::Tensor gp = att_c_(xp, bq) + xp, gq = att_c_(xq, bp) + xq;
     // 7: overlap scores.
     torch::Tensor op, oq;
@@ -298,8 +303,8 @@ NetOutput OgmmNet::Forward(const PairBatch& batch) {
         oq = torch::ones({q.size(0), q.size(2)}, q.options());
     }
     // 8: second self-attention gives the final point features f*.
-    const torch::Tensor fsp = config_.csa ? SelfAttention(att_s2_, gp, gp, p) : gp;
-    const torch::Tensor fsq = config_.csa ? SelfAttention(att_s2_, gq, gq, q) : gq;
+    const torch::Tensor fsp = config_.csa ? SelfAttention(att_s2_, gp, gp, p, batch.generator) : gp;
+    const torch::Tensor fsq = config_.csa ? SelfAttention(att_s2_, gq, gq, q, batch.generator) : gq;
     // 9: overlap-guided GMM fit in xyz (no gradient), cluster features with gradient.
     const GmmFitOptions fit{config_.gmm_iterations, config_.sinkhorn_epsilon,
                             config_.sinkhorn_threshold, config_.sinkhorn_iterations};

@@ -110,11 +110,14 @@ public:
     const OgmmConfig& config() const { return config_; }
 
 private:
-    torch::Tensor Anchors(const torch::Tensor& features, const torch::Tensor& xyz);
+    torch::Tensor Anchors(const torch::Tensor& features,
+                          const torch::Tensor& xyz,
+                          const c10::optional<at::Generator>& generator);
     torch::Tensor SelfAttention(AttentionalPropagation& block,
                                 const torch::Tensor& x,
                                 const torch::Tensor& keys,
-                                const torch::Tensor& xyz);
+                                const torch::Tensor& xyz,
+                                const c10::optional<at::Generator>& generator);
     std::pair<torch::Tensor, torch::Tensor> OverlapScores(const torch::Tensor& gp,
                                                           const torch::Tensor& gq);
     torch::Tensor ClusterLoss(const torch::Tensor& xyz,

@@ -51,6 +51,39 @@ TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
     fs::remove_all(dir);
 }
 
+// The runner's threads share one method object, so inference must not use torch's
+// process-wide RNG: seeding and drawing from it in two threads at once made ogmm's FPS starts,
+// and with them --jobs 2 results, depend on timing. Each call draws from its own generator.
+TEST(Learned, OgmmInferenceLeavesTheGlobalRngAloneAndDependsOnThePairOnly) {
+    torch::set_num_threads(1);
+    const fs::path dir =
+        fs::temp_directory_path() / ("regbench_learned_ogmm_" + std::to_string(::getpid()));
+    torch::manual_seed(5);
+    auto net = ogmm::MakeNet("ogmm-tiny");
+    ogmm::SaveCheckpoint(dir.string(), *net,
+                         {{"model", "ogmm-tiny"}, {"config", ogmm::NamedConfig("ogmm-tiny")}});
+    const auto pair = testing::CleanCompletePair(20.0);
+    auto method = CreateMethod("ogmm-noicp", {{"checkpoint", dir.string()}});
+    AlignContext context;
+    context.seed = 9;
+    context.pair_index = 2;
+    // The first call loads the checkpoint (building the modules draws their throw-away
+    // initial weights from the global RNG, once); the calls after it are inference only.
+    ASSERT_EQ(method->Align(pair.source, pair.target, context).status, AlignStatus::kOk);
+    torch::manual_seed(1);
+    const torch::Tensor global_before = at::detail::getDefaultCPUGenerator().get_state();
+    const AlignResult a = method->Align(pair.source, pair.target, context);
+    ASSERT_EQ(a.status, AlignStatus::kOk) << a.message;
+    EXPECT_TRUE(torch::equal(at::detail::getDefaultCPUGenerator().get_state(), global_before))
+        << "inference touched torch's global RNG";
+    // Whatever the global RNG holds, the same pair gives the same transform.
+    torch::manual_seed(77);
+    (void)torch::randint(100, {13});
+    const AlignResult b = method->Align(pair.source, pair.target, context);
+    EXPECT_EQ(a.T_target_source, b.T_target_source);
+    fs::remove_all(dir);
+}
+
 TEST(Learned, IcpRefineStartsFromTheGivenEstimate) {
     // Same points in both clouds; ICP from an estimate 3 degrees off converges onto the truth,
     // which it could not from an estimate composed the wrong way round.
