@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
+#include <cstdint>
 #include <filesystem>
+#include <string>
 
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
@@ -27,13 +29,21 @@ TEST(Learned, MissingCheckpointFailsThePairWithItsPath) {
     }
 }
 
-TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
+/// A checkpoint of the untrained named model (weights from torch::manual_seed(seed)) in a
+/// fresh temporary folder, with the zoo config that rebuilds it.
+fs::path SaveUntrainedCheckpoint(const std::string& model, std::uint64_t seed) {
     torch::set_num_threads(1);
-    const fs::path dir =
-        fs::temp_directory_path() / ("regbench_learned_" + std::to_string(::getpid()));
-    torch::manual_seed(3);
-    auto net = ogmm::MakeNet("deepgmr-small");
-    ogmm::SaveCheckpoint(dir.string(), *net, {{"model", "deepgmr-small"}});
+    const fs::path dir = fs::temp_directory_path() /
+                         ("regbench_learned_" + model + "_" + std::to_string(::getpid()));
+    torch::manual_seed(seed);
+    auto net = ogmm::MakeNet(model);
+    ogmm::SaveCheckpoint(dir.string(), *net,
+                         {{"model", model}, {"config", ogmm::NamedConfig(model)}});
+    return dir;
+}
+
+TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
+    const fs::path dir = SaveUntrainedCheckpoint("deepgmr-small", 3);
     const auto pair = testing::CleanCompletePair(20.0);
     AlignContext context;
     context.seed = 9;
@@ -55,13 +65,7 @@ TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
 // process-wide RNG: seeding and drawing from it in two threads at once made ogmm's FPS starts,
 // and with them --jobs 2 results, depend on timing. Each call draws from its own generator.
 TEST(Learned, OgmmInferenceLeavesTheGlobalRngAloneAndDependsOnThePairOnly) {
-    torch::set_num_threads(1);
-    const fs::path dir =
-        fs::temp_directory_path() / ("regbench_learned_ogmm_" + std::to_string(::getpid()));
-    torch::manual_seed(5);
-    auto net = ogmm::MakeNet("ogmm-tiny");
-    ogmm::SaveCheckpoint(dir.string(), *net,
-                         {{"model", "ogmm-tiny"}, {"config", ogmm::NamedConfig("ogmm-tiny")}});
+    const fs::path dir = SaveUntrainedCheckpoint("ogmm-tiny", 5);
     const auto pair = testing::CleanCompletePair(20.0);
     auto method = CreateMethod("ogmm-noicp", {{"checkpoint", dir.string()}});
     AlignContext context;
