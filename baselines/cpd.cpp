@@ -75,11 +75,10 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     partial_.resize(static_cast<size_t>(num_chunks * 4 * m));
     inv_den_.resize(static_cast<size_t>(n));
     out.pt1.resize(n);
-    // Both clouds scaled by sqrt(log2(e) / (2 sigma^2)): KernelRow's 2^-|q' - p'|^2 is then
+    // Both clouds scaled by KernelRowScale: KernelRow's 2^-|q' - p'|^2 is then
     // exp(-|q - p|^2 / (2 sigma^2)) with no per-pair multiply for either constant (targets are
     // scaled as they are visited). Sources padded to KernelRow's multiple, far away (kernel 0).
-    constexpr double kLog2e = 1.4426950408889634074;
-    const auto scale = static_cast<float>(std::sqrt(kLog2e / (2.0 * sigma2)));
+    const float scale = KernelRowScale(sigma2);
     const Eigen::Index m_pad = (m + kKernelRowPad - 1) / kKernelRowPad * kKernelRowPad;
     scaled_source_.assign(static_cast<size_t>(3 * m_pad), kKernelRowFar);
     for (Eigen::Index i = 0; i < m; ++i) {

@@ -95,7 +95,7 @@ private:
     KernelSumResult pass1_, pass2_;
     std::vector<float> inv_den_;  ///< target stored order
     std::vector<float> partial_;  ///< fused path: float p1/PX accumulators per target chunk
-    std::vector<float> scaled_source_;  ///< fused path: source x, y, z / (sqrt(2) sigma)
+    std::vector<float> scaled_source_;  ///< fused path: source x, y, z * KernelRowScale, padded
     std::vector<double> totals_;  ///< fused path: the chunks' sum, p1 then PX's x, y, z
 };
 

@@ -1,3 +1,9 @@
+// The GCC vector types below (and fast_exp::Polynomial on them) never cross a function
+// boundary (all always_inline), so GCC's note that passing them by value changes the ABI
+// without AVX does not apply; it is silenced for this file, before the header that uses them.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 #include "gmm/gauss_sum.hpp"
 
 #include <omp.h>
@@ -245,12 +251,7 @@ std::int64_t Dispatch(const LeafJob& job, bool weighted, bool moment) {
 
 // GCC vector types of kLanes floats: the kernel below is instantiated with the register width
 // of each clone (16 lanes for AVX-512, 8 for AVX2, 4 for the SSE2 baseline; a type wider than
-// the clone's registers is split badly: 16 lanes under AVX2 ran 11x the floor). They never
-// cross a function boundary (all always_inline in this file), so GCC's note that passing them
-// by value changes the ABI does not apply.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
+// the clone's registers is split badly: 16 lanes under AVX2 ran 11x the floor).
 // Spelled out per width: GCC 12 silently drops a template-dependent vector_size (the "vector"
 // becomes one float).
 template <int kLanes>
@@ -281,20 +282,14 @@ __attribute__((always_inline)) inline typename Lanes<kLanes>::Floats Exp2NonPosi
     typename Lanes<kLanes>::Floats y) {
     using Floats = typename Lanes<kLanes>::Floats;
     using Ints = typename Lanes<kLanes>::Ints;
-    constexpr float kShifter = 12582912.0f;  // 1.5 * 2^23: adding it rounds to an integer
-    constexpr std::int32_t kShifterBits = 0x4B400000;
+    using fast_exp::kShifter, fast_exp::kShifterBits;
     constexpr float kLn2 = 0.693147180559945309f;
-    constexpr float kMinArg = kFastExpMinArg * 1.44269504088896341f;  // FastExp's floor, base 2
+    constexpr float kMinArg = kFastExpMinArg * fast_exp::kLog2e;  // FastExp's floor, base 2
     const Floats yc = y < kMinArg ? kMinArg : y;
     const Floats t = yc + kShifter;  // its low mantissa bits hold n = round(y)
     const Floats n = t - kShifter;
     const Floats r = (yc - n) * kLn2;
-    Floats p = r * 1.9875691500e-4f + 1.3981999507e-3f;
-    p = p * r + 8.3334519073e-3f;
-    p = p * r + 4.1665795894e-2f;
-    p = p * r + 1.6666665459e-1f;
-    p = p * r + 5.0000001201e-1f;
-    p = p * (r * r) + r + 1.0f;
+    const Floats p = fast_exp::Polynomial(r);
     const Ints scale_bits = ((Ints)t - (kShifterBits - 127)) << 23;  // 2^n
     const Floats out = p * (Floats)scale_bits;
     return y < kMinArg ? Floats{} : out;
@@ -401,6 +396,10 @@ __attribute__((always_inline)) inline void AxpyRows4Impl(const float* __restrict
 }
 
 }  // namespace
+
+float KernelRowScale(double sigma2) {
+    return static_cast<float>(std::sqrt(M_LOG2E / (2.0 * sigma2)));
+}
 
 double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float* row) {
     if (points.count % kKernelRowPad != 0) {

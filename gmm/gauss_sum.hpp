@@ -38,6 +38,23 @@ constexpr float kFastExpMinArg = -87.0f;
 /// Arguments above this are clamped (exp(88) = 1.65e38, just below FLT_MAX).
 constexpr float kFastExpMaxArg = 88.0f;
 
+/// The pieces of FastExp that CPD's base-2 kernel (KernelRow) shares, written once.
+namespace fast_exp {
+inline constexpr float kLog2e = 1.44269504088896341f;
+inline constexpr float kShifter = 12582912.0f;  // 1.5 * 2^23: adding it rounds to an integer
+inline constexpr std::int32_t kShifterBits = 0x4B400000;
+/// Cephes' degree-6 polynomial for exp(r), |r| <= ln2 / 2; T is float or a GCC float vector.
+template <class T>
+__attribute__((always_inline)) inline T Polynomial(T r) {
+    T p = r * 1.9875691500e-4f + 1.3981999507e-3f;
+    p = p * r + 8.3334519073e-3f;
+    p = p * r + 4.1665795894e-2f;
+    p = p * r + 1.6666665459e-1f;
+    p = p * r + 5.0000001201e-1f;
+    return p * (r * r) + r + 1.0f;
+}
+}  // namespace fast_exp
+
 /// exp(x) in float: Cody-Waite range reduction x = n ln2 + r (|r| <= ln2 / 2) and Cephes'
 /// degree-6 polynomial for exp(r), then 2^n by exponent-bit arithmetic. Branch-free, so loops
 /// over it vectorise without -ffast-math. Relative error below 3e-7 (~2.5 float ulp) over
@@ -45,9 +62,7 @@ constexpr float kFastExpMaxArg = 88.0f;
 /// > 88. GCC vectorises loops over it only with -fno-trapping-math in the calling file (as
 /// gauss_sum.cpp is built); prefer KernelSums, which already is.
 inline float FastExp(float x) {
-    constexpr float kLog2e = 1.44269504088896341f;
-    constexpr float kShifter = 12582912.0f;  // 1.5 * 2^23: adding it rounds to an integer
-    constexpr std::int32_t kShifterBits = 0x4B400000;
+    using fast_exp::kLog2e, fast_exp::kShifter, fast_exp::kShifterBits;
     constexpr float kLn2Hi = 0.693359375f;  // ln 2 = kLn2Hi + kLn2Lo (Cody-Waite)
     constexpr float kLn2Lo = -2.12194440e-4f;
     // min/max and a final select, not branches: loops over FastExp stay free of control flow
@@ -56,13 +71,7 @@ inline float FastExp(float x) {
     const float t = xc * kLog2e + kShifter;  // its low mantissa bits hold n = round(x / ln 2)
     const float n = t - kShifter;
     const float r = (xc - n * kLn2Hi) - n * kLn2Lo;
-    float p = 1.9875691500e-4f;
-    p = p * r + 1.3981999507e-3f;
-    p = p * r + 8.3334519073e-3f;
-    p = p * r + 4.1665795894e-2f;
-    p = p * r + 1.6666665459e-1f;
-    p = p * r + 5.0000001201e-1f;
-    p = p * (r * r) + r + 1.0f;
+    const float p = fast_exp::Polynomial(r);
     std::int32_t t_bits;
     std::memcpy(&t_bits, &t, sizeof t_bits);
     const std::int32_t scale_bits = (t_bits - kShifterBits + 127) << 23;  // 2^n
@@ -166,9 +175,13 @@ constexpr Eigen::Index kKernelRowPad = 16;
 /// kernel is exactly 0, small enough that its squared distance stays finite in float.
 constexpr float kKernelRowFar = 1e18f;
 
+/// The factor KernelRow's points and query are scaled by for bandwidth sigma^2:
+/// sqrt(log2(e) / (2 sigma^2)).
+float KernelRowScale(double sigma2);
+
 /// One kernel column for CPD's fused E-step: row[i] = 2^-|q - p_i|^2 for all `points`,
 /// returning sum_i row[i] (float lanes, chunks in double). Points and q come scaled by
-/// sqrt(log2(e) / (2 sigma^2)), which makes row[i] = exp(-|q - p_i|^2 / (2 sigma^2)) in the
+/// KernelRowScale(sigma^2), which makes row[i] = exp(-|q - p_i|^2 / (2 sigma^2)) in the
 /// unscaled coordinates with neither the bandwidth nor log2(e) costing a multiply per pair.
 /// points.count must be a multiple of kKernelRowPad (pad with kKernelRowFar: the padding's
 /// entries come out exactly 0); row holds points.count floats.
