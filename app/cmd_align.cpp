@@ -28,13 +28,7 @@ std::string FormatTransform(const Transform& T) {
     return out;
 }
 
-}  // namespace
-
-void AddAlignCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "align",
-        "Register two point files (PLY, PCD, XYZ, OFF vertices): prints the 4x4 mapping SRC "
-        "into TGT's frame, the time and the status");
+void SetupAlignCommand(CLI::App* cmd) {
     auto src = std::make_shared<std::string>();
     auto tgt = std::make_shared<std::string>();
     auto method = std::make_shared<std::string>();
@@ -94,5 +88,12 @@ void AddAlignCommand(CLI::App& app) {
         if (r.status != AlignStatus::kOk) throw std::runtime_error(*method + " failed");
     });
 }
+
+[[maybe_unused]] const bool kAlignRegistered = RegisterCommand(
+    {"align",
+     "Register two point files (PLY, PCD, XYZ, OFF vertices): prints the 4x4 mapping SRC "
+     "into TGT's frame, the time and the status",
+     SetupAlignCommand});
+}  // namespace
 
 }  // namespace regbench::app

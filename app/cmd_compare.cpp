@@ -16,13 +16,7 @@ struct RegressionFound : std::runtime_error {
     RegressionFound() : std::runtime_error("a method got significantly worse beyond tolerance") {}
 };
 
-}  // namespace
-
-void AddCompareCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "compare",
-        "Paired test of two result files on the same pairs; exit 1 when a method got "
-        "significantly worse beyond --tolerance");
+void SetupCompareCommand(CLI::App* cmd) {
     auto base = std::make_shared<std::string>();
     auto candidate = std::make_shared<std::string>();
     auto tolerance = std::make_shared<std::string>("0");
@@ -58,5 +52,12 @@ void AddCompareCommand(CLI::App& app) {
         if (result.Regressed()) throw RegressionFound();
     });
 }
+
+[[maybe_unused]] const bool kCompareRegistered =
+    RegisterCommand({"compare",
+                     "Paired test of two result files on the same pairs; exit 1 when a method got "
+                     "significantly worse beyond --tolerance",
+                     SetupCompareCommand});
+}  // namespace
 
 }  // namespace regbench::app

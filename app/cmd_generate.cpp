@@ -74,10 +74,7 @@ ShapeLoader WarnIndoorOnObjects(ShapeLoader loader, Protocol protocol) {
     };
 }
 
-}  // namespace
-
-void AddGenerateCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("generate", "Generate a frozen benchmark of registration pairs");
+void SetupGenerateCommand(CLI::App* cmd) {
     auto a = std::make_shared<GenerateArgs>();
     std::string protocols;
     for (const auto& p : ProtocolNames()) protocols += (protocols.empty() ? "" : ", ") + p;
@@ -132,5 +129,9 @@ void AddGenerateCommand(CLI::App& app) {
         std::cerr << "generate: wrote " << request.out << "\n";
     });
 }
+
+[[maybe_unused]] const bool kGenerateRegistered = RegisterCommand(
+    {"generate", "Generate a frozen benchmark of registration pairs", SetupGenerateCommand});
+}  // namespace
 
 }  // namespace regbench::app

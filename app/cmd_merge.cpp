@@ -10,9 +10,9 @@
 
 namespace regbench::app {
 
-void AddMergeCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "merge", "Merge shard results; every (pair, method) exactly once, or an error naming it");
+namespace {
+
+void SetupMergeCommand(CLI::App* cmd) {
     auto o = std::make_shared<MergeOptions>();
     auto methods = std::make_shared<std::string>();
     auto params = std::make_shared<std::string>();
@@ -31,5 +31,10 @@ void AddMergeCommand(CLI::App& app) {
                   << options.out_path << "\n";
     });
 }
+
+[[maybe_unused]] const bool kMergeRegistered = RegisterCommand(
+    {"merge", "Merge shard results; every (pair, method) exactly once, or an error naming it",
+     SetupMergeCommand});
+}  // namespace
 
 }  // namespace regbench::app

@@ -6,9 +6,9 @@
 
 namespace regbench::app {
 
-void AddMethodsCommand(CLI::App& app) {
-    auto* cmd =
-        app.add_subcommand("methods", "List registered methods, their parameters and defaults");
+namespace {
+
+void SetupMethodsCommand(CLI::App* cmd) {
     auto* json_out = cmd->add_flag("--json", "Print as JSON instead of text");
     cmd->callback([json_out] {
         if (*json_out) {
@@ -33,5 +33,9 @@ void AddMethodsCommand(CLI::App& app) {
         }
     });
 }
+
+[[maybe_unused]] const bool kMethodsRegistered = RegisterCommand(
+    {"methods", "List registered methods, their parameters and defaults", SetupMethodsCommand});
+}  // namespace
 
 }  // namespace regbench::app

@@ -13,9 +13,9 @@
 
 namespace regbench::app {
 
-void AddInspectCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("inspect",
-                                   "Summarise a pair file (counts, overlap, motions, CCD floor)");
+namespace {
+
+void SetupInspectCommand(CLI::App* cmd) {
     auto file = std::make_shared<std::string>();
     auto json_out = std::make_shared<bool>(false);
     cmd->add_option("file", *file, "Pair file (.h5)")->required();
@@ -37,8 +37,7 @@ void AddInspectCommand(CLI::App& app) {
     });
 }
 
-void AddExportCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("export", "Write a pair file's pairs as xyz or PLY files");
+void SetupExportCommand(CLI::App* cmd) {
     auto file = std::make_shared<std::string>();
     auto dir = std::make_shared<std::string>();
     auto format = std::make_shared<std::string>("xyz");
@@ -58,9 +57,7 @@ void AddExportCommand(CLI::App& app) {
     });
 }
 
-void AddImportCommand(CLI::App& app) {
-    auto* cmd =
-        app.add_subcommand("import", "Build a pair file from NNNN_{src,tgt}.xyz + NNNN_gt.txt");
+void SetupImportCommand(CLI::App* cmd) {
     auto dir = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
     auto eta = std::make_shared<double>(ProtocolOptions{}.eta);
@@ -76,5 +73,14 @@ void AddImportCommand(CLI::App& app) {
         std::cerr << "import: wrote " << set.pairs.size() << " pairs to " << *out << "\n";
     });
 }
+
+[[maybe_unused]] const bool kInspectRegistered =
+    RegisterCommand({"inspect", "Summarise a pair file (counts, overlap, motions, CCD floor)",
+                     SetupInspectCommand});
+[[maybe_unused]] const bool kExportRegistered = RegisterCommand(
+    {"export", "Write a pair file's pairs as xyz or PLY files", SetupExportCommand});
+[[maybe_unused]] const bool kImportRegistered = RegisterCommand(
+    {"import", "Build a pair file from NNNN_{src,tgt}.xyz + NNNN_gt.txt", SetupImportCommand});
+}  // namespace
 
 }  // namespace regbench::app

@@ -30,13 +30,7 @@ std::string PaperComparison(const std::vector<ReportTable>& tables,
     return text;
 }
 
-}  // namespace
-
-void AddReportCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "report",
-        "Summarise JSONL results: one table per pair file and Euler convention, a row per "
-        "method and parameter set (metrics: docs/metrics.md)");
+void SetupReportCommand(CLI::App* cmd) {
     auto files = std::make_shared<std::vector<std::string>>();
     auto format = std::make_shared<std::string>("md");
     auto out = std::make_shared<std::string>();
@@ -101,5 +95,12 @@ void AddReportCommand(CLI::App& app) {
         }
     });
 }
+
+[[maybe_unused]] const bool kReportRegistered = RegisterCommand(
+    {"report",
+     "Summarise JSONL results: one table per pair file and Euler convention, a row per "
+     "method and parameter set (metrics: docs/metrics.md)",
+     SetupReportCommand});
+}  // namespace
 
 }  // namespace regbench::app

@@ -6,11 +6,9 @@
 
 namespace regbench::app {
 
-void AddReproduceCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "reproduce",
-        "Generate the pairs of the paper's tables, run the methods (isolated, resumable) and "
-        "write every report (Markdown, LaTeX, CSV, JSON, HTML) into one folder");
+namespace {
+
+void SetupReproduceCommand(CLI::App* cmd) {
     auto o = std::make_shared<ReproduceOptions>();
     std::string tables;
     for (const auto& t : ReproducibleTables()) tables += (tables.empty() ? "" : ", ") + t;
@@ -44,5 +42,12 @@ void AddReproduceCommand(CLI::App& app) {
                   << "HTML report:   " << s.html_path << "\n";
     });
 }
+
+[[maybe_unused]] const bool kReproduceRegistered = RegisterCommand(
+    {"reproduce",
+     "Generate the pairs of the paper's tables, run the methods (isolated, resumable) and "
+     "write every report (Markdown, LaTeX, CSV, JSON, HTML) into one folder",
+     SetupReproduceCommand});
+}  // namespace
 
 }  // namespace regbench::app

@@ -11,8 +11,9 @@
 
 namespace regbench::app {
 
-void AddRunCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("run", "Run methods over a pair file and write JSONL results");
+namespace {
+
+void SetupRunCommand(CLI::App* cmd) {
     auto opts = std::make_shared<RunOptions>();
     auto methods = std::make_shared<std::string>();
     auto params = std::make_shared<std::string>();
@@ -77,5 +78,9 @@ void AddRunCommand(CLI::App& app) {
                                  s.wall_seconds);
     });
 }
+
+[[maybe_unused]] const bool kRunRegistered = RegisterCommand(
+    {"run", "Run methods over a pair file and write JSONL results", SetupRunCommand});
+}  // namespace
 
 }  // namespace regbench::app

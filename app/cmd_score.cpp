@@ -10,11 +10,9 @@
 
 namespace regbench::app {
 
-void AddScoreCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand(
-        "score",
-        "Score transforms computed elsewhere on a pair file; writes the same rows as `run` "
-        "(formats: docs/metrics.md#scoring-external-transforms)");
+namespace {
+
+void SetupScoreCommand(CLI::App* cmd) {
     auto o = std::make_shared<ScoreOptions>();
     auto params = std::make_shared<std::string>();
     auto euler = std::make_shared<std::string>("zyx");
@@ -50,5 +48,12 @@ void AddScoreCommand(CLI::App& app) {
                                  opts.out_path);
     });
 }
+
+[[maybe_unused]] const bool kScoreRegistered = RegisterCommand(
+    {"score",
+     "Score transforms computed elsewhere on a pair file; writes the same rows as `run` "
+     "(formats: docs/metrics.md#scoring-external-transforms)",
+     SetupScoreCommand});
+}  // namespace
 
 }  // namespace regbench::app

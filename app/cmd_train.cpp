@@ -22,8 +22,8 @@
 #endif
 
 namespace regbench::app {
-#ifdef REGBENCH_HAVE_LEARNED
 namespace {
+#ifdef REGBENCH_HAVE_LEARNED
 
 struct TrainArgs {
     std::string model;
@@ -42,12 +42,9 @@ struct TrainArgs {
     int epochs = 0;
     int pairs_per_epoch = 0;
     double lr = 0.0;
-    double minutes = 0.0;
-    std::int64_t max_steps = 0;
-    bool resume = false;
-    int threads = 1;
-    std::uint64_t seed = 0;
-    std::string device = "cpu";
+    /// --resume, --minutes, --max-steps, --threads, --seed and --device bind straight to the
+    /// trainer's options (their defaults live there); RunOne adds the per-run fields.
+    ogmm::TrainOptions train;
     bool val_icp = true;
     std::string ablation;
     std::string data_dir;
@@ -133,11 +130,11 @@ ogmm::TrainData MakeData(const TrainArgs& a) {
     auto train_shapes = std::make_shared<std::vector<ShapeSource>>(LoadShapes(a, a.split));
     const std::vector<ShapeSource> val_shapes = LoadShapes(a, a.val_split);
     // Validation pairs come from another seed stream than training pairs.
-    const std::uint64_t val_seed = a.seed ^ 0x76616c6964ULL;
+    const std::uint64_t val_seed = a.train.seed ^ 0x76616c6964ULL;
     for (int i = 0; i < a.val_pairs; ++i) {
         data.validation.push_back(ToSample(GeneratePair(val_shapes, options, val_seed, i)));
     }
-    const std::uint64_t seed = a.seed;
+    const std::uint64_t seed = a.train.seed;
     data.train_pair = [train_shapes, options, seed](std::uint64_t k) {
         return ToSample(GeneratePair(*train_shapes, options, seed, k));
     };
@@ -148,7 +145,7 @@ ogmm::TrainData MakeData(const TrainArgs& a) {
                        {"train_shapes", train_shapes->size()},
                        {"val_shapes", val_shapes.size()},
                        {"val_pairs", a.val_pairs},
-                       {"seed", a.seed},
+                       {"seed", a.train.seed},
                        {"val_seed", val_seed}};
     return data;
 }
@@ -219,14 +216,8 @@ void RunOne(const TrainArgs& a,
             const nlohmann::json& config,
             const ogmm::TrainData& data,
             const std::string& out) {
-    ogmm::TrainOptions o;
+    ogmm::TrainOptions o = a.train;
     o.out_dir = out;
-    o.resume = a.resume;
-    o.minutes = a.minutes;
-    o.max_steps = a.max_steps;
-    o.threads = a.threads;
-    o.seed = a.seed;
-    o.device = a.device;
     o.run_info = {{"command", command_line}};
     if (a.val_icp) {
         o.refine = [](const PointCloud& s, const PointCloud& t, const Transform& init) {
@@ -234,8 +225,8 @@ void RunOne(const TrainArgs& a,
         };
     }
     std::cerr << "train: " << config.value("name", std::string("?")) << " -> " << out << " ("
-              << data.validation.size() << " validation pairs, " << a.threads << " threads, "
-              << a.device << ")\n";
+              << data.validation.size() << " validation pairs, " << a.train.threads << " threads, "
+              << a.train.device << ")\n";
     const ogmm::TrainSummary s = ogmm::Train(config, data, o);
     std::cerr << "train: done, " << s.steps << " steps; checkpoints " << out << "/last, " << out
               << "/best\n";
@@ -260,10 +251,7 @@ void Run(const TrainArgs& a, const std::string& command_line) {
     }
 }
 
-}  // namespace
-
-void AddTrainCommand(CLI::App& app) {
-    auto* cmd = app.add_subcommand("train", "Train a learned registration network (DeepGMR, OGMM)");
+void SetupTrainCommand(CLI::App* cmd) {
     auto a = std::make_shared<TrainArgs>();
     cmd->add_option("--model", a->model,
                     "Model: deepgmr, deepgmr-small, deepgmr-orig, deepgmr-orig-xyz, ogmm, "
@@ -288,15 +276,15 @@ void AddTrainCommand(CLI::App& app) {
     cmd->add_option("--epochs", a->epochs, "Epochs (default: the model's recipe)");
     cmd->add_option("--pairs-per-epoch", a->pairs_per_epoch, "Pairs per epoch (default: recipe)");
     cmd->add_option("--lr", a->lr, "Learning rate (default: recipe)");
-    cmd->add_option("--minutes", a->minutes,
+    cmd->add_option("--minutes", a->train.minutes,
                     "Wall-clock budget of the run directory, summed over --resume sessions; ends "
                     "with a checkpoint");
-    cmd->add_option("--max-steps", a->max_steps, "Stop after this many steps in total");
-    cmd->add_flag("--resume", a->resume, "Continue from OUT/last");
-    cmd->add_option("--threads", a->threads, "Torch threads")->capture_default_str();
-    cmd->add_option("--seed", a->seed, "Seed (weights, pairs, per-step randomness)")
+    cmd->add_option("--max-steps", a->train.max_steps, "Stop after this many steps in total");
+    cmd->add_flag("--resume", a->train.resume, "Continue from OUT/last");
+    cmd->add_option("--threads", a->train.threads, "Torch threads")->capture_default_str();
+    cmd->add_option("--seed", a->train.seed, "Seed (weights, pairs, per-step randomness)")
         ->capture_default_str();
-    cmd->add_option("--device", a->device, "cpu | cuda")->capture_default_str();
+    cmd->add_option("--device", a->train.device, "cpu | cuda")->capture_default_str();
     cmd->add_flag("!--no-val-icp", a->val_icp, "Skip the with-ICP validation metrics");
     cmd->add_option("--ablation", a->ablation,
                     "components | losses | clusters: train every variant into OUT/<variant>");
@@ -304,11 +292,16 @@ void AddTrainCommand(CLI::App& app) {
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
 
+constexpr const char* kTrainSummary = "Train a learned registration network (DeepGMR, OGMM)";
 #else
-void AddTrainCommand(CLI::App& app) {
-    app.add_subcommand("train", "Train a learned network (not in this build: needs LibTorch)")
-        ->callback([] { throw std::runtime_error("train: this build has no LibTorch (ogmm/)"); });
+void SetupTrainCommand(CLI::App* cmd) {
+    cmd->callback([] { throw std::runtime_error("train: this build has no LibTorch (ogmm/)"); });
 }
+constexpr const char* kTrainSummary = "Train a learned network (not in this build: needs LibTorch)";
 #endif
+
+[[maybe_unused]] const bool kTrainRegistered =
+    RegisterCommand({"train", kTrainSummary, SetupTrainCommand});
+}  // namespace
 
 }  // namespace regbench::app

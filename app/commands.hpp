@@ -1,21 +1,24 @@
 #pragma once
-// Each regbench subcommand lives in its own app/cmd_*.cpp and registers itself here.
+// Each regbench subcommand lives in its own app/cmd_*.cpp and registers itself there with one
+// RegisterCommand line (name, one-line summary, setup function); main.cpp adds the registered
+// commands to the CLI in its help order. A new subcommand is therefore one new file.
 #include <CLI/CLI.hpp>
+#include <vector>
 
 namespace regbench::app {
 
-void AddMethodsCommand(CLI::App& app);
-void AddRunCommand(CLI::App& app);
-void AddReportCommand(CLI::App& app);
-void AddGenerateCommand(CLI::App& app);
-void AddInspectCommand(CLI::App& app);
-void AddExportCommand(CLI::App& app);
-void AddImportCommand(CLI::App& app);
-void AddCompareCommand(CLI::App& app);
-void AddReproduceCommand(CLI::App& app);
-void AddScoreCommand(CLI::App& app);
-void AddAlignCommand(CLI::App& app);
-void AddTrainCommand(CLI::App& app);
-void AddMergeCommand(CLI::App& app);
+struct Command {
+    const char* name;     ///< the subcommand's word, e.g. "run"
+    const char* summary;  ///< one line for `regbench --help`
+    /// Adds the options and the callback to the subcommand (already named and summarised).
+    void (*setup)(CLI::App* cmd);
+};
+
+/// Records a subcommand; called while static objects are initialised, so that a command file
+/// needs no line anywhere else. Returns true for a namespace-scope constant to hold.
+bool RegisterCommand(const Command& command);
+
+/// Every registered subcommand (registration order across files is unspecified).
+const std::vector<Command>& RegisteredCommands();
 
 }  // namespace regbench::app

@@ -1,10 +1,14 @@
 // regbench: benchmark and evaluation harness for rigid point-cloud registration.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include "app/commands.hpp"
 #include "core/version.hpp"
@@ -26,7 +30,45 @@ void EnsurePassiveOmpWaitPolicy(char** argv) {
                  "OpenMP threads will spin while idle\n";
 }
 
+/// `regbench --help` lists the subcommands in this order (most used first); a registered
+/// command missing from the list comes after these, by name.
+constexpr std::string_view kHelpOrder[] = {"methods",   "run",     "report", "score",  "align",
+                                           "generate",  "inspect", "export", "import", "compare",
+                                           "reproduce", "train",   "merge"};
+
+void AddCommands(CLI::App& app) {
+    std::vector<regbench::app::Command> commands = regbench::app::RegisteredCommands();
+    const auto rank = [](const regbench::app::Command& c) {
+        const auto* it = std::find(std::begin(kHelpOrder), std::end(kHelpOrder), c.name);
+        return std::make_pair(it - std::begin(kHelpOrder), std::string_view(c.name));
+    };
+    std::sort(commands.begin(), commands.end(),
+              [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
+    for (const auto& c : commands) c.setup(app.add_subcommand(c.name, c.summary));
+}
+
 }  // namespace
+
+namespace regbench::app {
+namespace {
+
+/// A function-local static, so that registrations from other files' static initialisers
+/// cannot run before the vector exists.
+std::vector<Command>& CommandList() {
+    static std::vector<Command> commands;
+    return commands;
+}
+
+}  // namespace
+
+bool RegisterCommand(const Command& command) {
+    CommandList().push_back(command);
+    return true;
+}
+
+const std::vector<Command>& RegisteredCommands() { return CommandList(); }
+
+}  // namespace regbench::app
 
 int main(int argc, char** argv) {
     EnsurePassiveOmpWaitPolicy(argv);
@@ -34,19 +76,7 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", std::string("regbench ") + regbench::RegbenchVersion() +
                                           " (git " + regbench::RegbenchGitSha() + ")");
     app.require_subcommand(1);
-    regbench::app::AddMethodsCommand(app);
-    regbench::app::AddRunCommand(app);
-    regbench::app::AddReportCommand(app);
-    regbench::app::AddScoreCommand(app);
-    regbench::app::AddAlignCommand(app);
-    regbench::app::AddGenerateCommand(app);
-    regbench::app::AddInspectCommand(app);
-    regbench::app::AddExportCommand(app);
-    regbench::app::AddImportCommand(app);
-    regbench::app::AddCompareCommand(app);
-    regbench::app::AddReproduceCommand(app);
-    regbench::app::AddTrainCommand(app);
-    regbench::app::AddMergeCommand(app);
+    AddCommands(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

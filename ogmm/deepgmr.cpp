@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "core/enum_names.hpp"
+#include "core/options.hpp"
 #include "ogmm/gmm_head.hpp"
 
 namespace regbench::ogmm {
@@ -32,6 +33,23 @@ DeepGmrLoss ParseLoss(const std::string& s) {
     return ParseEnum(kLossNames, "loss", s, "deepgmr: ");
 }
 
+}  // namespace
+
+// JSON names of the config's enums, strict on reading (nlohmann's enum macro would map an
+// unknown name to the first value).
+static void to_json(nlohmann::json& j, DeepGmrFeatures f) { j = ToString(f); }
+static void from_json(const nlohmann::json& j, DeepGmrFeatures& f) {
+    f = ParseFeatures(j.get<std::string>());
+}
+static void to_json(nlohmann::json& j, DeepGmrLoss l) { j = ToString(l); }
+static void from_json(const nlohmann::json& j, DeepGmrLoss& l) { l = ParseLoss(j.get<std::string>()); }
+static void to_json(nlohmann::json& j, RriVariant v) { j = ToString(v); }
+static void from_json(const nlohmann::json& j, RriVariant& v) {
+    v = ParseRriVariant(j.get<std::string>());
+}
+
+namespace {
+
 /// CBR(i, o): 1x1 Conv1d without bias -> BatchNorm1d -> ReLU (the original's building block).
 /// Children "0" and "1" give the original's state-dict keys (encoder.0.0.weight, ...).
 class CbrImpl : public torch::nn::Module {
@@ -59,42 +77,32 @@ torch::Tensor Translation(const torch::Tensor& T) { return T.index({Slice(), Sli
 
 }  // namespace
 
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DeepGmrConfig,
+                                                name,
+                                                features,
+                                                clusters,
+                                                rri_k,
+                                                rri_variant,
+                                                emb_dims,
+                                                dgcnn_k,
+                                                head_hidden,
+                                                loss)
+
 nlohmann::json ToJson(const DeepGmrConfig& c) {
-    return {
-        {"arch", "deepgmr"},       {"name", c.name},       {"features", ToString(c.features)},
-        {"clusters", c.clusters},  {"rri_k", c.rri_k},     {"rri_variant", ToString(c.rri_variant)},
-        {"emb_dims", c.emb_dims},  {"dgcnn_k", c.dgcnn_k}, {"head_hidden", c.head_hidden},
-        {"loss", ToString(c.loss)}};
+    nlohmann::json j = c;
+    j["arch"] = "deepgmr";
+    return j;
 }
 
 DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
-    DeepGmrConfig c;
-    for (const auto& [key, value] : j.items()) {
-        if (key == "arch") {
-            if (value != "deepgmr")
-                throw std::invalid_argument("deepgmr config: arch is " + value.dump());
-        } else if (key == "name") {
-            c.name = value.get<std::string>();
-        } else if (key == "features") {
-            c.features = ParseFeatures(value.get<std::string>());
-        } else if (key == "clusters") {
-            c.clusters = value.get<int>();
-        } else if (key == "rri_k") {
-            c.rri_k = value.get<int>();
-        } else if (key == "rri_variant") {
-            c.rri_variant = ParseRriVariant(value.get<std::string>());
-        } else if (key == "emb_dims") {
-            c.emb_dims = value.get<int>();
-        } else if (key == "dgcnn_k") {
-            c.dgcnn_k = value.get<int>();
-        } else if (key == "head_hidden") {
-            c.head_hidden = value.get<int>();
-        } else if (key == "loss") {
-            c.loss = ParseLoss(value.get<std::string>());
-        } else {
-            throw std::invalid_argument("deepgmr config: unknown key '" + key + "'");
+    nlohmann::json fields = j;
+    if (j.is_object() && j.contains("arch")) {
+        if (j.at("arch") != "deepgmr") {
+            throw std::invalid_argument("deepgmr config: arch is " + j.at("arch").dump());
         }
+        fields.erase("arch");
     }
+    const auto c = ParseOptions<DeepGmrConfig>(fields, "deepgmr config");
     if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1) {
         throw std::invalid_argument(
             "deepgmr config: clusters, rri_k, emb_dims, dgcnn_k, head_hidden "

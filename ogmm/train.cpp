@@ -10,51 +10,30 @@
 #include <stdexcept>
 
 #include "core/metrics.hpp"
+#include "core/options.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::ogmm {
 namespace fs = std::filesystem;
 
-nlohmann::json ToJson(const TrainConfig& c) {
-    return {{"lr", c.lr},
-            {"weight_decay", c.weight_decay},
-            {"batch", c.batch},
-            {"epochs", c.epochs},
-            {"pairs_per_epoch", c.pairs_per_epoch},
-            {"schedule", c.schedule},
-            {"milestones", c.milestones},
-            {"lr_gamma", c.lr_gamma},
-            {"plateau_patience", c.plateau_patience},
-            {"min_lr", c.min_lr}};
-}
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainConfig,
+                                                lr,
+                                                weight_decay,
+                                                batch,
+                                                epochs,
+                                                pairs_per_epoch,
+                                                schedule,
+                                                milestones,
+                                                lr_gamma,
+                                                plateau_patience,
+                                                min_lr)
+
+nlohmann::json ToJson(const TrainConfig& c) { return c; }
 
 TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
-    TrainConfig c;
-    for (const auto& [key, v] : j.items()) {
-        if (key == "lr")
-            c.lr = v.get<double>();
-        else if (key == "weight_decay")
-            c.weight_decay = v.get<double>();
-        else if (key == "batch")
-            c.batch = v.get<int>();
-        else if (key == "epochs")
-            c.epochs = v.get<int>();
-        else if (key == "pairs_per_epoch")
-            c.pairs_per_epoch = v.get<int>();
-        else if (key == "schedule")
-            c.schedule = v.get<std::string>();
-        else if (key == "milestones")
-            c.milestones = v.get<std::vector<double>>();
-        else if (key == "lr_gamma")
-            c.lr_gamma = v.get<double>();
-        else if (key == "plateau_patience")
-            c.plateau_patience = v.get<int>();
-        else if (key == "min_lr")
-            c.min_lr = v.get<double>();
-        else
-            throw std::invalid_argument("train config: unknown key '" + key + "'");
-    }
+    // Unknown keys (a misspelt key in a recipe) and wrong types are errors naming the key.
+    const auto c = ParseOptions<TrainConfig>(j, "train config");
     if (c.lr <= 0 || c.batch < 1 || c.epochs < 1 || c.pairs_per_epoch < c.batch) {
         throw std::invalid_argument(
             "train config: need lr > 0, batch >= 1, epochs >= 1 and "
@@ -206,7 +185,7 @@ EpochMetrics Validate(RegistrationNet& net,
 /// What the trainer must remember across --resume besides weights and optimizer.
 struct TrainerState {
     std::int64_t step = 0;
-    double elapsed = 0.0;  ///< wall seconds over all sessions
+    double elapsed_seconds = 0.0;  ///< wall seconds over all sessions
     double best_mae_r = std::numeric_limits<double>::infinity();
     double plateau_best = std::numeric_limits<double>::infinity();
     int plateau_bad = 0;
@@ -215,32 +194,24 @@ struct TrainerState {
     std::int64_t epoch_loss_steps = 0;
 };
 
-nlohmann::json ToJson(const TrainerState& s) {
-    return {
-        {"step", s.step},
-        {"elapsed_seconds", s.elapsed},
-        {"best_mae_r", std::isfinite(s.best_mae_r) ? nlohmann::json(s.best_mae_r) : nullptr},
-        {"plateau_best", std::isfinite(s.plateau_best) ? nlohmann::json(s.plateau_best) : nullptr},
-        {"plateau_bad", s.plateau_bad},
-        {"plateau_scale", s.plateau_scale},
-        {"epoch_loss_sum", s.epoch_loss_sum},
-        {"epoch_loss_steps", s.epoch_loss_steps}};
-}
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
+                                                step,
+                                                elapsed_seconds,
+                                                best_mae_r,
+                                                plateau_best,
+                                                plateau_bad,
+                                                plateau_scale,
+                                                epoch_loss_sum,
+                                                epoch_loss_steps)
 
-TrainerState TrainerStateFromJson(const nlohmann::json& j) {
-    TrainerState s;
-    const auto num = [&](const char* k, double fallback) {
-        return j.contains(k) && j.at(k).is_number() ? j.at(k).get<double>() : fallback;
-    };
-    s.step = j.at("step").get<std::int64_t>();
-    s.elapsed = num("elapsed_seconds", 0.0);
-    s.best_mae_r = num("best_mae_r", s.best_mae_r);
-    s.plateau_best = num("plateau_best", s.plateau_best);
-    s.plateau_bad = j.value("plateau_bad", 0);
-    s.plateau_scale = num("plateau_scale", 1.0);
-    s.epoch_loss_sum = num("epoch_loss_sum", 0.0);
-    s.epoch_loss_steps = j.value("epoch_loss_steps", std::int64_t{0});
-    return s;
+/// Infinite bests (nothing validated yet) are written as null, JSON having no infinity.
+nlohmann::json ToJson(const TrainerState& s) { return s; }
+
+/// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
+TrainerState TrainerStateFromJson(nlohmann::json j) {
+    if (!j.contains("step")) throw std::invalid_argument("trainer state: no 'step'");
+    for (auto it = j.begin(); it != j.end();) it = it->is_null() ? j.erase(it) : std::next(it);
+    return j.get<TrainerState>();
 }
 
 /// LR of the next step. multistep: base x gamma^(milestones passed by `progress`).
@@ -358,7 +329,7 @@ TrainSummary Train(const nlohmann::json& config,
     const double budget = options.minutes * 60.0;
     const int val_batch = options.val_batch > 0 ? options.val_batch : tc.batch;
     const auto session_start = Clock::now();
-    const double elapsed_before = state.elapsed;
+    const double elapsed_before = state.elapsed_seconds;
     const auto elapsed = [&] {
         return elapsed_before + std::chrono::duration<double>(Clock::now() - session_start).count();
     };
@@ -369,7 +340,7 @@ TrainSummary Train(const nlohmann::json& config,
     std::int64_t steps_this_session = 0;
 
     const auto checkpoint_meta = [&](const EpochMetrics* m) {
-        state.elapsed = elapsed();
+        state.elapsed_seconds = elapsed();
         nlohmann::json meta = {{"model", config.value("name", std::string())},
                                {"config", config},
                                {"data", data.provenance},
