@@ -2,10 +2,12 @@
 // Strict number options: CLI11 alone turns "-1" into 2^64-1 for an unsigned option and reads
 // "1e23" into a count; these validators run on the text before any conversion.
 #include <CLI/CLI.hpp>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
+
+#include "core/parse_number.hpp"
 
 namespace regbench::app {
 
@@ -13,9 +15,7 @@ namespace regbench::app {
 inline CLI::Validator WholeNumber() {
     return CLI::Validator(
         [](std::string& s) -> std::string {
-            std::uint64_t v = 0;
-            const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-            if (s.empty() || ec != std::errc() || end != s.data() + s.size()) {
+            if (!ParseNumber<std::uint64_t>(s)) {
                 return "expected a whole number >= 0 (digits only), got '" + s + "'";
             }
             return "";
@@ -27,10 +27,8 @@ inline CLI::Validator WholeNumber() {
 inline CLI::Validator NonNegativeReal() {
     return CLI::Validator(
         [](std::string& s) -> std::string {
-            double v = 0;
-            const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-            if (s.empty() || ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v) ||
-                v < 0) {
+            const auto v = s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
+            if (!v || !std::isfinite(*v) || *v < 0) {
                 return "expected a finite number >= 0, got '" + s + "'";
             }
             return "";
@@ -42,9 +40,10 @@ inline CLI::Validator NonNegativeReal() {
 inline void ParseShard(const std::string& text, int* index, int* count) {
     const auto slash = text.find('/');
     const auto parse = [&](const std::string& part, int* out) {
-        const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), *out);
-        return !part.empty() && part[0] != '-' && ec == std::errc() &&
-               end == part.data() + part.size();
+        const std::optional<int> v =
+            part.empty() || part[0] == '-' ? std::nullopt : ParseNumber<int>(part);
+        if (v) *out = *v;
+        return v.has_value();
     };
     if (slash == std::string::npos || !parse(text.substr(0, slash), index) ||
         !parse(text.substr(slash + 1), count) || *count < 1 || *index >= *count) {

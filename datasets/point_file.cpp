@@ -1,11 +1,8 @@
 #include "datasets/point_file.hpp"
 
-#include "datasets/off_reader.hpp"
-
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -15,6 +12,9 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "core/parse_number.hpp"
+#include "datasets/off_reader.hpp"
 
 namespace regbench {
 namespace {
@@ -106,12 +106,9 @@ struct DeclaredCloud {
 
 /// Whole number from a header token, or an error naming the file and line (never std::stoul).
 double HeaderCount(const std::string& path, int line_no, const std::string& token) {
-    unsigned long long v = 0;
-    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), v);
-    if (token.empty() || ec != std::errc() || end != token.data() + token.size()) {
-        HeaderError(path, line_no, "bad count '" + token + "' in header");
-    }
-    return static_cast<double>(v);
+    const auto v = ParseNumber<unsigned long long>(token);
+    if (!v) HeaderError(path, line_no, "bad count '" + token + "' in header");
+    return static_cast<double>(*v);
 }
 
 double PlyTypeBytes(const std::string& type) {
@@ -219,9 +216,9 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
         if (w[0] == "DATA") {
             const std::string kind = w.size() >= 2 ? w[1] : "";
             if (kind != "ascii" && kind != "binary" && kind != "binary_compressed") {
-                HeaderError(path, n,
-                            "PCD DATA must be ascii, binary or binary_compressed, got '" + kind +
-                                "'");
+                HeaderError(
+                    path, n,
+                    "PCD DATA must be ascii, binary or binary_compressed, got '" + kind + "'");
             }
             d.ascii = kind == "ascii";
             d.compressed = kind == "binary_compressed";
@@ -260,7 +257,8 @@ void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
     // A header whose end marker is the file's last bytes without a newline ends "past" the
     // file (found by fuzz_ply: the negative body size then overflowed a conversion).
     if (d.body_offset > size) {
-        throw std::runtime_error(path + ": the header ends past the end of the file (truncated "
+        throw std::runtime_error(path +
+                                 ": the header ends past the end of the file (truncated "
                                  "or corrupt file)");
     }
     const double body = static_cast<double>(size) - static_cast<double>(d.body_offset);

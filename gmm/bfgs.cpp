@@ -10,6 +10,18 @@ constexpr double kStepMin = 1e-100;               // scipy's _minimize_bfgs pass
 constexpr double kStepMax = 1e100;                // ... and amax = 1e100
 constexpr double kRhoWhenCurvatureZero = 1000.0;  // scipy: "Divide-by-zero encountered"
 
+/// The minimiser of the cubic through (stp, fp, dp) and (st, f, d), written from stp: dcstep's
+/// case 2 (st = stx) and case 4 (st = sty) compute exactly this, operation for operation.
+double CubicStepFrom(double stp, double fp, double dp, double st, double f, double d) {
+    const double theta = 3.0 * (f - fp) / (stp - st) + d + dp;
+    const double s = std::max({std::abs(theta), std::abs(d), std::abs(dp)});
+    double gamma = s * std::sqrt((theta / s) * (theta / s) - (d / s) * (dp / s));
+    if (stp > st) gamma = -gamma;
+    const double p = (gamma - dp) + theta;
+    const double q = ((gamma - dp) + gamma) + d;
+    return stp + (p / q) * (st - stp);
+}
+
 /// MINPACK-2 dcstep: safeguarded cubic/quadratic step for the interval [stx, sty]
 /// (Moré & Thuente 1994, Sec. 4, cases 1-4). Updates the interval and returns the new step.
 /// Step() is long on purpose: it follows dcstep line by line (four cases sharing the interval
@@ -36,13 +48,7 @@ struct Dcstep {
             brackt = true;
         } else if (sgnd < 0.0) {
             // Case 2: lower value, derivatives of opposite sign; bracketed.
-            const double theta = 3.0 * (fx - fp) / (stp - stx) + dx + dp;
-            const double s = std::max({std::abs(theta), std::abs(dx), std::abs(dp)});
-            double gamma = s * std::sqrt((theta / s) * (theta / s) - (dx / s) * (dp / s));
-            if (stp > stx) gamma = -gamma;
-            const double p = (gamma - dp) + theta;
-            const double q = ((gamma - dp) + gamma) + dx;
-            const double stpc = stp + (p / q) * (stx - stp);
+            const double stpc = CubicStepFrom(stp, fp, dp, stx, fx, dx);
             const double stpq = stp + (dp / (dp - dx)) * (stx - stp);
             stpf = std::abs(stpc - stp) > std::abs(stpq - stp) ? stpc : stpq;
             brackt = true;
@@ -74,13 +80,8 @@ struct Dcstep {
         } else {
             // Case 4: lower value, same-sign derivative that does not decrease.
             if (brackt) {
-                const double theta = 3.0 * (fp - fy) / (sty - stp) + dy + dp;
-                const double s = std::max({std::abs(theta), std::abs(dy), std::abs(dp)});
-                double gamma = s * std::sqrt((theta / s) * (theta / s) - (dy / s) * (dp / s));
-                if (stp > sty) gamma = -gamma;
-                const double p = (gamma - dp) + theta;
-                const double q = ((gamma - dp) + gamma) + dy;
-                stpf = stp + (p / q) * (sty - stp);
+                // 3 (fp - fy) / (sty - stp) there = 3 (fy - fp) / (stp - sty) here, exactly.
+                stpf = CubicStepFrom(stp, fp, dp, sty, fy, dy);
             } else {
                 stpf = stp > stx ? stpmax : stpmin;
             }

@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
 
+#include "core/parse_number.hpp"
 #include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
 
@@ -138,19 +140,13 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
 
 void ParseTolerance(const std::string& text, CompareOptions* o) {
     const auto number = [&](const std::string& s) {
-        std::size_t used = 0;
-        double v = 0.0;
-        try {
-            v = std::stod(s, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used != s.size() || v < 0.0) {
+        const std::optional<double> v = ParseNumber<double>(s);
+        if (!v || !(*v >= 0.0)) {
             throw std::invalid_argument("--tolerance: '" + s +
                                         "' is not a non-negative number (use e.g. 0.5 or "
                                         "mae_r=0.5,ccd=0.001)");
         }
-        return v;
+        return *v;
     };
     if (text.find('=') == std::string::npos) {
         o->default_tolerance = number(text);

@@ -81,7 +81,8 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
     s.label = s.method;
     s.params = group.front()->params;
     s.pairs = group.size();
-    std::vector<double> mae_r, mae_t, ccd, rre, rte, mse_r, mse_t, chamfer, secs;
+    std::vector<PairMetrics> finite;  // the rows whose metrics are numbers
+    std::vector<double> secs;
     std::size_t recalled = 0, succeeded = 0, recalled_3dm = 0;
     for (const ResultRow* r : group) {
         const PairMetrics m = MetricsIn(*r, o);
@@ -99,14 +100,7 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
             continue;
         }
         if (r->status != Status::kOk) ++s.failed;
-        mae_r.push_back(m.mae_r);
-        mae_t.push_back(m.mae_t);
-        ccd.push_back(m.ccd);
-        rre.push_back(m.rre);
-        rte.push_back(m.rte);
-        mse_r.push_back(m.mse_r);
-        mse_t.push_back(m.mse_t);
-        chamfer.push_back(m.chamfer);
+        finite.push_back(m);
         if (m.mae_r < o.recall_r_deg && m.mae_t < o.recall_t) ++recalled;
         if (m.rre < o.success_rre_deg && m.rte < o.success_rte) ++succeeded;
         if (o.recall_3dmatch) {
@@ -123,17 +117,23 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
         }
     }
     const std::string id = data_key + "\n" + s.method + "\n" + s.params.dump() + "\n";
-    const auto boot = [&](const std::vector<double>& v, const char* metric) {
-        return Bootstrap(v, o.bootstrap_samples, StreamId(id + metric));
+    const auto column = [&](double PairMetrics::*metric) {
+        std::vector<double> v;
+        v.reserve(finite.size());
+        for (const PairMetrics& m : finite) v.push_back(m.*metric);
+        return v;
     };
-    s.mae_r = boot(mae_r, "mae_r");
-    s.mae_t = boot(mae_t, "mae_t");
-    s.ccd = boot(ccd, "ccd");
-    s.rre = boot(rre, "rre");
-    s.rte = boot(rte, "rte");
-    s.rmse_r = std::sqrt(SampleMean(mse_r));
-    s.rmse_t = std::sqrt(SampleMean(mse_t));
-    s.chamfer = SampleMean(chamfer);
+    const auto boot = [&](double PairMetrics::*metric, const char* name) {
+        return Bootstrap(column(metric), o.bootstrap_samples, StreamId(id + name));
+    };
+    s.mae_r = boot(&PairMetrics::mae_r, "mae_r");
+    s.mae_t = boot(&PairMetrics::mae_t, "mae_t");
+    s.ccd = boot(&PairMetrics::ccd, "ccd");
+    s.rre = boot(&PairMetrics::rre, "rre");
+    s.rte = boot(&PairMetrics::rte, "rte");
+    s.rmse_r = std::sqrt(SampleMean(column(&PairMetrics::mse_r)));
+    s.rmse_t = std::sqrt(SampleMean(column(&PairMetrics::mse_t)));
+    s.chamfer = SampleMean(column(&PairMetrics::chamfer));
     const double n = static_cast<double>(group.size());
     s.recall = static_cast<double>(recalled) / n;
     s.success = static_cast<double>(succeeded) / n;

@@ -5,10 +5,12 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/parse_number.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
@@ -109,18 +111,12 @@ void ParseCsvLine(const std::string& line,
     while (std::getline(ss, field, ',')) {
         field.erase(0, field.find_first_not_of(" \t\r"));
         field.erase(field.find_last_not_of(" \t\r") + 1);
-        std::size_t used = 0;
-        double x = 0.0;
-        try {
-            x = std::stod(field, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (field.empty() || used != field.size()) {
+        const std::optional<double> x = ParseNumber<double>(field);
+        if (!x) {
             throw std::runtime_error(where + ": field " + std::to_string(v.size() + 1) + " ('" +
                                      field + "') is not a number");
         }
-        v.push_back(x);
+        v.push_back(*x);
     }
     if (v.size() != 13 && v.size() != 14) {
         throw std::runtime_error(where +
