@@ -8,6 +8,7 @@
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "core/metrics.hpp"
 #include "core/options.hpp"
@@ -47,7 +48,10 @@ TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
     return c;
 }
 
-nlohmann::json ToJson(const EpochMetrics& m) {
+namespace {
+
+/// metrics.csv's columns and metrics.jsonl's keys, in order: listed once for both files.
+std::vector<std::pair<const char*, nlohmann::json>> MetricColumns(const EpochMetrics& m) {
     return {{"epoch", m.epoch},
             {"step", m.step},
             {"lr", m.lr},
@@ -61,6 +65,14 @@ nlohmann::json ToJson(const EpochMetrics& m) {
             {"ccd_icp", m.ccd_refined},
             {"identity_mae_r", m.identity_mae_r},
             {"seconds", m.seconds}};
+}
+
+}  // namespace
+
+nlohmann::json ToJson(const EpochMetrics& m) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [key, value] : MetricColumns(m)) j[key] = value;
+    return j;
 }
 
 PairBatch Collate(const std::vector<TrainSample>& samples, const torch::Device& device) {
@@ -241,18 +253,17 @@ std::string FormatSeconds(double s) {
     return o.str();
 }
 
-const char* kCsvHeader =
-    "epoch,step,lr,train_loss,val_loss,mae_r,mae_t,ccd,mae_r_icp,mae_t_icp,ccd_icp,identity_mae_r,"
-    "seconds\n";
+/// One CSV line: the column names, or one epoch's values (JSON numbers: exact round trip).
+std::string CsvLine(const EpochMetrics& m, bool header) {
+    std::string line;
+    for (const auto& [key, value] : MetricColumns(m)) {
+        line += (line.empty() ? "" : ",") + (header ? std::string(key) : value.dump());
+    }
+    return line + "\n";
+}
 
 void AppendMetrics(const fs::path& dir, const EpochMetrics& m) {
-    {
-        std::ofstream csv(dir / "metrics.csv", std::ios::app);
-        csv << m.epoch << ',' << m.step << ',' << m.lr << ',' << m.train_loss << ',' << m.val_loss
-            << ',' << m.mae_r << ',' << m.mae_t << ',' << m.ccd << ',' << m.mae_r_refined << ','
-            << m.mae_t_refined << ',' << m.ccd_refined << ',' << m.identity_mae_r << ','
-            << m.seconds << "\n";
-    }
+    std::ofstream(dir / "metrics.csv", std::ios::app) << CsvLine(m, /*header=*/false);
     std::ofstream jsonl(dir / "metrics.jsonl", std::ios::app);
     jsonl << ToJson(m).dump() << "\n";
 }
@@ -320,7 +331,7 @@ TrainSummary Train(const nlohmann::json& config,
         state = TrainerStateFromJson(j.at("trainer"));
         log << "train: resumed " << last.string() << " at step " << state.step << "\n";
     } else {
-        std::ofstream(dir / "metrics.csv") << kCsvHeader;
+        std::ofstream(dir / "metrics.csv") << CsvLine({}, /*header=*/true);
         std::ofstream(dir / "metrics.jsonl");
     }
 
