@@ -1,12 +1,9 @@
 // One writer per output, checked writes and validated --resume.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -18,6 +15,7 @@
 #include "runners/resume.hpp"
 #include "runners/runner.hpp"
 #include "runners/scale_guard.hpp"
+#include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/temp_dir_test.hpp"
@@ -191,21 +189,9 @@ TEST_F(Reliability, OutputThatIsThePairFileIsRefused) {
 
 TEST_F(Reliability, WriteFailureEndsTheRunWithAnErrorAndNoResultFile) {
     const RunOptions o = Options("r.jsonl", pairs_);
-    const pid_t pid = fork();
-    if (pid == 0) {
-        // Rows of this run are ~1 KB: 2 KB lets a row or two through, then EFBIG.
-        signal(SIGXFSZ, SIG_IGN);
-        rlimit rl{2048, 2048};
-        setrlimit(RLIMIT_FSIZE, &rl);
-        try {
-            RunBenchmark(o);
-        } catch (const std::runtime_error& e) {
-            _exit(std::strstr(e.what(), o.out_path.c_str()) != nullptr ? 3 : 4);
-        }
-        _exit(0);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
+    // Rows of this run are ~1 KB: 2 KB lets a row or two through, then EFBIG.
+    const int status = testing::RunUnderFileSizeLimit<std::runtime_error>(2048, o.out_path,
+                                                                          [&] { RunBenchmark(o); });
     ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
     EXPECT_EQ(WEXITSTATUS(status), 3);
     EXPECT_FALSE(fs::exists(o.out_path));
