@@ -42,6 +42,28 @@ double MaxRelDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
     return (a - b).cwiseAbs().maxCoeff() / std::max(b.cwiseAbs().maxCoeff(), 1e-300);
 }
 
+/// Source Y and target X: independent samples of the smooth blob, `m` and `n` points, from
+/// one seeded stream; T is the motion the E-steps apply to Y.
+struct BlobPair {
+    PointCloud Y, X;
+    Transform T;
+};
+BlobPair MakeBlobPair(std::uint64_t seed, Eigen::Index m, Eigen::Index n, const Transform& T) {
+    auto rng = MakePairRng(seed, 0);
+    BlobPair p;
+    p.Y = SmoothBlobSurface(rng, m);
+    p.X = SmoothBlobSurface(rng, n);
+    p.T = T;
+    return p;
+}
+
+/// Options forcing the dense E-step (the reference the approximations are compared with).
+GaussSumOptions DenseOptions() {
+    GaussSumOptions opt;
+    opt.mode = GaussSumMode::kDense;
+    return opt;
+}
+
 TEST(CpdEStep, MatchesBruteForceAndColumnIdentity) {
     auto rng = MakePairRng(5, 0);
     const PointCloud Y = SmoothBlobSurface(rng, 400);
@@ -75,10 +97,8 @@ TEST(CpdEStep, MatchesBruteForceAndColumnIdentity) {
 }
 
 TEST(CpdEStep, ThreadCountDoesNotChangeResults) {
-    auto rng = MakePairRng(7, 0);
-    const PointCloud Y = SmoothBlobSurface(rng, 1500);
-    const PointCloud X = SmoothBlobSurface(rng, 1400);
-    const Transform T = MakeTransform(RotationFromAxisAngle({0, 0, 1}, 0.3), {0.05, 0, 0});
+    const auto [Y, X, T] = MakeBlobPair(
+        7, 1500, 1400, MakeTransform(RotationFromAxisAngle({0, 0, 1}, 0.3), {0.05, 0, 0}));
     CpdEStep e_step(Y, X);
     const int saved = omp_get_max_threads();
     CpdPosteriors one, two;
@@ -93,14 +113,11 @@ TEST(CpdEStep, ThreadCountDoesNotChangeResults) {
 }
 
 TEST(CpdEStep, TruncatedAgreesWithDenseOnLargerCloud) {
-    auto rng = MakePairRng(9, 0);
-    const PointCloud Y = SmoothBlobSurface(rng, 6000);
-    const PointCloud X = SmoothBlobSurface(rng, 6000);
-    const Transform T = MakeTransform(RotationFromAxisAngle({0, 1, 0}, 0.05), {0.01, 0, 0});
-    GaussSumOptions dense_opt, trunc_opt;
-    dense_opt.mode = GaussSumMode::kDense;
+    const auto [Y, X, T] = MakeBlobPair(
+        9, 6000, 6000, MakeTransform(RotationFromAxisAngle({0, 1, 0}, 0.05), {0.01, 0, 0}));
+    GaussSumOptions trunc_opt;
     trunc_opt.mode = GaussSumMode::kTruncated;
-    CpdEStep dense(Y, X, dense_opt), trunc(Y, X, trunc_opt);
+    CpdEStep dense(Y, X, DenseOptions()), trunc(Y, X, trunc_opt);
     const double sigma2 = 1e-3;  // sigma ~ 0.03: 4 sigma is well inside the shape
     CpdPosteriors a, b;
     dense.Compute(T, sigma2, 0.0, a);
@@ -135,15 +152,12 @@ namespace {
 TEST(CpdEStep, CellCompressedAgreesWithDenseWhileSigmaIsLarge) {
     // Reference: the dense E-step (itself checked against brute force above). Compression with
     // cells of 0.25 sigma is second order in the cell size: ~1% on p1, px and Np.
-    auto rng = MakePairRng(19, 0);
-    const PointCloud Y = SmoothBlobSurface(rng, 8000);
-    const PointCloud X = SmoothBlobSurface(rng, 8000);
-    const Transform T = MakeTransform(RotationFromAxisAngle({0, 1, 0}, 0.2), {0.05, 0, 0});
-    GaussSumOptions dense_opt, auto_opt;
-    dense_opt.mode = GaussSumMode::kDense;
+    const auto [Y, X, T] = MakeBlobPair(
+        19, 8000, 8000, MakeTransform(RotationFromAxisAngle({0, 1, 0}, 0.2), {0.05, 0, 0}));
+    GaussSumOptions auto_opt;
     auto_opt.cluster_min_points = 1000;
     auto_opt.truncation_min_points = 1000;
-    CpdEStep dense(Y, X, dense_opt), approx(Y, X, auto_opt);
+    CpdEStep dense(Y, X, DenseOptions()), approx(Y, X, auto_opt);
     for (const double sigma2 : {0.3, 0.05}) {
         CpdPosteriors a, b;
         dense.Compute(T, sigma2, 1e-3, a);

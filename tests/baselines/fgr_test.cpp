@@ -9,18 +9,9 @@
 namespace regbench {
 namespace {
 
-using testing::AlignOk;
 using testing::CleanCompletePair;
-using testing::RreDeg;
 
-TEST(Fgr, RecoversLargeMotionOnCleanCompletePair) {
-    // Global: no initial guess needed, identical points give identical FPFH descriptors.
-    constexpr double kRreTolDeg = 1.0;
-    const auto pair = CleanCompletePair(60.0);
-    const AlignResult r = AlignOk("fgr", pair);
-    EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
-    EXPECT_EQ(r.iterations, 64);
-}
+// Recovery of a 60-degree motion: clean_pair_recovery_test.cpp.
 
 TEST(Fgr, SameSeedGivesSameResult) {
     const auto pair = CleanCompletePair(30.0, /*seed=*/5);

@@ -72,14 +72,11 @@ TEST(GmmReg, PointFeaturesAndScheduleWork) {
 }
 
 TEST(GmmReg, RejectsBadParametersByName) {
-    testing::ExpectRejected("gmmreg", {{"delta", 1.5}}, "delta");
-    testing::ExpectRejected("gmmreg", {{"sigma", -1.0}}, "sigma");
-    testing::ExpectRejected("gmmreg", {{"gmm", "kmeans"}}, "gmm");
-    testing::ExpectRejected("gmmreg", {{"gradient", "double"}}, "gradient");
-    testing::ExpectRejected("gmmreg", {{"compat", "matlab"}}, "compat");
-    testing::ExpectRejected("gmmreg", {{"n_gmm_components", 0}}, "n_gmm_components");
-    testing::ExpectRejected("gmmreg", {{"maxiter", -1}}, "maxiter");
-    testing::ExpectRejected("gmmreg", {{"sigma2", 1.0}}, "sigma2");
+    // "sigma2" is no gmmreg parameter (gmmreg's scale is "sigma").
+    testing::ExpectEachRejected("gmmreg", nlohmann::json::parse(R"({
+        "delta": [1.5], "sigma": [-1.0], "gmm": ["kmeans"], "gradient": ["double"],
+        "compat": ["matlab"], "n_gmm_components": [0], "maxiter": [-1], "sigma2": [1.0]
+    })"));
 }
 
 TEST(GmmReg, ParamsReportResolvedCompatDefaults) {

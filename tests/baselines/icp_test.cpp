@@ -12,12 +12,7 @@ using testing::RreDeg;
 
 constexpr double kRreTolDeg = 0.5;
 
-TEST(Icp, RecoversTenDegreesOnCleanCompletePair) {
-    const auto pair = CleanCompletePair(10.0);
-    const AlignResult r = AlignOk("icp", pair);
-    EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
-    EXPECT_GT(r.iterations, 1);
-}
+// Recovery of a 10-degree motion (icp, icp-pl): clean_pair_recovery_test.cpp.
 
 TEST(Icp, MaxIterationsIsApplied) {
     const auto pair = CleanCompletePair(10.0);
@@ -44,12 +39,6 @@ TEST(Icp, OutOfRangeParameterIsNamed) {
         EXPECT_NE(std::string(e.what()).find("'max_correspondence_distance'"), std::string::npos)
             << e.what();
     }
-}
-
-TEST(IcpPl, RecoversTenDegreesOnCleanCompletePair) {
-    const auto pair = CleanCompletePair(10.0);
-    const AlignResult r = AlignOk("icp-pl", pair);
-    EXPECT_LT(RreDeg(pair, r.T_target_source), kRreTolDeg);
 }
 
 TEST(IcpPl, NormalNeighbourCountIsValidated) {

@@ -16,7 +16,8 @@
 namespace regbench {
 namespace {
 
-using namespace testing;  // the shared fixtures and checks (tests/testing, registration_fixtures.hpp)
+using namespace testing;  // the shared fixtures and checks (tests/testing,
+                          // registration_fixtures.hpp)
 
 constexpr int kPoints = 717;
 constexpr double kEulerTolRad = 0.1;  // probreg's own SVR test tolerance
@@ -98,14 +99,10 @@ TEST(Svr, OuterScheduleRunsInBothModes) {
 }
 
 TEST(Svr, RejectsBadParametersByName) {
-    testing::ExpectRejected("svr", {{"nu", 0.0}}, "nu");
-    testing::ExpectRejected("svr", {{"nu", 1.2}}, "nu");
-    testing::ExpectRejected("svr", {{"gamma", -1.0}}, "gamma");
-    testing::ExpectRejected("svr", {{"delta", 0.0}}, "delta");
-    testing::ExpectRejected("svr", {{"svm_tol", 0.0}}, "svm_tol");
-    testing::ExpectRejected("svr", {{"gradient", "half"}}, "gradient");
-    testing::ExpectRejected("svr", {{"outer_iterations", 0}}, "outer_iterations");
-    testing::ExpectRejected("svr", {{"opt_maxiter", 5}}, "opt_maxiter");
+    testing::ExpectEachRejected("svr", nlohmann::json::parse(R"({
+        "nu": [0.0, 1.2], "gamma": [-1.0], "delta": [0.0], "svm_tol": [0.0],
+        "gradient": ["half"], "outer_iterations": [0], "opt_maxiter": [5]
+    })"));
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "core/file_lock.hpp"
+#include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/files.hpp"
 
 namespace regbench {
@@ -20,29 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Runs `write` in a forked child under RLIMIT_FSIZE = `limit` bytes with SIGXFSZ ignored (so a
-/// write past the limit fails with EFBIG instead of killing the process, as on a full disk).
-/// Returns the child's wait status; the child exits 3 when `write` threw an error naming
-/// `expect_in_message`, 4 when it threw something else, 0 when it did not throw.
-int RunUnderFileSizeLimit(rlim_t limit,
-                          const std::string& expect_in_message,
-                          const std::function<void()>& write) {
-    const pid_t pid = fork();
-    if (pid == 0) {
-        signal(SIGXFSZ, SIG_IGN);
-        rlimit rl{limit, limit};
-        setrlimit(RLIMIT_FSIZE, &rl);
-        try {
-            write();
-        } catch (const std::exception& e) {
-            _exit(std::strstr(e.what(), expect_in_message.c_str()) != nullptr ? 3 : 4);
-        }
-        _exit(0);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
-    return status;
-}
+using testing::RunUnderFileSizeLimit;
 
 TEST(AtomicFile, WritesAndReplacesAtomically) {
     const fs::path dir = testing::FreshTempDir("replace");

@@ -24,6 +24,17 @@ constexpr const char* kPlyAscii =
     "property float nx\nproperty float ny\nproperty float nz\nend_header\n"
     "0 0 0 0 0 1\n1 2 3 0 1 0\n-1 0.5 2 1 0 0\n";
 
+/// Writes `text` as `dir`/`name` and expects ReadPointFile to refuse it with a message naming the
+/// file's path followed by `where` (":line: reason", or nothing).
+void ExpectRefused(const std::filesystem::path& dir,
+                   const std::string& name,
+                   const std::string& text,
+                   const std::string& where = "") {
+    SCOPED_TRACE(name);
+    const std::string path = WriteText(dir / name, text);
+    ExpectThrowsWith([&] { ReadPointFile(path); }, path + where);
+}
+
 TEST(ReadPointFile, ReadsXyzWithCommentsAndNormals) {
     const auto dir = FreshDir();
     const std::string path =
@@ -42,16 +53,12 @@ TEST(ReadPointFile, ReadsXyzWithCommentsAndNormals) {
 
 TEST(ReadPointFile, RejectsBadXyzLineWithFileAndLine) {
     const auto dir = FreshDir();
-    const std::string bad = WriteText(dir / "bad.xyz", "1 2 3\n4 5 6\n7 eight 9\n");
-    ExpectThrowsWith([&] { ReadPointFile(bad); }, bad + ":3");
-    const std::string short_line = WriteText(dir / "short.xyz", "1 2 3\n4 5\n");
-    ExpectThrowsWith([&] { ReadPointFile(short_line); }, short_line + ":2");
-    const std::string empty = WriteText(dir / "empty.xyz", "# nothing\n");
-    ExpectThrowsWith([&] { ReadPointFile(empty); }, empty);
+    ExpectRefused(dir, "bad.xyz", "1 2 3\n4 5 6\n7 eight 9\n", ":3");
+    ExpectRefused(dir, "short.xyz", "1 2 3\n4 5\n", ":2");
+    ExpectRefused(dir, "empty.xyz", "# nothing\n");
     const std::string missing = (dir / "missing.xyz").string();
     ExpectThrowsWith([&] { ReadPointFile(missing); }, missing);
-    const std::string unknown = WriteText(dir / "cloud.obj", "v 1 2 3\n");
-    ExpectThrowsWith([&] { ReadPointFile(unknown); }, unknown);
+    ExpectRefused(dir, "cloud.obj", "v 1 2 3\n");
 }
 
 TEST(ReadPointFile, ReadsPlyAndPcdThroughOpen3D) {
@@ -75,30 +82,25 @@ TEST(ReadPointFile, RejectsTruncatedPlyNamingPath) {
     const auto dir = FreshDir();
     std::string text = kPlyAscii;
     text = text.substr(0, text.find("1 2 3"));  // header promises 3 vertices, 1 present
-    const std::string path = WriteText(dir / "truncated.ply", text);
-    ExpectThrowsWith([&] { ReadPointFile(path); }, path);
-    const std::string garbage = WriteText(dir / "garbage.ply", "this is not a ply file\n");
-    ExpectThrowsWith([&] { ReadPointFile(garbage); }, garbage);
+    ExpectRefused(dir, "truncated.ply", text);
+    ExpectRefused(dir, "garbage.ply", "this is not a ply file\n");
 }
 
 // Regression for a fuzz_ply find (UBSan: a negative body size converted to long long): a header
 // whose "end_header" is the file's last bytes, without a newline, with a body-less vertex count.
 TEST(ReadPointFile, RefusesAHeaderEndingAtTheEndOfTheFile) {
-    const auto dir = FreshDir();
-    const std::string path = WriteText(
-        dir / "header_only.ply", "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\n"
-                                 "property float y\nproperty float z\nend_header");
-    ExpectThrowsWith([&] { ReadPointFile(path); }, path);
+    ExpectRefused(FreshDir(), "header_only.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\n"
+                  "property float y\nproperty float z\nend_header");
 }
 
 // Regression for a fuzz_ply find (SEGV inside Open3D's PLY reader): a property line with no
 // type and name is refused by regbench's own header check, naming the file and line.
 TEST(ReadPointFile, RefusesAPlyPropertyWithoutTypeAndName) {
-    const auto dir = FreshDir();
-    const std::string path = WriteText(
-        dir / "bare_property.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                                   "property float y\nproperty\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
-    ExpectThrowsWith([&] { ReadPointFile(path); }, path + ":6");
+    ExpectRefused(FreshDir(), "bare_property.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                  "property float y\nproperty\nend_header\n0 0 0\n1 0 0\n0 1 0\n",
+                  ":6");
 }
 
 // Regression for a fuzz_pcd find (SEGV inside Open3D's PCD reader on a field with COUNT 0,
@@ -119,21 +121,16 @@ TEST(ReadPointFile, RefusesInconsistentPcdFieldLists) {
         {"no_type.pcd", "FIELDS x y z\nSIZE 4 4 4\n", ":1: PCD header lists 3 FIELDS but 0 TYPE"},
         {"no_fields.pcd", "SIZE 4 4 4\nTYPE F F F\n", ": PCD header has no FIELDS line"},
     };
-    for (const auto& [name, header, reason] : cases) {
-        SCOPED_TRACE(name);
-        const std::string path = WriteText(dir / name, header + body);
-        ExpectThrowsWith([&] { ReadPointFile(path); }, path + reason);
-    }
-    const std::string bad_data = WriteText(
-        dir / "data.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA binaqy\n1234");
-    ExpectThrowsWith([&] { ReadPointFile(bad_data); }, bad_data + ":5: PCD DATA must");
+    for (const auto& [name, header, reason] : cases)
+        ExpectRefused(dir, name, header + body, reason);
+    ExpectRefused(dir, "data.pcd",
+                  "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 1\nDATA binaqy\n1234",
+                  ":5: PCD DATA must");
     // No POINTS line (fuzz_pcd: Open3D then allocated from an uninitialised count, 33 GB).
-    const std::string no_points =
-        WriteText(dir / "no_points.pcd",
+    ExpectRefused(dir, "no_points.pcd",
                   "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 3\n"
-                  "HEIGHT 1\nDATA ascii\n0 0 0\n1 0 0\n0 1 0\n");
-    ExpectThrowsWith([&] { ReadPointFile(no_points); },
-                     no_points + ": PCD header has no POINTS line");
+                  "HEIGHT 1\nDATA ascii\n0 0 0\n1 0 0\n0 1 0\n",
+                  ": PCD header has no POINTS line");
 }
 
 TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {

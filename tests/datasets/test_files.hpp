@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/testing/expect_throw.hpp"  // ExpectThrowsWith, used with these files
+
 namespace regbench::testing {
 
 /// An empty folder under the test temp dir, named after the running test.
@@ -52,17 +54,6 @@ inline std::string WriteH5(const std::filesystem::path& path, const std::vector<
     }
     H5Fclose(file);
     return path.string();
-}
-
-/// Expects `fn` to throw an exception derived from E whose message contains `needle`.
-template <typename E = std::runtime_error, typename Fn>
-void ExpectThrowsWith(Fn fn, const std::string& needle) {
-    try {
-        fn();
-        ADD_FAILURE() << "no exception; expected one naming " << needle;
-    } catch (const E& e) {
-        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
 }
 
 /// A tetrahedron in OFF format (optionally with ModelNet40's run-together header).

@@ -16,11 +16,17 @@ double Rosenbrock(const Eigen::VectorXd& x, Eigen::VectorXd& g) {
     return a * a + 100.0 * b * b;
 }
 
-TEST(Bfgs, MinimisesRosenbrockFromTheClassicStart) {
+/// BFGS on Rosenbrock from the classic start (-1.2, 1), with at most `maxiter` iterations and
+/// gradient tolerance `gtol`.
+BfgsResult MinimizeRosenbrock(int maxiter, double gtol) {
     BfgsOptions options;
-    options.maxiter = 200;
-    options.gtol = 1e-8;
-    const BfgsResult r = MinimizeBfgs(Rosenbrock, Eigen::Vector2d(-1.2, 1.0), options);
+    options.maxiter = maxiter;
+    options.gtol = gtol;
+    return MinimizeBfgs(Rosenbrock, Eigen::Vector2d(-1.2, 1.0), options);
+}
+
+TEST(Bfgs, MinimisesRosenbrockFromTheClassicStart) {
+    const BfgsResult r = MinimizeRosenbrock(/*maxiter=*/200, /*gtol=*/1e-8);
     EXPECT_EQ(r.stop_reason, "converged");
     EXPECT_NEAR(r.x[0], 1.0, 1e-6);
     EXPECT_NEAR(r.x[1], 1.0, 1e-6);
@@ -65,10 +71,7 @@ TEST(Bfgs, FirstTrialStepIsScipys) {
 }
 
 TEST(Bfgs, ReportsMaxIterations) {
-    BfgsOptions options;
-    options.maxiter = 3;
-    options.gtol = 1e-12;
-    const BfgsResult r = MinimizeBfgs(Rosenbrock, Eigen::Vector2d(-1.2, 1.0), options);
+    const BfgsResult r = MinimizeRosenbrock(/*maxiter=*/3, /*gtol=*/1e-12);
     EXPECT_EQ(r.stop_reason, "max_iterations");
     EXPECT_EQ(r.iterations, 3);
 }

@@ -16,6 +16,20 @@ using testing::ErrorOf;
 
 fs::path TempDir(const std::string& name) { return testing::FreshTempDir("ckpt_" + name); }
 
+/// A fresh temporary folder `name` holding the checkpoint `ck` of a default deepgmr-orig-xyz
+/// net, for the tests that damage or mismatch it.
+struct SavedCheckpoint {
+    fs::path dir;  ///< the temporary folder (removed by the test)
+    fs::path ck;   ///< dir / "ck"
+    std::shared_ptr<RegistrationNet> net;
+};
+SavedCheckpoint SaveDefault(const std::string& name) {
+    SavedCheckpoint s{TempDir(name), {}, MakeNet("deepgmr-orig-xyz")};
+    s.ck = s.dir / "ck";
+    SaveCheckpoint(s.ck.string(), *s.net, {});
+    return s;
+}
+
 TEST(Checkpoint, RoundTripIsBitExact) {
     torch::set_num_threads(1);
     const fs::path dir = TempDir("roundtrip");
@@ -49,38 +63,33 @@ TEST(Checkpoint, RoundTripIsBitExact) {
 }
 
 TEST(Checkpoint, RefusesAnotherConfigNamingTheFile) {
-    const fs::path dir = TempDir("mismatch");
-    auto a = MakeNet("deepgmr-orig-xyz");
-    SaveCheckpoint((dir / "ck").string(), *a, {});
+    const SavedCheckpoint saved = SaveDefault("mismatch");
     auto b = MakeNet("deepgmr-orig-xyz", {{"clusters", 8}});
-    const std::string msg = ErrorOf([&] { LoadCheckpoint((dir / "ck").string(), *b); });
-    EXPECT_NE(msg.find((dir / "ck" / "checkpoint.json").string()), std::string::npos) << msg;
-    fs::remove_all(dir);
+    const std::string msg = ErrorOf([&] { LoadCheckpoint(saved.ck.string(), *b); });
+    EXPECT_NE(msg.find((saved.ck / "checkpoint.json").string()), std::string::npos) << msg;
+    fs::remove_all(saved.dir);
 }
 
 TEST(Checkpoint, RefusesCorruptWeightsNamingTheFile) {
-    const fs::path dir = TempDir("corrupt");
-    auto a = MakeNet("deepgmr-orig-xyz");
-    SaveCheckpoint((dir / "ck").string(), *a, {});
-    const fs::path weights = dir / "ck" / "weights.pt";
+    const SavedCheckpoint saved = SaveDefault("corrupt");
+    const fs::path weights = saved.ck / "weights.pt";
     const auto size = fs::file_size(weights);
     fs::resize_file(weights, size / 2);  // truncated write
-    const std::string msg = ErrorOf([&] { LoadCheckpoint((dir / "ck").string(), *a); });
+    const std::string msg = ErrorOf([&] { LoadCheckpoint(saved.ck.string(), *saved.net); });
     EXPECT_NE(msg.find(weights.string()), std::string::npos) << msg;
-    fs::remove_all(dir);
+    fs::remove_all(saved.dir);
 }
 
 TEST(Checkpoint, RefusesCorruptJsonNamingTheFile) {
-    const fs::path dir = TempDir("json");
-    auto a = MakeNet("deepgmr-orig-xyz");
-    SaveCheckpoint((dir / "ck").string(), *a, {});
-    const fs::path json = dir / "ck" / "checkpoint.json";
+    const SavedCheckpoint saved = SaveDefault("json");
+    const fs::path json = saved.ck / "checkpoint.json";
     std::ofstream(json) << "{\"format\": \"regbench-checkpoint\", ";
-    const std::string msg = ErrorOf([&] { LoadNetFromCheckpoint((dir / "ck").string()); });
+    const std::string msg = ErrorOf([&] { LoadNetFromCheckpoint(saved.ck.string()); });
     EXPECT_NE(msg.find(json.string()), std::string::npos) << msg;
-    const std::string missing = ErrorOf([&] { LoadNetFromCheckpoint((dir / "nowhere").string()); });
+    const std::string missing =
+        ErrorOf([&] { LoadNetFromCheckpoint((saved.dir / "nowhere").string()); });
     EXPECT_NE(missing.find("nowhere"), std::string::npos) << missing;
-    fs::remove_all(dir);
+    fs::remove_all(saved.dir);
 }
 
 }  // namespace

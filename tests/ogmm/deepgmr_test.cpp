@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -140,6 +141,7 @@ TEST(DeepGmr, OriginalParameterCountMatchesTheReference) {
 // /usr/bin/python3 scripts/ogmm_reference.py when the network changes on purpose.
 
 struct DeepGmrParityCase {
+    std::string name;  ///< the test name (the reference key is in the comment above each case)
     DeepGmrConfig config;
     int64_t n, m;             ///< source / target points (batch 2)
     bool train;               ///< BatchNorm mode
@@ -221,10 +223,14 @@ void ExpectDeepGmrParity(const DeepGmrParityCase& c) {
     for (const auto& [name, value] : c.loss) near(terms.at(name).item<double>(), value, name);
 }
 
-TEST(DeepGmrParity, PaperVariantTrainMode) {
-    // deepgmr_dgcnn_train: float32 vs float64 gap of T in the reference 4.1e-06.
-    ExpectDeepGmrParity(
-        {Paper(),
+std::ostream& operator<<(std::ostream& os, const DeepGmrParityCase& c) { return os << c.name; }
+
+/// The four reference cases; each comment gives the reference's own float32 vs float64 gap.
+std::vector<DeepGmrParityCase> ParityCases() {
+    return {
+        // deepgmr_dgcnn_train: float32 vs float64 gap of T in the reference 4.1e-06.
+        {"PaperVariantTrainMode",
+         Paper(),
          48,
          40,
          true,
@@ -242,13 +248,10 @@ TEST(DeepGmrParity, PaperVariantTrainMode) {
          0.25844407081604004,
          {{"rotation", 0.7497786283493042},
           {"translation", 0.01969393901526928},
-          {"total", 0.7694725394248962}}});
-}
-
-TEST(DeepGmrParity, PaperVariantEvalMode) {
-    // deepgmr_dgcnn_eval: float32 vs float64 gap of T in the reference 2.4e-05.
-    ExpectDeepGmrParity(
-        {Paper(),
+          {"total", 0.7694725394248962}}},
+        // deepgmr_dgcnn_eval: float32 vs float64 gap of T in the reference 2.4e-05.
+        {"PaperVariantEvalMode",
+         Paper(),
          48,
          40,
          false,
@@ -266,13 +269,10 @@ TEST(DeepGmrParity, PaperVariantEvalMode) {
          0.25246861577033997,
          {{"rotation", 0.2230340838432312},
           {"translation", 0.020405156537890434},
-          {"total", 0.24343924224376678}}});
-}
-
-TEST(DeepGmrParity, OriginalXyzTrainMode) {
-    // deepgmr_xyz_train: float32 vs float64 gap of T in the reference 3.2e-06.
-    ExpectDeepGmrParity(
-        {Original(DeepGmrFeatures::kXyz),
+          {"total", 0.24343924224376678}}},
+        // deepgmr_xyz_train: float32 vs float64 gap of T in the reference 3.2e-06.
+        {"OriginalXyzTrainMode",
+         Original(DeepGmrFeatures::kXyz),
          40,
          36,
          true,
@@ -290,13 +290,10 @@ TEST(DeepGmrParity, OriginalXyzTrainMode) {
          0.1282411813735962,
          {{"T12", 0.39707300066947937},
           {"T21", 0.3930644392967224},
-          {"total", 0.7901374101638794}}});
-}
-
-TEST(DeepGmrParity, OriginalRriTrainMode) {
-    // deepgmr_rri_train: float32 vs float64 gap of T in the reference 8.6e-06.
-    ExpectDeepGmrParity(
-        {Original(DeepGmrFeatures::kRri),
+          {"total", 0.7901374101638794}}},
+        // deepgmr_rri_train: float32 vs float64 gap of T in the reference 8.6e-06.
+        {"OriginalRriTrainMode",
+         Original(DeepGmrFeatures::kRri),
          40,
          36,
          true,
@@ -312,10 +309,20 @@ TEST(DeepGmrParity, OriginalRriTrainMode) {
           0.0,        0.0,        0.0,        1.0},
          5.850439548492432,
          0.12714052200317383,
-         {{"T12", 0.3823280334472656},
-          {"T21", 0.3862253725528717},
-          {"total", 0.7685533761978149}}});
+         {{"T12", 0.3823280334472656}, {"T21", 0.3862253725528717}, {"total", 0.7685533761978149}}},
+    };
 }
+
+class DeepGmrParity : public ::testing::TestWithParam<DeepGmrParityCase> {};
+
+TEST_P(DeepGmrParity, MatchesThePyTorchReference) { ExpectDeepGmrParity(GetParam()); }
+
+INSTANTIATE_TEST_SUITE_P(Reference,
+                         DeepGmrParity,
+                         ::testing::ValuesIn(ParityCases()),
+                         [](const ::testing::TestParamInfo<DeepGmrParityCase>& info) {
+                             return info.param.name;
+                         });
 
 }  // namespace
 }  // namespace regbench::ogmm

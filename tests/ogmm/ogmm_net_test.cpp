@@ -246,12 +246,17 @@ nlohmann::json SmallConfig() {
     return c;
 }
 
+// A network of SmallConfig() with `patch` merged over it (default weights).
+std::shared_ptr<RegistrationNet> SmallNet(const nlohmann::json& patch) {
+    nlohmann::json config = SmallConfig();
+    if (!patch.is_null()) config.merge_patch(patch);  // a null patch would replace it all
+    return MakeOgmmNet(config);
+}
+
 // Two networks with identical (formula) weights, differing only in `patch`.
 std::pair<std::shared_ptr<RegistrationNet>, std::shared_ptr<RegistrationNet>> TwinNets(
     const nlohmann::json& patch) {
-    nlohmann::json other = SmallConfig();
-    other.merge_patch(patch);
-    auto a = MakeOgmmNet(SmallConfig()), b = MakeOgmmNet(other);
+    auto a = SmallNet({}), b = SmallNet(patch);
     testing::FormulaFill(*a);
     testing::FormulaFill(*b);
     a->eval();
@@ -299,12 +304,9 @@ TEST_F(OgmmNetTest, EachCloudsResultIsIndependentOfTheRestOfTheBatch) {
 }
 
 TEST_F(OgmmNetTest, OverlapOffWeighsEveryPointOneAndDropsTheOverlapLoss) {
-    nlohmann::json config = SmallConfig();
-    config["osp"] = false;
-    auto net = MakeOgmmNet(config);
+    auto net = SmallNet({{"osp", false}});
     const PairBatch pairs = FormulaBatch(2, 40, 36);
-    torch::manual_seed(1);
-    const NetOutput out = net->Forward(pairs);
+    const NetOutput out = SeededForward(*net, pairs, 1);
     EXPECT_TRUE(torch::equal(out.aux.at("overlap_source"), torch::ones({2, 40})));
     const LossTerms terms = net->Loss(pairs, out);
     EXPECT_EQ(terms.count("ovl"), 0u);
@@ -327,12 +329,9 @@ TEST_F(OgmmNetTest, OverlapHeadLearnsOnlyFromTheOverlapLoss) {
     // The GMM fit sees the overlap scores detached, so with w_ovl = 0 the overlap head (proj,
     // CONV3_b, the overlap CONV3) gets no gradient while the backbone does.
     for (const double w_ovl : {0.0, 1.0}) {
-        nlohmann::json config = SmallConfig();
-        config["w_ovl"] = w_ovl;
-        auto net = MakeOgmmNet(config);
+        auto net = SmallNet({{"w_ovl", w_ovl}});
         const PairBatch pairs = FormulaBatch(2, 40, 40);
-        torch::manual_seed(2);
-        const NetOutput out = net->Forward(pairs);
+        const NetOutput out = SeededForward(*net, pairs, 2);
         net->Loss(pairs, out).at("total").backward();
         EXPECT_GT(GradientMass(*net, "dgcnn."), 0.0);
         for (const char* head : {"proj.", "conv3_b.", "conv3_o."}) {
@@ -346,10 +345,9 @@ TEST_F(OgmmNetTest, OverlapHeadLearnsOnlyFromTheOverlapLoss) {
 }
 
 TEST_F(OgmmNetTest, LossRefusesBatchesWithoutGroundTruth) {
-    auto net = MakeOgmmNet(SmallConfig());
+    auto net = SmallNet({});
     PairBatch pairs = FormulaBatch(1, 30, 30);
-    torch::manual_seed(4);
-    const NetOutput out = net->Forward(pairs);
+    const NetOutput out = SeededForward(*net, pairs, 4);
     pairs.source_overlap = torch::Tensor();
     EXPECT_THROW(net->Loss(pairs, out), std::invalid_argument);
     pairs = FormulaBatch(1, 30, 30);
@@ -375,9 +373,7 @@ struct ParityCase {
 // Expected numbers printed by scripts/ogmm_reference.py (independent PyTorch implementation,
 // same formula weights and inputs; torch.manual_seed(7) right before the forward).
 void ExpectParity(const ParityCase& c) {
-    nlohmann::json config = SmallConfig();
-    if (!c.patch.is_null()) config.merge_patch(c.patch);  // a null patch would replace it all
-    auto net = MakeOgmmNet(config);
+    auto net = SmallNet(c.patch);
     testing::FormulaFill(*net);
     net->train(c.train);
     const PairBatch pairs = FormulaBatch(2, c.n, c.m);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/testing/same_pairs.hpp"
 #include "tests/testing/synthetic.hpp"
 
 namespace regbench {
@@ -34,12 +35,9 @@ TEST(PairFile, RoundTripsEveryField) {
     EXPECT_EQ(back.provenance, set.provenance);
     ASSERT_EQ(back.pairs.size(), 2u);
     EXPECT_EQ(CountPairs(path), 2u);
+    testing::ExpectSamePairs(back, set);
     for (std::size_t k = 0; k < 2; ++k) {
-        EXPECT_EQ(back.pairs[k].source, set.pairs[k].source);
-        EXPECT_EQ(back.pairs[k].target, set.pairs[k].target);
-        EXPECT_EQ(back.pairs[k].T_gt, set.pairs[k].T_gt);
-        EXPECT_EQ(back.pairs[k].source_overlap, set.pairs[k].source_overlap);
-        EXPECT_EQ(back.pairs[k].target_overlap, set.pairs[k].target_overlap);
+        SCOPED_TRACE("pair " + std::to_string(k));
         EXPECT_EQ(back.pairs[k].shape, set.pairs[k].shape);
         EXPECT_EQ(back.pairs[k].category, set.pairs[k].category);
         EXPECT_DOUBLE_EQ(back.pairs[k].target_overlap_ratio, set.pairs[k].target_overlap_ratio);

@@ -1,15 +1,14 @@
 // Every hostile pair file is refused with an error naming the file and the problem, before a
 // large allocation; a pair file cannot be written over by a size-limited disk.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstring>
 #include <filesystem>
 
 #include "protocols/pair_file.hpp"
+#include "tests/testing/expect_throw.hpp"
+#include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/hostile_pair_files.hpp"
 
 namespace regbench {
@@ -23,14 +22,7 @@ TEST_P(HostilePairFile, IsRefusedNamingFileAndProblem) {
     const testing::HostileCase& c = GetParam();
     const fs::path path = fs::temp_directory_path() / ("regbench_hostile_" + c.name + ".h5");
     testing::WriteHostile(path.string(), c);
-    try {
-        ReadPairFile(path.string());
-        FAIL() << c.name << " was accepted";
-    } catch (const std::runtime_error& e) {
-        const std::string msg = e.what();
-        EXPECT_NE(msg.find(path.string()), std::string::npos) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
-    }
+    testing::ExpectThrowsWith([&] { ReadPairFile(path.string()); }, path.string(), c.expect);
     fs::remove(path);
 }
 
@@ -63,20 +55,8 @@ TEST(PairFileValidation, FileSizeLimitLeavesNoPairFileAndNoSignal) {
     for (int k = 0; k < 10; ++k) {
         set.pairs.push_back(testing::SyntheticPair(500, k, Transform::Identity()));
     }
-    const pid_t pid = fork();
-    if (pid == 0) {
-        signal(SIGXFSZ, SIG_IGN);
-        rlimit rl{16384, 16384};
-        setrlimit(RLIMIT_FSIZE, &rl);
-        try {
-            WritePairFile(path, set);
-        } catch (const std::runtime_error& e) {
-            _exit(std::strstr(e.what(), path.c_str()) != nullptr ? 3 : 4);
-        }
-        _exit(0);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
+    const int status = testing::RunUnderFileSizeLimit<std::runtime_error>(
+        16384, path, [&] { WritePairFile(path, set); });
     ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
     EXPECT_EQ(WEXITSTATUS(status), 3);
     EXPECT_FALSE(fs::exists(path));
@@ -84,22 +64,14 @@ TEST(PairFileValidation, FileSizeLimitLeavesNoPairFileAndNoSignal) {
     fs::remove_all(dir);
 }
 
-/// `read` must throw std::runtime_error whose message names `path` (fuzz regressions).
-template <class Read>
-void ExpectRefusedNamingFile(const Read& read, const std::string& path) {
-    try {
-        read();
-        ADD_FAILURE() << "fuzz regression accepted: " << path;
-    } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
-    }
-}
+// The fuzz regressions: the read must throw std::runtime_error whose message names the file.
+using testing::ExpectThrowsWith;
 
 TEST(PairFileValidation, FuzzFindingHugeMetadataAllocationIsRefused) {
     // Found by fuzz_pair_file (libFuzzer): a flipped header field makes HDF5 itself ask for a
     // 2^53-byte metadata buffer. The reader must refuse the file by name, not crash.
     const std::string path = "fuzz/corpus/pair_file/regression_hdf5_huge_metadata_alloc.h5";
-    ExpectRefusedNamingFile([&] { ReadPairFile(path); }, path);
+    ExpectThrowsWith([&] { ReadPairFile(path); }, path);
 }
 
 TEST(PairFileValidation, FuzzFindingUseAfterFreeInsideHdf5IsRefused) {
@@ -108,8 +80,8 @@ TEST(PairFileValidation, FuzzFindingUseAfterFreeInsideHdf5IsRefused) {
     // sanitizer build the child's death is what refuses it; in a plain build HDF5 reports an
     // error instead. Either way: an exception naming the file, never a crash of the caller.
     const std::string path = "fuzz/corpus/pair_file/regression_hdf5_use_after_free.h5";
-    ExpectRefusedNamingFile([&] { ReadPairFile(path); }, path);
-    ExpectRefusedNamingFile([&] { CountPairs(path); }, path);
+    ExpectThrowsWith([&] { ReadPairFile(path); }, path);
+    ExpectThrowsWith([&] { CountPairs(path); }, path);
 }
 
 TEST(PairFileValidation, OutputThatIsADirectoryIsRefused) {

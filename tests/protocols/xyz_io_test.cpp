@@ -8,6 +8,7 @@
 #include "protocols/pair_protocols.hpp"
 #include "tests/protocols/test_shapes.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/same_pairs.hpp"
 
 namespace regbench {
 namespace {
@@ -20,15 +21,9 @@ TEST(XyzIo, ExportThenImportRoundTripsExactly) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/0002_gt.txt"));
     const PairSet back = ImportXyzDir(dir, 0.1);
     ASSERT_EQ(back.pairs.size(), 3u);
-    for (std::size_t k = 0; k < 3; ++k) {
-        EXPECT_EQ(back.pairs[k].source, set.pairs[k].source);
-        EXPECT_EQ(back.pairs[k].target, set.pairs[k].target);
-        EXPECT_EQ(back.pairs[k].T_gt, set.pairs[k].T_gt);
-        // Same radius -> same labels as the generator computed.
-        EXPECT_EQ(back.pairs[k].source_overlap, set.pairs[k].source_overlap);
-        EXPECT_EQ(back.pairs[k].target_overlap, set.pairs[k].target_overlap);
-        EXPECT_EQ(back.pairs[k].shape, PairStem(k));
-    }
+    // Same radius -> same overlap labels as the generator computed.
+    testing::ExpectSamePairs(back, set);
+    for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(back.pairs[k].shape, PairStem(k));
     EXPECT_EQ(back.provenance.at("params").at("eta").get<double>(), 0.1);
     std::filesystem::remove_all(dir);
 }

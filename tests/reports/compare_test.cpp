@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "tests/testing/expect_throw.hpp"
+
 namespace regbench {
 namespace {
 
@@ -96,14 +98,11 @@ TEST(Compare, ImprovementIsNotARegression) {
 }
 
 TEST(Compare, MismatchedPairFilesAreRefusedNamingBoth) {
-    try {
-        CompareResults(Baseline("tab1_same.h5"), Baseline("tab1_cross.h5"), CompareOptions{});
-        FAIL() << "expected a refusal";
-    } catch (const std::runtime_error& e) {
-        const std::string msg = e.what();
-        EXPECT_NE(msg.find("tab1_same.h5"), std::string::npos) << msg;
-        EXPECT_NE(msg.find("tab1_cross.h5"), std::string::npos) << msg;
-    }
+    testing::ExpectThrowsWith<std::runtime_error>(
+        [] {
+            CompareResults(Baseline("tab1_same.h5"), Baseline("tab1_cross.h5"), CompareOptions{});
+        },
+        "tab1_same.h5", "tab1_cross.h5");
 }
 
 TEST(Compare, RepeatedRowIsAnError) {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace regbench {
 namespace {
@@ -10,42 +12,61 @@ namespace {
 // Expected values from scipy 1.10.1 (/usr/bin/python3):
 //   scipy.stats.wilcoxon(d, method=...) -> (statistic, pvalue)
 
-TEST(Wilcoxon, ExactMatchesScipyOnTenDifferences) {
-    // wilcoxon(a, method='exact') = (11.0, 0.10546875)
-    const std::vector<double> a = {0.31, -1.2, 2.5, 0.8, -0.05, 1.7, 3.1, -0.6, 0.9, 1.15};
-    const WilcoxonResult r = WilcoxonSignedRank(a);
-    EXPECT_EQ(r.method, WilcoxonMethod::kExact);
-    EXPECT_EQ(r.n, 10u);
-    EXPECT_DOUBLE_EQ(r.statistic, 11.0);
-    EXPECT_NEAR(r.p_value, 0.10546875, 1e-15);
-}
-
-TEST(Wilcoxon, ExactAllPositiveFive) {
-    // wilcoxon([1,2,3,4,5]) = (0.0, 0.0625): 2 * (1 / 2^5).
-    const WilcoxonResult r = WilcoxonSignedRank({1.0, 2.0, 3.0, 4.0, 5.0});
-    EXPECT_DOUBLE_EQ(r.statistic, 0.0);
-    EXPECT_NEAR(r.p_value, 0.0625, 1e-15);
-}
-
-TEST(Wilcoxon, NormalApproximationMatchesScipyOnSixtyWithZeroAndTies) {
-    // b = [((i*37) % 61 - 25) / 10.0 + 0.4 for i in range(60)] (one zero, tied magnitudes);
-    // wilcoxon(b, method='approx') = (431.0, 0.0006104519750996097)
+/// b = [((i*37) % 61 - 25) / 10.0 + 0.4 for i in range(60)]: one zero, tied magnitudes.
+std::vector<double> SixtyWithZeroAndTies() {
     std::vector<double> b;
     for (int i = 0; i < 60; ++i) b.push_back(((i * 37) % 61 - 25) / 10.0 + 0.4);
-    const WilcoxonResult r = WilcoxonSignedRank(b);
-    EXPECT_EQ(r.method, WilcoxonMethod::kNormal);
-    EXPECT_EQ(r.n, 59u);
-    EXPECT_DOUBLE_EQ(r.statistic, 431.0);
-    EXPECT_NEAR(r.p_value, 0.0006104519750996097, 1e-12);
+    return b;
 }
 
-TEST(Wilcoxon, TiesUseTieCorrectedNormal) {
-    // wilcoxon(c, method='approx') = (15.0, 0.05866024364167236)
-    const std::vector<double> c = {1, 1, -1, 2, 2, 2, 3, -3, 0.5, 4, 4, -0.5};
-    const WilcoxonResult r = WilcoxonSignedRank(c);
-    EXPECT_EQ(r.method, WilcoxonMethod::kNormal);
-    EXPECT_DOUBLE_EQ(r.statistic, 15.0);
-    EXPECT_NEAR(r.p_value, 0.05866024364167236, 1e-12);
+struct WilcoxonCase {
+    const char* name;
+    std::vector<double> sample;
+    WilcoxonMethod method;
+    std::size_t n;  ///< nonzero differences
+    double statistic, p_value;
+    double p_tol;
+    const char* source;  ///< where the expected statistic and p-value come from
+};
+
+TEST(Wilcoxon, MatchesScipy) {
+    const WilcoxonCase cases[] = {
+        {"exact on ten differences",
+         {0.31, -1.2, 2.5, 0.8, -0.05, 1.7, 3.1, -0.6, 0.9, 1.15},
+         WilcoxonMethod::kExact,
+         10,
+         11.0,
+         0.10546875,
+         1e-15,
+         "wilcoxon(a, method='exact') = (11.0, 0.10546875)"},
+        {"exact, all five positive",
+         {1.0, 2.0, 3.0, 4.0, 5.0},
+         WilcoxonMethod::kExact,
+         5,
+         0.0,
+         0.0625,
+         1e-15,
+         "wilcoxon([1,2,3,4,5]) = (0.0, 0.0625): 2 * (1 / 2^5)"},
+        {"normal approximation on sixty with a zero and ties", SixtyWithZeroAndTies(),
+         WilcoxonMethod::kNormal, 59, 431.0, 0.0006104519750996097, 1e-12,
+         "wilcoxon(b, method='approx') = (431.0, 0.0006104519750996097)"},
+        {"ties use the tie-corrected normal",
+         {1, 1, -1, 2, 2, 2, 3, -3, 0.5, 4, 4, -0.5},
+         WilcoxonMethod::kNormal,
+         12,
+         15.0,
+         0.05866024364167236,
+         1e-12,
+         "wilcoxon(c, method='approx') = (15.0, 0.05866024364167236)"},
+    };
+    for (const WilcoxonCase& c : cases) {
+        SCOPED_TRACE(std::string(c.name) + "; scipy: " + c.source);
+        const WilcoxonResult r = WilcoxonSignedRank(c.sample);
+        EXPECT_EQ(r.method, c.method);
+        EXPECT_EQ(r.n, c.n);
+        EXPECT_DOUBLE_EQ(r.statistic, c.statistic);
+        EXPECT_NEAR(r.p_value, c.p_value, c.p_tol);
+    }
 }
 
 TEST(Wilcoxon, AllZeroDifferencesGivePOne) {

@@ -1,12 +1,9 @@
 // One writer per output, checked writes and validated --resume.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -18,6 +15,7 @@
 #include "runners/resume.hpp"
 #include "runners/runner.hpp"
 #include "runners/scale_guard.hpp"
+#include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/temp_dir_test.hpp"
@@ -52,12 +50,33 @@ protected:
         o.progress = false;
         return o;
     }
+    /// The lines of the file at `path`.
+    static std::vector<std::string> Lines(const std::string& path) {
+        std::vector<std::string> lines;
+        std::ifstream in(path);
+        for (std::string l; std::getline(in, l);) lines.push_back(l);
+        return lines;
+    }
+    /// Expects the result rows in `path` to be `expected`, row for row, but for the timing and
+    /// machine-load fields, which differ between any two runs.
+    static void ExpectSameRowsButTiming(const std::vector<std::string>& expected,
+                                        const std::string& path) {
+        const std::vector<std::string> actual = Lines(path);
+        ASSERT_EQ(actual.size(), expected.size());
+        for (std::size_t i = 0; i < expected.size(); ++i) {
+            auto a = nlohmann::json::parse(expected[i]);
+            auto b = nlohmann::json::parse(actual[i]);
+            for (const char* key : {"seconds", "cpu_seconds", "machine"}) {
+                a.erase(key);
+                b.erase(key);
+            }
+            EXPECT_EQ(a, b) << "row " << i << " of " << path;
+        }
+    }
     /// Runs `o` to completion and returns its rows as lines.
     std::vector<std::string> FinishedLines(const RunOptions& o) {
         RunBenchmark(o);
-        std::vector<std::string> lines;
-        std::ifstream in(o.out_path);
-        for (std::string l; std::getline(in, l);) lines.push_back(l);
+        std::vector<std::string> lines = Lines(o.out_path);
         fs::remove(o.out_path);
         return lines;
     }
@@ -145,20 +164,7 @@ TEST_F(Reliability, ResumeKeepsValidRowsAndGivesTheUninterruptedResult) {
     // Three finished rows and a torn fourth (a kill mid-write): resumed output is identical
     // to the uninterrupted run except for the timing fields.
     EXPECT_EQ(ResumeWith(o, {full[0], full[3], full[5], full[6].substr(0, 30)}, true), "");
-    std::ifstream in(o.out_path);
-    std::vector<std::string> resumed;
-    for (std::string l; std::getline(in, l);) resumed.push_back(l);
-    ASSERT_EQ(resumed.size(), full.size());
-    for (std::size_t i = 0; i < full.size(); ++i) {
-        auto a = nlohmann::json::parse(full[i]);
-        auto b = nlohmann::json::parse(resumed[i]);
-        // Timing and machine-load fields differ between any two runs.
-        for (const char* key : {"seconds", "cpu_seconds", "machine"}) {
-            a.erase(key);
-            b.erase(key);
-        }
-        EXPECT_EQ(a, b) << i;
-    }
+    ExpectSameRowsButTiming(full, o.out_path);
 }
 
 TEST_F(Reliability, SecondWriterOfOneOutputIsRefusedAndTheFirstResultSurvives) {
@@ -183,21 +189,9 @@ TEST_F(Reliability, OutputThatIsThePairFileIsRefused) {
 
 TEST_F(Reliability, WriteFailureEndsTheRunWithAnErrorAndNoResultFile) {
     const RunOptions o = Options("r.jsonl", pairs_);
-    const pid_t pid = fork();
-    if (pid == 0) {
-        // Rows of this run are ~1 KB: 2 KB lets a row or two through, then EFBIG.
-        signal(SIGXFSZ, SIG_IGN);
-        rlimit rl{2048, 2048};
-        setrlimit(RLIMIT_FSIZE, &rl);
-        try {
-            RunBenchmark(o);
-        } catch (const std::runtime_error& e) {
-            _exit(std::strstr(e.what(), o.out_path.c_str()) != nullptr ? 3 : 4);
-        }
-        _exit(0);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
+    // Rows of this run are ~1 KB: 2 KB lets a row or two through, then EFBIG.
+    const int status = testing::RunUnderFileSizeLimit<std::runtime_error>(2048, o.out_path,
+                                                                          [&] { RunBenchmark(o); });
     ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
     EXPECT_EQ(WEXITSTATUS(status), 3);
     EXPECT_FALSE(fs::exists(o.out_path));
@@ -218,20 +212,7 @@ TEST_F(Reliability, FourShardMergeEqualsOneRunAndIncompleteMergesAreRefused) {
     m.pairs_path = pairs_;
     m.methods = ParseMethodSpecs("identity,icp", {});
     EXPECT_EQ(MergeResults(m), 8u);
-    std::ifstream in(m.out_path);
-    std::vector<std::string> merged;
-    for (std::string l; std::getline(in, l);) merged.push_back(l);
-    ASSERT_EQ(merged.size(), single.size());
-    for (std::size_t i = 0; i < single.size(); ++i) {
-        auto a = nlohmann::json::parse(single[i]);
-        auto b = nlohmann::json::parse(merged[i]);
-        // Timing and machine-load fields differ between any two runs.
-        for (const char* key : {"seconds", "cpu_seconds", "machine"}) {
-            a.erase(key);
-            b.erase(key);
-        }
-        EXPECT_EQ(a, b) << i;
-    }
+    ExpectSameRowsButTiming(single, m.out_path);
     fs::remove(m.out_path);
 
     // A shard missing: the error names the missing rows.

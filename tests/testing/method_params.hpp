@@ -24,4 +24,16 @@ inline void ExpectRejected(const std::string& method,
     }
 }
 
+/// Creating `method` with any one of the values in `bad` must throw std::invalid_argument
+/// naming the parameter in quotes. `bad` maps each parameter to the values to try, e.g.
+/// {"w": [1.0, -0.1]}: one CreateMethod call per value, with only that parameter set; a failure
+/// names the method and the parameters.
+inline void ExpectEachRejected(const std::string& method, const nlohmann::json& bad) {
+    for (const auto& item : bad.items()) {
+        for (const nlohmann::json& value : item.value()) {
+            ExpectRejected(method, {{item.key(), value}}, "'" + item.key() + "'");
+        }
+    }
+}
+
 }  // namespace regbench::testing
