@@ -1,19 +1,17 @@
 #include "baselines/identity.hpp"
 
+#include "baselines/schemas.hpp"
 #include "core/method_spec.hpp"
 
 namespace regbench {
 namespace {
 
-struct IdentityOptions {};
-
-const MethodSpec<IdentityOptions>& Spec() {
-    static const MethodSpec<IdentityOptions> spec{
-        "identity", "no motion (returns I); the floor every method must beat", {}, nullptr, {}};
+const MethodSpec<NoOptions>& Spec() {
+    static const MethodSpec<NoOptions> spec(BaselineSchema("identity"));
     return spec;
 }
 
-AlignResult AlignIdentity(const IdentityOptions&,
+AlignResult AlignIdentity(const NoOptions&,
                           const PointCloud&,
                           const PointCloud&,
                           const AlignContext&) {
