@@ -301,10 +301,7 @@ MStep MaximizationStep(const PointCloud& Y,
     return out;
 }
 
-const MethodSpec<CpdOptions>& Spec() {
-    static const MethodSpec<CpdOptions> spec(BaselineSchema("cpd"));
-    return spec;
-}
+const MethodSpec<CpdOptions>& Spec() { return SpecOf<CpdOptions>(BaselineSchema("cpd")); }
 
 class CpdMethod final : public SpecMethod<CpdOptions> {
 public:

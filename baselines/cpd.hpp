@@ -20,9 +20,8 @@ NLOHMANN_JSON_SERIALIZE_ENUM(CpdSigma2Formula,
                              {{CpdSigma2Formula::kMl, "ml"},
                               {CpdSigma2Formula::kProbreg, "probreg"}})
 
-/// Options of `cpd`: documented, with their defaults and ranges, once in
-/// baselines/cpd.schema.json (`regbench methods cpd` prints it). compat "probreg" presets
-/// update_scale = true and sigma2_formula = probreg; a value given explicitly always wins.
+/// Options of `cpd` (docs, defaults and ranges: baselines/cpd.schema.json). compat "probreg"
+/// presets update_scale = true and sigma2_formula = probreg; explicit values always win.
 struct CpdOptions {
     double w;
     int maxiter;
@@ -37,19 +36,11 @@ struct CpdOptions {
     double cluster_cell_sigmas;
     int cluster_min_points;
 };
-REGBENCH_OPTION_FIELDS(CpdOptions,
-                       w,
-                       maxiter,
-                       tol,
-                       update_scale,
-                       sigma2_formula,
-                       sigma2,
-                       compat,
-                       e_step,
-                       truncation_sigmas,
-                       truncation_min_points,
-                       cluster_cell_sigmas,
+// clang-format off
+REGBENCH_OPTION_FIELDS(CpdOptions, w, maxiter, tol, update_scale, sigma2_formula, sigma2, compat,
+                       e_step, truncation_sigmas, truncation_min_points, cluster_cell_sigmas,
                        cluster_min_points)
+// clang-format on
 
 /// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
 /// clouds' input order, all in double.

@@ -40,28 +40,12 @@ struct FgrOptions {  // documented in baselines/fgr.schema.json (defaults too)
     int seed;
     ScaleRuleMode scale_rule;
 };
-REGBENCH_OPTION_FIELDS(FgrOptions,
-                       voxel_size,
-                       voxel_downsample,
-                       normal_radius_voxels,
-                       normal_max_nn,
-                       fpfh_radius_voxels,
-                       fpfh_max_nn,
-                       max_correspondence_distance_voxels,
-                       division_factor,
-                       use_absolute_scale,
-                       decrease_mu,
-                       iteration_number,
-                       tuple_scale,
-                       maximum_tuple_count,
-                       tuple_test,
-                       seed,
-                       scale_rule)
-
-const MethodSpec<FgrOptions>& Spec() {
-    static const MethodSpec<FgrOptions> spec(BaselineSchema("fgr"));
-    return spec;
-}
+// clang-format off
+REGBENCH_OPTION_FIELDS(FgrOptions, voxel_size, voxel_downsample, normal_radius_voxels, normal_max_nn,
+                       fpfh_radius_voxels, fpfh_max_nn, max_correspondence_distance_voxels,
+                       division_factor, use_absolute_scale, decrease_mu, iteration_number,
+                       tuple_scale, maximum_tuple_count, tuple_test, seed, scale_rule)
+// clang-format on
 
 /// Optional voxel downsampling, then normals (FPFH needs them).
 std::shared_ptr<open3d::geometry::PointCloud> Prepare(const FgrOptions& o,
@@ -134,6 +118,8 @@ AlignResult AlignFgr(const FgrOptions& o,
 
 }  // namespace
 
-MethodInfo FgrMethodInfo() { return MakeMethodInfo(Spec(), AlignFgr); }
+MethodInfo FgrMethodInfo() {
+    return MakeMethodInfo(SpecOf<FgrOptions>(BaselineSchema("fgr")), AlignFgr);
+}
 
 }  // namespace regbench

@@ -455,8 +455,7 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
 namespace {
 
 const MethodSpec<FilterRegOptions>& Spec() {
-    static const MethodSpec<FilterRegOptions> spec(BaselineSchema("filterreg"));
-    return spec;
+    return SpecOf<FilterRegOptions>(BaselineSchema("filterreg"));
 }
 
 }  // namespace

@@ -33,10 +33,9 @@ NLOHMANN_JSON_SERIALIZE_ENUM(FilterRegEstimator,
                              {{FilterRegEstimator::kLattice, "lattice"},
                               {FilterRegEstimator::kExact, "exact"}})
 
-/// Options of `filterreg`: documented, with their defaults and ranges, once in
-/// baselines/filterreg.schema.json (`regbench methods filterreg` prints it). Defaults are
-/// probreg's `registration_filterreg` defaults, except that compat "probreg" switches
-/// update_sigma2 off unless it is given.
+/// Options of `filterreg`, documented in baselines/filterreg.schema.json with their defaults
+/// (probreg's `registration_filterreg` ones, except that compat "probreg" switches
+/// update_sigma2 off unless it is given) and ranges.
 struct FilterRegOptions {
     double sigma2;
     bool update_sigma2;
@@ -49,17 +48,10 @@ struct FilterRegOptions {
     Compat compat;
     int normals_k;
 };
-REGBENCH_OPTION_FIELDS(FilterRegOptions,
-                       sigma2,
-                       update_sigma2,
-                       w,
-                       maxiter,
-                       tol,
-                       min_sigma2,
-                       objective,
-                       estimator,
-                       compat,
-                       normals_k)
+// clang-format off
+REGBENCH_OPTION_FIELDS(FilterRegOptions, sigma2, update_sigma2, w, maxiter, tol, min_sigma2,
+                       objective, estimator, compat, normals_k)
+// clang-format on
 
 /// Parses and validates `filterreg` parameters: unknown keys, wrong types and out-of-range
 /// values throw std::invalid_argument naming the parameter. Applies the compat "none"

@@ -27,15 +27,12 @@ struct GicpOptions {  // documented in baselines/gicp.schema.json (defaults too)
     double translation_gradient_tolerance;
     double rotation_gradient_tolerance;
 };
-REGBENCH_OPTION_FIELDS(GicpOptions,
-                       max_correspondence_distance,
-                       max_iterations,
-                       transformation_epsilon,
-                       rotation_epsilon,
-                       correspondence_randomness,
-                       max_optimizer_iterations,
-                       translation_gradient_tolerance,
+// clang-format off
+REGBENCH_OPTION_FIELDS(GicpOptions, max_correspondence_distance, max_iterations,
+                       transformation_epsilon, rotation_epsilon, correspondence_randomness,
+                       max_optimizer_iterations, translation_gradient_tolerance,
                        rotation_gradient_tolerance)
+// clang-format on
 
 using PclGicp = pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ>;
 
@@ -44,11 +41,6 @@ class CountingGicp final : public PclGicp {
 public:
     int Iterations() const { return nr_iterations_; }
 };
-
-const MethodSpec<GicpOptions>& Spec() {
-    static const MethodSpec<GicpOptions> spec(BaselineSchema("gicp"));
-    return spec;
-}
 
 AlignResult AlignGicp(const GicpOptions& o,
                       const PointCloud& source,
@@ -99,6 +91,8 @@ AlignResult AlignGicp(const GicpOptions& o,
 
 }  // namespace
 
-MethodInfo GicpMethodInfo() { return MakeMethodInfo(Spec(), AlignGicp); }
+MethodInfo GicpMethodInfo() {
+    return MakeMethodInfo(SpecOf<GicpOptions>(BaselineSchema("gicp")), AlignGicp);
+}
 
 }  // namespace regbench

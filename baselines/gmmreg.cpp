@@ -51,31 +51,12 @@ struct GmmRegOptions {  // documented in baselines/gmmreg.schema.json (defaults 
     double cutoff_tolerance;
     double compress_cell_sigmas;
 };
-REGBENCH_OPTION_FIELDS(GmmRegOptions,
-                       compat,
-                       gmm,
-                       n_gmm_components,
-                       gradient,
-                       normalize,
-                       sigma,
-                       use_estimated_sigma,
-                       delta,
-                       outer_iterations,
-                       outer_tol,
-                       maxiter,
-                       gtol,
-                       gmm_max_iter,
-                       gmm_tol,
-                       seed,
-                       kernel_sums,
-                       approx_min_pairs,
-                       cutoff_tolerance,
+// clang-format off
+REGBENCH_OPTION_FIELDS(GmmRegOptions, compat, gmm, n_gmm_components, gradient, normalize, sigma,
+                       use_estimated_sigma, delta, outer_iterations, outer_tol, maxiter, gtol,
+                       gmm_max_iter, gmm_tol, seed, kernel_sums, approx_min_pairs, cutoff_tolerance,
                        compress_cell_sigmas)
-
-const MethodSpec<GmmRegOptions>& Spec() {
-    static const MethodSpec<GmmRegOptions> spec(BaselineSchema("gmmreg"));
-    return spec;
-}
+// clang-format on
 
 /// (mu, phi) of one cloud: sklearn-style spherical GMM or the points themselves.
 MixtureFeatures Features(const GmmRegOptions& options,
@@ -132,6 +113,8 @@ AlignResult AlignGmmReg(const GmmRegOptions& o,
 
 }  // namespace
 
-MethodInfo GmmRegMethodInfo() { return MakeMethodInfo(Spec(), AlignGmmReg); }
+MethodInfo GmmRegMethodInfo() {
+    return MakeMethodInfo(SpecOf<GmmRegOptions>(BaselineSchema("gmmreg")), AlignGmmReg);
+}
 
 }  // namespace regbench

@@ -18,17 +18,10 @@ struct IcpOptions {  // documented in baselines/icp.schema.json (defaults too)
     double relative_rmse;
     ScaleRuleMode scale_rule;
 };
-REGBENCH_OPTION_FIELDS(IcpOptions,
-                       max_correspondence_distance,
-                       max_iterations,
-                       relative_fitness,
-                       relative_rmse,
-                       scale_rule)
-
-const MethodSpec<IcpOptions>& Spec() {
-    static const MethodSpec<IcpOptions> spec(BaselineSchema("icp"));
-    return spec;
-}
+// clang-format off
+REGBENCH_OPTION_FIELDS(IcpOptions, max_correspondence_distance, max_iterations, relative_fitness,
+                       relative_rmse, scale_rule)
+// clang-format on
 
 AlignResult AlignIcp(const IcpOptions& o,
                      const PointCloud& source,
@@ -50,6 +43,8 @@ AlignResult AlignIcp(const IcpOptions& o,
 
 }  // namespace
 
-MethodInfo IcpMethodInfo() { return MakeMethodInfo(Spec(), AlignIcp); }
+MethodInfo IcpMethodInfo() {
+    return MakeMethodInfo(SpecOf<IcpOptions>(BaselineSchema("icp")), AlignIcp);
+}
 
 }  // namespace regbench

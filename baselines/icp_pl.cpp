@@ -19,18 +19,10 @@ struct IcpPlOptions {  // documented in baselines/icp_pl.schema.json (defaults t
     double normal_radius;
     int normal_max_nn;
 };
-REGBENCH_OPTION_FIELDS(IcpPlOptions,
-                       max_correspondence_distance,
-                       max_iterations,
-                       relative_fitness,
-                       relative_rmse,
-                       normal_radius,
-                       normal_max_nn)
-
-const MethodSpec<IcpPlOptions>& Spec() {
-    static const MethodSpec<IcpPlOptions> spec(BaselineSchema("icp_pl"));
-    return spec;
-}
+// clang-format off
+REGBENCH_OPTION_FIELDS(IcpPlOptions, max_correspondence_distance, max_iterations, relative_fitness,
+                       relative_rmse, normal_radius, normal_max_nn)
+// clang-format on
 
 AlignResult AlignIcpPl(const IcpPlOptions& o,
                        const PointCloud& source,
@@ -50,6 +42,8 @@ AlignResult AlignIcpPl(const IcpPlOptions& o,
 
 }  // namespace
 
-MethodInfo IcpPlMethodInfo() { return MakeMethodInfo(Spec(), AlignIcpPl); }
+MethodInfo IcpPlMethodInfo() {
+    return MakeMethodInfo(SpecOf<IcpPlOptions>(BaselineSchema("icp_pl")), AlignIcpPl);
+}
 
 }  // namespace regbench

@@ -6,11 +6,6 @@
 namespace regbench {
 namespace {
 
-const MethodSpec<NoOptions>& Spec() {
-    static const MethodSpec<NoOptions> spec(BaselineSchema("identity"));
-    return spec;
-}
-
 AlignResult AlignIdentity(const NoOptions&,
                           const PointCloud&,
                           const PointCloud&,
@@ -22,6 +17,8 @@ AlignResult AlignIdentity(const NoOptions&,
 
 }  // namespace
 
-MethodInfo IdentityMethodInfo() { return MakeMethodInfo(Spec(), AlignIdentity); }
+MethodInfo IdentityMethodInfo() {
+    return MakeMethodInfo(SpecOf<NoOptions>(BaselineSchema("identity")), AlignIdentity);
+}
 
 }  // namespace regbench

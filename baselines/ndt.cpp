@@ -25,15 +25,11 @@ struct NdtOptions {  // documented in baselines/ndt.schema.json (defaults too)
     double transformation_rotation_epsilon;
     ScaleRuleMode scale_rule;
 };
-REGBENCH_OPTION_FIELDS(NdtOptions,
-                       resolution,
-                       min_points_per_voxel,
-                       step_size,
-                       outlier_ratio,
-                       max_iterations,
-                       transformation_epsilon,
-                       transformation_rotation_epsilon,
+// clang-format off
+REGBENCH_OPTION_FIELDS(NdtOptions, resolution, min_points_per_voxel, step_size, outlier_ratio,
+                       max_iterations, transformation_epsilon, transformation_rotation_epsilon,
                        scale_rule)
+// clang-format on
 
 using PclNdt = pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>;
 
@@ -43,11 +39,6 @@ class CheckedNdt final : public PclNdt {
 public:
     std::size_t TargetCells() { return target_cells_.getCentroids()->size(); }
 };
-
-const MethodSpec<NdtOptions>& Spec() {
-    static const MethodSpec<NdtOptions> spec(BaselineSchema("ndt"));
-    return spec;
-}
 
 AlignResult AlignNdt(const NdtOptions& o,
                      const PointCloud& source,
@@ -96,6 +87,8 @@ AlignResult AlignNdt(const NdtOptions& o,
 
 }  // namespace
 
-MethodInfo NdtMethodInfo() { return MakeMethodInfo(Spec(), AlignNdt); }
+MethodInfo NdtMethodInfo() {
+    return MakeMethodInfo(SpecOf<NdtOptions>(BaselineSchema("ndt")), AlignNdt);
+}
 
 }  // namespace regbench

@@ -50,26 +50,12 @@ struct SvrOptions {  // documented in baselines/svr.schema.json (defaults too)
     double cutoff_tolerance;
     double compress_cell_sigmas;
 };
-REGBENCH_OPTION_FIELDS(SvrOptions,
-                       compat,
-                       nu,
-                       gradient,
-                       normalize,
-                       sigma,
-                       gamma,
-                       use_estimated_sigma,
-                       delta,
-                       gamma_delta,
-                       outer_iterations,
-                       outer_tol,
-                       maxiter,
-                       gtol,
-                       svm_tol,
-                       svm_max_points,
-                       kernel_sums,
-                       approx_min_pairs,
-                       cutoff_tolerance,
-                       compress_cell_sigmas)
+// clang-format off
+REGBENCH_OPTION_FIELDS(SvrOptions, compat, nu, gradient, normalize, sigma, gamma,
+                       use_estimated_sigma, delta, gamma_delta, outer_iterations, outer_tol, maxiter,
+                       gtol, svm_tol, svm_max_points, kernel_sums, approx_min_pairs,
+                       cutoff_tolerance, compress_cell_sigmas)
+// clang-format on
 
 /// A seeded uniform random subset of `max_points` rows (all rows when the cloud is smaller),
 /// in increasing row order.
@@ -112,11 +98,6 @@ MixtureFeatures SvmFeatures(const PointCloud& full,
     const double rescale = static_cast<double>(full.rows()) / static_cast<double>(P.rows());
     f.weights = rescale * svm.alpha * std::pow(2.0 * kPi * phi_sigma * phi_sigma, 1.5);
     return f;
-}
-
-const MethodSpec<SvrOptions>& Spec() {
-    static const MethodSpec<SvrOptions> spec(BaselineSchema("svr"));
-    return spec;
 }
 
 AlignResult AlignSvr(const SvrOptions& o,
@@ -223,6 +204,8 @@ OneClassSvm FitOneClassSvm(const PointCloud& X, double nu, double gamma, double 
     return out;
 }
 
-MethodInfo SvrMethodInfo() { return MakeMethodInfo(Spec(), AlignSvr); }
+MethodInfo SvrMethodInfo() {
+    return MakeMethodInfo(SpecOf<SvrOptions>(BaselineSchema("svr")), AlignSvr);
+}
 
 }  // namespace regbench

@@ -170,6 +170,16 @@ private:
     }
 };
 
+/// The MethodSpec of `Options`, built from `schema_text` (and `validate`) on the first call and
+/// kept for the program's life (instances refer to it): a function-local static per options
+/// struct, so each method's struct must be its own type.
+template <class Options>
+const MethodSpec<Options>& SpecOf(const char* schema_text,
+                                  std::function<void(const Options&)> validate = nullptr) {
+    static const MethodSpec<Options> spec(schema_text, std::move(validate));
+    return spec;
+}
+
 /// MethodInfo without `create`: name, summary, docs, defaults and schema from the spec.
 template <class Options>
 MethodInfo DescribeMethod(const MethodSpec<Options>& spec) {
