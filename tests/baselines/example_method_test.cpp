@@ -56,12 +56,6 @@ struct CentroidOptions {  // documented in baselines/centroid.schema.json (defau
 };
 REGBENCH_OPTION_FIELDS(CentroidOptions, centre, step)
 
-const MethodSpec<CentroidOptions>& Spec() {
-    // Checks across parameters, if any, go in a second argument: a validate function.
-    static const MethodSpec<CentroidOptions> spec(BaselineSchema("centroid"));
-    return spec;
-}
-
 Eigen::Vector3d Centre3(const PointCloud& p, Centre how) {
     if (how == Centre::kMean) return p.colwise().mean().transpose();
     Eigen::Vector3d c;
@@ -84,7 +78,11 @@ AlignResult AlignCentroid(const CentroidOptions& o,
     return r;
 }
 
-MethodInfo CentroidMethodInfo() { return MakeMethodInfo(Spec(), AlignCentroid); }
+MethodInfo CentroidMethodInfo() {
+    // SpecOf builds the MethodSpec once; checks across parameters, if any, would be its second
+    // argument, a validate function.
+    return MakeMethodInfo(SpecOf<CentroidOptions>(BaselineSchema("centroid")), AlignCentroid);
+}
 // EXAMPLE END
 
 /// Four points whose mean (1.5, 0, 0) and upper median (2, 0, 0) differ: x = 0, 1, 2, 3.
