@@ -47,8 +47,13 @@ bool HasType(const nlohmann::json& value, const std::string& type) {
 ParamSchema::ParamSchema(const char* text) {
     // ordered_json keeps the file's order of properties and of range keywords, which is the
     // order errors are reported in.
-    const auto doc = nlohmann::ordered_json::parse(text);
-    document_ = nlohmann::json::parse(text);
+    nlohmann::ordered_json doc;
+    try {
+        doc = nlohmann::ordered_json::parse(text);
+        document_ = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw std::logic_error(std::string("parameter schema is not JSON: ") + e.what());
+    }
     const std::string where = "parameter schema '" + doc.value("title", std::string("?")) + "'";
     auto fail = [&where](const std::string& why) { throw std::logic_error(where + ": " + why); };
     static const std::set<std::string> kTopKeys = {
