@@ -1,4 +1,5 @@
-// `regbench methods`: every registered method with its parameters and defaults.
+// `regbench methods`: every registered method with its parameters and defaults (--json adds
+// each method's parameter schema, for editors that validate configs).
 #include <iostream>
 
 #include "app/commands.hpp"
@@ -17,7 +18,8 @@ void SetupMethodsCommand(CLI::App* cmd) {
                 out.push_back({{"name", m.name},
                                {"summary", m.summary},
                                {"defaults", m.defaults},
-                               {"param_docs", m.param_docs}});
+                               {"param_docs", m.param_docs},
+                               {"schema", m.schema}});
             }
             std::cout << out.dump(2) << "\n";
             return;

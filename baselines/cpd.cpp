@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "baselines/schemas.hpp"
 #include "core/kabsch.hpp"
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
@@ -110,9 +111,9 @@ void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
                 const Eigen::Index block = std::min(kBlock, j1 - j0);
                 for (Eigen::Index t = 0; t < block; ++t) {
                     const Eigen::Index j = j0 + t;
-                    const double sum = KernelRow(
-                        source_points, scale * Eigen::Vector3f(tx[j], ty[j], tz[j]),
-                        columns.data() + t * m_pad);
+                    const double sum =
+                        KernelRow(source_points, scale * Eigen::Vector3f(tx[j], ty[j], tz[j]),
+                                  columns.data() + t * m_pad);
                     const double den = sum == 0.0 ? kDenFloor : sum;
                     const double inv = 1.0 / (den + c);
                     inv_den_[static_cast<size_t>(j)] = static_cast<float>(inv);
@@ -250,7 +251,6 @@ void CpdEStep::Compute(const Transform& T, double sigma2, double c, CpdPosterior
 
 namespace {
 
-constexpr const char* kName = "cpd";
 constexpr int kDim = 3;
 /// probreg's floor for sigma^2 (np.finfo(np.float32).eps): keeps ln(sigma^2) and 1/sigma^2
 /// finite once a clean pair has converged exactly.
@@ -301,61 +301,7 @@ MStep MaximizationStep(const PointCloud& Y,
     return out;
 }
 
-const MethodSpec<CpdOptions>& Spec() {
-    using O = CpdOptions;
-    static const MethodSpec<CpdOptions> spec{
-        kName,
-        "rigid Coherent Point Drift (Myronenko & Song 2010) per probreg 0.3.7; fused float "
-        "SIMD E-step (kd-leaf pruning, optional 4-sigma truncation), double M-step",
-        {
-            Param("w", &O::w,
-                  "weight of the uniform outlier component, in [0, 1); probreg default 0")
-                .AtLeast(0.0)
-                .Below(1.0),
-            Param("maxiter", &O::maxiter, "maximum EM iterations (>= 1); probreg 50").AtLeast(1),
-            Param("tol", &O::tol,
-                  "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3")
-                .AtLeast(0.0)
-                .Finite(),
-            Param("update_scale", &O::update_scale,
-                  "estimate a scale s (similarity transform); default false, true under "
-                  "compat=probreg"),
-            Param(
-                "sigma2_formula", &O::sigma2_formula,
-                "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without "
-                "scale (probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg"),
-            Param("sigma2", &O::sigma2, "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg")
-                .AtLeast(0.0)
-                .Finite(),
-            Param("compat", &O::compat,
-                  "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's "
-                  "sigma^2 formula unless those are given explicitly)"),
-            Param("e_step", &O::e_step,
-                  "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), "
-                  "\"dense\" (exact up "
-                  "to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)"),
-            Param("truncation_sigmas", &O::truncation_sigmas,
-                  "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4")
-                .Greater(0.0)
-                .Finite(),
-            Param("truncation_min_points", &O::truncation_min_points,
-                  "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox "
-                  "diagonal")
-                .AtLeast(0),
-            Param("cluster_cell_sigmas", &O::cluster_cell_sigmas,
-                  "auto, at scale: while a cloud has under half as many cells of edge "
-                  "cluster_cell_sigmas * sigma as points, each E-step pass sums over its cells' "
-                  "weighted centroids (docs/performance.md: accuracy cost); 0 = never")
-                .AtLeast(0.0)
-                .AtMost(1.0),
-            Param("cluster_min_points", &O::cluster_min_points,
-                  "auto: compress only if max(M, N) >= this")
-                .AtLeast(0),
-        },
-        nullptr,
-        {{"probreg", {{"update_scale", true}, {"sigma2_formula", "probreg"}}}}};
-    return spec;
-}
+const MethodSpec<CpdOptions>& Spec() { return SpecOf<CpdOptions>(BaselineSchema("cpd")); }
 
 class CpdMethod final : public SpecMethod<CpdOptions> {
 public:

@@ -20,23 +20,27 @@ NLOHMANN_JSON_SERIALIZE_ENUM(CpdSigma2Formula,
                              {{CpdSigma2Formula::kMl, "ml"},
                               {CpdSigma2Formula::kProbreg, "probreg"}})
 
-/// Options of `cpd`, each documented once in the parameter table of baselines/cpd.cpp
-/// (`regbench methods cpd` prints it). compat "probreg" presets update_scale = true and
-/// sigma2_formula = probreg; a value given explicitly always wins over the preset.
+/// Options of `cpd` (docs, defaults and ranges: baselines/cpd.schema.json). compat "probreg"
+/// presets update_scale = true and sigma2_formula = probreg; explicit values always win.
 struct CpdOptions {
-    double w = 0.0;
-    int maxiter = 50;
-    double tol = 1e-3;
-    bool update_scale = false;
-    CpdSigma2Formula sigma2_formula = CpdSigma2Formula::kMl;
-    double sigma2 = 0.0;
-    Compat compat = Compat::kNone;
-    GaussSumMode e_step = GaussSumMode::kAuto;
-    double truncation_sigmas = 4.0;
-    int truncation_min_points = 20000;
-    double cluster_cell_sigmas = 0.25;
-    int cluster_min_points = 20000;
+    double w;
+    int maxiter;
+    double tol;
+    bool update_scale;
+    CpdSigma2Formula sigma2_formula;
+    double sigma2;
+    Compat compat;
+    GaussSumMode e_step;
+    double truncation_sigmas;
+    int truncation_min_points;
+    double cluster_cell_sigmas;
+    int cluster_min_points;
 };
+// clang-format off
+REGBENCH_OPTION_FIELDS(CpdOptions, w, maxiter, tol, update_scale, sigma2_formula, sigma2, compat,
+                       e_step, truncation_sigmas, truncation_min_points, cluster_cell_sigmas,
+                       cluster_min_points)
+// clang-format on
 
 /// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
 /// clouds' input order, all in double.
@@ -93,10 +97,10 @@ private:
     BlockedCloud source_;
     BlockedCloud target_blocked_;
     KernelSumResult pass1_, pass2_;
-    std::vector<float> inv_den_;  ///< target stored order
-    std::vector<float> partial_;  ///< fused path: float p1/PX accumulators per target chunk
+    std::vector<float> inv_den_;        ///< target stored order
+    std::vector<float> partial_;        ///< fused path: float p1/PX accumulators per target chunk
     std::vector<float> scaled_source_;  ///< fused path: source x, y, z * KernelRowScale, padded
-    std::vector<double> totals_;  ///< fused path: the chunks' sum, p1 then PX's x, y, z
+    std::vector<double> totals_;        ///< fused path: the chunks' sum, p1 then PX's x, y, z
 };
 
 /// Parses and validates CPD options, applying the compat preset to keys absent from `j`.

@@ -12,6 +12,7 @@
 #include <mutex>
 
 #include "baselines/open3d_adapter.hpp"
+#include "baselines/schemas.hpp"
 #include "core/method_spec.hpp"
 #include "core/rng.hpp"
 #include "core/scale_rule.hpp"
@@ -19,91 +20,32 @@
 namespace regbench {
 namespace {
 
-constexpr const char* kName = "fgr";
-
 /// Radii follow the Open3D tutorial (and the OGMM repo's unused FPFH helper) as multiples of
 /// one voxel size; the FGR solver settings are Open3D's Python defaults.
-struct FgrOptions {  // each member documented once, in Spec()
-    double voxel_size = 0.05;
-    bool voxel_downsample = false;
-    double normal_radius_voxels = 2.0;
-    int normal_max_nn = 30;
-    double fpfh_radius_voxels = 5.0;
-    int fpfh_max_nn = 100;
-    double max_correspondence_distance_voxels = 0.5;
-    double division_factor = 1.4;
-    bool use_absolute_scale = false;
-    bool decrease_mu = false;
-    int iteration_number = 64;
-    double tuple_scale = 0.95;
-    int maximum_tuple_count = 1000;
-    bool tuple_test = true;
-    int seed = 0;
-    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;
+struct FgrOptions {  // documented in baselines/fgr.schema.json (defaults too)
+    double voxel_size;
+    bool voxel_downsample;
+    double normal_radius_voxels;
+    int normal_max_nn;
+    double fpfh_radius_voxels;
+    int fpfh_max_nn;
+    double max_correspondence_distance_voxels;
+    double division_factor;
+    bool use_absolute_scale;
+    bool decrease_mu;
+    int iteration_number;
+    double tuple_scale;
+    int maximum_tuple_count;
+    bool tuple_test;
+    int seed;
+    ScaleRuleMode scale_rule;
 };
-
-const MethodSpec<FgrOptions>& Spec() {
-    static const MethodSpec<FgrOptions> spec{
-        kName,
-        "Fast Global Registration on FPFH features (Open3D ComputeFPFHFeature + "
-        "FastGlobalRegistrationBasedOnFeatureMatching), Open3D tutorial radii",
-        {
-            Param("voxel_size", &FgrOptions::voxel_size,
-                  "base length for the radii below [unit-sphere units], > 0; 0.05 ~ the sample "
-                  "spacing sqrt(area / 1024) of a unit-sphere object, so FPFH (0.25) sees 50-100 "
-                  "neighbours")
-                .Greater(0.0),
-            Param("voxel_downsample", &FgrOptions::voxel_downsample,
-                  "voxel-downsample both clouds first (tutorial step for dense scans); false: 717 "
-                  "points are already at ~voxel spacing"),
-            Param("normal_radius_voxels", &FgrOptions::normal_radius_voxels,
-                  "normal radius in voxels, > 0; 2 = Open3D tutorial / OGMM helper")
-                .Greater(0.0),
-            Param("normal_max_nn", &FgrOptions::normal_max_nn,
-                  "neighbour cap per normal, >= 3; 30 = Open3D tutorial / OGMM helper")
-                .AtLeast(3),
-            Param("fpfh_radius_voxels", &FgrOptions::fpfh_radius_voxels,
-                  "FPFH radius in voxels, > 0; 5 = Open3D tutorial / OGMM helper")
-                .Greater(0.0),
-            Param("fpfh_max_nn", &FgrOptions::fpfh_max_nn,
-                  "neighbour cap per FPFH, >= 1; 100 = Open3D tutorial / OGMM helper")
-                .AtLeast(1),
-            Param("max_correspondence_distance_voxels",
-                  &FgrOptions::max_correspondence_distance_voxels,
-                  "FGR max correspondence distance in voxels (used for the mu floor when "
-                  "decrease_mu and for the reported fitness), > 0; 0.5 = Open3D tutorial")
-                .Greater(0.0),
-            Param("division_factor", &FgrOptions::division_factor,
-                  "graduated non-convexity divisor of mu, > 1; 1.4 = Open3D default")
-                .Greater(1.0),
-            Param("use_absolute_scale", &FgrOptions::use_absolute_scale,
-                  "measure distances absolutely instead of relative to the object size; false = "
-                  "Open3D default"),
-            Param("decrease_mu", &FgrOptions::decrease_mu,
-                  "anneal mu by division_factor every 4 iterations; false = Open3D Python default"),
-            Param("iteration_number", &FgrOptions::iteration_number,
-                  "number of FGR iterations (fixed), >= 1; 64 = Open3D default")
-                .AtLeast(1),
-            Param("tuple_scale", &FgrOptions::tuple_scale,
-                  "tuple-test edge-length ratio, in (0, 1); 0.95 = Open3D default")
-                .Greater(0.0)
-                .Below(1.0),
-            Param("maximum_tuple_count", &FgrOptions::maximum_tuple_count,
-                  "tuples kept at most, >= 1; 1000 = Open3D default")
-                .AtLeast(1),
-            Param("tuple_test", &FgrOptions::tuple_test,
-                  "run the tuple (geometric consistency) test; true = Open3D default"),
-            Param("seed", &FgrOptions::seed,
-                  "seed for Open3D's global RNG, set right before each call (tuple sampling); 0"),
-            Param("scale_rule", &FgrOptions::scale_rule,
-                  "\"auto\": voxel_size scaled by the pair's unit (RMS radius / 0.6 when outside "
-                  "[0.5, 2], else 1) and voxel downsampling when a cloud has > 2048 points "
-                  "(docs/performance.md); used values in extra.resolved; \"preset\": as given"),
-        },
-        nullptr,
-        {}};
-    return spec;
-}
+// clang-format off
+REGBENCH_OPTION_FIELDS(FgrOptions, voxel_size, voxel_downsample, normal_radius_voxels, normal_max_nn,
+                       fpfh_radius_voxels, fpfh_max_nn, max_correspondence_distance_voxels,
+                       division_factor, use_absolute_scale, decrease_mu, iteration_number,
+                       tuple_scale, maximum_tuple_count, tuple_test, seed, scale_rule)
+// clang-format on
 
 /// Optional voxel downsampling, then normals (FPFH needs them).
 std::shared_ptr<open3d::geometry::PointCloud> Prepare(const FgrOptions& o,
@@ -162,21 +104,22 @@ AlignResult AlignFgr(const FgrOptions& o,
     result.T_target_source = reg.transformation_;
     result.iterations = o.iteration_number;  // FGR runs a fixed number
     result.stop_reason = "max_iterations";
-    result.extra = {{"fitness", reg.fitness_},
-                    {"inlier_rmse", reg.inlier_rmse_},
-                    {"correspondences", reg.correspondence_set_.size()},
-                    {"source_points_used", source_o3d->points_.size()},
-                    {"target_points_used", target_o3d->points_.size()},
-                    {"resolved",
-                     {{"voxel_size", voxel},
-                      {"voxel_downsample", downsample},
-                      {"scale_rule", rule.ToJson()}}},
-                    {kExcludedSecondsKey, waited}};
+    result.extra = {
+        {"fitness", reg.fitness_},
+        {"inlier_rmse", reg.inlier_rmse_},
+        {"correspondences", reg.correspondence_set_.size()},
+        {"source_points_used", source_o3d->points_.size()},
+        {"target_points_used", target_o3d->points_.size()},
+        {"resolved",
+         {{"voxel_size", voxel}, {"voxel_downsample", downsample}, {"scale_rule", rule.ToJson()}}},
+        {kExcludedSecondsKey, waited}};
     return result;
 }
 
 }  // namespace
 
-MethodInfo FgrMethodInfo() { return MakeMethodInfo(Spec(), AlignFgr); }
+MethodInfo FgrMethodInfo() {
+    return MakeMethodInfo(SpecOf<FgrOptions>(BaselineSchema("fgr")), AlignFgr);
+}
 
 }  // namespace regbench

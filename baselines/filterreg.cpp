@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "baselines/schemas.hpp"
 #include "core/kabsch.hpp"
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
@@ -454,55 +455,7 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
 namespace {
 
 const MethodSpec<FilterRegOptions>& Spec() {
-    static const MethodSpec<FilterRegOptions> spec{
-        kName,
-        "FilterReg (Gao & Tedrake 2019) as probreg's registration_filterreg: permutohedral-lattice "
-        "E-step, weighted Kabsch (pt2pt) or twist (pt2pl) M-step; regbench C++",
-        {
-            Param("sigma2", &FilterRegOptions::sigma2,
-                  "initial kernel variance [length^2]; 0 or null = max(sqsum(Y,X), min_sigma2) "
-                  "(probreg)")
-                .Finite()
-                .AtLeast(0.0),
-            Param("update_sigma2", &FilterRegOptions::update_sigma2,
-                  "re-estimate sigma2 in every M-step; default true; false under compat = "
-                  "\"probreg\" unless given (probreg keeps sigma fixed)"),
-            Param("w", &FilterRegOptions::w,
-                  "weight of the uniform outlier component, in [0, 1); probreg default 0")
-                .AtLeast(0.0)
-                .Below(1.0),
-            Param("maxiter", &FilterRegOptions::maxiter,
-                  "maximum EM iterations (>= 1); probreg default 50")
-                .AtLeast(1),
-            Param("tol", &FilterRegOptions::tol,
-                  "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3")
-                .Finite()
-                .AtLeast(0.0),
-            Param("min_sigma2", &FilterRegOptions::min_sigma2,
-                  "floor on sigma2 after each iteration and on the auto init (> 0); 1e-4")
-                .Finite()
-                .Greater(0.0),
-            Param("objective", &FilterRegOptions::objective,
-                  "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton "
-                  "on filtered target normals, normals by PCA of normals_k neighbours; give a "
-                  "small sigma2, e.g. 0.01 as probreg's example: from sqsum its undamped steps can "
-                  "flip the cloud)"),
-            Param("estimator", &FilterRegOptions::estimator,
-                  "\"lattice\": permutohedral lattice, blurred only while <= 0.015 N vertices "
-                  "(probreg); \"exact\": Gaussian sums within 3 sigma (kd-tree), not "
-                  "probreg-equivalent"),
-            Param("compat", &FilterRegOptions::compat,
-                  "\"none\" (default): consistent w_i^2 weights and update_sigma2 on unless given; "
-                  "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by "
-                  "w_i, sigma fixed"),
-            Param("normals_k", &FilterRegOptions::normals_k,
-                  "pt2pl only: neighbours for the target's PCA normals (>= 3); 30")
-                .AtLeast(3),
-        },
-        nullptr,
-        // compat "probreg" keeps sigma fixed unless update_sigma2 is given.
-        {{"probreg", {{"update_sigma2", false}}}}};
-    return spec;
+    return SpecOf<FilterRegOptions>(BaselineSchema("filterreg"));
 }
 
 }  // namespace

@@ -33,22 +33,25 @@ NLOHMANN_JSON_SERIALIZE_ENUM(FilterRegEstimator,
                              {{FilterRegEstimator::kLattice, "lattice"},
                               {FilterRegEstimator::kExact, "exact"}})
 
-/// Options of `filterreg`, each documented once in the parameter table of
-/// baselines/filterreg.cpp (`regbench methods filterreg` prints it). Defaults are probreg's
-/// `registration_filterreg` defaults, except that compat "probreg" switches update_sigma2 off
-/// unless it is given.
+/// Options of `filterreg`, documented in baselines/filterreg.schema.json with their defaults
+/// (probreg's `registration_filterreg` ones, except that compat "probreg" switches
+/// update_sigma2 off unless it is given) and ranges.
 struct FilterRegOptions {
-    double sigma2 = 0.0;
-    bool update_sigma2 = true;
-    double w = 0.0;
-    int maxiter = 50;
-    double tol = 1e-3;
-    double min_sigma2 = 1e-4;
-    FilterRegObjective objective = FilterRegObjective::kPt2Pt;
-    FilterRegEstimator estimator = FilterRegEstimator::kLattice;
-    Compat compat = Compat::kNone;
-    int normals_k = 30;
+    double sigma2;
+    bool update_sigma2;
+    double w;
+    int maxiter;
+    double tol;
+    double min_sigma2;
+    FilterRegObjective objective;
+    FilterRegEstimator estimator;
+    Compat compat;
+    int normals_k;
 };
+// clang-format off
+REGBENCH_OPTION_FIELDS(FilterRegOptions, sigma2, update_sigma2, w, maxiter, tol, min_sigma2,
+                       objective, estimator, compat, normals_k)
+// clang-format on
 
 /// Parses and validates `filterreg` parameters: unknown keys, wrong types and out-of-range
 /// values throw std::invalid_argument naming the parameter. Applies the compat "none"

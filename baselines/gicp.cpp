@@ -11,23 +11,28 @@
 #include <string>
 
 #include "baselines/pcl_adapter.hpp"
+#include "baselines/schemas.hpp"
 #include "core/method_spec.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr const char* kName = "gicp";
-
-struct GicpOptions {  // each member documented once, in Spec()
-    double max_correspondence_distance = 1.0;
-    int max_iterations = 200;
-    double transformation_epsilon = 5e-4;
-    double rotation_epsilon = 2e-3;
-    int correspondence_randomness = 20;
-    int max_optimizer_iterations = 20;
-    double translation_gradient_tolerance = 1e-2;
-    double rotation_gradient_tolerance = 1e-2;
+struct GicpOptions {  // documented in baselines/gicp.schema.json (defaults too)
+    double max_correspondence_distance;
+    int max_iterations;
+    double transformation_epsilon;
+    double rotation_epsilon;
+    int correspondence_randomness;
+    int max_optimizer_iterations;
+    double translation_gradient_tolerance;
+    double rotation_gradient_tolerance;
 };
+// clang-format off
+REGBENCH_OPTION_FIELDS(GicpOptions, max_correspondence_distance, max_iterations,
+                       transformation_epsilon, rotation_epsilon, correspondence_randomness,
+                       max_optimizer_iterations, translation_gradient_tolerance,
+                       rotation_gradient_tolerance)
+// clang-format on
 
 using PclGicp = pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ>;
 
@@ -36,45 +41,6 @@ class CountingGicp final : public PclGicp {
 public:
     int Iterations() const { return nr_iterations_; }
 };
-
-const MethodSpec<GicpOptions>& Spec() {
-    static const MethodSpec<GicpOptions> spec{
-        kName,
-        "Generalized-ICP from the identity (PCL GeneralizedIterativeClosestPoint, float32)",
-        {
-            Param("max_correspondence_distance", &GicpOptions::max_correspondence_distance,
-                  "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp` (covers "
-                  "the protocols' motions from the identity)")
-                .Greater(0.0),
-            Param("max_iterations", &GicpOptions::max_iterations,
-                  "outer iteration cap, >= 1; 200 = PCL default")
-                .AtLeast(1),
-            Param("transformation_epsilon", &GicpOptions::transformation_epsilon,
-                  "stop when every translation entry changes less than this, > 0; 5e-4 = PCL "
-                  "default (0.05% of the object radius)")
-                .Greater(0.0),
-            Param("rotation_epsilon", &GicpOptions::rotation_epsilon,
-                  "stop when every rotation-matrix entry changes less than this, > 0; 2e-3 = PCL "
-                  "default")
-                .Greater(0.0),
-            Param("correspondence_randomness", &GicpOptions::correspondence_randomness,
-                  "k nearest neighbours per point covariance, >= 3 (clouds need >= k points); 20 = "
-                  "PCL default (Segal et al.)")
-                .AtLeast(3),
-            Param("max_optimizer_iterations", &GicpOptions::max_optimizer_iterations,
-                  "BFGS iterations per outer step, >= 1; 20 = PCL default")
-                .AtLeast(1),
-            Param("translation_gradient_tolerance", &GicpOptions::translation_gradient_tolerance,
-                  "BFGS translation gradient stop, > 0; 1e-2 = PCL")
-                .Greater(0.0),
-            Param("rotation_gradient_tolerance", &GicpOptions::rotation_gradient_tolerance,
-                  "BFGS rotation gradient stop, > 0; 1e-2 = PCL")
-                .Greater(0.0),
-        },
-        nullptr,
-        {}};
-    return spec;
-}
 
 AlignResult AlignGicp(const GicpOptions& o,
                       const PointCloud& source,
@@ -125,6 +91,8 @@ AlignResult AlignGicp(const GicpOptions& o,
 
 }  // namespace
 
-MethodInfo GicpMethodInfo() { return MakeMethodInfo(Spec(), AlignGicp); }
+MethodInfo GicpMethodInfo() {
+    return MakeMethodInfo(SpecOf<GicpOptions>(BaselineSchema("gicp")), AlignGicp);
+}
 
 }  // namespace regbench

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "baselines/schemas.hpp"
 #include "core/method_spec.hpp"
 #include "core/rng.hpp"
 #include "gmm/bfgs.hpp"
@@ -29,108 +30,33 @@ enum class GmmFeatures {
 NLOHMANN_JSON_SERIALIZE_ENUM(GmmFeatures,
                              {{GmmFeatures::kSklearn, "sklearn"}, {GmmFeatures::kPoints, "points"}})
 
-struct GmmRegOptions {  // each member documented once, in Spec()
-    Compat compat = Compat::kNone;
-    GmmFeatures gmm = GmmFeatures::kPoints;
-    int n_gmm_components = 800;
-    L2Gradient gradient = L2Gradient::kExact;
-    bool normalize = true;
-    double sigma = 1.0;
-    bool use_estimated_sigma = true;
-    double delta = 0.9;
-    int outer_iterations = 1;
-    double outer_tol = 1e-3;
-    int maxiter = 200;
-    double gtol = 1e-6;
-    int gmm_max_iter = 100;
-    double gmm_tol = 1e-3;
-    int seed = 0;
-    L2KernelSums kernel_sums = L2KernelSums::kAuto;
-    double approx_min_pairs = 1e8;
-    double cutoff_tolerance = 1e-4;
-    double compress_cell_sigmas = 0.1;
+struct GmmRegOptions {  // documented in baselines/gmmreg.schema.json (defaults too)
+    Compat compat;
+    GmmFeatures gmm;
+    int n_gmm_components;
+    L2Gradient gradient;
+    bool normalize;
+    double sigma;
+    bool use_estimated_sigma;
+    double delta;
+    int outer_iterations;
+    double outer_tol;
+    int maxiter;
+    double gtol;
+    int gmm_max_iter;
+    double gmm_tol;
+    int seed;
+    L2KernelSums kernel_sums;
+    double approx_min_pairs;
+    double cutoff_tolerance;
+    double compress_cell_sigmas;
 };
-
-const MethodSpec<GmmRegOptions>& Spec() {
-    static const MethodSpec<GmmRegOptions> spec{
-        kName,
-        "GMMReg rigid as probreg runs it: spherical GMM features (k-means++/EM, seeded), L2 "
-        "cost, scipy-like BFGS (More-Thuente); exact Gauss sums instead of IFGT (approximated at "
-        "scale)",
-        {
-            Param("compat", &GmmRegOptions::compat,
-                  "\"none\" (default, the correct algorithm: defaults become gmm=points, "
-                  "gradient=exact, normalize=true, gtol=1e-6, maxiter=200) or \"probreg\" (probreg "
-                  "v0.3.7 behaviour); explicit keys win"),
-            Param("gmm", &GmmRegOptions::gmm,
-                  "features: \"sklearn\" = GaussianMixture(K, spherical) means/weights (probreg), "
-                  "\"points\" = every point with weight 1/N (Jian & Vemuri, faster)"),
-            Param("n_gmm_components", &GmmRegOptions::n_gmm_components,
-                  "GMM components; K = min(this, floor(0.8 M)) from the source size M")
-                .AtLeast(1),
-            Param("gradient", &GmmRegOptions::gradient,
-                  "\"probreg_half\" = probreg's gradient (exactly 1/2 of the true one), \"exact\""),
-            Param("normalize", &GmmRegOptions::normalize,
-                  "optimise with both clouds centred and divided by sigma (unit-free gtol); "
-                  "probreg: false"),
-            Param("sigma", &GmmRegOptions::sigma,
-                  "kernel bandwidth [input units], used only if use_estimated_sigma is false")
-                .Greater(0.0)
-                .Finite(),
-            Param("use_estimated_sigma", &GmmRegOptions::use_estimated_sigma,
-                  "sigma = det(cov(source))^(1/6) (probreg default true)"),
-            Param("delta", &GmmRegOptions::delta,
-                  "sigma *= delta after each outer iteration, in (0, 1] (probreg 0.9)")
-                .Greater(0.0)
-                .AtMost(1.0),
-            Param("outer_iterations", &GmmRegOptions::outer_iterations,
-                  "BFGS runs on a coarse-to-fine sigma schedule; probreg's gmmreg always runs 1")
-                .AtLeast(1),
-            Param("outer_tol", &GmmRegOptions::outer_tol,
-                  "stop the schedule when |f - f_prev| < outer_tol (probreg 1e-3)")
-                .AtLeast(0.0),
-            Param("maxiter", &GmmRegOptions::maxiter,
-                  "BFGS iterations per run (probreg opt_maxiter 50)")
-                .AtLeast(0),
-            Param("gtol", &GmmRegOptions::gtol,
-                  "BFGS stops when |grad|_inf <= gtol (probreg tol 1e-3, absolute)")
-                .AtLeast(0.0),
-            Param("gmm_max_iter", &GmmRegOptions::gmm_max_iter,
-                  "EM iterations of each GMM fit (sklearn 100)")
-                .AtLeast(1),
-            Param("gmm_tol", &GmmRegOptions::gmm_tol,
-                  "EM stops when the mean log-likelihood changes by < gmm_tol (sklearn 1e-3)")
-                .AtLeast(0.0),
-            Param("seed", &GmmRegOptions::seed,
-                  "seed of the k-means++ initialisation (sklearn's is unseeded in probreg)")
-                .AtLeast(0),
-            Param("kernel_sums", &GmmRegOptions::kernel_sums,
-                  "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per "
-                  "cell of compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1 / "
-                  "cutoff_tolerance)) are skipped (docs/performance.md: accuracy cost); "
-                  "\"dense\": always exact"),
-            Param("approx_min_pairs", &GmmRegOptions::approx_min_pairs,
-                  "component pairs K_s * K_t from which kernel_sums=auto approximates")
-                .AtLeast(0.0),
-            Param("cutoff_tolerance", &GmmRegOptions::cutoff_tolerance,
-                  "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma")
-                .Greater(0.0)
-                .Below(1.0),
-            Param("compress_cell_sigmas", &GmmRegOptions::compress_cell_sigmas,
-                  "cell edge of the compression in sigmas, [0, 1]; 0 = none")
-                .AtLeast(0.0)
-                .AtMost(1.0),
-        },
-        nullptr,
-        // compat "probreg": probreg v0.3.7's values for the keys the user did not give.
-        {{"probreg",
-          {{"gmm", "sklearn"},
-           {"gradient", "probreg_half"},
-           {"normalize", false},
-           {"gtol", 1e-3},
-           {"maxiter", 50}}}}};
-    return spec;
-}
+// clang-format off
+REGBENCH_OPTION_FIELDS(GmmRegOptions, compat, gmm, n_gmm_components, gradient, normalize, sigma,
+                       use_estimated_sigma, delta, outer_iterations, outer_tol, maxiter, gtol,
+                       gmm_max_iter, gmm_tol, seed, kernel_sums, approx_min_pairs, cutoff_tolerance,
+                       compress_cell_sigmas)
+// clang-format on
 
 /// (mu, phi) of one cloud: sklearn-style spherical GMM or the points themselves.
 MixtureFeatures Features(const GmmRegOptions& options,
@@ -187,6 +113,8 @@ AlignResult AlignGmmReg(const GmmRegOptions& o,
 
 }  // namespace
 
-MethodInfo GmmRegMethodInfo() { return MakeMethodInfo(Spec(), AlignGmmReg); }
+MethodInfo GmmRegMethodInfo() {
+    return MakeMethodInfo(SpecOf<GmmRegOptions>(BaselineSchema("gmmreg")), AlignGmmReg);
+}
 
 }  // namespace regbench

@@ -1,19 +1,12 @@
 #include "baselines/identity.hpp"
 
+#include "baselines/schemas.hpp"
 #include "core/method_spec.hpp"
 
 namespace regbench {
 namespace {
 
-struct IdentityOptions {};
-
-const MethodSpec<IdentityOptions>& Spec() {
-    static const MethodSpec<IdentityOptions> spec{
-        "identity", "no motion (returns I); the floor every method must beat", {}, nullptr, {}};
-    return spec;
-}
-
-AlignResult AlignIdentity(const IdentityOptions&,
+AlignResult AlignIdentity(const NoOptions&,
                           const PointCloud&,
                           const PointCloud&,
                           const AlignContext&) {
@@ -24,6 +17,8 @@ AlignResult AlignIdentity(const IdentityOptions&,
 
 }  // namespace
 
-MethodInfo IdentityMethodInfo() { return MakeMethodInfo(Spec(), AlignIdentity); }
+MethodInfo IdentityMethodInfo() {
+    return MakeMethodInfo(SpecOf<NoOptions>(BaselineSchema("identity")), AlignIdentity);
+}
 
 }  // namespace regbench

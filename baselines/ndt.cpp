@@ -6,26 +6,30 @@
 #include <string>
 
 #include "baselines/pcl_adapter.hpp"
+#include "baselines/schemas.hpp"
 #include "core/method_spec.hpp"
 #include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
 
-constexpr const char* kName = "ndt";
-
 /// PCL's defaults are tuned for metre-scale lidar maps; the scale-dependent ones are
 /// rescaled here for unit-sphere objects with ~717 points.
-struct NdtOptions {  // each member documented once, in Spec()
-    double resolution = 0.25;
-    int min_points_per_voxel = 6;
-    double step_size = 0.1;
-    double outlier_ratio = 0.55;
-    int max_iterations = 35;
-    double transformation_epsilon = 1e-6;
-    double transformation_rotation_epsilon = 0.9999995;
-    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;
+struct NdtOptions {  // documented in baselines/ndt.schema.json (defaults too)
+    double resolution;
+    int min_points_per_voxel;
+    double step_size;
+    double outlier_ratio;
+    int max_iterations;
+    double transformation_epsilon;
+    double transformation_rotation_epsilon;
+    ScaleRuleMode scale_rule;
 };
+// clang-format off
+REGBENCH_OPTION_FIELDS(NdtOptions, resolution, min_points_per_voxel, step_size, outlier_ratio,
+                       max_iterations, transformation_epsilon, transformation_rotation_epsilon,
+                       scale_rule)
+// clang-format on
 
 using PclNdt = pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>;
 
@@ -35,48 +39,6 @@ class CheckedNdt final : public PclNdt {
 public:
     std::size_t TargetCells() { return target_cells_.getCentroids()->size(); }
 };
-
-const MethodSpec<NdtOptions>& Spec() {
-    static const MethodSpec<NdtOptions> spec{
-        kName,
-        "3-D Normal Distributions Transform from the identity (PCL NormalDistributionsTransform, "
-        "float32), rescaled for unit-sphere objects",
-        {
-            Param("resolution", &NdtOptions::resolution,
-                  "target voxel side [unit-sphere units], > 0; 0.25: ~10-20 points per occupied "
-                  "cell of a 717-point crop (PCL's 1.0 is metre-scale)")
-                .Greater(0.0),
-            Param("min_points_per_voxel", &NdtOptions::min_points_per_voxel,
-                  "cells with fewer points are dropped, >= 3; 6 = PCL default")
-                .AtLeast(3),
-            Param("scale_rule", &NdtOptions::scale_rule,
-                  "\"auto\": resolution and step_size scaled by the pair's unit (RMS radius / 0.6 "
-                  "when outside [0.5, 2], else 1; docs/performance.md), used values in "
-                  "extra.resolved; \"preset\": as given"),
-            Param("step_size", &NdtOptions::step_size,
-                  "More-Thuente maximum step length, > 0; 0.1 = PCL default")
-                .Greater(0.0),
-            Param("outlier_ratio", &NdtOptions::outlier_ratio,
-                  "uniform outlier weight of the NDT mixture, [0, 1); 0.55 = PCL default")
-                .AtLeast(0.0)
-                .Below(1.0),
-            Param("max_iterations", &NdtOptions::max_iterations,
-                  "Newton iteration cap, >= 1; 35 = PCL default")
-                .AtLeast(1),
-            Param("transformation_epsilon", &NdtOptions::transformation_epsilon,
-                  "stop when the last step's squared translation is <= this, > 0; 1e-6 (a 1e-3 "
-                  "step; PCL's 0.1 is metre-scale)")
-                .Greater(0.0),
-            Param("transformation_rotation_epsilon", &NdtOptions::transformation_rotation_epsilon,
-                  "and when cos(last step's rotation angle) >= this, [0, 1), 0 disables; 0.9999995 "
-                  "= cos(1e-3 rad)")
-                .AtLeast(0.0)
-                .Below(1.0),
-        },
-        nullptr,
-        {}};
-    return spec;
-}
 
 AlignResult AlignNdt(const NdtOptions& o,
                      const PointCloud& source,
@@ -125,6 +87,8 @@ AlignResult AlignNdt(const NdtOptions& o,
 
 }  // namespace
 
-MethodInfo NdtMethodInfo() { return MakeMethodInfo(Spec(), AlignNdt); }
+MethodInfo NdtMethodInfo() {
+    return MakeMethodInfo(SpecOf<NdtOptions>(BaselineSchema("ndt")), AlignNdt);
+}
 
 }  // namespace regbench

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "baselines/schemas.hpp"
 #include "core/math_constants.hpp"
 #include "core/method_spec.hpp"
 #include "gmm/bfgs.hpp"
@@ -28,27 +29,33 @@ constexpr double kLibsvmCacheMb = 200.0;  // sklearn's OneClassSVM cache_size
 
 void QuietLibsvm(const char*) {}
 
-struct SvrOptions {  // each member documented once, in Spec()
-    Compat compat = Compat::kNone;
-    double nu = 0.1;
-    L2Gradient gradient = L2Gradient::kExact;
-    bool normalize = true;
-    double sigma = 1.0;
-    double gamma = 0.5;
-    bool use_estimated_sigma = true;
-    double delta = 0.9;
-    double gamma_delta = 10.0;
-    int outer_iterations = 1;
-    double outer_tol = 1e-3;
-    int maxiter = 200;
-    double gtol = 1e-6;
-    double svm_tol = 1e-3;
-    int svm_max_points = 8000;
-    L2KernelSums kernel_sums = L2KernelSums::kAuto;
-    double approx_min_pairs = 1e8;
-    double cutoff_tolerance = 1e-4;
-    double compress_cell_sigmas = 0.1;
+struct SvrOptions {  // documented in baselines/svr.schema.json (defaults too)
+    Compat compat;
+    double nu;
+    L2Gradient gradient;
+    bool normalize;
+    double sigma;
+    double gamma;
+    bool use_estimated_sigma;
+    double delta;
+    double gamma_delta;
+    int outer_iterations;
+    double outer_tol;
+    int maxiter;
+    double gtol;
+    double svm_tol;
+    int svm_max_points;
+    L2KernelSums kernel_sums;
+    double approx_min_pairs;
+    double cutoff_tolerance;
+    double compress_cell_sigmas;
 };
+// clang-format off
+REGBENCH_OPTION_FIELDS(SvrOptions, compat, nu, gradient, normalize, sigma, gamma,
+                       use_estimated_sigma, delta, gamma_delta, outer_iterations, outer_tol, maxiter,
+                       gtol, svm_tol, svm_max_points, kernel_sums, approx_min_pairs,
+                       cutoff_tolerance, compress_cell_sigmas)
+// clang-format on
 
 /// A seeded uniform random subset of `max_points` rows (all rows when the cloud is smaller),
 /// in increasing row order.
@@ -91,83 +98,6 @@ MixtureFeatures SvmFeatures(const PointCloud& full,
     const double rescale = static_cast<double>(full.rows()) / static_cast<double>(P.rows());
     f.weights = rescale * svm.alpha * std::pow(2.0 * kPi * phi_sigma * phi_sigma, 1.5);
     return f;
-}
-
-const MethodSpec<SvrOptions>& Spec() {
-    static const MethodSpec<SvrOptions> spec{
-        kName,
-        "Support Vector Registration rigid as probreg runs it: libsvm one-class nu-SVM per "
-        "cloud (support vectors = GMM means), L2 cost, scipy-like BFGS; exact Gauss sums (approximated at scale)",
-        {
-            Param("compat", &SvrOptions::compat,
-                  "\"none\" (default, correct: gradient=exact, normalize=true, gtol=1e-6, "
-                  "maxiter=200, consistent sigma schedule) or \"probreg\" (probreg v0.3.7, incl. "
-                  "its gamma*=10 annealing); explicit keys win"),
-            Param("nu", &SvrOptions::nu,
-                  "one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)")
-                .Greater(0.0)
-                .AtMost(1.0),
-            Param("gradient", &SvrOptions::gradient,
-                  "\"probreg_half\" = probreg's gradient (1/2 of the true one), \"exact\""),
-            Param("normalize", &SvrOptions::normalize,
-                  "optimise with both clouds centred and divided by sigma; probreg: false"),
-            Param("sigma", &SvrOptions::sigma,
-                  "bandwidth [input units] when use_estimated_sigma is false (probreg 1.0)")
-                .Greater(0.0)
-                .Finite(),
-            Param("gamma", &SvrOptions::gamma,
-                  "RBF gamma when use_estimated_sigma is false (probreg 0.5)")
-                .Greater(0.0)
-                .Finite(),
-            Param("use_estimated_sigma", &SvrOptions::use_estimated_sigma,
-                  "sigma = det(cov(source))^(1/6), gamma = 1/(2 sigma^2) (true)"),
-            Param("delta", &SvrOptions::delta,
-                  "cost sigma *= delta per outer iteration, in (0, 1] (probreg 0.9)")
-                .Greater(0.0)
-                .AtMost(1.0),
-            Param("gamma_delta", &SvrOptions::gamma_delta,
-                  "compat probreg: SVM gamma *= gamma_delta per outer iteration (10)")
-                .Greater(0.0)
-                .Finite(),
-            Param("outer_iterations", &SvrOptions::outer_iterations,
-                  "outer loop steps, SVMs refitted each step (probreg maxiter 1)")
-                .AtLeast(1),
-            Param("outer_tol", &SvrOptions::outer_tol,
-                  "stop the outer loop when |f - f_prev| < outer_tol (probreg tol 1e-3)")
-                .AtLeast(0.0),
-            Param("maxiter", &SvrOptions::maxiter,
-                  "BFGS iterations per outer step (probreg opt_maxiter 50)")
-                .AtLeast(0),
-            Param("gtol", &SvrOptions::gtol,
-                  "BFGS stops when |grad|_inf <= gtol (probreg opt_tol 1e-3)")
-                .AtLeast(0.0),
-            Param("svm_tol", &SvrOptions::svm_tol,
-                  "libsvm stopping tolerance eps (sklearn tol 1e-3)")
-                .Greater(0.0),
-            Param("svm_max_points", &SvrOptions::svm_max_points,
-                  "fit each one-class SVM on a seeded random subsample of this many points when "
-                  "the cloud is larger (alphas scaled by n / subsample); >= 10")
-                .AtLeast(10),
-            Param("kernel_sums", &SvrOptions::kernel_sums,
-                  "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed "
-                  "mixtures and a kd-tree cutoff (as gmmreg); \"dense\": always exact"),
-            Param("approx_min_pairs", &SvrOptions::approx_min_pairs,
-                  "S_s * S_t from which kernel_sums=auto approximates")
-                .AtLeast(0.0),
-            Param("cutoff_tolerance", &SvrOptions::cutoff_tolerance,
-                  "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma")
-                .Greater(0.0)
-                .Below(1.0),
-            Param("compress_cell_sigmas", &SvrOptions::compress_cell_sigmas,
-                  "cell edge of the compression in sigmas, [0, 1]; 0 = none")
-                .AtLeast(0.0)
-                .AtMost(1.0),
-        },
-        nullptr,
-        // compat "probreg": probreg v0.3.7's values for the keys the user did not give.
-        {{"probreg",
-          {{"gradient", "probreg_half"}, {"normalize", false}, {"gtol", 1e-3}, {"maxiter", 50}}}}};
-    return spec;
 }
 
 AlignResult AlignSvr(const SvrOptions& o,
@@ -274,6 +204,8 @@ OneClassSvm FitOneClassSvm(const PointCloud& X, double nu, double gamma, double 
     return out;
 }
 
-MethodInfo SvrMethodInfo() { return MakeMethodInfo(Spec(), AlignSvr); }
+MethodInfo SvrMethodInfo() {
+    return MakeMethodInfo(SpecOf<SvrOptions>(BaselineSchema("svr")), AlignSvr);
+}
 
 }  // namespace regbench

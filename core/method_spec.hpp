@@ -1,9 +1,10 @@
 #pragma once
-// Method boilerplate written once. A method declares its options struct and one table
-// (MethodSpec) that binds each JSON key to a struct member and documents it; from that table
-// come the struct's JSON reading and writing, the `methods` listing (MethodInfo::param_docs),
-// compat presets and the `create` function. docs/adding-a-method.md walks through an example.
-#include <cmath>
+// Method boilerplate written once. A method declares its options struct (C++ types only, bound
+// to JSON by REGBENCH_OPTION_FIELDS) and its parameter schema (baselines/<method>.schema.json:
+// docs, defaults, ranges, choices, compat presets; core/param_schema.hpp); a MethodSpec joins
+// the two, and from it come parsing, the `methods` listing (MethodInfo::param_docs, defaults,
+// schema) and the `create` function. docs/adding-a-method.md walks through an example.
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <memory>
@@ -15,12 +16,13 @@
 #include <vector>
 
 #include "core/options.hpp"
+#include "core/param_schema.hpp"
 #include "core/registration.hpp"
 
 namespace regbench {
 
 /// The `compat` choice of the probabilistic baselines: the correct algorithm, or the
-/// published probreg 0.3.7 behaviour (its presets are each method's compat_presets).
+/// published probreg 0.3.7 behaviour (its presets are each schema's "x-compat-presets").
 enum class Compat { kNone, kProbreg };
 NLOHMANN_JSON_SERIALIZE_ENUM(Compat, {{Compat::kNone, "none"}, {Compat::kProbreg, "probreg"}})
 
@@ -40,162 +42,153 @@ std::vector<std::string> EnumChoices() {
     return names;
 }
 
-/// One documented parameter: its JSON key, how to write, read and check it, and its meaning.
-template <class Options>
-struct ParamSpec {
-    std::string key;
-    std::string doc;  ///< one line: units, range, why this default
-    std::function<void(const Options&, nlohmann::json&)> write;
-    /// Reads j[key] into the struct; throws std::invalid_argument naming method and key.
-    std::function<void(const nlohmann::json&, Options&, const std::string& method)> read;
-    /// Range checks, run after parsing; each throws std::invalid_argument naming the key.
-    std::vector<std::function<void(const Options&, const std::string& method)>> checks;
-};
+/// Binds an options struct's members to JSON, one line per struct, after the struct:
+///   REGBENCH_OPTION_FIELDS(IcpOptions, max_correspondence_distance, max_iterations, ...)
+/// It defines nlohmann's to_json/from_json (NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE) and
+/// VisitOptionFields(options, visitor), which calls visitor("member", options.member) per
+/// member with its C++ type, so MethodSpec can read each key on its own (errors name it) and
+/// check the struct against the schema (same keys, JSON types and enum names). The struct
+/// itself holds no defaults: they are the schema's.
+#define REGBENCH_OPTION_FIELDS(Type, ...)                                                   \
+    NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(Type, __VA_ARGS__)                                   \
+    template <class RegbenchVisitor>                                                        \
+    [[maybe_unused]] void VisitOptionFields(Type& regbench_options,                         \
+                                            RegbenchVisitor&& regbench_visitor) {           \
+        NLOHMANN_JSON_EXPAND(NLOHMANN_JSON_PASTE(REGBENCH_VISIT_OPTION_FIELD, __VA_ARGS__)) \
+    }
+#define REGBENCH_VISIT_OPTION_FIELD(member) regbench_visitor(#member, regbench_options.member);
 
-/// A ParamSpec under construction that still knows the member's type, so range checks can be
-/// chained onto it: Param("tol", &O::tol, "...").AtLeast(0.0).Finite().
-template <class Options, class T>
-class TypedParam {
-public:
-    TypedParam(const char* key, T Options::*member, const char* doc);
-    operator ParamSpec<Options>() const { return spec_; }  // NOLINT: table entries convert
+/// The options of a method without parameters (its schema has no properties).
+struct NoOptions {};
+inline void to_json(nlohmann::json& j, const NoOptions& /*o*/) { j = nlohmann::json::object(); }
+inline void from_json(const nlohmann::json& /*j*/, NoOptions& /*o*/) {}
+template <class Visitor>
+void VisitOptionFields(NoOptions& /*o*/, Visitor&& /*visitor*/) {}
 
-    TypedParam& Greater(T bound) {
-        return Check([=](T v) { return v > bound; }, "> ", bound);
+/// The schema "type" a member of C++ type T has.
+template <class T>
+const char* SchemaTypeOf() {
+    if constexpr (std::is_same_v<T, bool>) {
+        return "boolean";
+    } else if constexpr (std::is_integral_v<T>) {
+        return "integer";
+    } else if constexpr (std::is_floating_point_v<T>) {
+        return "number";
+    } else if constexpr (std::is_enum_v<T> || std::is_same_v<T, std::string>) {
+        return "string";
+    } else {
+        return "array";
     }
-    TypedParam& AtLeast(T bound) {
-        return Check([=](T v) { return v >= bound; }, ">= ", bound);
-    }
-    TypedParam& Below(T bound) {
-        return Check([=](T v) { return v < bound; }, "< ", bound);
-    }
-    TypedParam& AtMost(T bound) {
-        return Check([=](T v) { return v <= bound; }, "<= ", bound);
-    }
-    /// Rejects NaN and infinities (a comparison alone lets +inf through).
-    TypedParam& Finite() {
-        return Check([](T v) { return std::isfinite(static_cast<double>(v)); }, "finite", T{});
-    }
-
-private:
-    template <class Pred>
-    TypedParam& Check(Pred ok, const char* what, T bound) {
-        const std::string key = spec_.key;
-        const std::string rule =
-            std::string(what) + (std::string(what) == "finite" ? "" : nlohmann::json(bound).dump());
-        T Options::*member = member_;
-        spec_.checks.push_back([=](const Options& o, const std::string& method) {
-            if (!ok(o.*member)) {
-                throw std::invalid_argument(method + ": parameter '" + key + "' must be " + rule +
-                                            ", got " + nlohmann::json(o.*member).dump());
-            }
-        });
-        return *this;
-    }
-
-    T Options::*member_;
-    ParamSpec<Options> spec_;
-};
-
-/// Binds `member` to `key`. Enum-class members are read strictly: a string that is not one
-/// of the enum's names is an error listing the choices (nlohmann alone would fall back to
-/// the first value).
-template <class Options, class T>
-TypedParam<Options, T> Param(const char* key, T Options::*member, const char* doc) {
-    return TypedParam<Options, T>(key, member, doc);
 }
 
-template <class Options, class T>
-TypedParam<Options, T>::TypedParam(const char* key, T Options::*member, const char* doc)
-    : member_(member) {
-    spec_.key = key;
-    spec_.doc = doc;
-    spec_.write = [key, member](const Options& o, nlohmann::json& j) { j[key] = o.*member; };
-    spec_.read = [key, member](const nlohmann::json& j, Options& o, const std::string& method) {
-        const nlohmann::json& value = j.at(key);
-        if constexpr (std::is_enum_v<T>) {
-            std::string list;
-            for (const std::string& name : EnumChoices<T>()) {
-                if (value == name) {
-                    o.*member = value.template get<T>();
-                    return;
-                }
-                list += (list.empty() ? "\"" : ", \"") + name + "\"";
-            }
-            throw std::invalid_argument(method + ": parameter '" + key + "' must be one of " +
-                                        list + ", got " + value.dump());
-        } else {
-            o.*member = value.template get<T>();
-        }
-    };
-}
-
-/// Everything about a method that is not its algorithm.
+/// Everything about a method that is not its algorithm: its parameter schema
+/// (core/param_schema.hpp, one baselines/<method>.schema.json each) bound to an options
+/// struct, plus the checks across parameters that a schema cannot express.
 template <class Options>
 struct MethodSpec {
-    std::string name;     ///< registry name
-    std::string summary;  ///< one line for `regbench methods`
-    std::vector<ParamSpec<Options>> params;
-    /// Checks across parameters beyond each Param's own range checks (may be empty);
-    /// throws std::invalid_argument (core/options.hpp Require).
-    std::function<void(const Options&)> validate;
-    /// Compat presets as data: the value of the "compat" key -> defaults it sets for keys the
-    /// user did not give. Empty for methods without compat modes.
-    std::map<std::string, nlohmann::json> compat_presets;
-
-    nlohmann::json ToJson(const Options& o) const {
-        nlohmann::json j = nlohmann::json::object();
-        for (const auto& p : params) p.write(o, j);
-        return j;
+    /// `schema_text`: the method's JSON schema (baselines/schemas.hpp BaselineSchema, or a
+    /// literal). `validate`: checks across parameters beyond each key's own range (may be
+    /// null); throws std::invalid_argument (core/options.hpp Require). Throws
+    /// std::logic_error when the schema and the struct disagree (keys, types, enum names).
+    explicit MethodSpec(const char* schema_text,
+                        std::function<void(const Options&)> validate_fn = nullptr)
+        : schema(schema_text),
+          name(schema.name()),
+          summary(schema.summary()),
+          validate(std::move(validate_fn)) {
+        CheckAgainstStruct();
     }
 
+    ParamSchema schema;
+    std::string name;     ///< registry name: the schema's "title"
+    std::string summary;  ///< one line for `regbench methods`: the schema's "description"
+    std::function<void(const Options&)> validate;
+
+    nlohmann::json ToJson(const Options& o) const { return o; }
+
     /// Parses user parameters: unknown keys and wrong JSON types are rejected by name, absent
-    /// keys take the compat preset's value (if any), then the struct's default; then every
-    /// parameter's range checks and validate() run.
+    /// keys take the compat preset's value (if any), then the schema's default; choices are
+    /// strict; then every range keyword and validate() run.
     Options Parse(const nlohmann::json& user) const {
-        RequireParamObject(user, name);
-        const nlohmann::json j = user.is_null() ? nlohmann::json::object() : user;
-        const nlohmann::json defaults = ToJson(Options{});
-        CheckParamKeysAndTypes(j, defaults, name);
-        nlohmann::json merged = defaults;
-        if (!compat_presets.empty()) {
-            const nlohmann::json compat =
-                j.contains("compat") ? j.at("compat") : defaults.at("compat");
-            const auto preset = compat.is_string() ? compat_presets.find(compat.get<std::string>())
-                                                   : compat_presets.end();
-            if (preset != compat_presets.end()) merged.update(preset->second);
-        }
-        merged.update(j);
-        Options o;
-        for (const auto& p : params) {
-            try {
-                p.read(merged, o, name);
-            } catch (const nlohmann::json::exception& e) {
-                throw std::invalid_argument(name + ": bad parameter '" + p.key + "': " + e.what());
-            }
-        }
-        for (const auto& p : params) {
-            for (const auto& check : p.checks) check(o, name);
-        }
+        Options o = Read(schema.Complete(user));
+        schema.CheckRanges(ToJson(o));
         if (validate) validate(o);
         return o;
     }
 
-    std::map<std::string, std::string> Docs() const {
-        std::map<std::string, std::string> docs;
-        for (const auto& p : params) docs[p.key] = p.doc;
-        return docs;
+    /// The schema's defaults in the struct (no checks).
+    Options Defaults() const { return Read(schema.defaults()); }
+
+    std::map<std::string, std::string> Docs() const { return schema.Docs(); }
+
+private:
+    Options Read(const nlohmann::json& values) const {
+        Options o{};
+        VisitOptionFields(o, [&](const char* key, auto& member) {
+            using T = std::decay_t<decltype(member)>;
+            try {
+                member = values.at(key).template get<T>();
+            } catch (const nlohmann::json::exception& e) {
+                throw std::invalid_argument(name + ": bad parameter '" + key + "': " + e.what());
+            }
+        });
+        return o;
+    }
+
+    void CheckAgainstStruct() const {
+        const std::vector<std::string> keys = schema.Keys();
+        std::vector<std::string> members;
+        auto fail = [this](const std::string& key, const std::string& why) {
+            throw std::logic_error("parameter schema '" + name + "': property '" + key + "' " +
+                                   why);
+        };
+        Options o{};
+        VisitOptionFields(o, [&](const char* key, auto& member) {
+            using T = std::decay_t<decltype(member)>;
+            members.push_back(key);
+            if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
+                fail(key, "is missing (it is a member of the options struct)");
+            }
+            const std::string type = schema.document().at("properties").at(key).at("type");
+            if (type != SchemaTypeOf<T>()) {
+                fail(key, "has type " + type + " but the member is " + SchemaTypeOf<T>());
+            }
+            const std::vector<std::string>* choices = schema.Choices(key);
+            if constexpr (std::is_enum_v<T>) {
+                if (choices == nullptr || *choices != EnumChoices<T>()) {
+                    fail(key, "needs \"enum\": the enum's names in value order");
+                }
+            } else if (choices != nullptr) {
+                fail(key, "has \"enum\" but the member is not an enum class");
+            }
+        });
+        for (const auto& key : keys) {
+            if (std::find(members.begin(), members.end(), key) == members.end()) {
+                fail(key, "is not a member of the options struct");
+            }
+        }
     }
 };
 
-/// MethodInfo without `create`: name, summary, docs and defaults from the table.
+/// The MethodSpec of `Options`, built from `schema_text` (and `validate`) on the first call and
+/// kept for the program's life (instances refer to it): a function-local static per options
+/// struct, so each method's struct must be its own type.
+template <class Options>
+const MethodSpec<Options>& SpecOf(const char* schema_text,
+                                  std::function<void(const Options&)> validate = nullptr) {
+    static const MethodSpec<Options> spec(schema_text, std::move(validate));
+    return spec;
+}
+
+/// MethodInfo without `create`: name, summary, docs, defaults and schema from the spec.
 template <class Options>
 MethodInfo DescribeMethod(const MethodSpec<Options>& spec) {
     MethodInfo info;
     info.name = spec.name;
     info.summary = spec.summary;
     info.param_docs = spec.Docs();
-    info.defaults = spec.ToJson(Options{});
+    info.defaults = spec.ToJson(spec.Defaults());
+    info.schema = spec.schema.document();
     return info;
 }
 

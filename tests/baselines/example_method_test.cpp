@@ -1,7 +1,7 @@
 // The worked example of docs/adding-a-method.md, compiled and tested so the document cannot rot:
 // a `centroid` method (not in the registry) that only translates the source's centre onto the
 // target's. The block between the EXAMPLE markers is the document's baselines/centroid.cpp
-// body verbatim; keep the two in step.
+// body verbatim, and kCentroidSchema its baselines/centroid.schema.json; keep them in step.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,30 +16,45 @@
 namespace regbench {
 namespace {
 
+/// The document's baselines/centroid.schema.json verbatim; keep the two in step.
+constexpr const char* kCentroidSchema = R"json({
+  "$schema": "https://json-schema.org/draft/2020-12/schema",
+  "title": "centroid",
+  "description": "translation only: moves the source's centre onto the target's",
+  "type": "object",
+  "additionalProperties": false,
+  "properties": {
+    "centre": {
+      "type": "string",
+      "description": "\"mean\" or \"median\" (per axis; robust to outliers)",
+      "default": "mean",
+      "enum": ["mean", "median"]
+    },
+    "step": {
+      "type": "number",
+      "description": "fraction of the offset applied, in (0, 1]",
+      "default": 1.0,
+      "exclusiveMinimum": 0.0,
+      "maximum": 1.0
+    }
+  }
+})json";
+
+/// In the tree, baselines/schemas.hpp's BaselineSchema returns the compiled-in file.
+const char* BaselineSchema(const std::string& stem) {
+    if (stem != "centroid") throw std::logic_error("no schema " + stem);
+    return kCentroidSchema;
+}
+
 // EXAMPLE BEGIN
 enum class Centre { kMean, kMedian };
 NLOHMANN_JSON_SERIALIZE_ENUM(Centre, {{Centre::kMean, "mean"}, {Centre::kMedian, "median"}})
 
-struct CentroidOptions {  // each member documented once, in Spec()
-    Centre centre = Centre::kMean;
-    double step = 1.0;
+struct CentroidOptions {  // documented in baselines/centroid.schema.json (defaults too)
+    Centre centre;
+    double step;
 };
-
-const MethodSpec<CentroidOptions>& Spec() {
-    static const MethodSpec<CentroidOptions> spec{
-        "centroid",
-        "translation only: moves the source's centre onto the target's",
-        {
-            Param("centre", &CentroidOptions::centre,
-                  "\"mean\" or \"median\" (per axis; robust to outliers)"),
-            Param("step", &CentroidOptions::step, "fraction of the offset applied, in (0, 1]")
-                .Greater(0.0)
-                .AtMost(1.0),
-        },
-        nullptr,  // no checks across parameters
-        {}};      // no compat presets
-    return spec;
-}
+REGBENCH_OPTION_FIELDS(CentroidOptions, centre, step)
 
 Eigen::Vector3d Centre3(const PointCloud& p, Centre how) {
     if (how == Centre::kMean) return p.colwise().mean().transpose();
@@ -63,7 +78,11 @@ AlignResult AlignCentroid(const CentroidOptions& o,
     return r;
 }
 
-MethodInfo CentroidMethodInfo() { return MakeMethodInfo(Spec(), AlignCentroid); }
+MethodInfo CentroidMethodInfo() {
+    // SpecOf builds the MethodSpec once; checks across parameters, if any, would be its second
+    // argument, a validate function.
+    return MakeMethodInfo(SpecOf<CentroidOptions>(BaselineSchema("centroid")), AlignCentroid);
+}
 // EXAMPLE END
 
 /// Four points whose mean (1.5, 0, 0) and upper median (2, 0, 0) differ: x = 0, 1, 2, 3.
@@ -73,10 +92,13 @@ PointCloud Line() {
     return p;
 }
 
-TEST(ExampleMethod, RegistryEntryComesFromTheTable) {
+TEST(ExampleMethod, RegistryEntryComesFromTheSchema) {
     const MethodInfo info = CentroidMethodInfo();
     EXPECT_EQ(info.name, "centroid");
+    EXPECT_EQ(info.summary, "translation only: moves the source's centre onto the target's");
+    EXPECT_EQ(info.schema, nlohmann::json::parse(kCentroidSchema));
     ASSERT_EQ(info.param_docs.size(), 2u);
+    EXPECT_EQ(info.param_docs.at("step"), "fraction of the offset applied, in (0, 1]");
     EXPECT_EQ(info.defaults, nlohmann::json({{"centre", "mean"}, {"step", 1.0}}));
     auto method = info.create({{"centre", "median"}});
     EXPECT_EQ(method->Name(), "centroid");
@@ -103,9 +125,11 @@ TEST(ExampleMethod, BadParametersNameTheParameter) {
     const MethodInfo info = CentroidMethodInfo();
     for (const auto& [params, name] : std::vector<std::pair<nlohmann::json, std::string>>{
              {{{"centre", "mode"}}, "'centre' must be one of \"mean\", \"median\""},
-             {{{"step", 0.0}}, "'step' must be > 0.0"},
+             {{{"step", 0.0}}, "'step' must be > 0.0, got 0.0"},
+             {{{"step", 1.5}}, "'step' must be <= 1.0, got 1.5"},
              {{{"step", "half"}}, "'step' expects number"},
-             {{{"stride", 1}}, "unknown parameter 'stride'"}}) {
+             {{{"stride", 1}}, "unknown parameter 'stride'"},
+             {nlohmann::json::array(), "parameters must be a JSON object"}}) {
         try {
             info.create(params);
             ADD_FAILURE() << params.dump() << " was accepted";

@@ -1,0 +1,183 @@
+// Every registered method's parameter schema (baselines/<method>.schema.json) against its code:
+// the expected values come from the schema text, the observed ones from creating the method,
+// so a schema that documents a default, range or choice the code does not have fails here.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "runners/registry.hpp"
+
+namespace regbench {
+namespace {
+
+std::vector<std::string> SchemaMethodNames() {
+    std::vector<std::string> names;
+    for (const auto& m : AllMethods()) {
+        if (!m.schema.is_null()) names.push_back(m.name);
+    }
+    return names;
+}
+
+/// The message of the std::invalid_argument that creating `method` with `params` throws,
+/// or "" when it is accepted.
+std::string Rejection(const MethodInfo& method, const nlohmann::json& params) {
+    try {
+        method.create(params);
+    } catch (const std::invalid_argument& e) {
+        return e.what();
+    }
+    return "";
+}
+
+bool Contains(const std::string& text, const std::string& part) {
+    return text.find(part) != std::string::npos;
+}
+
+class MethodSchema : public ::testing::TestWithParam<std::string> {
+protected:
+    const MethodInfo& info() const { return FindMethod(GetParam()); }
+    const nlohmann::json& properties() const { return info().schema.at("properties"); }
+};
+
+TEST(MethodSchemas, EveryBaselineHasOne) {
+    for (const char* name :
+         {"identity", "icp", "icp-pl", "gicp", "ndt", "fgr", "cpd", "gmmreg", "svr", "filterreg"}) {
+        EXPECT_TRUE(FindMethod(name).schema.is_object()) << name;
+    }
+}
+
+TEST_P(MethodSchema, HeaderMatchesTheRegistryEntry) {
+    const nlohmann::json& s = info().schema;
+    EXPECT_EQ(s.at("title"), info().name);
+    EXPECT_EQ(s.at("description"), info().summary);
+    EXPECT_EQ(s.at("type"), "object");
+    EXPECT_EQ(s.at("additionalProperties"), false);
+}
+
+TEST_P(MethodSchema, PropertiesAreTheParamsOfADefaultInstance) {
+    const nlohmann::json params = info().create({})->Params();
+    std::set<std::string> schema_keys;
+    for (const auto& item : properties().items()) schema_keys.insert(item.key());
+    std::set<std::string> param_keys;
+    for (const auto& item : params.items()) param_keys.insert(item.key());
+    EXPECT_EQ(schema_keys, param_keys);
+    for (const auto& item : properties().items()) {
+        EXPECT_EQ(info().param_docs.at(item.key()), item.value().at("description"));
+    }
+}
+
+TEST_P(MethodSchema, DefaultsRoundTripThroughTheStruct) {
+    const nlohmann::json params = info().create({})->Params();
+    for (const auto& item : properties().items()) {
+        const nlohmann::json& def = item.value().at("default");
+        const nlohmann::json& got = params.at(item.key());
+        EXPECT_EQ(got, def) << item.key();
+        // The same JSON number kind too, so `regbench methods` prints 1.0 where it did.
+        EXPECT_EQ(got.is_number_integer(), def.is_number_integer()) << item.key();
+        EXPECT_EQ(info().defaults.at(item.key()), def) << item.key();
+    }
+}
+
+TEST_P(MethodSchema, EveryChoiceRoundTripsAndOthersAreRejected) {
+    for (const auto& item : properties().items()) {
+        if (!item.value().contains("enum")) continue;
+        const std::string& key = item.key();
+        for (const auto& choice : item.value().at("enum")) {
+            // A name the enum lacks would come back as its first name (nlohmann's fallback).
+            EXPECT_EQ(info().create({{key, choice}})->Params().at(key), choice) << key;
+        }
+        const std::string why = Rejection(info(), {{key, "no-such-choice"}});
+        EXPECT_TRUE(Contains(why, "'" + key + "' must be one of")) << key << ": " << why;
+        for (const auto& choice : item.value().at("enum")) {
+            EXPECT_TRUE(Contains(why, choice.dump())) << key << ": " << why;
+        }
+    }
+}
+
+TEST_P(MethodSchema, EveryRangeKeywordIsEnforced) {
+    const double kInf = std::numeric_limits<double>::infinity();
+    for (const auto& item : properties().items()) {
+        const std::string& key = item.key();
+        const nlohmann::json& p = item.value();
+        const bool integer = p.at("type") == "integer";
+        const std::string must = "'" + key + "' must be ";
+        // Just outside each bound is rejected; on an inclusive bound is accepted.
+        auto check = [&](const char* keyword, double towards, bool inclusive) {
+            if (!p.contains(keyword)) return;
+            const double bound = p.at(keyword).get<double>();
+            const nlohmann::json on =
+                integer ? nlohmann::json(static_cast<long long>(bound)) : nlohmann::json(bound);
+            const nlohmann::json outside =
+                integer ? nlohmann::json(static_cast<long long>(bound) + (towards > 0 ? 1 : -1))
+                        : nlohmann::json(std::nextafter(bound, towards));
+            const std::string why = Rejection(info(), {{key, outside}});
+            EXPECT_TRUE(Contains(why, must)) << key << " = " << outside << ": " << why;
+            const std::string on_bound = Rejection(info(), {{key, on}});
+            if (inclusive) {
+                EXPECT_EQ(on_bound, "") << key << " = " << on;
+            } else {
+                EXPECT_TRUE(Contains(on_bound, must)) << key << " = " << on << ": " << on_bound;
+            }
+        };
+        check("minimum", -kInf, true);
+        check("exclusiveMinimum", -kInf, false);
+        check("maximum", kInf, true);
+        check("exclusiveMaximum", kInf, false);
+        if (p.value("x-finite", false)) {
+            for (const double bad : {kInf, -kInf, std::nan("")}) {
+                const std::string why = Rejection(info(), {{key, bad}});
+                EXPECT_TRUE(Contains(why, must)) << key << " = " << bad << ": " << why;
+            }
+        }
+    }
+}
+
+TEST_P(MethodSchema, WrongJsonTypesAndUnknownKeysAreRejectedByName) {
+    for (const auto& item : properties().items()) {
+        const std::string& key = item.key();
+        const bool numeric =
+            item.value().at("type") == "number" || item.value().at("type") == "integer";
+        const nlohmann::json wrong = numeric ? nlohmann::json("1") : nlohmann::json(1);
+        const std::string why = Rejection(info(), {{key, wrong}});
+        EXPECT_TRUE(Contains(why, "'" + key + "' expects")) << key << ": " << why;
+        EXPECT_EQ(why.rfind(info().name + ": ", 0), 0u) << why;
+    }
+    EXPECT_TRUE(Contains(Rejection(info(), {{"no_such_key", 1}}), "unknown parameter"));
+    EXPECT_TRUE(Contains(Rejection(info(), nlohmann::json::array()), "must be a JSON object"));
+}
+
+TEST_P(MethodSchema, CompatPresetsSetTheirDefaultsAndExplicitKeysWin) {
+    const nlohmann::json& s = info().schema;
+    if (!s.contains("x-compat-presets")) return;
+    for (const auto& preset : s.at("x-compat-presets").items()) {
+        const nlohmann::json params = info().create({{"compat", preset.key()}})->Params();
+        for (const auto& value : preset.value().items()) {
+            EXPECT_EQ(params.at(value.key()), value.value()) << preset.key() << " " << value.key();
+            const nlohmann::json def = properties().at(value.key()).at("default");
+            const nlohmann::json explicit_default =
+                info().create({{"compat", preset.key()}, {value.key(), def}})->Params();
+            EXPECT_EQ(explicit_default.at(value.key()), def) << value.key();
+        }
+    }
+}
+
+/// "icp-pl" -> "icp_pl": gtest names allow only letters, digits and underscores.
+std::string TestName(const ::testing::TestParamInfo<std::string>& info) {
+    std::string name = info.param;
+    std::replace(name.begin(), name.end(), '-', '_');
+    return name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Registry,
+                         MethodSchema,
+                         ::testing::ValuesIn(SchemaMethodNames()),
+                         TestName);
+
+}  // namespace
+}  // namespace regbench
