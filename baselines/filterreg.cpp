@@ -461,19 +461,9 @@ const MethodSpec<FilterRegOptions>& Spec() {
 }  // namespace
 
 FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
-    nlohmann::json j = params.is_null() ? nlohmann::json::object() : params;
-    // sigma2: null means "auto", like probreg's None.
-    if (j.is_object() && j.contains("sigma2") && j["sigma2"].is_null()) j.erase("sigma2");
-    return Spec().Parse(j);
+    return Spec().Parse(params);  // sigma2: null means "auto" (the schema's [number, null])
 }
 
-MethodInfo FilterRegMethodInfo() {
-    MethodInfo info = MakeMethodInfo(Spec(), AlignFilterReg);
-    info.create = [](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
-        return std::make_unique<FunctionMethod<FilterRegOptions>>(Spec(), ParseFilterRegOptions(j),
-                                                                  AlignFilterReg);
-    };
-    return info;
-}
+MethodInfo FilterRegMethodInfo() { return MakeMethodInfo(Spec(), AlignFilterReg); }
 
 }  // namespace regbench

@@ -149,7 +149,7 @@ private:
             if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
                 fail(key, "is missing (it is a member of the options struct)");
             }
-            const std::string type = schema.document().at("properties").at(key).at("type");
+            const std::string type = schema.ValueType(key);
             if (type != SchemaTypeOf<T>()) {
                 fail(key, "has type " + type + " but the member is " + SchemaTypeOf<T>());
             }

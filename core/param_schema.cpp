@@ -80,12 +80,19 @@ ParamSchema::ParamSchema(const char* text) {
         Property prop;
         prop.key = item.key();
         const std::string at = "property '" + prop.key + "': ";
-        if (!p.contains("type") || !p["type"].is_string()) fail(at + "needs a string \"type\"");
+        // "type": "number", or ["number", "null"] for a key where null means "the default".
+        const nlohmann::ordered_json type = p.value("type", nlohmann::ordered_json());
+        const bool nullable =
+            type.is_array() && type.size() == 2 && type[0].is_string() && type[1] == "null";
+        if (!type.is_string() && !nullable) {
+            fail(at + "needs a \"type\": a name, or [name, \"null\"]");
+        }
         if (!p.contains("description") || !p["description"].is_string()) {
             fail(at + "needs a string \"description\"");
         }
         if (!p.contains("default")) fail(at + "needs a \"default\"");
-        prop.type = p["type"].get<std::string>();
+        prop.type = (nullable ? type[0] : type).get<std::string>();
+        prop.nullable = nullable;
         prop.doc = p["description"].get<std::string>();
         const nlohmann::json def = nlohmann::json::parse(p["default"].dump());
         if (!HasType(def, prop.type)) fail(at + "default does not have type " + prop.type);
@@ -144,6 +151,13 @@ std::map<std::string, std::string> ParamSchema::Docs() const {
     return docs;
 }
 
+std::string ParamSchema::ValueType(const std::string& key) const {
+    for (const auto& p : properties_) {
+        if (p.key == key) return p.type;
+    }
+    return "";
+}
+
 const std::vector<std::string>* ParamSchema::Choices(const std::string& key) const {
     for (const auto& p : properties_) {
         if (p.key == key) return p.has_choices ? &p.choices : nullptr;
@@ -159,7 +173,10 @@ std::vector<std::string> ParamSchema::Keys() const {
 
 nlohmann::json ParamSchema::Complete(const nlohmann::json& user) const {
     RequireParamObject(user, name_);
-    const nlohmann::json j = user.is_null() ? nlohmann::json::object() : user;
+    nlohmann::json j = user.is_null() ? nlohmann::json::object() : user;
+    for (const auto& p : properties_) {
+        if (p.nullable && j.contains(p.key) && j.at(p.key).is_null()) j.erase(p.key);
+    }
     CheckParamKeysAndTypes(j, defaults_, name_);
     nlohmann::json merged = defaults_;
     if (!compat_presets_.empty()) {
@@ -170,6 +187,18 @@ nlohmann::json ParamSchema::Complete(const nlohmann::json& user) const {
         if (preset != compat_presets_.end()) merged.update(preset->second);
     }
     merged.update(j);
+    // Whole numbers for "integer" keys: the type check above lets any number through (an int
+    // default accepts 2.0), and reading 2.5 into an int would silently truncate it to 2. JSON
+    // Schema counts 2.0 as an integer, so only a fractional part (or inf/NaN) is refused.
+    for (const auto& p : properties_) {
+        const nlohmann::json& value = merged.at(p.key);
+        if (p.type != "integer" || !value.is_number_float()) continue;
+        const double v = value.get<double>();
+        if (!std::isfinite(v) || std::trunc(v) != v) {
+            throw std::invalid_argument(name_ + ": parameter '" + p.key +
+                                        "' must be a whole number, got " + value.dump());
+        }
+    }
     // Strict choices: nlohmann's enum conversion alone would fall back to the first name.
     for (const auto& p : properties_) {
         if (!p.has_choices) continue;

@@ -34,6 +34,9 @@ public:
     std::map<std::string, std::string> Docs() const;
     /// The "enum" of `key`, or nullptr when it has none.
     const std::vector<std::string>* Choices(const std::string& key) const;
+    /// The value type of `key` ("number", "integer", ...; without a "null" alternative); ""
+    /// when the schema has no such key.
+    std::string ValueType(const std::string& key) const;
     /// Property keys in the order the schema lists them.
     std::vector<std::string> Keys() const;
 
@@ -52,6 +55,7 @@ private:
     struct Property {
         std::string key;
         std::string type;
+        bool nullable = false;  ///< "type": [type, "null"]: a null value means the default
         std::string doc;
         /// Range keywords in schema order: ("minimum", 0.0), ("x-finite", true), ...
         std::vector<std::pair<std::string, nlohmann::json>> checks;

@@ -39,6 +39,12 @@ bool Contains(const std::string& text, const std::string& part) {
     return text.find(part) != std::string::npos;
 }
 
+/// A property's value type: "type" is a name, or [name, "null"] when null means the default.
+std::string TypeOf(const nlohmann::json& property) {
+    const nlohmann::json& type = property.at("type");
+    return type.is_array() ? type.at(0).get<std::string>() : type.get<std::string>();
+}
+
 class MethodSchema : public ::testing::TestWithParam<std::string> {
 protected:
     const MethodInfo& info() const { return FindMethod(GetParam()); }
@@ -105,7 +111,7 @@ TEST_P(MethodSchema, EveryRangeKeywordIsEnforced) {
     for (const auto& item : properties().items()) {
         const std::string& key = item.key();
         const nlohmann::json& p = item.value();
-        const bool integer = p.at("type") == "integer";
+        const bool integer = TypeOf(p) == "integer";
         const std::string must = "'" + key + "' must be ";
         // Just outside each bound is rejected; on an inclusive bound is accepted.
         auto check = [&](const char* keyword, double towards, bool inclusive) {
@@ -141,8 +147,7 @@ TEST_P(MethodSchema, EveryRangeKeywordIsEnforced) {
 TEST_P(MethodSchema, WrongJsonTypesAndUnknownKeysAreRejectedByName) {
     for (const auto& item : properties().items()) {
         const std::string& key = item.key();
-        const bool numeric =
-            item.value().at("type") == "number" || item.value().at("type") == "integer";
+        const bool numeric = TypeOf(item.value()) == "number" || TypeOf(item.value()) == "integer";
         const nlohmann::json wrong = numeric ? nlohmann::json("1") : nlohmann::json(1);
         const std::string why = Rejection(info(), {{key, wrong}});
         EXPECT_TRUE(Contains(why, "'" + key + "' expects")) << key << ": " << why;
@@ -150,6 +155,34 @@ TEST_P(MethodSchema, WrongJsonTypesAndUnknownKeysAreRejectedByName) {
     }
     EXPECT_TRUE(Contains(Rejection(info(), {{"no_such_key", 1}}), "unknown parameter"));
     EXPECT_TRUE(Contains(Rejection(info(), nlohmann::json::array()), "must be a JSON object"));
+}
+
+TEST_P(MethodSchema, IntegerKeysRefuseFractionsAndAcceptWholeFloats) {
+    // JSON Schema's "integer": 2.0 is one, 2.5 is not (it must not be truncated to 2).
+    for (const auto& item : properties().items()) {
+        if (TypeOf(item.value()) != "integer") continue;
+        const std::string& key = item.key();
+        const nlohmann::json def = item.value().at("default");
+        const std::string why = Rejection(info(), {{key, def.get<double>() + 0.5}});
+        EXPECT_TRUE(Contains(why, "'" + key + "' must be a whole number")) << key << ": " << why;
+        const nlohmann::json as_float = def.get<double>();  // e.g. 30 -> 30.0
+        EXPECT_EQ(Rejection(info(), {{key, as_float}}), "") << key;
+        EXPECT_EQ(info().create({{key, as_float}})->Params().at(key), def) << key;
+    }
+}
+
+TEST_P(MethodSchema, NullMeansTheDefaultOnlyWhereTheTypeAllowsIt) {
+    for (const auto& item : properties().items()) {
+        const std::string& key = item.key();
+        const std::string why = Rejection(info(), {{key, nullptr}});
+        if (item.value().at("type").is_array()) {  // [type, "null"]
+            EXPECT_EQ(why, "") << key;
+            EXPECT_EQ(info().create({{key, nullptr}})->Params().at(key), item.value().at("default"))
+                << key;
+        } else {
+            EXPECT_TRUE(Contains(why, "'" + key + "' expects")) << key << ": " << why;
+        }
+    }
 }
 
 TEST_P(MethodSchema, CompatPresetsSetTheirDefaultsAndExplicitKeysWin) {
