@@ -3,8 +3,7 @@
 // plus the rotation error against the ground truth and, where a dense reference is run, the
 // rotation difference to it. One Align per benchmark (Iterations(1)): the big sizes take
 // minutes. docs/performance.md has the table this produces and how it was run:
-//   build/bench/regbench_bench --benchmark_filter='Scaling/' \
-//       --benchmark_counters_tabular=true
+//   build/bench/regbench_bench --benchmark_filter='Scaling/' --benchmark_counters_tabular=true
 // The pair: source = SmoothBlobSurface (unit-scale asymmetric closed surface, N points),
 // target = R(25 deg about an oblique axis) * (an independent N-point sample) + t, so no point
 // has an exact partner (a sampling-noise floor on rre, as real scans have).

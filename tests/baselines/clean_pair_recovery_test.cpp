@@ -41,9 +41,15 @@ TEST_P(CleanCompletePairRecovery, RotationErrorWithinTolerance) {
     const auto pair = CleanCompletePair(c.angle_deg);
     const AlignResult r = AlignOk(c.method, pair);
     EXPECT_LT(RreDeg(pair, r.T_target_source), c.rre_tol_deg);
-    if (c.iterations) EXPECT_EQ(r.iterations, *c.iterations);
-    if (c.min_iterations) EXPECT_GE(r.iterations, *c.min_iterations);
-    if (c.stop_reason) EXPECT_EQ(r.stop_reason, *c.stop_reason);
+    if (c.iterations) {
+        EXPECT_EQ(r.iterations, *c.iterations);
+    }
+    if (c.min_iterations) {
+        EXPECT_GE(r.iterations, *c.min_iterations);
+    }
+    if (c.stop_reason) {
+        EXPECT_EQ(r.stop_reason, *c.stop_reason);
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(
