@@ -30,26 +30,18 @@ enum class GmmFeatures {
 NLOHMANN_JSON_SERIALIZE_ENUM(GmmFeatures,
                              {{GmmFeatures::kSklearn, "sklearn"}, {GmmFeatures::kPoints, "points"}})
 
-struct GmmRegOptions {  // documented in baselines/gmmreg.schema.json (defaults too)
+/// Documented in baselines/gmmreg.schema.json (defaults too); the annealing, BFGS and
+/// kernel-sum keys are the shared AnnealedL2MethodOptions base (gmm/gmm_l2.hpp).
+struct GmmRegOptions : AnnealedL2MethodOptions {
     Compat compat;
     GmmFeatures gmm;
     int n_gmm_components;
-    L2Gradient gradient;
     bool normalize;
     double sigma;
     bool use_estimated_sigma;
-    double delta;
-    int outer_iterations;
-    double outer_tol;
-    int maxiter;
-    double gtol;
     int gmm_max_iter;
     double gmm_tol;
     int seed;
-    L2KernelSums kernel_sums;
-    double approx_min_pairs;
-    double cutoff_tolerance;
-    double compress_cell_sigmas;
 };
 // clang-format off
 REGBENCH_OPTION_FIELDS(GmmRegOptions, compat, gmm, n_gmm_components, gradient, normalize, sigma,

@@ -29,26 +29,18 @@ constexpr double kLibsvmCacheMb = 200.0;  // sklearn's OneClassSVM cache_size
 
 void QuietLibsvm(const char*) {}
 
-struct SvrOptions {  // documented in baselines/svr.schema.json (defaults too)
+/// Documented in baselines/svr.schema.json (defaults too); the annealing, BFGS and
+/// kernel-sum keys are the shared AnnealedL2MethodOptions base (gmm/gmm_l2.hpp).
+struct SvrOptions : AnnealedL2MethodOptions {
     Compat compat;
     double nu;
-    L2Gradient gradient;
     bool normalize;
     double sigma;
     double gamma;
     bool use_estimated_sigma;
-    double delta;
     double gamma_delta;
-    int outer_iterations;
-    double outer_tol;
-    int maxiter;
-    double gtol;
     double svm_tol;
     int svm_max_points;
-    L2KernelSums kernel_sums;
-    double approx_min_pairs;
-    double cutoff_tolerance;
-    double compress_cell_sigmas;
 };
 // clang-format off
 REGBENCH_OPTION_FIELDS(SvrOptions, compat, nu, gradient, normalize, sigma, gamma,

@@ -32,6 +32,11 @@ const RangeRule* FindRangeRule(const std::string& keyword) {
     return nullptr;
 }
 
+/// The same JSON as a key-sorted value (nlohmann has no conversion between its two kinds).
+nlohmann::json Unordered(const nlohmann::ordered_json& j) {
+    return nlohmann::json::parse(j.dump());
+}
+
 /// Whether `value` has the JSON type the schema's "type" names.
 bool HasType(const nlohmann::json& value, const std::string& type) {
     if (type == "number") return value.is_number();
@@ -50,7 +55,7 @@ ParamSchema::ParamSchema(const char* text) {
     nlohmann::ordered_json doc;
     try {
         doc = nlohmann::ordered_json::parse(text);
-        document_ = nlohmann::json::parse(text);
+        document_ = Unordered(doc);
     } catch (const nlohmann::json::parse_error& e) {
         throw std::logic_error(std::string("parameter schema is not JSON: ") + e.what());
     }
@@ -94,7 +99,7 @@ ParamSchema::ParamSchema(const char* text) {
         prop.type = (nullable ? type[0] : type).get<std::string>();
         prop.nullable = nullable;
         prop.doc = p["description"].get<std::string>();
-        const nlohmann::json def = nlohmann::json::parse(p["default"].dump());
+        const nlohmann::json def = Unordered(p["default"]);
         if (!HasType(def, prop.type)) fail(at + "default does not have type " + prop.type);
         for (const auto& kw : p.items()) {
             const std::string& k = kw.key();
@@ -117,7 +122,7 @@ ParamSchema::ParamSchema(const char* text) {
             if (k == "x-finite" ? kw.value() != true : !kw.value().is_number()) {
                 fail(at + "'" + k + "' needs " + (k == "x-finite" ? "true" : "a number"));
             }
-            prop.checks.emplace_back(k, nlohmann::json::parse(kw.value().dump()));
+            prop.checks.emplace_back(k, Unordered(kw.value()));
         }
         if (prop.has_choices) {
             bool found = false;
@@ -133,7 +138,7 @@ ParamSchema::ParamSchema(const char* text) {
             fail("\"x-compat-presets\" needs an object and a \"compat\" property");
         }
         for (const auto& preset : presets.items()) {
-            const nlohmann::json values = nlohmann::json::parse(preset.value().dump());
+            const nlohmann::json values = Unordered(preset.value());
             if (!values.is_object()) fail("compat preset '" + preset.key() + "' must be an object");
             try {
                 CheckParamKeysAndTypes(values, defaults_, name_);

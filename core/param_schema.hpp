@@ -7,7 +7,8 @@
 // The subset: top-level "title" (registry name), "description" (one-line summary),
 // "type": "object", "additionalProperties": false, "properties" and the custom
 // "x-compat-presets" ({compat value: {key: default, ...}}). Each property has "type"
-// ("number", "integer", "boolean", "string" or "array"), "description", "default", and
+// ("number", "integer", "boolean", "string" or "array"; or [one of them, "null"], where a
+// user's null means the default; "integer" refuses fractions), "description", "default", and
 // optionally "minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum", "x-finite": true
 // (rejects NaN and infinities, which a bound alone may let through) and "enum" (strings).
 // Range keywords run in the order they are written, so the first failing one is reported.

@@ -6,9 +6,9 @@
 #include <Eigen/Core>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
-#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "core/point_cloud.hpp"
@@ -121,8 +121,8 @@ struct L2Frame {
 
 /// What the approximated L2 sums do for one (mixtures, sigma): each part only where it pays.
 struct L2SumsPlan {
-    MixtureFeatures source;         ///< compressed, or the input mixture
-    MixtureFeatures target;         ///< compressed, or the input mixture
+    MixtureFeatures source;  ///< compressed, or the input mixture
+    MixtureFeatures target;  ///< compressed, or the input mixture
     bool compressed_source = false;
     bool compressed_target = false;
     double cutoff_radius = std::numeric_limits<double>::infinity();  ///< infinity = dense
@@ -170,16 +170,28 @@ struct AnnealedL2Options {
     double delta = 1.0;        ///< sigma multiplier after each step
     double outer_tol = 0.0;    ///< stop when the objective changes by less than this
     L2Gradient gradient = L2Gradient::kExact;
-    BfgsOptions bfgs;  ///< options of every inner BFGS run
+    BfgsOptions bfgs;   ///< options of every inner BFGS run
     L2SumOptions sums;  ///< dense or approximated Gaussian sums in every inner run
 };
 
-/// The schedule from a method's options struct: GMMReg's and SVR's options share the field
-/// names outer_iterations, delta, outer_tol, gradient, maxiter, gtol and the kernel-sum keys
-/// (kernel_sums, approx_min_pairs, cutoff_tolerance, compress_cell_sigmas), so both read them
-/// through this one function.
-template <class MethodOptions>
-AnnealedL2Options AnnealedL2OptionsFrom(const MethodOptions& o) {
+/// The options GMMReg and SVR share, under the same JSON keys in both schemas: the annealing
+/// schedule, the inner BFGS and the kernel sums. Both methods' options structs derive from it
+/// (no defaults here: they are the schemas').
+struct AnnealedL2MethodOptions {
+    L2Gradient gradient;
+    double delta;
+    int outer_iterations;
+    double outer_tol;
+    int maxiter;
+    double gtol;
+    L2KernelSums kernel_sums;
+    double approx_min_pairs;
+    double cutoff_tolerance;
+    double compress_cell_sigmas;
+};
+
+/// The schedule from the shared options.
+inline AnnealedL2Options AnnealedL2OptionsFrom(const AnnealedL2MethodOptions& o) {
     AnnealedL2Options anneal;
     anneal.outer_iterations = o.outer_iterations;
     anneal.delta = o.delta;
@@ -196,10 +208,10 @@ AnnealedL2Options AnnealedL2OptionsFrom(const MethodOptions& o) {
 
 /// Outcome of MinimizeAnnealedL2.
 struct AnnealedL2Result {
-    Eigen::VectorXd theta;  ///< final (q, t), see TransformFromTheta
-    BfgsResult last;        ///< the last inner BFGS run
-    int iterations = 0;     ///< BFGS iterations summed over all outer steps
-    int outer_steps = 0;    ///< outer steps run
+    Eigen::VectorXd theta;      ///< final (q, t), see TransformFromTheta
+    BfgsResult last;            ///< the last inner BFGS run
+    int iterations = 0;         ///< BFGS iterations summed over all outer steps
+    int outer_steps = 0;        ///< outer steps run
     bool approximated = false;  ///< whether any inner run used approximated sums
 };
 
