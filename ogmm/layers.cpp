@@ -3,6 +3,10 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
+
+#include "core/kd_tree.hpp"
+#include "ogmm/profile_scope.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -30,22 +34,41 @@ void CheckChannelFirst(const torch::Tensor& x, int64_t channels, const char* who
 }
 
 // The farthest-point loop shared by both starts: `distance` [B, N] is the running squared
-// distance to the chosen set, `farthest` [B] the next index to take.
+// distance to the chosen set, `farthest` [B] the first index to take. A plain loop over the
+// float data: as tensor ops it cost ~6 small ops per chosen point (LibTorch has no FPS op), which
+// dominated the small configs' forward. Arithmetic as the tensor form did it: float squared
+// differences summed over x, y, z in that order, ties to the lowest index.
 torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
-                                torch::Tensor distance,
-                                torch::Tensor farthest,
+                                const torch::Tensor& distance,
+                                const torch::Tensor& farthest,
                                 int64_t n) {
-    const int64_t batch = xyz.size(0);
-    torch::Tensor chosen = torch::empty({batch, n}, farthest.options());
-    const torch::Tensor rows = torch::arange(batch, farthest.options());
-    for (int64_t i = 0; i < n; ++i) {
-        chosen.select(1, i).copy_(farthest);
-        // xyz [B, 3, N] at (b, :, farthest[b]) -> [B, 3, 1]
-        const torch::Tensor centre = xyz.permute({0, 2, 1}).index({rows, farthest}).unsqueeze(2);
-        distance = torch::minimum(distance, (xyz - centre).pow(2).sum(1));
-        farthest = std::get<1>(distance.max(1));
+    const int64_t batch = xyz.size(0), points = xyz.size(2);
+    const torch::Tensor cloud = xyz.to(torch::kCPU, torch::kFloat).contiguous();  // [B, 3, N]
+    torch::Tensor running = distance.to(torch::kCPU, torch::kFloat).contiguous();  // [B, N]
+    const torch::Tensor start = farthest.to(torch::kCPU, torch::kLong).contiguous();
+    torch::Tensor chosen = torch::empty({batch, n}, torch::kLong);
+    for (int64_t b = 0; b < batch; ++b) {
+        const float* x = cloud.data_ptr<float>() + b * 3 * points;
+        const float *y = x + points, *z = y + points;
+        float* d = running.data_ptr<float>() + b * points;
+        int64_t* out = chosen.data_ptr<int64_t>() + b * n;
+        int64_t next = start.data_ptr<int64_t>()[b];
+        for (int64_t i = 0; i < n; ++i) {
+            out[i] = next;
+            const float cx = x[next], cy = y[next], cz = z[next];
+            float best = -1.0f;
+            for (int64_t j = 0; j < points; ++j) {
+                const float dx = x[j] - cx, dy = y[j] - cy, dz = z[j] - cz;
+                const float dj = std::min(d[j], dx * dx + dy * dy + dz * dz);
+                d[j] = dj;
+                if (dj > best) {
+                    best = dj;
+                    next = j;
+                }
+            }
+        }
     }
-    return chosen;
+    return chosen.to(xyz.device());
 }
 
 void CheckSampleCount(const torch::Tensor& xyz, int64_t n, const char* who) {
@@ -54,6 +77,54 @@ void CheckSampleCount(const torch::Tensor& xyz, int64_t n, const char* who) {
         throw std::runtime_error(std::string(who) + ": cannot sample " + std::to_string(n) +
                                  " of " + std::to_string(xyz.size(2)) + " points");
     }
+}
+
+// kNN of 3-D points with nanoflann (exact double distances, closest first, so the point itself
+// comes first): x [B, 3, N] -> [B, N, k]. The N x N distance matrix + topk it replaces cost
+// ~20 ms per 717-point cloud, a tree ~1 ms.
+torch::Tensor KnnIndices3d(const torch::Tensor& x, int64_t k) {
+    const int64_t batch = x.size(0), points = x.size(2);
+    const torch::Tensor rows =
+        x.to(torch::kCPU, torch::kDouble).transpose(1, 2).contiguous();  // [B, N, 3]
+    torch::Tensor idx = torch::empty({batch, points, k}, torch::kLong);
+    std::vector<Eigen::Index> found;
+    std::vector<double> sq;
+    for (int64_t b = 0; b < batch; ++b) {
+        const PointCloud cloud =
+            Eigen::Map<const PointCloud>(rows.data_ptr<double>() + b * points * 3, points, 3);
+        const KdTree tree(cloud);
+        int64_t* out = idx.data_ptr<int64_t>() + b * points * k;
+        for (int64_t i = 0; i < points; ++i) {
+            tree.Knn(cloud.row(i).transpose(), static_cast<int>(k), found, sq);
+            std::copy(found.begin(), found.end(), out + i * k);
+        }
+    }
+    return idx.to(x.device());
+}
+
+// One DGCNN stage on rows [M, in] (M = B N k edges or B N points, channels last): the 1x1 conv as
+// a GEMM, BatchNorm, ReLU. In eval mode BatchNorm is folded into the GEMM's weights and bias
+// (W' = W g / sqrt(var + eps), b' = beta - mean g / sqrt(var + eps)), so one addmm and one
+// in-place ReLU touch the [M, out] map. In training mode the batch statistics over the M rows
+// are those BatchNorm2d takes over (B, N, k).
+torch::Tensor RowsConvBnRelu(const torch::Tensor& rows,
+                             const torch::nn::Conv2d& conv,
+                             const torch::nn::BatchNorm2d& bn) {
+    const torch::Tensor w = conv->weight.view({conv->weight.size(0), conv->weight.size(1)});
+    const auto& o = bn->options;
+    if (!bn->is_training()) {
+        const torch::Tensor scale = bn->weight * torch::rsqrt(bn->running_var + o.eps());
+        const torch::Tensor bias = bn->bias - bn->running_mean * scale;
+        return torch::addmm(bias, rows, (w * scale.unsqueeze(1)).t()).relu_();
+    }
+    {
+        torch::NoGradGuard no_grad;
+        bn->num_batches_tracked.add_(1);  // as BatchNorm2d::forward counts its batches
+    }
+    const double momentum = o.momentum().has_value() ? o.momentum().value() : 0.1;
+    return torch::relu(torch::batch_norm(torch::mm(rows, w.t()), bn->weight, bn->bias,
+                                         bn->running_mean, bn->running_var, /*training=*/true,
+                                         momentum, o.eps(), /*cudnn_enabled=*/false));
 }
 
 }  // namespace
@@ -112,6 +183,7 @@ torch::Tensor KnnIndices(const torch::Tensor& x, int64_t k) {
                                  std::to_string(x.size(2)) + " points");
     }
     torch::NoGradGuard no_grad;
+    if (x.size(1) == 3) return KnnIndices3d(x, k);
     // -|xi - xj|^2 = -|xi|^2 + 2 xi.xj - |xj|^2, the largest k are the nearest.
     const torch::Tensor inner = -2 * torch::matmul(x.transpose(2, 1), x);
     const torch::Tensor xx = x.pow(2).sum(1, true);
@@ -146,17 +218,24 @@ DgcnnImpl::DgcnnImpl(int64_t emb_dims, int64_t k) : k_(k) {
 
 torch::Tensor DgcnnImpl::forward(const torch::Tensor& xyz) {
     CheckChannelFirst(xyz, 3, "Dgcnn");
-    torch::Tensor x = EdgeFeatures(xyz, KnnIndices(xyz, k_));  // [B, 6, N, k]
-    x = torch::relu(bn1_(conv1_(x)));
-    const torch::Tensor x1 = x.amax(-1, true);
-    x = torch::relu(bn2_(conv2_(x)));
-    const torch::Tensor x2 = x.amax(-1, true);
-    x = torch::relu(bn3_(conv3_(x)));
-    const torch::Tensor x3 = x.amax(-1, true);
-    x = torch::relu(bn4_(conv4_(x)));
-    const torch::Tensor x4 = x.amax(-1, true);
-    x = torch::cat({x1, x2, x3, x4}, 1);  // [B, 512, N, 1]
-    return torch::relu(bn5_(conv5_(x))).squeeze(-1);
+    REGBENCH_PROFILE_SCOPE("ogmm::dgcnn");
+    // Channels last: every edge is a row, so each 1x1 conv is one GEMM over B N k rows and the
+    // max over the k neighbours reduces a strided dimension with the channels contiguous. The
+    // channel-first form (Conv2d on [B, C, N, k], amax over the innermost k) spent most of its
+    // time in the amax and in the convolution's input copies (docs/performance.md).
+    const int64_t batch = xyz.size(0), points = xyz.size(2);
+    torch::Tensor x = EdgeFeatures(xyz, KnnIndices(xyz, k_))  // [B, 6, N, k]
+                          .permute({0, 2, 3, 1})
+                          .reshape({batch * points * k_, 6});
+    std::vector<torch::Tensor> pooled;
+    const std::pair<torch::nn::Conv2d*, torch::nn::BatchNorm2d*> stages[] = {
+        {&conv1_, &bn1_}, {&conv2_, &bn2_}, {&conv3_, &bn3_}, {&conv4_, &bn4_}};
+    for (const auto& [conv, bn] : stages) {
+        x = RowsConvBnRelu(x, *conv, *bn);
+        pooled.push_back(x.view({batch, points, k_, x.size(1)}).amax(2));
+    }
+    const torch::Tensor cat = torch::cat(pooled, 2).view({batch * points, -1});  // [BN, 512]
+    return RowsConvBnRelu(cat, conv5_, bn5_).view({batch, points, -1}).transpose(1, 2);
 }
 
 AttentionalPropagationImpl::AttentionalPropagationImpl(int64_t feature_dim, int64_t num_heads)
