@@ -37,7 +37,7 @@ struct TrainArgs {
     bool jitter = true;
     std::string pairs_file;
     double val_fraction = 0.2;
-    int val_pairs = 64;
+    int val_pairs = 200;
     int batch = 0;
     int epochs = 0;
     int pairs_per_epoch = 0;
@@ -218,6 +218,9 @@ void RunOne(const TrainArgs& a,
             const std::string& out) {
     ogmm::TrainOptions o = a.train;
     o.out_dir = out;
+    // A budget without an explicit length plans the LR schedule to what fits the budget.
+    o.plan_to_budget = a.train.minutes > 0 && !a.train.resume && a.epochs == 0 &&
+                       a.train.max_steps == 0;
     o.run_info = {{"command", command_line}};
     if (a.val_icp) {
         o.refine = [](const PointCloud& s, const PointCloud& t, const Transform& init) {
@@ -277,8 +280,8 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--pairs-per-epoch", a->pairs_per_epoch, "Pairs per epoch (default: recipe)");
     cmd->add_option("--lr", a->lr, "Learning rate (default: recipe)");
     cmd->add_option("--minutes", a->train.minutes,
-                    "Wall-clock budget of the run directory, summed over --resume sessions; ends "
-                    "with a checkpoint");
+                    "Wall-clock budget of this invocation; ends with a validated checkpoint. On a "
+                    "fresh run without --epochs/--max-steps the LR schedule is planned to fit it");
     cmd->add_option("--max-steps", a->train.max_steps, "Stop after this many steps in total");
     cmd->add_flag("--resume", a->train.resume, "Continue from OUT/last");
     cmd->add_option("--threads", a->train.threads, "Torch threads")->capture_default_str();

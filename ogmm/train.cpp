@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
+#include <future>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -10,6 +12,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/cpu_time.hpp"
 #include "core/metrics.hpp"
 #include "core/options.hpp"
 #include "ogmm/checkpoint.hpp"
@@ -60,11 +63,14 @@ std::vector<std::pair<const char*, nlohmann::json>> MetricColumns(const EpochMet
             {"mae_r", m.mae_r},
             {"mae_t", m.mae_t},
             {"ccd", m.ccd},
+            {"recall", m.recall},
             {"mae_r_icp", m.mae_r_refined},
             {"mae_t_icp", m.mae_t_refined},
             {"ccd_icp", m.ccd_refined},
+            {"recall_icp", m.recall_refined},
             {"identity_mae_r", m.identity_mae_r},
-            {"seconds", m.seconds}};
+            {"seconds", m.seconds},
+            {"cpu_seconds", m.cpu_seconds}};
 }
 
 }  // namespace
@@ -122,6 +128,21 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The recall of validation: the fraction of pairs with MAE(R) below 1 degree and MAE(t) below
+// 0.1, the thresholds `regbench report` uses by default (--recall-r 1 --recall-t 0.1).
+constexpr double kRecallMaeRDeg = 1.0;
+constexpr double kRecallMaeT = 0.1;
+// A wall budget stops the run while one more validation (with this margin over the last one's
+// time) and this many more steps still fit, so a budget never ends without a checkpoint.
+constexpr double kValidationTimeMargin = 1.5;
+constexpr double kStepsKeptInReserve = 2.0;
+// plateau: a validation loss must improve by this relative amount to count as a gain
+// (PyTorch's ReduceLROnPlateau default threshold, mode "rel").
+constexpr double kPlateauRelativeGain = 1e-4;
+// A fresh run with a wall budget and no explicit length times this many steps, then plans its
+// LR schedule over the steps that fit the budget (frozen in the checkpoint from then on).
+constexpr std::int64_t kPlanningSteps = 3;
+
 Transform ToTransform(const torch::Tensor& T) {
     const torch::Tensor c = T.detach().to(torch::kCPU, torch::kDouble).contiguous();
     Eigen::Matrix<double, 4, 4, Eigen::RowMajor> m;
@@ -141,6 +162,17 @@ void SeedTorch(std::uint64_t seed, std::uint64_t step) {
     torch::manual_seed(Mix(seed ^ Mix(step)) & 0x7fffffffffffULL);
 }
 
+/// Sums of the validation metrics over pairs.
+struct MetricSums {
+    double mae_r = 0, mae_t = 0, ccd = 0, recall = 0;
+    void Add(const PairMetrics& m) {
+        mae_r += m.mae_r;
+        mae_t += m.mae_t;
+        ccd += m.ccd;
+        recall += (m.mae_r < kRecallMaeRDeg && m.mae_t < kRecallMaeT) ? 1.0 : 0.0;
+    }
+};
+
 /// Validation pass: loss and metrics with and without refinement.
 EpochMetrics Validate(RegistrationNet& net,
                       const std::vector<TrainSample>& val,
@@ -153,9 +185,9 @@ EpochMetrics Validate(RegistrationNet& net,
     net.eval();
     torch::NoGradGuard no_grad;
     SeedTorch(seed, ~0ULL);
-    double loss_sum = 0.0;
+    double loss_sum = 0.0, identity_sum = 0.0;
     std::size_t batches = 0;
-    double sum[7] = {0, 0, 0, 0, 0, 0, 0};
+    MetricSums net_sums, refined_sums;
     for (std::size_t start = 0; start < val.size(); start += batch) {
         const std::size_t end = std::min(val.size(), start + batch);
         const std::vector<TrainSample> part(val.begin() + start, val.begin() + end);
@@ -165,31 +197,27 @@ EpochMetrics Validate(RegistrationNet& net,
         ++batches;
         for (std::size_t i = 0; i < part.size(); ++i) {
             const TrainSample& s = part[i];
-            const Transform T = ToTransform(out.T[i]);
-            const PairMetrics pm = ComputeMetrics(s.T_gt, T, s.source, s.target);
-            sum[0] += pm.mae_r;
-            sum[1] += pm.mae_t;
-            sum[2] += pm.ccd;
-            sum[6] += MotionMetrics(s.T_gt, Transform::Identity()).mae_r;
+            const Transform T = ToTransform(out.T[static_cast<int64_t>(i)]);
+            net_sums.Add(ComputeMetrics(s.T_gt, T, s.source, s.target));
+            identity_sum += MotionMetrics(s.T_gt, Transform::Identity()).mae_r;
             if (refine) {
-                const PairMetrics pr =
-                    ComputeMetrics(s.T_gt, refine(s.source, s.target, T), s.source, s.target);
-                sum[3] += pr.mae_r;
-                sum[4] += pr.mae_t;
-                sum[5] += pr.ccd;
+                refined_sums.Add(
+                    ComputeMetrics(s.T_gt, refine(s.source, s.target, T), s.source, s.target));
             }
         }
     }
     const double n = static_cast<double>(val.size());
     m.val_loss = loss_sum / static_cast<double>(batches);
-    m.mae_r = sum[0] / n;
-    m.mae_t = sum[1] / n;
-    m.ccd = sum[2] / n;
-    m.identity_mae_r = sum[6] / n;
+    m.mae_r = net_sums.mae_r / n;
+    m.mae_t = net_sums.mae_t / n;
+    m.ccd = net_sums.ccd / n;
+    m.recall = net_sums.recall / n;
+    m.identity_mae_r = identity_sum / n;
     if (refine) {
-        m.mae_r_refined = sum[3] / n;
-        m.mae_t_refined = sum[4] / n;
-        m.ccd_refined = sum[5] / n;
+        m.mae_r_refined = refined_sums.mae_r / n;
+        m.mae_t_refined = refined_sums.mae_t / n;
+        m.ccd_refined = refined_sums.ccd / n;
+        m.recall_refined = refined_sums.recall / n;
     }
     return m;
 }
@@ -197,7 +225,13 @@ EpochMetrics Validate(RegistrationNet& net,
 /// What the trainer must remember across --resume besides weights and optimizer.
 struct TrainerState {
     std::int64_t step = 0;
+    /// Steps the LR schedule spans, fixed when the run starts (the recipe's epochs, or what fits
+    /// a wall budget); a resumed run keeps it, so its LRs are those of an uninterrupted run.
+    std::int64_t planned_steps = 0;
+    double lr = 0.0;               ///< LR of the last step taken
     double elapsed_seconds = 0.0;  ///< wall seconds over all sessions
+    double cpu_seconds = 0.0;      ///< process CPU seconds over all sessions
+    std::int64_t pairs_seen = 0;   ///< training pairs consumed (steps x batch)
     double best_mae_r = std::numeric_limits<double>::infinity();
     double plateau_best = std::numeric_limits<double>::infinity();
     int plateau_bad = 0;
@@ -208,7 +242,11 @@ struct TrainerState {
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
                                                 step,
+                                                planned_steps,
+                                                lr,
                                                 elapsed_seconds,
+                                                cpu_seconds,
+                                                pairs_seen,
                                                 best_mae_r,
                                                 plateau_best,
                                                 plateau_bad,
@@ -224,25 +262,6 @@ TrainerState TrainerStateFromJson(nlohmann::json j) {
     if (!j.contains("step")) throw std::invalid_argument("trainer state: no 'step'");
     for (auto it = j.begin(); it != j.end();) it = it->is_null() ? j.erase(it) : std::next(it);
     return j.get<TrainerState>();
-}
-
-/// LR of the next step. multistep: base x gamma^(milestones passed by `progress`).
-double LearningRate(const TrainConfig& c, const TrainerState& s, double progress) {
-    if (c.schedule == "multistep") {
-        double lr = c.lr;
-        for (double m : c.milestones) {
-            if (progress >= m) lr *= c.lr_gamma;
-        }
-        return lr;
-    }
-    if (c.schedule == "plateau") return std::max(c.lr * s.plateau_scale, c.min_lr);
-    return c.lr;
-}
-
-void SetLearningRate(torch::optim::Adam& opt, double lr) {
-    for (auto& group : opt.param_groups()) {
-        static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-    }
 }
 
 std::string FormatSeconds(double s) {
@@ -268,6 +287,352 @@ void AppendMetrics(const fs::path& dir, const EpochMetrics& m) {
     jsonl << ToJson(m).dump() << "\n";
 }
 
+/// Set by SIGINT / SIGTERM while a Trainer runs: the run ends after the current step with a
+/// validated checkpoint, so `--resume` loses nothing.
+volatile std::sig_atomic_t g_stop_requested = 0;
+extern "C" void RequestStop(int) { g_stop_requested = 1; }
+
+/// Installs RequestStop for SIGINT and SIGTERM for the guard's lifetime.
+class StopSignalGuard {
+public:
+    StopSignalGuard() {
+        g_stop_requested = 0;
+        previous_int_ = std::signal(SIGINT, RequestStop);
+        previous_term_ = std::signal(SIGTERM, RequestStop);
+    }
+    ~StopSignalGuard() {
+        std::signal(SIGINT, previous_int_);
+        std::signal(SIGTERM, previous_term_);
+    }
+    StopSignalGuard(const StopSignalGuard&) = delete;
+    StopSignalGuard& operator=(const StopSignalGuard&) = delete;
+
+private:
+    void (*previous_int_)(int) = SIG_DFL;
+    void (*previous_term_)(int) = SIG_DFL;
+};
+
+/// The training loop in named steps: Resume (or start), then Step until the plan, the budget,
+/// --max-steps or a stop signal ends the run, with Validate + Checkpoint at every epoch's end.
+/// Batches are built by a second thread one step ahead (the data stream depends on the step
+/// only, so the order of work does not change a single value).
+class Trainer {
+public:
+    Trainer(const nlohmann::json& config, const TrainData& data, const TrainOptions& options);
+    TrainSummary Run();
+
+private:
+    void Start();
+    void Resume();
+    std::future<PairBatch> Prefetch(std::int64_t step) const;
+    double Step(const PairBatch& batch);
+    void EndEpoch();
+    void Checkpoint(const EpochMetrics& m);
+    bool ShouldStop() const;
+    void PlanForBudget();
+    double LearningRate() const;
+    void LogProgress(const LossTerms& terms);
+    double Elapsed() const;
+    double CpuSeconds() const;
+
+    const nlohmann::json config_;
+    const TrainData& data_;
+    const TrainOptions& options_;
+    std::ostream& log_;
+    const TrainConfig recipe_;
+    const torch::Device device_;
+    const fs::path dir_;
+    const std::int64_t steps_per_epoch_;
+    const double budget_seconds_;
+    std::shared_ptr<RegistrationNet> net_;
+    std::unique_ptr<torch::optim::Adam> opt_;
+    TrainerState state_;
+    TrainSummary summary_;
+    Clock::time_point session_start_ = Clock::now();
+    double session_cpu_start_ = ProcessCpuSeconds();
+    double elapsed_before_ = 0.0, cpu_before_ = 0.0;
+    double last_validation_seconds_ = 0.0, step_seconds_ = 0.0;
+    Clock::time_point last_progress_ = Clock::now();
+    std::int64_t steps_this_session_ = 0;
+};
+
+torch::Device ParseDevice(const std::string& device) {
+    if (device != "cpu" && device != "cuda") {
+        throw std::invalid_argument("--device must be cpu or cuda, got '" + device + "'");
+    }
+    if (device == "cuda" && !torch::cuda::is_available()) {
+        throw std::runtime_error("--device cuda: this LibTorch build sees no CUDA device");
+    }
+    return torch::Device(device == "cuda" ? torch::kCUDA : torch::kCPU);
+}
+
+Trainer::Trainer(const nlohmann::json& config, const TrainData& data, const TrainOptions& options)
+    : config_(config),
+      data_(data),
+      options_(options),
+      log_(options.log != nullptr ? *options.log : std::cerr),
+      recipe_(TrainConfigFromJson(config.value("train", nlohmann::json::object()))),
+      device_(ParseDevice(options.device)),
+      dir_(options.out_dir),
+      steps_per_epoch_(recipe_.pairs_per_epoch / recipe_.batch),
+      budget_seconds_(options.minutes * 60.0) {
+    if (!data.train_pair) throw std::invalid_argument("Train: no training data source");
+    if (options.out_dir.empty()) throw std::invalid_argument("Train: no output directory");
+    torch::set_num_threads(std::max(1, options.threads));
+    torch::manual_seed(options.seed);  // deterministic initial weights
+    net_ = MakeNetFromConfig(config);
+    net_->to(device_);
+    opt_ = std::make_unique<torch::optim::Adam>(
+        net_->parameters(),
+        torch::optim::AdamOptions(recipe_.lr).weight_decay(recipe_.weight_decay));
+}
+
+void Trainer::Start() {
+    if (fs::exists(dir_ / "last")) {
+        throw std::runtime_error("output directory " + dir_.string() +
+                                 " already holds a run (last/); pass --resume or another --out");
+    }
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "metrics.csv") << CsvLine({}, /*header=*/true);
+    std::ofstream(dir_ / "metrics.jsonl");
+    state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
+}
+
+void Trainer::Resume() {
+    const fs::path last = dir_ / "last";
+    if (!fs::exists(last)) throw std::runtime_error("--resume: " + last.string() + " does not exist");
+    const nlohmann::json j = LoadCheckpoint(last.string(), *net_, opt_.get());
+    if (j.contains("config") && j.at("config").value("train", nlohmann::json()) !=
+                                    config_.value("train", nlohmann::json())) {
+        log_ << "train: note: the training recipe differs from the one in " << last.string()
+             << "; continuing with the new one\n";
+    }
+    state_ = TrainerStateFromJson(j.at("trainer"));
+    if (state_.planned_steps <= 0) state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
+    elapsed_before_ = state_.elapsed_seconds;
+    cpu_before_ = state_.cpu_seconds;
+    log_ << "train: resumed " << last.string() << " at step " << state_.step << " of "
+         << state_.planned_steps << " planned\n";
+}
+
+double Trainer::Elapsed() const {
+    return elapsed_before_ + std::chrono::duration<double>(Clock::now() - session_start_).count();
+}
+
+double Trainer::CpuSeconds() const {
+    return cpu_before_ + ProcessCpuSeconds() - session_cpu_start_;
+}
+
+/// multistep: base x gamma^(milestones passed, as fractions of the planned steps); plateau:
+/// base x the factor validations have cut it by; constant: base.
+double Trainer::LearningRate() const {
+    if (recipe_.schedule == "multistep") {
+        double lr = recipe_.lr;
+        const double progress =
+            static_cast<double>(state_.step) / static_cast<double>(std::max<std::int64_t>(1, state_.planned_steps));
+        for (double m : recipe_.milestones) {
+            if (progress >= m) lr *= recipe_.lr_gamma;
+        }
+        return lr;
+    }
+    if (recipe_.schedule == "plateau") {
+        return std::max(recipe_.lr * state_.plateau_scale, recipe_.min_lr);
+    }
+    return recipe_.lr;
+}
+
+/// With options.plan_to_budget, after the first kPlanningSteps steps of a fresh run: the
+/// schedule spans the steps that fit the budget at the measured time a step, never more than the
+/// recipe's steps. From then on the plan is fixed (and stored in every checkpoint).
+void Trainer::PlanForBudget() {
+    if (!options_.plan_to_budget || budget_seconds_ <= 0 || state_.step != kPlanningSteps ||
+        steps_this_session_ != kPlanningSteps) {
+        return;
+    }
+    const double per_step = Elapsed() / static_cast<double>(kPlanningSteps);
+    const auto fit = static_cast<std::int64_t>(budget_seconds_ / std::max(per_step, 1e-9));
+    if (fit < state_.planned_steps) {
+        state_.planned_steps = std::max(fit, kPlanningSteps + 1);
+        log_ << "train: LR schedule planned over " << state_.planned_steps
+             << " steps, what fits the " << options_.minutes << "-minute budget at "
+             << per_step << " s a step (the recipe has "
+             << steps_per_epoch_ * recipe_.epochs << ")\n";
+    }
+}
+
+std::future<PairBatch> Trainer::Prefetch(std::int64_t step) const {
+    // The new thread takes the process's torch thread count on its first parallel op.
+    return std::async(std::launch::async, [this, step] {
+        std::vector<TrainSample> samples;
+        samples.reserve(static_cast<std::size_t>(recipe_.batch));
+        for (int i = 0; i < recipe_.batch; ++i) {
+            samples.push_back(data_.train_pair(static_cast<std::uint64_t>(step) *
+                                                   static_cast<std::uint64_t>(recipe_.batch) +
+                                               static_cast<std::uint64_t>(i)));
+        }
+        return Collate(samples, device_);
+    });
+}
+
+/// One optimizer step: seeded forward, loss, backward and Adam at the schedule's LR; a
+/// non-finite loss skips the update (logged).
+double Trainer::Step(const PairBatch& batch) {
+    state_.lr = LearningRate();
+    for (auto& group : opt_->param_groups()) {
+        static_cast<torch::optim::AdamOptions&>(group.options()).lr(state_.lr);
+    }
+    SeedTorch(options_.seed, static_cast<std::uint64_t>(state_.step));
+    net_->train();
+    const NetOutput out = net_->Forward(batch);
+    const LossTerms terms = net_->Loss(batch, out);
+    const torch::Tensor total = terms.at("total");
+    opt_->zero_grad();
+    const double loss = total.item<double>();
+    if (std::isfinite(loss)) {
+        total.backward();
+        opt_->step();
+    } else {
+        log_ << "train: step " << state_.step << ": non-finite loss, update skipped\n";
+    }
+    summary_.step_losses.push_back(loss);
+    state_.epoch_loss_sum += std::isfinite(loss) ? loss : 0.0;
+    state_.epoch_loss_steps += std::isfinite(loss) ? 1 : 0;
+    state_.pairs_seen += recipe_.batch;
+    ++state_.step;
+    ++steps_this_session_;
+    LogProgress(terms);
+    return loss;
+}
+
+void Trainer::LogProgress(const LossTerms& terms) {
+    if (std::chrono::duration<double>(Clock::now() - last_progress_).count() <
+            options_.progress_seconds &&
+        state_.step != state_.planned_steps) {
+        return;
+    }
+    last_progress_ = Clock::now();
+    const double session = std::chrono::duration<double>(Clock::now() - session_start_).count();
+    const double rate =
+        static_cast<double>(steps_this_session_ * recipe_.batch) / std::max(session, 1e-9);
+    double eta = static_cast<double>((state_.planned_steps - state_.step) * recipe_.batch) /
+                 std::max(rate, 1e-9);
+    if (budget_seconds_ > 0) eta = std::min(eta, std::max(0.0, budget_seconds_ - session));
+    log_ << "train: epoch " << (state_.step - 1) / steps_per_epoch_ + 1 << " step " << state_.step
+         << "/" << state_.planned_steps << " lr " << state_.lr;
+    for (const auto& [name, value] : terms) log_ << " " << name << " " << value.item<double>();
+    log_ << " | " << std::fixed << std::setprecision(2) << rate << " pairs/s, ETA "
+         << FormatSeconds(eta) << std::defaultfloat << std::setprecision(6) << "\n";
+    log_.flush();
+}
+
+bool Trainer::ShouldStop() const {
+    if (state_.step >= state_.planned_steps) return true;
+    if (options_.max_steps > 0 && state_.step >= options_.max_steps) return true;
+    if (g_stop_requested != 0) return true;
+    const double session = std::chrono::duration<double>(Clock::now() - session_start_).count();
+    return budget_seconds_ > 0 && session + last_validation_seconds_ * kValidationTimeMargin +
+                                          step_seconds_ * kStepsKeptInReserve >
+                                      budget_seconds_;
+}
+
+/// Validation, the plateau schedule's bookkeeping, metrics files and checkpoints.
+void Trainer::EndEpoch() {
+    const auto t0 = Clock::now();
+    const int val_batch = options_.val_batch > 0 ? options_.val_batch : recipe_.batch;
+    EpochMetrics m =
+        Validate(*net_, data_.validation, val_batch, device_, options_.refine, options_.seed);
+    last_validation_seconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
+    m.epoch = static_cast<int>((state_.step + steps_per_epoch_ - 1) / steps_per_epoch_);
+    m.step = state_.step;
+    m.lr = state_.lr;
+    m.train_loss = state_.epoch_loss_steps > 0
+                       ? state_.epoch_loss_sum / static_cast<double>(state_.epoch_loss_steps)
+                       : 0;
+    m.seconds = Elapsed();
+    m.cpu_seconds = CpuSeconds();
+    state_.epoch_loss_sum = 0;
+    state_.epoch_loss_steps = 0;
+    if (recipe_.schedule == "plateau") {
+        if (m.val_loss < state_.plateau_best * (1 - kPlateauRelativeGain)) {
+            state_.plateau_best = m.val_loss;
+            state_.plateau_bad = 0;
+        } else if (++state_.plateau_bad > recipe_.plateau_patience) {
+            state_.plateau_scale *= recipe_.lr_gamma;
+            state_.plateau_bad = 0;
+        }
+    }
+    AppendMetrics(dir_, m);
+    summary_.epochs.push_back(m);
+    log_ << "train: validation epoch " << m.epoch << " step " << m.step << ": loss " << m.val_loss
+         << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t "
+         << m.mae_t << ", ccd " << m.ccd << ", recall " << m.recall;
+    if (options_.refine) log_ << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
+    if (!data_.validation.empty() && m.mae_r >= m.identity_mae_r) {
+        log_ << "; WORSE THAN THE IDENTITY (network alone)";
+    }
+    log_ << "\n";
+    Checkpoint(m);
+}
+
+void Trainer::Checkpoint(const EpochMetrics& m) {
+    state_.elapsed_seconds = Elapsed();
+    state_.cpu_seconds = CpuSeconds();
+    const bool is_best = !data_.validation.empty() && m.mae_r < state_.best_mae_r;
+    if (is_best) state_.best_mae_r = m.mae_r;
+    nlohmann::json meta = {
+        {"model", config_.value("name", std::string())},
+        {"config", config_},
+        {"data", data_.provenance},
+        {"steps", state_.step},
+        {"epoch", static_cast<double>(state_.step) / static_cast<double>(steps_per_epoch_)},
+        {"pairs_seen", state_.pairs_seen},
+        {"cpu_seconds", state_.cpu_seconds},
+        {"wall_seconds", state_.elapsed_seconds},
+        {"seed", options_.seed},
+        {"trainer", ToJson(state_)},
+        {"run", options_.run_info},
+        {"parameters", CountParameters(*net_)},
+        {"metrics", ToJson(m)},
+        // The network alone does worse than not moving the source at all on validation.
+        {"worse_than_identity", !data_.validation.empty() && m.mae_r >= m.identity_mae_r}};
+    SaveCheckpoint((dir_ / "last").string(), *net_, meta, opt_.get());
+    if (is_best) SaveCheckpoint((dir_ / "best").string(), *net_, meta, nullptr);
+}
+
+TrainSummary Trainer::Run() {
+    if (options_.resume) {
+        Resume();
+    } else {
+        Start();
+    }
+    const StopSignalGuard signals;
+    std::future<PairBatch> next = Prefetch(state_.step);
+    while (!ShouldStop()) {
+        const auto t0 = Clock::now();
+        const PairBatch batch = next.get();
+        next = Prefetch(state_.step + 1);
+        Step(batch);
+        step_seconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
+        PlanForBudget();
+        if (state_.step % steps_per_epoch_ == 0) EndEpoch();
+    }
+    next.wait();
+    // A run stopped mid-epoch (budget, max_steps, a signal) still ends with a validated
+    // checkpoint.
+    if (state_.epoch_loss_steps > 0 || !fs::exists(dir_ / "last")) EndEpoch();
+    summary_.steps = state_.step;
+    summary_.budget_exhausted = budget_seconds_ > 0 && state_.step < state_.planned_steps &&
+                                !(options_.max_steps > 0 && state_.step >= options_.max_steps);
+    if (g_stop_requested != 0) {
+        log_ << "train: stopped by a signal at step " << state_.step
+             << " with a checkpoint; continue with --resume\n";
+    } else if (summary_.budget_exhausted) {
+        log_ << "train: wall budget of " << options_.minutes << " min reached at step "
+             << state_.step << "; continue with --resume\n";
+    }
+    return summary_;
+}
+
 }  // namespace
 
 std::vector<Transform> Predict(RegistrationNet& net,
@@ -277,10 +642,12 @@ std::vector<Transform> Predict(RegistrationNet& net,
     net.eval();
     torch::NoGradGuard no_grad;
     std::vector<Transform> out;
-    for (std::size_t start = 0; start < samples.size(); start += batch) {
-        const std::size_t end = std::min(samples.size(), start + batch);
+    for (std::size_t start = 0; start < samples.size(); start += static_cast<std::size_t>(batch)) {
+        const std::size_t end = std::min(samples.size(), start + static_cast<std::size_t>(batch));
         const PairBatch b = Collate(
-            std::vector<TrainSample>(samples.begin() + start, samples.begin() + end), device);
+            std::vector<TrainSample>(samples.begin() + static_cast<std::ptrdiff_t>(start),
+                                     samples.begin() + static_cast<std::ptrdiff_t>(end)),
+            device);
         const NetOutput o = net.Forward(b);
         for (int64_t i = 0; i < o.T.size(0); ++i) out.push_back(ToTransform(o.T[i]));
     }
@@ -290,182 +657,7 @@ std::vector<Transform> Predict(RegistrationNet& net,
 TrainSummary Train(const nlohmann::json& config,
                    const TrainData& data,
                    const TrainOptions& options) {
-    std::ostream& log = options.log != nullptr ? *options.log : std::cerr;
-    if (!data.train_pair) throw std::invalid_argument("Train: no training data source");
-    if (options.out_dir.empty()) throw std::invalid_argument("Train: no output directory");
-    const TrainConfig tc = TrainConfigFromJson(config.value("train", nlohmann::json::object()));
-    if (options.device != "cpu" && options.device != "cuda") {
-        throw std::invalid_argument("--device must be cpu or cuda, got '" + options.device + "'");
-    }
-    if (options.device == "cuda" && !torch::cuda::is_available()) {
-        throw std::runtime_error("--device cuda: this LibTorch build sees no CUDA device");
-    }
-    const torch::Device device(options.device == "cuda" ? torch::kCUDA : torch::kCPU);
-    torch::set_num_threads(std::max(1, options.threads));
-
-    const fs::path dir(options.out_dir);
-    const fs::path last = dir / "last";
-    const fs::path best = dir / "best";
-    if (!options.resume && fs::exists(last)) {
-        throw std::runtime_error("output directory " + dir.string() +
-                                 " already holds a run (last/); pass --resume or another --out");
-    }
-    fs::create_directories(dir);
-
-    torch::manual_seed(options.seed);  // deterministic initial weights
-    std::shared_ptr<RegistrationNet> net = MakeNetFromConfig(config);
-    net->to(device);
-    torch::optim::Adam opt(net->parameters(),
-                           torch::optim::AdamOptions(tc.lr).weight_decay(tc.weight_decay));
-    TrainerState state;
-    if (options.resume) {
-        if (!fs::exists(last)) {
-            throw std::runtime_error("--resume: " + last.string() + " does not exist");
-        }
-        const nlohmann::json j = LoadCheckpoint(last.string(), *net, &opt);
-        if (j.contains("config") && j.at("config").value("train", nlohmann::json()) !=
-                                        config.value("train", nlohmann::json())) {
-            log << "train: note: the training recipe differs from the one in " << last.string()
-                << "; continuing with the new one\n";
-        }
-        state = TrainerStateFromJson(j.at("trainer"));
-        log << "train: resumed " << last.string() << " at step " << state.step << "\n";
-    } else {
-        std::ofstream(dir / "metrics.csv") << CsvLine({}, /*header=*/true);
-        std::ofstream(dir / "metrics.jsonl");
-    }
-
-    const std::int64_t steps_per_epoch = tc.pairs_per_epoch / tc.batch;
-    const std::int64_t total_steps = steps_per_epoch * tc.epochs;
-    const double budget = options.minutes * 60.0;
-    const int val_batch = options.val_batch > 0 ? options.val_batch : tc.batch;
-    const auto session_start = Clock::now();
-    const double elapsed_before = state.elapsed_seconds;
-    const auto elapsed = [&] {
-        return elapsed_before + std::chrono::duration<double>(Clock::now() - session_start).count();
-    };
-    TrainSummary summary;
-    double last_validation_seconds = 0.0;
-    double step_seconds = 0.0;
-    auto last_progress = Clock::now();
-    std::int64_t steps_this_session = 0;
-
-    const auto checkpoint_meta = [&](const EpochMetrics* m) {
-        state.elapsed_seconds = elapsed();
-        nlohmann::json meta = {{"model", config.value("name", std::string())},
-                               {"config", config},
-                               {"data", data.provenance},
-                               {"steps", state.step},
-                               {"epoch", static_cast<double>(state.step) / steps_per_epoch},
-                               {"seed", options.seed},
-                               {"trainer", ToJson(state)},
-                               {"run", options.run_info},
-                               {"parameters", CountParameters(*net)}};
-        if (m != nullptr) meta["metrics"] = ToJson(*m);
-        return meta;
-    };
-    // Validation + checkpoints; called at the end of every epoch and when the run stops early.
-    const auto end_epoch = [&] {
-        const auto t0 = Clock::now();
-        EpochMetrics m =
-            Validate(*net, data.validation, val_batch, device, options.refine, options.seed);
-        last_validation_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-        m.epoch = static_cast<int>((state.step + steps_per_epoch - 1) / steps_per_epoch);
-        m.step = state.step;
-        m.lr = LearningRate(tc, state, static_cast<double>(state.step) / total_steps);
-        m.train_loss =
-            state.epoch_loss_steps > 0 ? state.epoch_loss_sum / state.epoch_loss_steps : 0;
-        m.seconds = elapsed();
-        state.epoch_loss_sum = 0;
-        state.epoch_loss_steps = 0;
-        if (tc.schedule == "plateau") {
-            if (m.val_loss < state.plateau_best * (1 - 1e-4)) {
-                state.plateau_best = m.val_loss;
-                state.plateau_bad = 0;
-            } else if (++state.plateau_bad > tc.plateau_patience) {
-                state.plateau_scale *= tc.lr_gamma;
-                state.plateau_bad = 0;
-            }
-        }
-        AppendMetrics(dir, m);
-        summary.epochs.push_back(m);
-        log << "train: validation epoch " << m.epoch << " step " << m.step << ": loss "
-            << m.val_loss << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r
-            << "), mae_t " << m.mae_t << ", ccd " << m.ccd;
-        if (options.refine)
-            log << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
-        log << "\n";
-        const bool is_best = !data.validation.empty() && m.mae_r < state.best_mae_r;
-        if (is_best) state.best_mae_r = m.mae_r;
-        SaveCheckpoint(last.string(), *net, checkpoint_meta(&m), &opt);
-        if (is_best) SaveCheckpoint(best.string(), *net, checkpoint_meta(&m), nullptr);
-    };
-
-    while (state.step < total_steps) {
-        if (options.max_steps > 0 && state.step >= options.max_steps) break;
-        // Stop while a validation and one more step still fit the budget.
-        if (budget > 0 && elapsed() + last_validation_seconds * 1.5 + step_seconds * 2 > budget) {
-            summary.budget_exhausted = true;
-            break;
-        }
-        const double progress =
-            budget > 0 ? std::max(static_cast<double>(state.step) / total_steps, elapsed() / budget)
-                       : static_cast<double>(state.step) / total_steps;
-        const double lr = LearningRate(tc, state, progress);
-        SetLearningRate(opt, lr);
-        const auto t0 = Clock::now();
-        std::vector<TrainSample> samples;
-        samples.reserve(tc.batch);
-        for (int i = 0; i < tc.batch; ++i) {
-            samples.push_back(
-                data.train_pair(static_cast<std::uint64_t>(state.step) * tc.batch + i));
-        }
-        const PairBatch batch = Collate(samples, device);
-        SeedTorch(options.seed, static_cast<std::uint64_t>(state.step));
-        net->train();
-        const NetOutput out = net->Forward(batch);
-        const LossTerms terms = net->Loss(batch, out);
-        const torch::Tensor total = terms.at("total");
-        opt.zero_grad();
-        const double loss = total.item<double>();
-        if (std::isfinite(loss)) {
-            total.backward();
-            opt.step();
-        } else {
-            log << "train: step " << state.step << ": non-finite loss, update skipped\n";
-        }
-        summary.step_losses.push_back(loss);
-        state.epoch_loss_sum += std::isfinite(loss) ? loss : 0.0;
-        state.epoch_loss_steps += std::isfinite(loss) ? 1 : 0;
-        ++state.step;
-        ++steps_this_session;
-        step_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-        const double session = std::chrono::duration<double>(Clock::now() - session_start).count();
-        if (std::chrono::duration<double>(Clock::now() - last_progress).count() >=
-                options.progress_seconds ||
-            state.step == total_steps) {
-            last_progress = Clock::now();
-            const double rate = steps_this_session * tc.batch / std::max(session, 1e-9);
-            double eta = (total_steps - state.step) * tc.batch / std::max(rate, 1e-9);
-            if (budget > 0) eta = std::min(eta, std::max(0.0, budget - elapsed()));
-            log << "train: epoch " << (state.step - 1) / steps_per_epoch + 1 << "/" << tc.epochs
-                << " step " << state.step << "/" << total_steps << " lr " << lr;
-            for (const auto& [name, value] : terms)
-                log << " " << name << " " << value.item<double>();
-            log << " | " << std::fixed << std::setprecision(2) << rate << " pairs/s, ETA "
-                << FormatSeconds(eta) << std::defaultfloat << std::setprecision(6) << "\n";
-            log.flush();
-        }
-        if (state.step % steps_per_epoch == 0) end_epoch();
-    }
-    // A run stopped mid-epoch (budget or max_steps) still ends with a validated checkpoint.
-    if (state.epoch_loss_steps > 0 || !fs::exists(last)) end_epoch();
-    summary.steps = state.step;
-    if (summary.budget_exhausted) {
-        log << "train: wall budget of " << options.minutes << " min reached at step " << state.step
-            << "; continue with --resume\n";
-    }
-    return summary;
+    return Trainer(config, data, options).Run();
 }
 
 }  // namespace regbench::ogmm

@@ -48,8 +48,8 @@ struct TrainConfig {
     int epochs = 10;                     ///< epochs of `pairs_per_epoch` pairs
     int pairs_per_epoch = 512;           ///< training pairs per epoch (the stream is endless)
     std::string schedule = "multistep";  ///< "multistep" | "plateau" | "constant"
-    /// multistep: LR x lr_gamma at these fractions of the run (steps, or of the wall budget when
-    /// --minutes ends the run first), so a short run keeps the recipe's shape.
+    /// multistep: LR x lr_gamma at these fractions of the run's planned steps (the recipe's
+    /// epochs, or what fits a wall budget, see TrainOptions::plan_to_budget).
     std::vector<double> milestones = {75.0 / 450, 150.0 / 450, 200.0 / 450};
     double lr_gamma = 0.1;      ///< multistep / plateau factor
     int plateau_patience = 10;  ///< plateau: epochs without a 1e-4 relative gain before a cut
@@ -62,7 +62,12 @@ TrainConfig TrainConfigFromJson(const nlohmann::json& j);
 struct TrainOptions {
     std::string out_dir;             ///< run directory: last/, best/, metrics.csv, metrics.jsonl
     bool resume = false;             ///< continue from out_dir/last
-    double minutes = 0.0;            ///< wall-clock budget; 0 = run all epochs
+    /// Wall-clock budget of this invocation (0: none); the run ends with a validated checkpoint.
+    double minutes = 0.0;
+    /// With `minutes` on a fresh run: plan the LR schedule over the steps that fit the budget
+    /// (timed on the first steps) when the recipe's steps would not fit. The plan is stored in
+    /// the checkpoint; a resumed run keeps it.
+    bool plan_to_budget = false;
     std::int64_t max_steps = 0;      ///< stop after this many steps in total; 0 = no limit
     int threads = 1;                 ///< torch intra-op threads
     std::uint64_t seed = 0;          ///< initialisation and per-step seeds
@@ -83,11 +88,14 @@ struct EpochMetrics {
     double mae_r = 0.0;       ///< validation mean MAE(R) [deg], network alone
     double mae_t = 0.0;
     double ccd = 0.0;
+    double recall = 0.0;          ///< fraction of pairs with mae_r < 1 deg and mae_t < 0.1
     double mae_r_refined = -1.0;  ///< after `refine` (-1 when none)
     double mae_t_refined = -1.0;
     double ccd_refined = -1.0;
+    double recall_refined = -1.0;
     double identity_mae_r = 0.0;  ///< the identity's MAE(R) on the same pairs (the floor)
     double seconds = 0.0;         ///< wall time since the run started (over resumes)
+    double cpu_seconds = 0.0;     ///< process CPU time since the run started (over resumes)
 };
 nlohmann::json ToJson(const EpochMetrics& m);
 
