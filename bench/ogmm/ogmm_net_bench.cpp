@@ -1,13 +1,23 @@
+// Learned networks against their multiply-accumulate floor (docs/performance.md, section 4).
 // BM_OgmmForward / BM_DeepGmrForward: one batch-1 forward (no gradient, eval mode) per
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
+// BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
+// backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
 // Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
-// Counters: parameters and the analytic multiply-accumulate count of one forward on the pair
-// (ogmm/cost.hpp, formulas in docs/learned-methods.md).
+// Counters, all in CPU time of the calling thread (one torch thread):
+//   MACs       analytic multiply-accumulates of the timed work (ogmm/cost.hpp; a training step
+//              counts forward + backward as 3 x the forward, the usual convention)
+//   GMAC_per_s rate of a 717x512 by 512x512 fp32 torch::mm, timed interleaved with the network
+//              in the same process, so a loaded machine slows both alike
+//   floor_ms   MACs at that rate
+//   ratio      CPU ms of the network / floor_ms (targets: forward 2.5, training step 4)
+// Run: OMP_WAIT_POLICY=PASSIVE build/bench/regbench_bench --benchmark_filter='Forward|TrainStep'
 #include <benchmark/benchmark.h>
 
 #include <string>
 #include <utility>
 
+#include "core/cpu_time.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/ogmm_net.hpp"
 #include "ogmm/zoo.hpp"
@@ -15,34 +25,106 @@
 namespace regbench::bench {
 namespace {
 
-/// Times net->Forward on a uniform random pair of state.range(0) points in [-0.5, 0.5]^3.
+constexpr int64_t kGemmRows = 717, kGemmInner = 512, kGemmCols = 512;
+constexpr int64_t kTrainBatch = 8;
+
+/// A uniform random batch of `batch` pairs of `points` points in [-0.5, 0.5]^3 with the ground
+/// truth and overlap labels a loss needs.
+ogmm::PairBatch RandomBatch(int64_t batch, int64_t points) {
+    torch::manual_seed(0);
+    ogmm::PairBatch pair;
+    pair.source = torch::rand({batch, points, 3}) - 0.5;
+    pair.target = torch::rand({batch, points, 3}) - 0.5;
+    pair.T_gt = torch::eye(4).expand({batch, 4, 4}).contiguous();
+    pair.source_overlap = (torch::rand({batch, points}) > 0.3).to(torch::kFloat);
+    pair.target_overlap = (torch::rand({batch, points}) > 0.3).to(torch::kFloat);
+    return pair;
+}
+
+/// Times `work` and, interleaved, the GEMM floor; sets the counters.
+template <typename Work>
+void TimeAgainstGemm(benchmark::State& state, double macs, Work&& work) {
+    const torch::Tensor a = torch::rand({kGemmRows, kGemmInner});
+    const torch::Tensor b = torch::rand({kGemmInner, kGemmCols});
+    torch::Tensor c = torch::empty({kGemmRows, kGemmCols});
+    work();  // warm-up, untimed
+    torch::mm_out(c, a, b);
+    double work_cpu = 0.0, gemm_cpu = 0.0;
+    int64_t gemms = 0;
+    for (auto _ : state) {
+        const double t0 = ThreadCpuSeconds();
+        work();
+        const double t1 = ThreadCpuSeconds();
+        work_cpu += t1 - t0;
+        // About as much GEMM time as network time, at least one GEMM.
+        double spent = 0.0;
+        do {
+            torch::mm_out(c, a, b);
+            ++gemms;
+            spent = ThreadCpuSeconds() - t1;
+        } while (spent < 0.25 * (t1 - t0));
+        gemm_cpu += spent;
+        benchmark::DoNotOptimize(c.data_ptr());
+    }
+    const double gemm_rate =
+        static_cast<double>(gemms * kGemmRows * kGemmInner * kGemmCols) / gemm_cpu;
+    const double work_ms = 1e3 * work_cpu / static_cast<double>(state.iterations());
+    const double floor_ms = 1e3 * macs / gemm_rate;
+    state.counters["MACs"] = macs;
+    state.counters["GMAC_per_s"] = gemm_rate * 1e-9;
+    state.counters["floor_ms"] = floor_ms;
+    state.counters["cpu_ms"] = work_ms;
+    state.counters["ratio"] = work_ms / floor_ms;
+}
+
+/// Forward of one pair of state.range(0) points.
 void TimeForward(benchmark::State& state,
                  ogmm::RegistrationNet& net,
                  const nlohmann::json& config) {
     net.eval();
     const int64_t points = state.range(0);
-    torch::manual_seed(0);
-    ogmm::PairBatch pair;
-    pair.source = torch::rand({1, points, 3}) - 0.5;
-    pair.target = torch::rand({1, points, 3}) - 0.5;
+    const ogmm::PairBatch pair = RandomBatch(1, points);
     torch::NoGradGuard no_grad;
-    net.Forward(pair);  // warm-up, untimed
-    for (auto _ : state) {
+    const auto macs = static_cast<double>(ogmm::ComputeForwardCost(config, points, points).total);
+    TimeAgainstGemm(state, macs, [&] {
         torch::manual_seed(1);  // same FPS starts every iteration
         const ogmm::NetOutput out = net.Forward(pair);
         benchmark::DoNotOptimize(out.T.data_ptr());
-    }
+    });
     state.counters["parameters"] = static_cast<double>(ogmm::CountParameters(net));
-    state.counters["MACs"] =
+}
+
+/// One training step (train mode, Adam) on kTrainBatch pairs of state.range(0) points.
+void TimeTrainStep(benchmark::State& state,
+                   ogmm::RegistrationNet& net,
+                   const nlohmann::json& config) {
+    net.train();
+    const int64_t points = state.range(0);
+    const ogmm::PairBatch batch = RandomBatch(kTrainBatch, points);
+    torch::optim::Adam opt(net.parameters(), torch::optim::AdamOptions(1e-4));
+    const double forward_macs =
         static_cast<double>(ogmm::ComputeForwardCost(config, points, points).total);
+    TimeAgainstGemm(state, 3.0 * forward_macs * kTrainBatch, [&] {
+        torch::manual_seed(1);
+        const ogmm::NetOutput out = net.Forward(batch);
+        const torch::Tensor loss = net.Loss(batch, out).at("total");
+        opt.zero_grad();
+        loss.backward();
+        opt.step();
+    });
+}
+
+nlohmann::json OgmmConfig(const std::string& name, const std::string& attention) {
+    nlohmann::json config = ogmm::OgmmNamedConfig(name);
+    config["attention"] = attention;
+    return config;
 }
 
 void BM_OgmmForward(benchmark::State& state,
                     const std::string& name,
                     const std::string& attention) {
     torch::set_num_threads(static_cast<int>(state.range(1)));
-    nlohmann::json config = ogmm::OgmmNamedConfig(name);
-    config["attention"] = attention;
+    const nlohmann::json config = OgmmConfig(name, attention);
     TimeForward(state, *ogmm::MakeOgmmNet(config), config);
 }
 
@@ -52,13 +134,25 @@ void BM_DeepGmrForward(benchmark::State& state, const std::string& name) {
     TimeForward(state, *ogmm::MakeNetFromConfig(config), config);
 }
 
-/// One forward of 717 points (the bench pair's size) on one thread, in milliseconds.
+void BM_OgmmTrainStep(benchmark::State& state, const std::string& name) {
+    torch::set_num_threads(static_cast<int>(state.range(1)));
+    const nlohmann::json config = OgmmConfig(name, "clustered");
+    TimeTrainStep(state, *ogmm::MakeOgmmNet(config), config);
+}
+
+void BM_DeepGmrTrainStep(benchmark::State& state, const std::string& name) {
+    torch::set_num_threads(static_cast<int>(state.range(1)));
+    const nlohmann::json config = ogmm::NamedConfig(name);
+    TimeTrainStep(state, *ogmm::MakeNetFromConfig(config), config);
+}
+
+/// 717 points (the bench pair's size) on one thread, in milliseconds.
 void Configure(benchmark::internal::Benchmark* b) {
     b->Args({717, 1})->ArgNames({"points", "threads"})->Unit(benchmark::kMillisecond);
 }
 
 // Runs before main(), like the BENCHMARK macros (see align_bench.cpp). Names as
-// BM_OgmmForward/<label>, BM_DeepGmrForward/<label>.
+// BM_OgmmForward/<label>, BM_DeepGmrForward/<label>, BM_*TrainStep/<label>.
 const bool kRegistered = [] {
     struct OgmmCase {
         const char* label;
@@ -86,6 +180,10 @@ const bool kRegistered = [] {
         Configure(benchmark::RegisterBenchmark(("BM_DeepGmrForward/" + std::string(label)).c_str(),
                                                BM_DeepGmrForward, std::string(config)));
     }
+    Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,
+                                           std::string("ogmm-small")));
+    Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small",
+                                           BM_DeepGmrTrainStep, std::string("deepgmr-small")));
     return true;
 }();
 
