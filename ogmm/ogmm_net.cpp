@@ -1,6 +1,7 @@
 #include "ogmm/ogmm_net.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "core/options.hpp"
+#include "gmm/simd_exp.hpp"
 #include "ogmm/gmm_head.hpp"
 
 namespace regbench::ogmm {
@@ -156,7 +158,7 @@ std::shared_ptr<RegistrationNet> MakeOgmmNet(const nlohmann::json& config) {
     return std::make_shared<OgmmNet>(ParseOgmmConfig(config));
 }
 
-OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
+OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz,
                          const torch::Tensor& overlap,
                          int64_t clusters,
                          const GmmFitOptions& options) {
@@ -182,6 +184,189 @@ OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
         mu = ClusterAverages(gamma, xyz);
     }
     return {gamma, mu, gamma.mean(1)};
+}
+
+// One cloud of FitOverlapGmm in plain loops (the CPU path). The tensor-op version calls ~40
+// small LibTorch ops per Sinkhorn iteration on a [1, N, J] tensor (two logsumexp, a mean, an
+// item() sync); here each iteration is two passes over an N x J double buffer with a branch-free
+// exp that vectorises. Same maths; the row update is written in the equivalent form
+// u_i = eps (log p_i - LSE_j((v_j - C_ij) / eps)), which drops the u_i / eps that the tensor
+// form adds and subtracts again.
+namespace {
+
+// u_i = eps * (log_p_i - LSE_j((v_j - C_ij) / eps)) for every row i of cost [n, J].
+REGBENCH_SIMD_CLONES void SinkhornRows(const double* cost,
+                                       const double* v,
+                                       const double* log_p,
+                                       long n,
+                                       long J,
+                                       double epsilon,
+                                       double* scratch,
+                                       double* u) {
+    const double inv = 1.0 / epsilon;
+    for (long i = 0; i < n; ++i) {
+        const double* c = cost + i * J;
+        double m = -std::numeric_limits<double>::infinity();
+#pragma omp simd reduction(max : m)
+        for (long j = 0; j < J; ++j) {
+            const double a = (v[j] - c[j]) * inv;
+            scratch[j] = a;
+            m = a > m ? a : m;
+        }
+        double s = 0.0;
+#pragma omp simd reduction(+ : s)
+        for (long j = 0; j < J; ++j) s += ExpClamped(scratch[j] - m);
+        u[i] = epsilon * (log_p[i] - (m + std::log(s)));
+    }
+}
+
+// v_j = eps * (log_q - LSE_i((u_i - C_ij) / eps)) for every column j of cost [n, J].
+REGBENCH_SIMD_CLONES void SinkhornColumns(const double* cost,
+                                          const double* u,
+                                          double log_q,
+                                          long n,
+                                          long J,
+                                          double epsilon,
+                                          double* column_max,
+                                          double* column_sum,
+                                          double* v) {
+    const double inv = 1.0 / epsilon;
+    for (long j = 0; j < J; ++j) {
+        column_max[j] = -std::numeric_limits<double>::infinity();
+        column_sum[j] = 0.0;
+    }
+    for (long i = 0; i < n; ++i) {
+        const double* c = cost + i * J;
+#pragma omp simd
+        for (long j = 0; j < J; ++j) {
+            const double a = (u[i] - c[j]) * inv;
+            column_max[j] = a > column_max[j] ? a : column_max[j];
+        }
+    }
+    for (long i = 0; i < n; ++i) {
+        const double* c = cost + i * J;
+#pragma omp simd
+        for (long j = 0; j < J; ++j) column_sum[j] += ExpClamped((u[i] - c[j]) * inv - column_max[j]);
+    }
+    for (long j = 0; j < J; ++j) v[j] = epsilon * (log_q - (column_max[j] + std::log(column_sum[j])));
+}
+
+// gamma_ij = Gamma_ij / max(sum_j Gamma_ij, 1e-3), Gamma_ij = exp((u_i + v_j - C_ij) / eps)
+// with non-finite values set to 0 (the code's nan_to_num).
+REGBENCH_SIMD_CLONES void SinkhornPlanRows(const double* cost,
+                                           const double* u,
+                                           const double* v,
+                                           long n,
+                                           long J,
+                                           double epsilon,
+                                           double* gamma) {
+    const double inv = 1.0 / epsilon;
+    for (long i = 0; i < n; ++i) {
+        const double* c = cost + i * J;
+        double* g = gamma + i * J;
+        double s = 0.0;
+#pragma omp simd reduction(+ : s)
+        for (long j = 0; j < J; ++j) {
+            const double e = ExpClamped(std::min((u[i] + v[j] - c[j]) * inv, 700.0));
+            g[j] = e;
+            s += e;
+        }
+        const double scale = 1.0 / std::max(s, kRowMassFloor);
+#pragma omp simd
+        for (long j = 0; j < J; ++j) g[j] *= scale;
+    }
+}
+
+// xyz [n, 3], w [n] (normalised masses), first [J] indices of the initial means; writes gamma
+// [n, J] and mu [J, 3].
+void FitOverlapGmmCloud(const double* xyz,
+                        const double* w,
+                        long n,
+                        long J,
+                        const int64_t* first,
+                        const GmmFitOptions& options,
+                        double* gamma,
+                        double* mu) {
+    constexpr double kLogFloor = 1e-8;  // the code's log(p + 1e-8)
+    const double eps = options.epsilon;
+    std::vector<double> cost(static_cast<size_t>(n * J)), u(static_cast<size_t>(n)), v(static_cast<size_t>(J)),
+        log_p(static_cast<size_t>(n)), u_new(static_cast<size_t>(n)), v_new(static_cast<size_t>(J)),
+        scratch(static_cast<size_t>(std::max(J, 1L))), column_max(static_cast<size_t>(J)),
+        column_sum(static_cast<size_t>(J));
+    for (long j = 0; j < J; ++j) {
+        for (int d = 0; d < 3; ++d) mu[j * 3 + d] = xyz[first[j] * 3 + d];
+    }
+    for (long i = 0; i < n; ++i) log_p[i] = std::log(w[i] + kLogFloor);
+    const double log_q = std::log(1.0 / static_cast<double>(J) + kLogFloor);
+    for (int64_t round = 0; round < options.iterations; ++round) {
+        for (long i = 0; i < n; ++i) {  // |p_i - mu_j|, not squared
+            for (long j = 0; j < J; ++j) {
+                double d2 = 0.0;
+                for (int d = 0; d < 3; ++d) {
+                    const double diff = xyz[i * 3 + d] - mu[j * 3 + d];
+                    d2 += diff * diff;
+                }
+                cost[i * J + j] = std::sqrt(d2);
+            }
+        }
+        std::fill(u.begin(), u.end(), 0.0);
+        std::fill(v.begin(), v.end(), 0.0);
+        for (int64_t it = 0; it < options.sinkhorn_iterations; ++it) {
+            SinkhornRows(cost.data(), v.data(), log_p.data(), n, J, eps, scratch.data(),
+                         u_new.data());
+            SinkhornColumns(cost.data(), u_new.data(), log_q, n, J, eps, column_max.data(),
+                            column_sum.data(), v_new.data());
+            double change = 0.0;
+            for (long i = 0; i < n; ++i) change += std::abs(u_new[i] - u[i]);
+            for (long j = 0; j < J; ++j) change += std::abs(v_new[j] - v[j]);
+            u.swap(u_new);
+            v.swap(v_new);
+            if (change < options.threshold) break;
+        }
+        SinkhornPlanRows(cost.data(), u.data(), v.data(), n, J, eps, gamma);
+        for (long j = 0; j < J; ++j) {  // mu_j = sum_i gamma_ij p_i / (sum_i gamma_ij + 1e-5)
+            double mass = 0.0, sx = 0.0, sy = 0.0, sz = 0.0;
+            for (long i = 0; i < n; ++i) {
+                const double g = gamma[i * J + j];
+                mass += g;
+                sx += g * xyz[i * 3];
+                sy += g * xyz[i * 3 + 1];
+                sz += g * xyz[i * 3 + 2];
+            }
+            const double denominator = mass + kMeanDenominator;
+            mu[j * 3] = sx / denominator;
+            mu[j * 3 + 1] = sy / denominator;
+            mu[j * 3 + 2] = sz / denominator;
+        }
+    }
+}
+
+}  // namespace
+
+OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
+                         const torch::Tensor& overlap,
+                         int64_t clusters,
+                         const GmmFitOptions& options) {
+    if (!xyz.device().is_cpu() || options.iterations < 1) {
+        return FitOverlapGmmTensorOps(xyz, overlap, clusters, options);
+    }
+    torch::NoGradGuard no_grad;
+    // Masses in the input's precision (as the tensor-op path), the fit itself in double.
+    const torch::Tensor w =
+        (overlap / overlap.sum(1, true).clamp_min(kOverlapSumFloor)).to(torch::kDouble).contiguous();
+    const torch::Tensor points = xyz.to(torch::kDouble).contiguous();
+    const torch::Tensor first = FpsCentroid(xyz.transpose(1, 2), clusters).contiguous();
+    const int64_t batch = points.size(0), n = points.size(1);
+    torch::Tensor gamma = torch::empty({batch, n, clusters}, points.options());
+    torch::Tensor mu = torch::empty({batch, clusters, 3}, points.options());
+    for (int64_t b = 0; b < batch; ++b) {
+        FitOverlapGmmCloud(points.data_ptr<double>() + b * n * 3, w.data_ptr<double>() + b * n, n,
+                           clusters, first.data_ptr<int64_t>() + b * clusters, options,
+                           gamma.data_ptr<double>() + b * n * clusters,
+                           mu.data_ptr<double>() + b * clusters * 3);
+    }
+    gamma = gamma.to(xyz.scalar_type());
+    return {gamma, mu.to(xyz.scalar_type()), gamma.mean(1)};
 }
 
 torch::Tensor KabschTransform(const torch::Tensor& src, const torch::Tensor& dst) {

@@ -80,6 +80,13 @@ OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
                          int64_t clusters,
                          const GmmFitOptions& options = {});
 
+/// FitOverlapGmm written as LibTorch tensor ops: the path for CUDA tensors, and on the CPU the
+/// reference that tests hold the loop version (FitOverlapGmm on CPU tensors) to.
+OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz,
+                                  const torch::Tensor& overlap,
+                                  int64_t clusters,
+                                  const GmmFitOptions& options = {});
+
 /// Unweighted Kabsch between matched point sets src, dst [B, J, 3] as the authors' code runs
 /// it: H = sum (s_i - s_mean)(d_i - d_mean)^T + 1e-5 I = U S V^T, R = V U^T (V's third column
 /// negated when det < 0), t = d_mean - R s_mean. Returns T [B, 4, 4]; differentiable.

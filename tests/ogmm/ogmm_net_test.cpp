@@ -227,6 +227,30 @@ TEST_F(OgmmNetTest, ZeroOverlapPointsAreIgnoredByTheGmm) {
     EXPECT_GT(all.mu.select(2, 0).max().item<double>(), 0.2);
 }
 
+TEST_F(OgmmNetTest, LoopGmmFitEqualsTheTensorOpFit) {
+    // The CPU path (plain loops) against the tensor-op path (LibTorch's logsumexp, cdist,
+    // bmm), which is the same Sinkhorn k-means written op by op: in double they agree to
+    // rounding; in float (the network's dtype) to float rounding amplified by 1 / eps.
+    torch::manual_seed(11);
+    for (const auto dtype : {torch::kFloat64, torch::kFloat32}) {
+        const torch::Tensor xyz = (torch::rand({3, 257, 3}, dtype) - 0.5) * 2;
+        torch::Tensor overlap = torch::rand({3, 257}, dtype);
+        overlap.index_put_({0, Slice(0, 100)}, 0.0);  // points the fit must ignore
+        overlap.index_put_({2}, 0.0);                 // a cloud with no overlap at all
+        for (const int64_t rounds : {int64_t{1}, int64_t{10}}) {
+            GmmFitOptions options;
+            options.iterations = rounds;
+            const OverlapGmm loops = FitOverlapGmm(xyz, overlap, 12, options);
+            const OverlapGmm ops = FitOverlapGmmTensorOps(xyz, overlap, 12, options);
+            const double tol = dtype == torch::kFloat64 ? 1e-9 : 2e-3;
+            EXPECT_EQ(loops.gamma.scalar_type(), dtype);
+            EXPECT_LT((loops.gamma - ops.gamma).abs().max().item<double>(), tol) << rounds;
+            EXPECT_LT((loops.mu - ops.mu).abs().max().item<double>(), tol) << rounds;
+            EXPECT_LT((loops.pi - ops.pi).abs().max().item<double>(), tol) << rounds;
+        }
+    }
+}
+
 // ---- forward behaviour ------------------------------------------------------------------------
 
 PairBatch FormulaBatch(int64_t batch, int64_t n, int64_t m) {
