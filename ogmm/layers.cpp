@@ -122,9 +122,23 @@ torch::Tensor RowsConvBnRelu(const torch::Tensor& rows,
         bn->num_batches_tracked.add_(1);  // as BatchNorm2d::forward counts its batches
     }
     const double momentum = o.momentum().has_value() ? o.momentum().value() : 0.1;
-    return torch::relu(torch::batch_norm(torch::mm(rows, w.t()), bn->weight, bn->bias,
-                                         bn->running_mean, bn->running_var, /*training=*/true,
-                                         momentum, o.eps(), /*cudnn_enabled=*/false));
+    // In place: BatchNorm's backward needs its input and batch statistics, not its output.
+    return torch::batch_norm(torch::mm(rows, w.t()), bn->weight, bn->bias, bn->running_mean,
+                             bn->running_var, /*training=*/true, momentum, o.eps(),
+                             /*cudnn_enabled=*/false)
+        .relu_();
+}
+
+// Max over the k neighbours of edges [B, N, k, C]. With a gradient to take, max with indices:
+// its backward scatters the gradient to the argmax (one pass), where amax's backward builds an
+// equality mask, counts ties and multiplies (four passes over the B N k C map, the mask
+// converted to float on the way). The two differ only on exact positive ties, which the
+// ReLU outputs meet when two neighbours coincide; at 0 ReLU's backward zeroes both anyway.
+torch::Tensor MaxOverNeighbours(const torch::Tensor& edges) {
+    if (torch::GradMode::is_enabled() && edges.requires_grad()) {
+        return std::get<0>(edges.max(2));
+    }
+    return edges.amax(2);
 }
 
 }  // namespace
@@ -232,7 +246,7 @@ torch::Tensor DgcnnImpl::forward(const torch::Tensor& xyz) {
         {&conv1_, &bn1_}, {&conv2_, &bn2_}, {&conv3_, &bn3_}, {&conv4_, &bn4_}};
     for (const auto& [conv, bn] : stages) {
         x = RowsConvBnRelu(x, *conv, *bn);
-        pooled.push_back(x.view({batch, points, k_, x.size(1)}).amax(2));
+        pooled.push_back(MaxOverNeighbours(x.view({batch, points, k_, x.size(1)})));
     }
     const torch::Tensor cat = torch::cat(pooled, 2).view({batch * points, -1});  // [BN, 512]
     return RowsConvBnRelu(cat, conv5_, bn5_).view({batch, points, -1}).transpose(1, 2);
