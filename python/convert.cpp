@@ -173,7 +173,6 @@ py::array CloudView(const PointCloud& cloud, py::handle owner) {
         py::dtype::of<double>(), {static_cast<py::ssize_t>(cloud.rows()), py::ssize_t{3}},
         {static_cast<py::ssize_t>(3 * sizeof(double)), static_cast<py::ssize_t>(sizeof(double))},
         cloud.data(), owner);
-    view.attr("setflags")(py::arg("write") = false);
     return view;
 }
 

@@ -37,7 +37,9 @@ py::array_t<double> CloudToPy(const PointCloud& cloud);
 /// A fresh (4, 4) float64 copy of a transform.
 py::array_t<double> TransformToPy(const Transform& T);
 
-/// An (N, 3) float64 read-only view of `cloud`, kept alive by `owner` (no copy).
+/// An (N, 3) float64 view of `cloud`, kept alive by `owner` (no copy). Writable, because
+/// libraries refuse read-only arrays (Open3D's Vector3dVector): writes change what this object
+/// returns afterwards, never the file.
 py::array CloudView(const PointCloud& cloud, py::handle owner);
 
 }  // namespace regbench::python

@@ -94,7 +94,6 @@ py::array LabelView(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels
                     py::handle owner) {
     py::array view(py::dtype::of<std::uint8_t>(), {static_cast<py::ssize_t>(labels.size())},
                    {static_cast<py::ssize_t>(1)}, labels.data(), owner);
-    view.attr("setflags")(py::arg("write") = false);
     return view;
 }
 
@@ -395,9 +394,10 @@ PYBIND11_MODULE(regbench, m) {
           "`regbench methods --json` prints them.");
 
     py::class_<PairRef>(m, "Pair",
-                        "One pair of a pair file. `source` and `target` are read-only (N, 3) "
-                        "float64 views of the file's arrays (no copy); `T_gt` maps source into "
-                        "the target frame.")
+                        "One pair of a pair file. `source` and `target` are (N, 3) float64 "
+                        "views of the PairFile's arrays (no copy; writing to them changes what "
+                        "this PairFile returns, never the file); `T_gt` maps source into the "
+                        "target frame.")
         .def_property_readonly(
             "index", [](const PairRef& p) { return p.index; },
             "Index of the pair in its file (the rows' `pair`).")
@@ -406,13 +406,13 @@ PYBIND11_MODULE(regbench, m) {
             [](py::object self) {
                 return CloudView(self.cast<const PairRef&>().pair().source, self);
             },
-            "Source cloud, (N, 3) float64, read-only view.")
+            "Source cloud, (N, 3) float64 view.")
         .def_property_readonly(
             "target",
             [](py::object self) {
                 return CloudView(self.cast<const PairRef&>().pair().target, self);
             },
-            "Target cloud, (M, 3) float64, read-only view.")
+            "Target cloud, (M, 3) float64 view.")
         .def_property_readonly(
             "T_gt", [](const PairRef& p) { return TransformToPy(p.pair().T_gt); },
             "Ground truth (4, 4): target ~ T_gt applied to source.")
@@ -421,13 +421,13 @@ PYBIND11_MODULE(regbench, m) {
             [](py::object self) {
                 return LabelView(self.cast<const PairRef&>().pair().source_overlap, self);
             },
-            "Per source point: 1 = overlaps the target (uint8, read-only).")
+            "Per source point: 1 = overlaps the target (uint8).")
         .def_property_readonly(
             "target_overlap",
             [](py::object self) {
                 return LabelView(self.cast<const PairRef&>().pair().target_overlap, self);
             },
-            "Per target point: 1 = overlaps the source (uint8, read-only).")
+            "Per target point: 1 = overlaps the source (uint8).")
         .def_property_readonly(
             "source_overlap_ratio", [](const PairRef& p) { return p.pair().source_overlap_ratio; },
             "Fraction of source points labelled overlapping.")

@@ -51,15 +51,15 @@ def methods() -> list[_MethodInfo]:
     """Every registered method with its defaults, parameter docs and JSON schema."""
 
 class Pair:
-    """One pair of a PairFile; source/target are read-only views of the file's arrays."""
+    """One pair of a PairFile; source/target are views of the PairFile's arrays (no copy)."""
     @property
     def index(self) -> int: ...
     @property
     def source(self) -> npt.NDArray[np.float64]:
-        """(N, 3) float64, read-only."""
+        """(N, 3) float64 view."""
     @property
     def target(self) -> npt.NDArray[np.float64]:
-        """(M, 3) float64, read-only."""
+        """(M, 3) float64 view."""
     @property
     def T_gt(self) -> npt.NDArray[np.float64]:
         """(4, 4): maps source into the target frame."""
