@@ -253,6 +253,9 @@ py::dict Run(py::handle pairs,
     o.downsample = downsample;
     o.progress = progress;
     if (!timeout.is_none()) {
+        if (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)) {
+            throw py::type_error("timeout must be a number of seconds or None");
+        }
         o.timeout_seconds = timeout.cast<double>();
         if (!(o.timeout_seconds > 0.0))
             throw py::value_error("timeout must be > 0 seconds (or None)");
@@ -264,8 +267,13 @@ py::dict Run(py::handle pairs,
 
     // Methods in the order given: names of built-in methods ("a,b" and "all" too) and callables.
     py::list items;
-    if (py::isinstance<py::str>(methods)) {
-        items.append(methods);
+    const bool named_callable = py::isinstance<py::tuple>(methods) && py::len(methods) == 2 &&
+                                py::isinstance<py::str>(methods[py::int_(0)]) &&
+                                PyCallable_Check(methods[py::int_(1)].ptr());
+    if (py::isinstance<py::str>(methods) || named_callable || PyCallable_Check(methods.ptr())) {
+        items.append(methods);  // one method
+    } else if (!py::isinstance<py::iterable>(methods)) {
+        throw py::type_error("methods must be a list of method names and callables");
     } else {
         for (const auto& item : methods) items.append(item);
     }

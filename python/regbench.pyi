@@ -174,7 +174,7 @@ _MethodItem = Union[str, _MethodCallable, Tuple[str, _MethodCallable]]
 
 def run(
     pairs: _PathLike | PairFile,
-    methods: str | Sequence[_MethodItem],
+    methods: _MethodItem | Sequence[_MethodItem],
     out: _PathLike,
     params: Mapping[str, Mapping[str, Any]] | None = None,
     resume: bool = False,

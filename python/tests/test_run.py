@@ -121,9 +121,24 @@ def test_bad_method_lists_are_refused(pair_file, tmp_path):
         regbench.run(pair_file, ["icp"], out, params={"cpd": {}})
     with pytest.raises(ValueError, match="timeout must be > 0"):
         regbench.run(pair_file, ["icp"], out, timeout=0)
+    with pytest.raises(TypeError, match="methods must be a list"):
+        regbench.run(pair_file, 3, out)
+    with pytest.raises(TypeError, match="timeout must be a number"):
+        regbench.run(pair_file, "icp", out, timeout="1")
     with pytest.raises(FileNotFoundError):
         regbench.run(out.parent / "absent.h5", ["icp"], out)
     assert not out.exists()
+
+
+def test_one_method_or_a_tuple_of_names(pair_file, tmp_path):
+    regbench.run(pair_file, py_icp, tmp_path / "a.jsonl")
+    regbench.run(pair_file, ("np", py_icp), tmp_path / "b.jsonl")
+    regbench.run(pair_file, ("identity", "icp"), tmp_path / "c.jsonl")
+    regbench.run(pair_file, "identity,icp", tmp_path / "d.jsonl")
+    assert {r["method"] for r in read_jsonl(tmp_path / "a.jsonl")} == {"py_icp"}
+    assert {r["method"] for r in read_jsonl(tmp_path / "b.jsonl")} == {"np"}
+    assert [untimed(r) for r in read_jsonl(tmp_path / "c.jsonl")] == \
+           [untimed(r) for r in read_jsonl(tmp_path / "d.jsonl")]
 
 
 def test_timeout_runs_callables_in_a_child(pair_file, tmp_path):
