@@ -78,9 +78,9 @@ TEST_F(ExternalMethodTest, RowsLikeRegisteredMethods) {
 TEST_F(ExternalMethodTest, IsolatedCallsRunTheForkHooks) {
     RunOptions o = Options("iso.jsonl");
     o.timeout_seconds = 30;
-    static std::atomic<int> prepared{0}, parented{0};
-    o.external_methods["shift"].fork_hooks.prepare = [] { ++prepared; };
-    o.external_methods["shift"].fork_hooks.parent = [] { ++parented; };
+    std::atomic<int> prepared{0}, parented{0};
+    o.external_methods["shift"].fork_hooks.prepare = [&prepared] { ++prepared; };
+    o.external_methods["shift"].fork_hooks.parent = [&parented] { ++parented; };
     // The child hook runs in the child: exiting there leaves a child without a result.
     o.external_methods["shift"].fork_hooks.child = [] { ::_exit(3); };
     RunBenchmark(o);
