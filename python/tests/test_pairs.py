@@ -97,3 +97,16 @@ def test_views_work_with_open3d(pair_file):
     pair = pair_file[0]
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pair.source))
     np.testing.assert_array_equal(np.asarray(cloud.points), pair.source)
+
+
+def test_bad_pair_named_in_the_value_error(pairs_path, tmp_path):
+    bad = tmp_path / "nan.h5"
+    shutil.copy(pairs_path, bad)
+    with h5py.File(bad, "r+") as f:
+        f["pairs"]["000002"]["source"][5, 1] = np.nan
+    with pytest.raises(ValueError, match=rf"^{bad}: pair 2: .*non-finite value \(row 5\)"):
+        regbench.PairFile(bad)
+    # run() refuses it the same way, before writing anything.
+    with pytest.raises(ValueError, match=rf"^{bad}: pair 2: "):
+        regbench.run(bad, ["identity"], tmp_path / "r.jsonl")
+    assert not (tmp_path / "r.jsonl").exists()
