@@ -66,12 +66,15 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
                           const Pair& pair,
                           const AlignContext& context,
                           double timeout,
-                          int threads) {
+                          int threads,
+                          const ForkHooks& hooks) {
     int fds[2];
     if (pipe(fds) != 0)
         return Failure(Status::kFailed, "pipe() failed: " + std::string(strerror(errno)), 0);
     const pid_t parent = getpid();
+    if (hooks.prepare) hooks.prepare();
     const pid_t pid = fork();
+    if (pid != 0 && hooks.parent) hooks.parent();
     if (pid < 0) {
         close(fds[0]);
         close(fds[1]);
@@ -79,6 +82,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     }
     if (pid == 0) {
         BecomeDisposableChild(parent);  // dies with the parent: no orphan keeps computing
+        if (hooks.child) hooks.child();
         close(fds[0]);
         omp_set_num_threads(threads);
         const std::string payload =

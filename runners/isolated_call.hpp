@@ -2,6 +2,8 @@
 // One method call of a run: in this process, or in a forked child so that a crash (a signal,
 // an abort inside a library) or a hang becomes a `crashed` / `timeout` row instead of ending
 // the whole run.
+#include <functional>
+
 #include "core/registration.hpp"
 #include "protocols/pair.hpp"
 #include "runners/result_row.hpp"
@@ -17,6 +19,14 @@ struct CallOutcome {
 /// kOk when the method returned a transform, kFailed when it reported a failure.
 Status StatusOf(const AlignResult& r);
 
+/// Called around the fork() of an isolated call, for a method that needs process state handed
+/// to the child (the Python module's callables: the interpreter lock). Null members are skipped.
+struct ForkHooks {
+    std::function<void()> prepare;  ///< in the parent, right before fork()
+    std::function<void()> parent;   ///< in the parent, right after fork() (also when it failed)
+    std::function<void()> child;    ///< in the child, right after fork(), before Align
+};
+
 /// Calls method.Align on the pair in this process (a crash here ends the run).
 CallOutcome AlignInProcess(RegistrationMethod& method,
                            const Pair& pair,
@@ -30,6 +40,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
                           const Pair& pair,
                           const AlignContext& context,
                           double timeout,
-                          int threads);
+                          int threads,
+                          const ForkHooks& hooks = {});
 
 }  // namespace regbench

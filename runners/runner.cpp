@@ -14,6 +14,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -236,6 +237,12 @@ void ValidateRunOptions(const RunOptions& options) {
         throw std::invalid_argument("--shard must be i/n with 0 <= i < n");
     }
     if (options.out_path.empty()) throw std::invalid_argument("--out is required");
+    for (const auto& m : AllMethods()) {
+        if (options.external_methods.count(m.name)) {
+            throw std::invalid_argument(
+                "'" + m.name + "' is a registered method; name the external one otherwise");
+        }
+    }
 }
 
 /// The pair indices of this run's shard: every shard_count-th pair from shard_index.
@@ -304,6 +311,12 @@ struct RunState {
     std::exception_ptr error;  ///< first failure in a worker (a write error), rethrown after join
 };
 
+/// The caller-supplied method named `name`, or null for a registered one.
+const ExternalMethod* FindExternal(const RunOptions& options, const std::string& name) {
+    const auto it = options.external_methods.find(name);
+    return it == options.external_methods.end() ? nullptr : &it->second;
+}
+
 /// One (pair, method) call, isolated when a timeout is set, turned into its row.
 ResultRow RunCall(const RunPlan& plan,
                   RegistrationMethod& method,
@@ -315,14 +328,17 @@ ResultRow RunCall(const RunPlan& plan,
     // Scale guard: an O(N*M) method on a large cloud runs on the recorded stride-downsampled
     // pair; metrics still compare against the full pair.
     nlohmann::json downsampled;
-    const bool reduce = options.downsample && NeedsScaleGuard(spec.name, pair, options.max_points);
+    const ExternalMethod* external = FindExternal(options, spec.name);
+    const bool reduce = options.downsample && external == nullptr &&
+                        NeedsScaleGuard(spec.name, pair, options.max_points);
     const Pair reduced =
         reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
     const Pair& input = reduce ? reduced : pair;
-    const CallOutcome outcome = options.timeout_seconds > 0.0
-                                    ? AlignIsolated(method, input, context, options.timeout_seconds,
-                                                    options.threads_per_call)
-                                    : AlignInProcess(method, input, context);
+    const CallOutcome outcome =
+        options.timeout_seconds > 0.0
+            ? AlignIsolated(method, input, context, options.timeout_seconds,
+                            options.threads_per_call, external ? external->fork_hooks : ForkHooks{})
+            : AlignInProcess(method, input, context);
     RowContext row_context = plan.row_context;
     row_context.status = outcome.status;
     ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
@@ -337,8 +353,10 @@ void WorkOnPairs(const RunPlan& plan, RunState& state) {
     // Each worker owns its method instances: methods keep scratch buffers.
     omp_set_num_threads(options.threads_per_call);
     std::vector<std::unique_ptr<RegistrationMethod>> methods;
-    for (const auto& spec : options.methods)
-        methods.push_back(CreateMethod(spec.name, spec.params));
+    for (const auto& spec : options.methods) {
+        const ExternalMethod* external = FindExternal(options, spec.name);
+        methods.push_back(external ? external->create() : CreateMethod(spec.name, spec.params));
+    }
     for (;;) {
         if (state.stop.load()) return;
         const std::size_t i = state.next.fetch_add(1);
@@ -351,6 +369,7 @@ void WorkOnPairs(const RunPlan& plan, RunState& state) {
             const auto& spec = options.methods[m];
             if (plan.done.count(RowKey(context.pair_index, spec.name))) continue;
             const ResultRow row = RunCall(plan, *methods[m], spec, context);
+            if (options.check_interrupt) options.check_interrupt();  // may end the run
             if (row.status != Status::kOk) state.failures.fetch_add(1);
             {
                 std::lock_guard<std::mutex> guard(state.out_mutex);
@@ -428,8 +447,12 @@ RunSummary RunBenchmark(const RunOptions& options) {
     // downsample).
     RunPlan plan(options, set);
     plan.indices = ShardPairs(set.pairs.size(), options);
+    std::vector<MethodSpec> guarded;  // registered methods: the scale guard knows their cost
+    for (const auto& spec : options.methods) {
+        if (FindExternal(options, spec.name) == nullptr) guarded.push_back(spec);
+    }
     const std::string notice =
-        CheckScale(set, plan.indices, options.methods, options.max_points, options.downsample);
+        CheckScale(set, plan.indices, guarded, options.max_points, options.downsample);
     if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
     const std::string part_path = options.out_path + ".part";
     CheckOutputPath(options.out_path, {options.pairs_path});
@@ -461,7 +484,10 @@ RunSummary RunBenchmark(const RunOptions& options) {
     state.rows_safe = resumed.rows.size();
     // setenv is not thread-safe: set the process-wide part once, before any worker starts.
     SetOmpThreads(options.threads_per_call);
-    const InterruptNotice interrupt(&state.rows_safe, part_path, ResumeCommand(options));
+    std::optional<InterruptNotice> interrupt;
+    if (!options.check_interrupt) {
+        interrupt.emplace(&state.rows_safe, part_path, ResumeCommand(options));
+    }
     RunWorkers(plan, state);
     progress.Finish();
     if (state.error) std::rethrow_exception(state.error);

@@ -1,6 +1,8 @@
 #pragma once
 // Runs registration methods over a frozen pair file: timing, fault isolation, resume, shards.
 #include <functional>
+#include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -9,6 +11,7 @@
 #include "core/metrics.hpp"
 #include "core/registration.hpp"
 #include "protocols/pair.hpp"
+#include "runners/isolated_call.hpp"
 #include "runners/result_row.hpp"
 
 namespace regbench {
@@ -17,6 +20,16 @@ namespace regbench {
 struct MethodSpec {
     std::string name;
     nlohmann::json params = nlohmann::json::object();
+};
+
+/// A method the registry does not know, given by the program that calls RunBenchmark (the
+/// Python module's callables). It is timed, isolated (--timeout), resumed and written like a
+/// registered method; its MethodSpec in RunOptions::methods names it and records its params.
+struct ExternalMethod {
+    /// A new instance (one per worker, as CreateMethod makes for registered methods).
+    std::function<std::unique_ptr<RegistrationMethod>()> create;
+    /// Run around the fork of each isolated call (--timeout); empty when none is needed.
+    ForkHooks fork_hooks;
 };
 
 struct RunOptions {
@@ -35,6 +48,14 @@ struct RunOptions {
     std::size_t max_points = 20000;
     bool downsample = false;  ///< guard: run on stride-downsampled clouds instead of refusing
     EulerConvention euler = EulerConvention::kZyx;  ///< Euler angles of mae_r / rmse_r
+    /// Methods of `methods` that are not registered, by name (which must not be a registered
+    /// method's). The scale guard skips them: their cost is unknown.
+    std::map<std::string, ExternalMethod> external_methods;
+    /// For a caller that handles SIGINT/SIGTERM itself (the Python module): when set, the run
+    /// installs no signal handlers and calls this after each call, before its row is written.
+    /// An exception from it drops that row and ends the run with the exception (the rows
+    /// written so far stay in <out>.part for `resume`).
+    std::function<void()> check_interrupt;
 };
 
 /// Summary of a finished run.

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages regbench needs. Idempotent: installs only what is missing.
-# --reference also installs what scripts/probreg_reference.py needs to run probreg (Python
-# modules for /usr/bin/python3 and pybind11 to build probreg's extensions; see
-# docs/probreg-equivalence.md). The C++ build and tests do not need them. chromium renders the
+# The python3-* packages and pybind11-dev build and test the `regbench` Python module
+# (python/, docs/python.md: pybind11, NumPy; pytest, scipy, h5py and pandas in its tests; Open3D
+# in scripts/example_open3d_icp.py). --reference also installs what scripts/probreg_reference.py
+# needs to run probreg (more Python modules for /usr/bin/python3 and pybind11 to build probreg's
+# extensions; see docs/probreg-equivalence.md). The C++ build and tests do not need them. chromium renders the
 # HTML report headless in its test (docs/reports.md). clang + libclang-rt-14-dev build the
 # sanitizer + libFuzzer stage of the test command (scripts/ci_extra.sh); ccache makes rebuilds
 # (that stage, worktrees, re-runs) cheap.
@@ -15,13 +17,14 @@ PACKAGES=(
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
   chromium zlib1g-dev
+  python3-dev pybind11-dev python3-numpy python3-scipy python3-h5py python3-pandas
+  python3-pytest python3-open3d
   clang libclang-rt-14-dev ccache
   slurmctld slurmd slurm-client munge
 )
 if [ "${1:-}" = "--reference" ]; then
   PACKAGES+=(
-    python3-dev python3-numpy python3-scipy python3-sklearn python3-h5py python3-open3d
-    python3-transforms3d python3-six python3-matplotlib python3-pybind11 pybind11-dev
+    python3-sklearn python3-transforms3d python3-six python3-matplotlib python3-pybind11
   )
 fi
 

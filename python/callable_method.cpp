@@ -1,0 +1,108 @@
+#include "python/callable_method.hpp"
+
+#include <chrono>
+#include <stdexcept>
+
+#include "python/convert.hpp"
+
+namespace regbench::python {
+
+void PendingInterrupt::Store(const py::error_already_set& e) {
+    std::lock_guard<std::mutex> guard(mutex_);
+    if (!error_) error_.emplace(e);
+}
+
+void PendingInterrupt::RethrowIfAny() {
+    std::lock_guard<std::mutex> guard(mutex_);
+    if (error_) throw *error_;
+}
+
+std::string DescribePythonError(const py::error_already_set& e) {
+    const std::string type = py::str(e.type().attr("__name__")).cast<std::string>();
+    const std::string text = py::str(e.value()).cast<std::string>();
+    return text.empty() ? type : type + ": " + text;
+}
+
+namespace {
+
+/// Reads what the callable returned into `r` (lock held). Throws std::runtime_error saying
+/// what was wrong with it.
+void ReadCallableResult(const py::object& out, AlignResult* r) {
+    py::object transform = out;
+    if (py::isinstance<py::dict>(out)) {
+        const py::dict d = out.cast<py::dict>();
+        if (!d.contains("transform")) {
+            throw std::runtime_error("returned a dict without a \"transform\" key");
+        }
+        for (const auto& item : d) {
+            const std::string key = py::str(item.first).cast<std::string>();
+            const py::handle value = item.second;
+            if (key == "transform") {
+                transform = py::reinterpret_borrow<py::object>(value);
+            } else if (key == "iterations") {
+                if (!py::isinstance<py::int_>(value) || py::isinstance<py::bool_>(value)) {
+                    throw std::runtime_error("\"iterations\" must be an int");
+                }
+                r->iterations = value.cast<int>();
+            } else if (key == "stop_reason") {
+                if (!py::isinstance<py::str>(value)) {
+                    throw std::runtime_error("\"stop_reason\" must be a str");
+                }
+                r->stop_reason = value.cast<std::string>();
+            } else {
+                r->extra[key] = PyToJson(value, "returned \"" + key + "\"");
+            }
+        }
+    }
+    try {
+        r->T_target_source = TransformFromPy(transform, "the returned transform");
+    } catch (const py::value_error& e) {
+        throw std::runtime_error(e.what());
+    }
+}
+
+}  // namespace
+
+AlignResult CallableMethod::DoAlign(const PointCloud& source,
+                                    const PointCloud& target,
+                                    const AlignContext& /*context*/) {
+    const auto start = std::chrono::steady_clock::now();
+    py::gil_scoped_acquire gil;
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    AlignResult r;
+    try {
+        py::dict kwargs = JsonToPy(params_);
+        const py::object out = fn_(CloudToPy(source), CloudToPy(target), **kwargs);
+        ReadCallableResult(out, &r);
+    } catch (py::error_already_set& e) {
+        if (!e.matches(PyExc_Exception)) {
+            // KeyboardInterrupt, SystemExit: the run ends (check_interrupt rethrows it).
+            pending_->Store(e);
+            throw std::runtime_error("interrupted by " + DescribePythonError(e));
+        }
+        throw std::runtime_error(DescribePythonError(e));
+    } catch (const py::builtin_exception& e) {  // a conversion of the result (TypeError, ...)
+        throw std::runtime_error(e.what());
+    }
+    r.extra[kExcludedSecondsKey] = waited;
+    return r;
+}
+
+ForkHooks InterpreterForkHooks() {
+    // The lock state of the forking thread, between prepare and parent.
+    static thread_local PyGILState_STATE state;
+    ForkHooks hooks;
+    hooks.prepare = [] {
+        state = PyGILState_Ensure();
+        PyOS_BeforeFork();
+    };
+    hooks.parent = [] {
+        PyOS_AfterFork_Parent();
+        PyGILState_Release(state);
+    };
+    hooks.child = [] { PyOS_AfterFork_Child(); };  // the child keeps the lock for its call
+    return hooks;
+}
+
+}  // namespace regbench::python

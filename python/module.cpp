@@ -1,0 +1,596 @@
+// The `regbench` Python module: pair files as NumPy arrays, every registered method and metric,
+// and Python callables benchmarked as methods by the C++ runner. A thin layer: every check,
+// timing, row and file format is the C++ core's; this file converts types and errors.
+#include <Python.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/metrics.hpp"
+#include "core/threads.hpp"
+#include "core/transform.hpp"
+#include "core/version.hpp"
+#include "protocols/pair_file.hpp"
+#include "python/callable_method.hpp"
+#include "python/convert.hpp"
+#include "runners/align_clouds.hpp"
+#include "runners/registry.hpp"
+#include "runners/result_row.hpp"
+#include "runners/runner.hpp"
+
+namespace regbench::python {
+namespace {
+
+/// os.fspath(path) as a std::string (str and os.PathLike accepted).
+std::string PathOf(py::handle path) {
+    return py::str(py::module_::import("os").attr("fspath")(path)).cast<std::string>();
+}
+
+/// FileNotFoundError for an input that is not there.
+void RequireFile(const std::string& path, const std::string& what) {
+    if (!std::filesystem::exists(path)) {
+        PyErr_SetString(PyExc_FileNotFoundError, (path + ": no such " + what).c_str());
+        throw py::error_already_set();
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pair files
+
+struct PairFile {
+    std::string path;
+    std::shared_ptr<const PairSet> set;
+    DataTag data;  ///< provenance tag every result row on this file carries
+};
+
+struct PairRef {
+    std::shared_ptr<const PairFile> file;
+    std::size_t index = 0;
+    const Pair& pair() const { return file->set->pairs[index]; }
+};
+
+std::shared_ptr<PairFile> OpenPairFile(py::handle path_like) {
+    auto f = std::make_shared<PairFile>();
+    f->path = PathOf(path_like);
+    RequireFile(f->path, "pair file");
+    try {
+        py::gil_scoped_release release;
+        auto set = std::make_shared<PairSet>(ReadPairFile(f->path));
+        f->data = DataTagOf(f->path, *set);  // checks the stored content hash
+        f->set = std::move(set);
+    } catch (const std::runtime_error& e) {
+        throw py::value_error(e.what());  // the file's content: bad input
+    }
+    return f;
+}
+
+py::dict DataTagToPy(const DataTag& d) {
+    nlohmann::json j = d;
+    return JsonToPy(j);
+}
+
+PairRef PairAt(const std::shared_ptr<PairFile>& f, py::ssize_t k) {
+    const auto n = static_cast<py::ssize_t>(f->set->pairs.size());
+    if (k < 0) k += n;
+    if (k < 0 || k >= n) {
+        throw py::index_error("pair index out of range (" + std::to_string(n) + " pairs)");
+    }
+    return PairRef{f, static_cast<std::size_t>(k)};
+}
+
+/// Iterator over a pair file's pairs.
+struct PairIterator {
+    std::shared_ptr<PairFile> file;
+    std::size_t next = 0;
+};
+
+py::array LabelView(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels,
+                    py::handle owner) {
+    py::array view(py::dtype::of<std::uint8_t>(), {static_cast<py::ssize_t>(labels.size())},
+                   {static_cast<py::ssize_t>(1)}, labels.data(), owner);
+    return view;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Methods
+
+/// One validated built-in method spec (the checks `regbench run --params` applies).
+MethodSpec BuiltinSpec(const std::string& name, const nlohmann::json& params) {
+    FindMethod(name);  // unknown names: ValueError listing the known ones
+    nlohmann::json by_method = nlohmann::json::object();
+    by_method[name] = params;
+    return ParseMethodSpecs(name, by_method).front();
+}
+
+py::list Methods() {
+    py::list out;
+    for (const auto& m : AllMethods()) {
+        py::dict d;
+        d["name"] = m.name;
+        d["summary"] = m.summary;
+        d["defaults"] = JsonToPy(m.defaults);
+        d["param_docs"] = JsonToPy(nlohmann::json(m.param_docs));
+        d["schema"] = JsonToPy(m.schema);
+        out.append(d);
+    }
+    return out;
+}
+
+/// What align() returns: the method's result plus which method and parameters produced it.
+struct AlignOutcome {
+    std::string method;
+    nlohmann::json params;
+    AlignResult result;
+};
+
+AlignOutcome Align(py::handle source,
+                   py::handle target,
+                   const std::string& method,
+                   py::handle params,
+                   std::uint64_t seed,
+                   int threads,
+                   std::uint64_t pair_index,
+                   bool normalize) {
+    if (threads < 1) throw py::value_error("threads must be >= 1, got " + std::to_string(threads));
+    const MethodSpec spec = BuiltinSpec(method, ParamsToJson(params, "params"));
+    const PointCloud src = CloudFromPy(source, "source");
+    const PointCloud tgt = CloudFromPy(target, "target");
+    std::unique_ptr<RegistrationMethod> reg = CreateMethod(spec.name, spec.params);
+    AlignContext context;
+    context.seed = seed;
+    context.pair_index = pair_index;
+    context.threads = threads;
+    SetOmpThreads(threads);  // setenv: before other threads may run
+    AlignOutcome out{spec.name, spec.params, {}};
+    {
+        py::gil_scoped_release release;
+        out.result = AlignClouds(*reg, src, tgt, normalize, context);
+    }
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Metrics
+
+py::dict Metrics(py::handle T_est,
+                 py::handle T_gt,
+                 py::handle source,
+                 py::handle target,
+                 const std::string& euler,
+                 py::handle source_overlap) {
+    const EulerConvention convention = ParseEulerConvention(euler);
+    const Transform est = TransformFromPy(T_est, "T_est");
+    const Transform gt = TransformFromPy(T_gt, "T_gt");
+    const PointCloud src = CloudFromPy(source, "source");
+    const PointCloud tgt = CloudFromPy(target, "target");
+    Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> labels;
+    if (!source_overlap.is_none()) {
+        const auto a = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(
+            source_overlap);
+        if (!a || a.ndim() != 1 || a.shape(0) != src.rows()) {
+            throw py::value_error("source_overlap must be a 1-D array of " +
+                                  std::to_string(src.rows()) + " labels (0 or 1)");
+        }
+        labels =
+            Eigen::Map<const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>>(a.data(), a.shape(0));
+    }
+    PairMetrics m;
+    {
+        py::gil_scoped_release release;
+        m = ComputeMetrics(gt, est, src, tgt, convention);
+        m.overlap_rmse = OverlapRmse(gt, est, src, labels);
+    }
+    py::dict d;
+    d["mae_r"] = m.mae_r;
+    d["mae_t"] = m.mae_t;
+    d["mse_r"] = m.mse_r;
+    d["mse_t"] = m.mse_t;
+    d["rre"] = m.rre;
+    d["rte"] = m.rte;
+    d["ccd"] = m.ccd;
+    d["chamfer"] = m.chamfer;
+    d["ccd_within_clip"] = m.ccd_within_clip;
+    d["overlap_rmse"] = m.overlap_rmse;
+    d["euler"] = ToString(m.euler);
+    return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Runs
+
+/// The name a callable runs under: the tuple's name, else its __name__.
+std::string CallableName(py::handle item, py::handle* fn) {
+    if (py::isinstance<py::tuple>(item)) {
+        const py::tuple t = item.cast<py::tuple>();
+        if (t.size() != 2 || !py::isinstance<py::str>(t[0]) || !PyCallable_Check(t[1].ptr())) {
+            throw py::value_error("a method given as a tuple must be (name, callable)");
+        }
+        *fn = t[1];
+        return t[0].cast<std::string>();
+    }
+    *fn = item;
+    const std::string name =
+        py::hasattr(item, "__name__") ? py::str(item.attr("__name__")).cast<std::string>() : "";
+    if (name.empty() || name == "<lambda>") {
+        throw py::value_error("cannot name the callable " + py::repr(item).cast<std::string>() +
+                              ": pass it as (name, callable)");
+    }
+    return name;
+}
+
+py::dict Run(py::handle pairs,
+             py::handle methods,
+             py::handle out,
+             py::handle params,
+             bool resume,
+             py::handle timeout,
+             int jobs,
+             int threads,
+             const std::string& euler,
+             std::size_t max_points,
+             bool downsample,
+             bool progress) {
+    RunOptions o;
+    try {
+        o.pairs_path =
+            py::isinstance<PairFile>(pairs) ? pairs.cast<const PairFile&>().path : PathOf(pairs);
+    } catch (const py::cast_error&) {
+        throw py::type_error("pairs must be a path or a PairFile");
+    }
+    RequireFile(o.pairs_path, "pair file");
+    o.out_path = PathOf(out);
+    o.resume = resume;
+    o.jobs = jobs;
+    o.threads_per_call = threads;
+    o.euler = ParseEulerConvention(euler);
+    o.max_points = max_points;
+    o.downsample = downsample;
+    o.progress = progress;
+    if (!timeout.is_none()) {
+        if (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)) {
+            throw py::type_error("timeout must be a number of seconds or None");
+        }
+        o.timeout_seconds = timeout.cast<double>();
+        if (!(o.timeout_seconds > 0.0))
+            throw py::value_error("timeout must be > 0 seconds (or None)");
+    }
+    const nlohmann::json by_method = ParamsToJson(params, "params");
+    const auto params_of = [&](const std::string& name) {
+        return by_method.contains(name) ? by_method.at(name) : nlohmann::json::object();
+    };
+
+    // Methods in the order given: names of built-in methods ("a,b" and "all" too) and callables.
+    py::list items;
+    const bool named_callable = py::isinstance<py::tuple>(methods) && py::len(methods) == 2 &&
+                                py::isinstance<py::str>(methods[py::int_(0)]) &&
+                                PyCallable_Check(methods[py::int_(1)].ptr());
+    if (py::isinstance<py::str>(methods) || named_callable || PyCallable_Check(methods.ptr())) {
+        items.append(methods);  // one method
+    } else if (!py::isinstance<py::iterable>(methods)) {
+        throw py::type_error("methods must be a list of method names and callables");
+    } else {
+        for (const auto& item : methods) items.append(item);
+    }
+    const auto pending = std::make_shared<PendingInterrupt>();
+    const ForkHooks fork_hooks = InterpreterForkHooks();
+    for (const auto& item : items) {
+        if (py::isinstance<py::str>(item)) {
+            const std::vector<MethodSpec> specs =
+                ParseMethodSpecs(item.cast<std::string>(), nlohmann::json::object());
+            for (const auto& s : specs) o.methods.push_back(BuiltinSpec(s.name, params_of(s.name)));
+            continue;
+        }
+        py::handle fn;
+        const std::string name = CallableName(item, &fn);
+        if (!PyCallable_Check(fn.ptr())) {
+            throw py::type_error("methods must be names of built-in methods or callables, got " +
+                                 py::repr(item).cast<std::string>());
+        }
+        if (name.find_first_of(", \t") != std::string::npos) {
+            throw py::value_error("method name '" + name + "' must not contain commas or spaces");
+        }
+        bool registered = true;
+        try {
+            FindMethod(name);
+        } catch (const std::invalid_argument&) {
+            registered = false;
+        }
+        if (registered) {
+            throw py::value_error("'" + name +
+                                  "' is a built-in method; pass the callable as (other_name, fn)");
+        }
+        const nlohmann::json p = params_of(name);
+        if (!p.is_object()) throw py::value_error("params['" + name + "'] must be a dict");
+        o.methods.push_back(MethodSpec{name, p});
+        ExternalMethod external;
+        external.create = [name, p, fn, pending] {
+            return std::make_unique<CallableMethod>(name, p, fn, pending);
+        };
+        external.fork_hooks = fork_hooks;
+        o.external_methods[name] = external;
+    }
+    if (o.methods.empty()) throw py::value_error("no methods given");
+    for (std::size_t i = 0; i < o.methods.size(); ++i) {
+        for (std::size_t k = 0; k < i; ++k) {
+            if (o.methods[k].name == o.methods[i].name) {
+                throw py::value_error("method '" + o.methods[i].name + "' listed twice");
+            }
+        }
+    }
+    for (const auto& item : by_method.items()) {
+        bool listed = false;
+        for (const auto& m : o.methods) listed = listed || m.name == item.key();
+        if (!listed) {
+            throw py::value_error("params names method '" + item.key() +
+                                  "' which is not in methods");
+        }
+    }
+    // Ctrl-C stays Python's: between calls the runner asks whether one arrived (only the main
+    // thread can see it) or a callable raised KeyboardInterrupt / SystemExit.
+    const unsigned long caller = PyThread_get_thread_ident();
+    o.check_interrupt = [pending, caller] {
+        pending->RethrowIfAny();
+        if (PyThread_get_thread_ident() == caller) {
+            py::gil_scoped_acquire gil;
+            if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+        }
+    };
+    SetOmpThreads(threads >= 1 ? threads : 1);
+    RunSummary s;
+    try {
+        py::gil_scoped_release release;
+        s = RunBenchmark(o);
+    } catch (const std::runtime_error& e) {
+        // Problems of the pair file are bad input; the rest (locks, writes, resume) are not.
+        const std::string what = e.what();
+        if (what.rfind(o.pairs_path + ":", 0) == 0) throw py::value_error(what);
+        throw;
+    }
+    py::dict d;
+    d["out"] = o.out_path;
+    d["rows_written"] = s.rows_written;
+    d["rows_skipped"] = s.rows_skipped;
+    d["failures"] = s.failures;
+    d["wall_seconds"] = s.wall_seconds;
+    return d;
+}
+
+py::object ReadResults(py::handle path_like, py::handle as_frame) {
+    const std::string path = PathOf(path_like);
+    RequireFile(path, "results file");
+    std::vector<ResultRow> rows;
+    try {
+        rows = ReadResultRows(path);
+    } catch (const std::exception& e) {
+        throw py::value_error(e.what());
+    }
+    py::list out;
+    for (const auto& row : rows) out.append(JsonToPy(nlohmann::json(row)));
+    if (!as_frame.is_none() && !as_frame.cast<bool>()) return std::move(out);
+    py::module_ pandas;
+    try {
+        pandas = py::module_::import("pandas");
+    } catch (const py::error_already_set& e) {
+        if (as_frame.is_none() && e.matches(PyExc_ImportError)) return std::move(out);
+        throw;
+    }
+    return pandas.attr("json_normalize")(out, py::arg("max_level") = 1);
+}
+
+}  // namespace
+}  // namespace regbench::python
+
+PYBIND11_MODULE(regbench, m) {
+    using namespace regbench;
+    using namespace regbench::python;
+    m.doc() =
+        "regbench from Python: frozen pair files as NumPy arrays, every registered method and "
+        "metric, and Python callables benchmarked beside the built-in methods by the same "
+        "runner (timing, failures, timeouts, resume, result rows). See docs/python.md.";
+    m.attr("__version__") = std::string(RegbenchVersion()) + "+g" + RegbenchGitSha();
+
+    m.def("methods", &Methods,
+          "methods() -> list[dict]\n\n"
+          "Every registered method: name, summary, defaults (every parameter with its default), "
+          "param_docs (one line per parameter) and schema (JSON Schema, or None), as "
+          "`regbench methods --json` prints them.");
+
+    py::class_<PairRef>(m, "Pair",
+                        "One pair of a pair file. `source` and `target` are (N, 3) float64 "
+                        "views of the PairFile's arrays (no copy; writing to them changes what "
+                        "this PairFile returns, never the file); `T_gt` maps source into the "
+                        "target frame.")
+        .def_property_readonly(
+            "index", [](const PairRef& p) { return p.index; },
+            "Index of the pair in its file (the rows' `pair`).")
+        .def_property_readonly(
+            "source",
+            [](py::object self) {
+                return CloudView(self.cast<const PairRef&>().pair().source, self);
+            },
+            "Source cloud, (N, 3) float64 view.")
+        .def_property_readonly(
+            "target",
+            [](py::object self) {
+                return CloudView(self.cast<const PairRef&>().pair().target, self);
+            },
+            "Target cloud, (M, 3) float64 view.")
+        .def_property_readonly(
+            "T_gt", [](const PairRef& p) { return TransformToPy(p.pair().T_gt); },
+            "Ground truth (4, 4): target ~ T_gt applied to source.")
+        .def_property_readonly(
+            "source_overlap",
+            [](py::object self) {
+                return LabelView(self.cast<const PairRef&>().pair().source_overlap, self);
+            },
+            "Per source point: 1 = overlaps the target (uint8).")
+        .def_property_readonly(
+            "target_overlap",
+            [](py::object self) {
+                return LabelView(self.cast<const PairRef&>().pair().target_overlap, self);
+            },
+            "Per target point: 1 = overlaps the source (uint8).")
+        .def_property_readonly(
+            "source_overlap_ratio", [](const PairRef& p) { return p.pair().source_overlap_ratio; },
+            "Fraction of source points labelled overlapping.")
+        .def_property_readonly(
+            "target_overlap_ratio", [](const PairRef& p) { return p.pair().target_overlap_ratio; },
+            "Fraction of target points labelled overlapping.")
+        .def_property_readonly(
+            "overlap", [](const PairRef& p) { return p.pair().source_overlap_ratio; },
+            "The pair's overlap: source_overlap_ratio (what reports bin by).")
+        .def_property_readonly(
+            "shape", [](const PairRef& p) { return p.pair().shape; }, "Mesh / scan name.")
+        .def_property_readonly(
+            "category", [](const PairRef& p) { return p.pair().category; },
+            "Category of the shape (may be empty).")
+        .def_property_readonly(
+            "meta", [](const PairRef& p) { return JsonToPy(p.pair().meta); },
+            "Per-pair generation details (dict).")
+        .def_property_readonly(
+            "data", [](const PairRef& p) { return DataTagToPy(p.file->data); },
+            "Provenance tag of the file, as result rows carry it: pairs_file, "
+            "dataset, protocol, pairing, seed, content_hash.")
+        .def_property_readonly("content_hash",
+                               [](const PairRef& p) { return p.file->data.content_hash; })
+        .def_property_readonly("dataset", [](const PairRef& p) { return p.file->data.dataset; })
+        .def_property_readonly("protocol", [](const PairRef& p) { return p.file->data.protocol; })
+        .def_property_readonly("pairing", [](const PairRef& p) { return p.file->data.pairing; })
+        .def_property_readonly("seed", [](const PairRef& p) { return JsonToPy(p.file->data.seed); })
+        .def("__repr__", [](const PairRef& p) {
+            const Pair& q = p.pair();
+            return "<regbench.Pair " + std::to_string(p.index) + " of " + p.file->data.pairs_file +
+                   ": " + q.shape + (q.category.empty() ? "" : " (" + q.category + ")") + ", " +
+                   std::to_string(q.source.rows()) + " -> " + std::to_string(q.target.rows()) +
+                   " points, overlap " + std::to_string(q.source_overlap_ratio) + ">";
+        });
+
+    py::class_<PairIterator>(m, "_PairIterator")
+        .def("__iter__", [](py::object self) { return self; })
+        .def("__next__", [](PairIterator& it) {
+            if (it.next >= it.file->set->pairs.size()) throw py::stop_iteration();
+            return PairRef{it.file, it.next++};
+        });
+
+    py::class_<PairFile, std::shared_ptr<PairFile>>(
+        m, "PairFile",
+        "PairFile(path): a frozen HDF5 pair file (regbench generate / import), read and "
+        "validated by the C++ reader. Raises FileNotFoundError, or ValueError with the reader's "
+        "message (\"FILE: pair K: ...\") for a damaged or modified file.")
+        .def(py::init(&OpenPairFile), py::arg("path"))
+        .def("__len__", [](const PairFile& f) { return f.set->pairs.size(); })
+        .def("__getitem__", &PairAt, py::arg("index"))
+        .def("__iter__",
+             [](const std::shared_ptr<PairFile>& f) {
+                 return PairIterator{f, 0};
+             })
+        .def_property_readonly("path", [](const PairFile& f) { return f.path; })
+        .def_property_readonly(
+            "provenance", [](const PairFile& f) { return JsonToPy(f.set->provenance); },
+            "The file's provenance (protocol, params, seed, dataset, ...).")
+        .def_property_readonly(
+            "data", [](const PairFile& f) { return DataTagToPy(f.data); },
+            "Provenance tag as result rows carry it.")
+        .def_property_readonly(
+            "content_hash", [](const PairFile& f) { return f.data.content_hash; },
+            "Hash of the pairs' arrays (rows' data.content_hash).")
+        .def_property_readonly("dataset", [](const PairFile& f) { return f.data.dataset; })
+        .def_property_readonly("protocol", [](const PairFile& f) { return f.data.protocol; })
+        .def_property_readonly("pairing", [](const PairFile& f) { return f.data.pairing; })
+        .def_property_readonly(
+            "seed", [](const PairFile& f) { return JsonToPy(f.data.seed); },
+            "Generation seed (None when unknown); seeds methods' streams.")
+        .def("__repr__", [](const PairFile& f) {
+            return "<regbench.PairFile " + f.path + ": " + std::to_string(f.set->pairs.size()) +
+                   " pairs, dataset " + f.data.dataset + ", protocol " + f.data.protocol +
+                   ", content " + f.data.content_hash + ">";
+        });
+
+    py::class_<AlignOutcome>(m, "AlignResult", "What align() returns.")
+        .def_property_readonly("method", [](const AlignOutcome& a) { return a.method; })
+        .def_property_readonly(
+            "params", [](const AlignOutcome& a) { return JsonToPy(a.params); },
+            "The method's full parameters (defaults filled in).")
+        .def_property_readonly(
+            "T_target_source",
+            [](const AlignOutcome& a) { return TransformToPy(a.result.T_target_source); },
+            "Estimate (4, 4) mapping source into the target frame (identity "
+            "when the call failed).")
+        .def_property_readonly("iterations",
+                               [](const AlignOutcome& a) { return a.result.iterations; })
+        .def_property_readonly("stop_reason",
+                               [](const AlignOutcome& a) { return a.result.stop_reason; })
+        .def_property_readonly(
+            "status", [](const AlignOutcome& a) { return std::string(ToString(a.result.status)); },
+            "\"ok\" or \"failed\" (then `message` says why).")
+        .def_property_readonly("message", [](const AlignOutcome& a) { return a.result.message; })
+        .def_property_readonly(
+            "seconds", [](const AlignOutcome& a) { return a.result.seconds; },
+            "Wall time of the method's call.")
+        .def_property_readonly(
+            "cpu_seconds", [](const AlignOutcome& a) { return a.result.cpu_seconds; },
+            "CPU time of the call (clock named by cpu_scope).")
+        .def_property_readonly("cpu_scope",
+                               [](const AlignOutcome& a) { return a.result.cpu_scope; })
+        .def_property_readonly("scale", [](const AlignOutcome& a) { return a.result.scale; })
+        .def_property_readonly(
+            "extra", [](const AlignOutcome& a) { return JsonToPy(a.result.extra); },
+            "Method diagnostics (dict).")
+        .def("__repr__", [](const AlignOutcome& a) {
+            return "<regbench.AlignResult " + a.method + ": " + ToString(a.result.status) + ", " +
+                   std::to_string(a.result.iterations) + " iterations (" + a.result.stop_reason +
+                   "), " + std::to_string(a.result.seconds) + " s>";
+        });
+
+    m.def("align", &Align, py::arg("source"), py::arg("target"), py::arg("method") = "cpd",
+          py::arg("params") = py::none(), py::arg("seed") = 0, py::arg("threads") = 1,
+          py::arg("pair_index") = 0, py::arg("normalize") = false,
+          "align(source, target, method=\"cpd\", params=None, seed=0, threads=1, pair_index=0, "
+          "normalize=False) -> AlignResult\n\n"
+          "Registers source onto target with a built-in method, the interpreter lock released "
+          "while C++ works. source, target: (N, 3) float arrays. seed and pair_index pick the "
+          "method's random stream as `regbench run` does for pair `pair_index` of a file "
+          "generated with `seed`. normalize: as `regbench align --normalize`. A method that "
+          "fails returns status \"failed\" and a message; bad input (unknown method or "
+          "parameter, wrong shape or dtype, NaN) raises ValueError.");
+
+    m.def("metrics", &Metrics, py::arg("T_est"), py::arg("T_gt"), py::arg("source"),
+          py::arg("target"), py::arg("euler") = "zyx", py::arg("source_overlap") = py::none(),
+          "metrics(T_est, T_gt, source, target, euler=\"zyx\", source_overlap=None) -> dict\n\n"
+          "Every per-pair metric of docs/metrics.md for an estimate against the ground truth: "
+          "mae_r, mse_r (degrees, Euler angles of `euler`: 'zyx' or 'xyz'), mae_t, mse_t, rre "
+          "(degrees), rte, ccd, chamfer, ccd_within_clip, overlap_rmse (over the source points "
+          "labelled 1 in source_overlap; all points when None), and euler.");
+
+    m.def("run", &Run, py::arg("pairs"), py::arg("methods"), py::arg("out"),
+          py::arg("params") = py::none(), py::arg("resume") = false,
+          py::arg("timeout") = py::none(), py::kw_only(), py::arg("jobs") = 1,
+          py::arg("threads") = 1, py::arg("euler") = "zyx", py::arg("max_points") = 20000,
+          py::arg("downsample") = false, py::arg("progress") = false,
+          "run(pairs, methods, out, params=None, resume=False, timeout=None, *, jobs=1, "
+          "threads=1, euler=\"zyx\", max_points=20000, downsample=False, progress=False) -> "
+          "dict\n\n"
+          "`regbench run` with Python callables as methods. methods: a list of built-in method "
+          "names and callables fn(source, target, **params) -> 4x4 array (or a dict with "
+          "\"transform\" and optional \"iterations\", \"stop_reason\" and extras); a callable "
+          "runs under its __name__, or give (name, fn). params: {method name: {parameter: "
+          "value}}. Rows, file format, resume, the output lock and atomic writes are those of "
+          "`regbench run`; a callable is timed like a built-in method (wall and CPU), an "
+          "exception in it becomes a `failed` row with its message, and with `timeout` it runs "
+          "in a forked child. Ctrl-C stops the run with KeyboardInterrupt, the finished rows "
+          "kept in OUT.part for resume=True. Returns {out, rows_written, rows_skipped, "
+          "failures, wall_seconds}.");
+
+    m.def("read_results", &ReadResults, py::arg("path"), py::arg("as_frame") = py::none(),
+          "read_results(path, as_frame=None) -> pandas.DataFrame | list[dict]\n\n"
+          "Reads a results file (`run`, `score`, `merge`), each row validated by the C++ "
+          "reader. A pandas DataFrame (nested keys one level flattened: metrics.mae_r, "
+          "data.content_hash, params.w, ...) when pandas is importable and as_frame is not "
+          "False, else a list of dicts.");
+}
