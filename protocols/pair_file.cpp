@@ -83,6 +83,21 @@ void WriteDoubleAttr(const std::string& path, hid_t obj, const char* name, doubl
 
 std::string ReadStringAttrBytes(const std::string& where, hid_t obj, const char* name);
 
+/// The provenance keys readers use with a fixed type: a mistyped one (a number for `dataset`)
+/// made a bare type_error.302 later, in whichever command read it.
+void CheckProvenanceTypes(const std::string& path, const nlohmann::json& p) {
+    if (!p.is_object()) Fail(path, "provenance is not a JSON object");
+    for (const char* key : {"dataset", "protocol", "pairing", "content_hash", "format"}) {
+        if (p.contains(key) && !p.at(key).is_string()) {
+            Fail(path, std::string("provenance key '") + key + "' must be a string, got " +
+                           p.at(key).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+        }
+    }
+    if (p.contains("params") && !p.at("params").is_object()) {
+        Fail(path, "provenance key 'params' must be an object");
+    }
+}
+
 /// A string attribute, refused naming the file/group and the key unless it is UTF-8 (every
 /// one ends up in JSON rows and reports, where other bytes made a bare type_error.316).
 std::string ReadStringAttr(const std::string& where, hid_t obj, const char* name) {
@@ -423,6 +438,7 @@ PairSet ReadPairFileInProcess(const std::string& path) {
     try {
         set.provenance = ParseJsonBounded(ReadStringAttr(path, file.get(), "provenance"),
                                           path + " provenance");
+        CheckProvenanceTypes(path, set.provenance);
     } catch (const nlohmann::json::exception& e) {
         Fail(path, std::string("provenance is not valid JSON: ") + e.what());
     }
