@@ -148,7 +148,6 @@ std::uintmax_t ReadHeader(const std::string& path, const char* last, OnLine on_l
 DeclaredCloud ReadPlyHeader(const std::string& path) {
     DeclaredCloud d;
     bool in_vertex = false;
-    bool list_property = false;
     d.body_offset = ReadHeader(path, "end_header", [&](int n, const std::vector<std::string>& w) {
         if (w.size() >= 2 && w[0] == "format") d.ascii = w[1] == "ascii";
         if (w.size() >= 3 && w[0] == "element") {
@@ -165,11 +164,12 @@ DeclaredCloud ReadPlyHeader(const std::string& path) {
                                      ": PLY property line needs a type and a name");
         }
         if (in_vertex && w.size() >= 3 && w[0] == "property") {
-            if (w[1] == "list") list_property = true;
-            d.point_bytes += PlyTypeBytes(w[1]);
+            // A list takes at least its count (an empty list): the bytes per point are then a
+            // lower bound, still enough to refuse 2e9 declared points in a tiny file (the
+            // reader used to allocate for them first: a bare std::bad_alloc).
+            d.point_bytes += PlyTypeBytes(w[1] == "list" ? w[2] : w[1]);
         }
     });
-    if (list_property) d.point_bytes = 0;  // variable size: bound by the ASCII rule only
     return d;
 }
 
