@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <string>
 
@@ -36,6 +37,45 @@ inline CLI::Validator NonNegativeReal() {
         "REAL>=0");
 }
 
+/// Digits only, fitting in 64 bits, at least 1 ("0", "-1", "2.5", "1e3" refused).
+inline CLI::Validator PositiveWholeNumber() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            const auto v = ParseNumber<std::uint64_t>(s);
+            if (!v || *v < 1) return "expected a whole number >= 1 (digits only), got '" + s + "'";
+            return "";
+        },
+        "UINT>=1");
+}
+
+/// A finite decimal number > 0 ("0", "-1", "nan", "inf" refused).
+inline CLI::Validator PositiveReal() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            const auto v = s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
+            if (!v || !std::isfinite(*v) || *v <= 0) {
+                return "expected a finite number > 0, got '" + s + "'";
+            }
+            return "";
+        },
+        "REAL>0");
+}
+
+/// A finite number strictly between `lo` and `hi` (a significance level, a fraction).
+inline CLI::Validator OpenInterval(double lo, double hi) {
+    return CLI::Validator(
+        [lo, hi](std::string& s) -> std::string {
+            const auto v = s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
+            if (!v || !std::isfinite(*v) || !(*v > lo) || !(*v < hi)) {
+                char range[64];
+                std::snprintf(range, sizeof(range), "(%g, %g)", lo, hi);
+                return std::string("expected a number in ") + range + ", got '" + s + "'";
+            }
+            return "";
+        },
+        "REAL");
+}
+
 /// Parses "i/n" with 0 <= i < n, digits only ("1/2x", "-1/2", "1/0" refused).
 inline void ParseShard(const std::string& text, int* index, int* count) {
     const auto slash = text.find('/');
@@ -47,8 +87,8 @@ inline void ParseShard(const std::string& text, int* index, int* count) {
     };
     if (slash == std::string::npos || !parse(text.substr(0, slash), index) ||
         !parse(text.substr(slash + 1), count) || *count < 1 || *index >= *count) {
-        throw std::invalid_argument("--shard must be i/n with whole numbers 0 <= i < n, got '" +
-                                    text + "'");
+        throw std::invalid_argument(
+            "--shard must be i/n with whole numbers 0 <= i < n <= 2147483647, got '" + text + "'");
     }
 }
 

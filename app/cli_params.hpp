@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/json_limits.hpp"
+
 namespace regbench::app {
 
 /// Parses the text of `--params`; an empty text (option not given) is an empty object.
@@ -12,7 +14,7 @@ namespace regbench::app {
 inline nlohmann::json ParseParamsOption(const std::string& text) {
     if (text.empty()) return nlohmann::json::object();
     try {
-        return nlohmann::json::parse(text);
+        return ParseJsonBounded(text, "--params");
     } catch (const nlohmann::json::exception& e) {
         throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
     }

@@ -6,10 +6,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "app/cli_params.hpp"
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "core/metrics.hpp"
 #include "core/transform.hpp"
 #include "datasets/point_file.hpp"
@@ -54,9 +57,20 @@ void SetupAlignCommand(CLI::App* cmd) {
     cmd->add_option("--euler", *euler, "Euler angles of mae_r with --gt: zyx (paper) | xyz")
         ->check(CLI::IsMember({"zyx", "xyz"}))
         ->capture_default_str();
-    cmd->add_option("--seed", *seed, "Seed of the method's random stream")->capture_default_str();
-    cmd->add_option("--threads", *threads, "Threads inside the method")->capture_default_str();
+    cmd->add_option("--seed", *seed, "Seed of the method's random stream")
+        ->check(WholeNumber())
+        ->capture_default_str();
+    cmd->add_option("--threads", *threads, "Threads inside the method")
+        ->check(PositiveWholeNumber())
+        ->capture_default_str();
     cmd->callback([=] {
+        std::optional<OutputLock> lock;  // one writer per --out, inputs refused before work
+        if (!out->empty()) {
+            std::vector<std::string> inputs{*src, *tgt};
+            if (!gt->empty()) inputs.push_back(*gt);
+            CheckOutputPath(*out, inputs);
+            lock.emplace(*out);
+        }
         const nlohmann::json p = ParseParamsOption(*params);
         const auto reg = CreateMethod(*method, p);  // validates name and params
         const PointCloud source = ReadCloudFile(*src);

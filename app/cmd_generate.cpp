@@ -10,6 +10,8 @@
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
+#include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
@@ -112,6 +114,8 @@ void SetupGenerateCommand(CLI::App* cmd) {
         ->delimiter(',');
     cmd->callback([cmd, a] {
         GenerateRequest request = a->request;
+        CheckOutputPath(request.out);  // a directory, a device: refused before any work
+        const OutputLock lock(request.out);  // one writer per --out while generating
         request.options = BuildOptions(*cmd, *a);
         request.one_per_item = a->pairs == "all";
         if (!request.one_per_item) request.num_pairs = std::stoull(a->pairs);  // validated digits

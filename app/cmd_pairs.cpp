@@ -1,9 +1,14 @@
 // `regbench inspect`, `regbench export`, `regbench import`: look into and convert pair files.
+#include <filesystem>
 #include <iostream>
+#include <system_error>
+#include <vector>
 #include <memory>
 #include <string>
 
 #include "app/commands.hpp"
+#include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "core/version.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -47,6 +52,7 @@ void SetupExportCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"xyz", "ply"}))
         ->capture_default_str();
     cmd->callback([file, dir, format] {
+        const OutputLock lock(*dir);  // one export into a folder at a time
         const PairSet set = ReadPairFile(*file);
         if (*format == "ply") {
             ExportPly(set, *dir);
@@ -65,6 +71,15 @@ void SetupImportCommand(CLI::App* cmd) {
     cmd->add_option("--out", *out, "Output HDF5 file")->required();
     cmd->add_option("--eta", *eta, "Overlap label radius")->capture_default_str();
     cmd->callback([dir, out, eta] {
+        // --out may not be any file of the folder being imported (compared by device and
+        // inode, so ./a, a and links to a all count).
+        std::vector<std::string> inputs;
+        std::error_code ec;
+        for (const auto& e : std::filesystem::recursive_directory_iterator(*dir, ec)) {
+            if (e.is_regular_file(ec)) inputs.push_back(e.path().string());
+        }
+        CheckOutputPath(*out, inputs);
+        const OutputLock lock(*out);
         PairSet set = ImportXyzDir(*dir, *eta);
         set.provenance["regbench_version"] = RegbenchVersion();
         set.provenance["git_sha"] = RegbenchGitSha();

@@ -3,9 +3,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "runners/result_row.hpp"
@@ -64,6 +66,13 @@ void SetupReportCommand(CLI::App* cmd) {
                     "table1_modelnet_partial:same_category (md format)");
     cmd->add_option("--paper-file", *paper_file, "The paper's tables (JSON)");
     cmd->callback([=] {
+        // Refused before reading anything: an input as --out, a directory, a device; then one
+        // writer per --out until the report is in place.
+        std::optional<OutputLock> lock;
+        if (!out->empty()) {
+            CheckOutputPath(*out, *files);
+            lock.emplace(*out);
+        }
         std::vector<ResultRow> rows;
         for (const auto& f : *files) {
             auto part = ReadResultRows(f);  // throws naming file:line

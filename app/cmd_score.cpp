@@ -4,6 +4,7 @@
 
 #include <iostream>
 
+#include "app/cli_numbers.hpp"
 #include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "runners/score.hpp"
@@ -33,11 +34,13 @@ void SetupScoreCommand(CLI::App* cmd) {
     cmd->add_option("--rigid-tol", o->rigid_tolerance,
                     "Reject a transform when max|R^T R - I|, |det R - 1| or its bottom row's "
                     "distance from (0,0,0,1) exceeds this")
+        ->check(NonNegativeReal())  // NaN would accept every matrix
         ->capture_default_str();
     cmd->add_flag("--allow-scale", o->allow_scale,
                   "Accept similarities s R (uniform scale, e.g. CPD with scale): the rotation "
                   "metrics use R, the row's scale is s");
     cmd->add_option("--threads", o->threads, "Threads the method used (recorded in rows)")
+        ->check(PositiveWholeNumber())
         ->capture_default_str();
     cmd->callback([=] {
         ScoreOptions opts = *o;

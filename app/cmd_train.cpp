@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
@@ -270,22 +271,34 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--pairing", a->pairing, "shared | independent")->capture_default_str();
     cmd->add_flag("--jitter,!--no-jitter", a->jitter, "Jitter both clouds (default on)");
     cmd->add_option("--pairs-file", a->pairs_file, "Train on a frozen pair file instead");
+    // Every number is checked before any work: a value that is NaN, negative or zero where
+    // the recipe needs a positive one used to fall back to the full recipe silently.
     cmd->add_option("--val-fraction", a->val_fraction,
                     "Fraction of --pairs-file pairs held out for validation")
+        ->check(OpenInterval(0.0, 1.0))
         ->capture_default_str();
     cmd->add_option("--val-pairs", a->val_pairs, "Validation pairs (protocol data)")
+        ->check(PositiveWholeNumber())
         ->capture_default_str();
-    cmd->add_option("--batch", a->batch, "Batch size (default: the model's recipe)");
-    cmd->add_option("--epochs", a->epochs, "Epochs (default: the model's recipe)");
-    cmd->add_option("--pairs-per-epoch", a->pairs_per_epoch, "Pairs per epoch (default: recipe)");
-    cmd->add_option("--lr", a->lr, "Learning rate (default: recipe)");
+    cmd->add_option("--batch", a->batch, "Batch size (default: the model's recipe)")
+        ->check(PositiveWholeNumber());
+    cmd->add_option("--epochs", a->epochs, "Epochs (default: the model's recipe)")
+        ->check(PositiveWholeNumber());
+    cmd->add_option("--pairs-per-epoch", a->pairs_per_epoch, "Pairs per epoch (default: recipe)")
+        ->check(PositiveWholeNumber());
+    cmd->add_option("--lr", a->lr, "Learning rate (default: recipe)")->check(PositiveReal());
     cmd->add_option("--minutes", a->train.minutes,
                     "Wall-clock budget of this invocation; ends with a validated checkpoint. On a "
-                    "fresh run without --epochs/--max-steps the LR schedule is planned to fit it");
-    cmd->add_option("--max-steps", a->train.max_steps, "Stop after this many steps in total");
+                    "fresh run without --epochs/--max-steps the LR schedule is planned to fit it")
+        ->check(PositiveReal());
+    cmd->add_option("--max-steps", a->train.max_steps, "Stop after this many steps in total")
+        ->check(PositiveWholeNumber());
     cmd->add_flag("--resume", a->train.resume, "Continue from OUT/last");
-    cmd->add_option("--threads", a->train.threads, "Torch threads")->capture_default_str();
+    cmd->add_option("--threads", a->train.threads, "Torch threads")
+        ->check(PositiveWholeNumber())
+        ->capture_default_str();
     cmd->add_option("--seed", a->train.seed, "Seed (weights, pairs, per-step randomness)")
+        ->check(WholeNumber())
         ->capture_default_str();
     cmd->add_option("--device", a->train.device, "cpu | cuda")->capture_default_str();
     cmd->add_flag("!--no-val-icp", a->val_icp, "Skip the with-ICP validation metrics");

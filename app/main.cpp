@@ -1,4 +1,5 @@
 // regbench: benchmark and evaluation harness for rigid point-cloud registration.
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -71,6 +72,10 @@ const std::vector<Command>& RegisteredCommands() { return CommandList(); }
 }  // namespace regbench::app
 
 int main(int argc, char** argv) {
+    // A file-size limit (ulimit -f) must end a write with EFBIG, which every writer checks and
+    // reports naming the file (and removes its temporary), instead of killing the process
+    // silently by SIGXFSZ. Ignored dispositions survive the exec below.
+    ::signal(SIGXFSZ, SIG_IGN);
     EnsurePassiveOmpWaitPolicy(argv);
     CLI::App app{"regbench: reproducible benchmarks for rigid point-cloud registration"};
     app.set_version_flag("--version", std::string("regbench ") + regbench::RegbenchVersion() +
@@ -80,7 +85,11 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // --help and --version print and exit 0; every other parse or validation error is a
+        // usage error: one plain line naming the flag and the value, exit status 2.
+        if (e.get_exit_code() == 0) return app.exit(e);
+        std::cerr << "regbench: usage error: " << e.what() << "\n";
+        return 2;
     } catch (const std::exception& e) {
         std::cerr << "regbench: error: " << e.what() << "\n";
         return 1;

@@ -71,7 +71,7 @@ void WriteAllOrThrow(int fd, std::string_view data, const std::string& what) {
 }
 
 AtomicFile::AtomicFile(std::string path, const std::vector<std::string>& inputs)
-    : path_(std::move(path)) {
+    : path_(std::move(path)), owner_(::getpid()) {
     CheckOutputPath(path_, inputs);
     // A unique name in the final directory: the rename stays on one filesystem (atomic), and
     // two writers never share a temporary.
@@ -122,7 +122,8 @@ void AtomicFile::Abort() noexcept {
         ::close(fd_);
         fd_ = -1;
     }
-    if (!done_ && !temp_.empty()) ::unlink(temp_.c_str());
+    // A forked child never removes its parent's temporary.
+    if (!done_ && !temp_.empty() && ::getpid() == owner_) ::unlink(temp_.c_str());
     done_ = true;
 }
 

@@ -43,6 +43,7 @@ private:
     std::string temp_;
     int fd_ = -1;
     bool done_ = false;
+    int owner_ = 0;  ///< pid that created the temporary; only it removes it
 };
 
 /// Writes `content` to `path` atomically (AtomicFile in one call).

@@ -26,14 +26,49 @@ std::string ReadHolder(int fd) {
 
 }  // namespace
 
-OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
+void RequireRegularOrAbsent(const std::string& path, const std::string& what) {
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) != 0) {
+        if (errno == ENOENT) return;
+        throw std::runtime_error(path + ": cannot check " + what + ": " + std::strerror(errno));
+    }
+    if (S_ISLNK(st.st_mode)) {
+        throw std::runtime_error(path + ": " + what +
+                                 " is a symbolic link; refusing to follow it (remove it)");
+    }
+    if (!S_ISREG(st.st_mode)) {
+        throw std::runtime_error(path + ": " + what +
+                                 " exists and is not a regular file; refusing to use it");
+    }
+    if (st.st_nlink != 1) {
+        throw std::runtime_error(path + ": " + what +
+                                 " is a hard link shared with another file; refusing to write "
+                                 "through it (remove it)");
+    }
+}
+
+OutputLock::OutputLock(const std::string& path)
+    : lock_path_(path + ".lock"), owner_(::getpid()) {
     // Retry when the file we locked was unlinked by a finishing holder between our open and
     // our flock: that inode no longer guards the path.
     for (int attempt = 0; attempt < 100; ++attempt) {
-        const int fd = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        // Never through a link: a symlink (or a FIFO, a device) pre-placed at the lock path
+        // would make the pid write below truncate whatever it points to.
+        RequireRegularOrAbsent(lock_path_, "lock file");
+        const int fd =
+            ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
         if (fd < 0) {
+            const int err = errno;
+            if (err == ELOOP) RequireRegularOrAbsent(lock_path_, "lock file");  // names the link
             throw std::runtime_error(lock_path_ +
-                                     ": cannot create lock file: " + std::strerror(errno));
+                                     ": cannot create lock file: " + std::strerror(err));
+        }
+        struct stat opened {};
+        if (::fstat(fd, &opened) != 0 || !S_ISREG(opened.st_mode) || opened.st_nlink != 1) {
+            ::close(fd);
+            throw std::runtime_error(lock_path_ +
+                                     ": lock file is not a plain file of its own (a special "
+                                     "file or a hard link to another file): refusing to use it");
         }
         if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
             const int err = errno;
@@ -70,6 +105,12 @@ OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
 
 OutputLock::~OutputLock() {
     if (fd_ < 0) return;
+    // A forked child that ran this destructor (it should leave by _exit, but a library may
+    // unwind) must not remove the parent's lock: only the process that took it removes it.
+    if (::getpid() != owner_) {
+        ::close(fd_);
+        return;
+    }
     // Unlink while still holding the lock, so no newcomer can lock the old inode after us
     // and believe it guards the path (the newcomer's inode check retries instead).
     ::unlink(lock_path_.c_str());

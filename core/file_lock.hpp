@@ -8,7 +8,14 @@ namespace regbench {
 /// into it. Throws std::runtime_error naming the output and the holder's pid when another
 /// process (or another OutputLock in this one) holds it. The kernel drops the lock when the
 /// process dies, so a killed run never leaves a stale lock behind; the destructor also removes
-/// the lock file.
+/// the lock file, but only in the process that took the lock (never in a forked child). The
+/// lock path is opened without following links (O_NOFOLLOW) and only as a plain file.
+/// Throws std::runtime_error naming `path` (described as `what`) unless nothing exists there
+/// or it is a regular file with a single link: a symbolic link, a hard link shared with
+/// another file, a FIFO or a device at a path regbench writes (lock, .part, temporary files)
+/// is refused, never followed.
+void RequireRegularOrAbsent(const std::string& path, const std::string& what);
+
 class OutputLock {
 public:
     explicit OutputLock(const std::string& path);
@@ -21,6 +28,7 @@ public:
 private:
     std::string lock_path_;
     int fd_ = -1;
+    int owner_ = 0;  ///< pid that took the lock; only it removes the file
 };
 
 }  // namespace regbench

@@ -4,6 +4,7 @@
 #include <exception>
 #include <limits>
 
+#include "core/coordinate_limit.hpp"
 #include "core/cpu_time.hpp"
 #include "core/enum_names.hpp"
 #include "core/rng.hpp"
@@ -27,10 +28,10 @@ std::string ValidateCloud(const PointCloud& cloud, const std::string& which) {
         return which + " cloud has " + std::to_string(cloud.rows()) + " points (need >= 3)";
     }
     if (!cloud.allFinite()) return which + " cloud has non-finite (NaN or Inf) coordinates";
-    // PCL (GICP, NDT) and the float E-steps convert to float: a finite double beyond float's
-    // range becomes Inf there and PCL aborts the whole process, so it fails here as a row.
-    if (cloud.cwiseAbs().maxCoeff() > static_cast<double>(std::numeric_limits<float>::max())) {
-        return which + " cloud has coordinates beyond float range (|x| > 3.4e38)";
+    // PCL (GICP, NDT) and the float E-steps square coordinates in float: beyond kMaxCoordinate
+    // (point_cloud.hpp) PCL can abort the whole process, so it fails here as a row.
+    if (cloud.cwiseAbs().maxCoeff() > kMaxCoordinate) {
+        return which + " cloud has coordinates beyond the limit |x| <= 1e15";
     }
     return {};
 }

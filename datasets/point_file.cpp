@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/coordinate_limit.hpp"
 #include "core/parse_number.hpp"
 #include "datasets/off_reader.hpp"
 
@@ -28,11 +30,11 @@ std::string LowerExtension(const std::string& path) {
 
 /// Registration libraries (PCL) convert to float and abort on overflow: refuse such clouds.
 void CheckCoordinates(const std::string& path, const PointCloud& points) {
-    const double limit = static_cast<double>(std::numeric_limits<float>::max());
     for (Eigen::Index i = 0; i < points.rows(); ++i) {
-        if (points.row(i).cwiseAbs().maxCoeff() > limit) {
+        if (points.row(i).cwiseAbs().maxCoeff() > kMaxCoordinate) {
             throw std::runtime_error(path + ": point " + std::to_string(i) +
-                                     " has a coordinate that does not fit in a float");
+                                     " has a coordinate beyond the limit |x| <= 1e15 (does not "
+                                     "fit in a float or in the methods' float arithmetic)");
         }
     }
 }
@@ -94,6 +96,7 @@ PointCloud ReadXyz(const std::string& path, Normals* normals) {
 /// What a PLY or PCD header promises, read by us before Open3D allocates anything.
 struct DeclaredCloud {
     double points = 0;               ///< declared point count
+    std::string points_text;         ///< the count as written in the header
     bool ascii = false;              ///< ASCII body (one point per line)
     bool compressed = false;         ///< PCD binary_compressed (LZF)
     double point_bytes = 0;          ///< bytes per point in a binary body (0: unknown)
@@ -145,12 +148,14 @@ std::uintmax_t ReadHeader(const std::string& path, const char* last, OnLine on_l
 DeclaredCloud ReadPlyHeader(const std::string& path) {
     DeclaredCloud d;
     bool in_vertex = false;
-    bool list_property = false;
     d.body_offset = ReadHeader(path, "end_header", [&](int n, const std::vector<std::string>& w) {
         if (w.size() >= 2 && w[0] == "format") d.ascii = w[1] == "ascii";
         if (w.size() >= 3 && w[0] == "element") {
             in_vertex = w[1] == "vertex";
-            if (in_vertex) d.points = HeaderCount(path, n, w[2]);
+            if (in_vertex) {
+                d.points = HeaderCount(path, n, w[2]);
+                d.points_text = w[2];
+            }
         }
         // A property line without type and name crashes Open3D's PLY reader (found by
         // fuzz_ply): refuse it here, before Open3D sees the file.
@@ -159,11 +164,12 @@ DeclaredCloud ReadPlyHeader(const std::string& path) {
                                      ": PLY property line needs a type and a name");
         }
         if (in_vertex && w.size() >= 3 && w[0] == "property") {
-            if (w[1] == "list") list_property = true;
-            d.point_bytes += PlyTypeBytes(w[1]);
+            // A list takes at least its count (an empty list): the bytes per point are then a
+            // lower bound, still enough to refuse 2e9 declared points in a tiny file (the
+            // reader used to allocate for them first: a bare std::bad_alloc).
+            d.point_bytes += PlyTypeBytes(w[1] == "list" ? w[2] : w[1]);
         }
     });
-    if (list_property) d.point_bytes = 0;  // variable size: bound by the ASCII rule only
     return d;
 }
 
@@ -192,6 +198,7 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
         }
         if (w[0] == "POINTS" && w.size() >= 2) {
             d.points = HeaderCount(path, n, w[1]);
+            d.points_text = w[1];
             have_points = true;
         }
         if (w[0] == "SIZE") {
@@ -263,9 +270,9 @@ void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
     }
     const double body = static_cast<double>(size) - static_cast<double>(d.body_offset);
     const auto refuse = [&](const std::string& why) {
-        throw std::runtime_error(path + ": header declares " +
-                                 std::to_string(static_cast<unsigned long long>(d.points)) +
-                                 " points but " + why + " (truncated or corrupt file)");
+        // The count as written (a cast of 2^64-1 held in a double wrapped to 0).
+        throw std::runtime_error(path + ": header declares " + d.points_text + " points but " +
+                                 why + " (truncated or corrupt file)");
     };
     if (d.points < 1) throw std::runtime_error(path + ": header declares no points");
     if (d.ascii) {

@@ -1,9 +1,19 @@
 #include "ogmm/checkpoint.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <sstream>
+#include <system_error>
 #include <stdexcept>
 
+#include "core/atomic_file.hpp"
+#include "core/json_limits.hpp"
 #include "core/version.hpp"
 #include "ogmm/zoo.hpp"
 
@@ -15,6 +25,28 @@ constexpr char kFormat[] = "regbench-checkpoint";
 constexpr int kFormatVersion = 1;
 }  // namespace
 
+/// Creates `path` with `bytes`: every write, the fsync and the close checked (ENOSPC, EFBIG).
+void WriteFileChecked(const fs::path& path, const std::string& bytes) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0) throw std::runtime_error(path.string() + ": cannot create: " + std::strerror(errno));
+    try {
+        WriteAllOrThrow(fd, bytes, path.string());
+    } catch (...) {
+        ::close(fd);
+        throw;
+    }
+    const bool synced = ::fsync(fd) == 0;
+    if (::close(fd) != 0 || !synced) {
+        throw std::runtime_error(path.string() + ": write failed: " + std::strerror(errno));
+    }
+}
+
+/// Writes the weights, optimizer state and checkpoint.json into the folder `tmp`.
+void SaveCheckpointInto(const fs::path& tmp,
+                        RegistrationNet& net,
+                        const nlohmann::json& meta,
+                        torch::optim::Optimizer* optimizer);
+
 std::string BuildVersion() { return RegbenchVersion(); }
 std::string BuildGitSha() { return RegbenchGitSha(); }
 
@@ -24,14 +56,46 @@ void SaveCheckpoint(const std::string& dir,
                     torch::optim::Optimizer* optimizer) {
     const fs::path final_dir(dir);
     const fs::path tmp = final_dir.string() + ".tmp";
+    // A full disk or a file-size limit fails inside torch's writer (a c10::Error with a stack
+    // dump) or ours: either way the half-written folder is removed and the error names the
+    // checkpoint, and the previous checkpoint at `dir` stays as it was.
+    try {
+        SaveCheckpointInto(tmp, net, meta, optimizer);
+        fs::remove_all(final_dir);
+        fs::rename(tmp, final_dir);
+    } catch (const c10::Error& e) {
+        std::error_code ec;
+        fs::remove_all(tmp, ec);
+        throw std::runtime_error("cannot save checkpoint " + final_dir.string() + ": " +
+                                 e.what_without_backtrace());
+    } catch (const std::exception& e) {
+        std::error_code ec;
+        fs::remove_all(tmp, ec);
+        throw std::runtime_error("cannot save checkpoint " + final_dir.string() + ": " + e.what());
+    }
+}
+
+void SaveCheckpointInto(const fs::path& tmp,
+                        RegistrationNet& net,
+                        const nlohmann::json& meta,
+                        torch::optim::Optimizer* optimizer) {
     fs::remove_all(tmp);
     fs::create_directories(tmp);
+    // torch's file writer throws on a failed write and then throws again from its destructor
+    // (std::terminate, a c10 stack dump): serialise into memory, where nothing fails, and write
+    // the bytes with checked writes.
     {
         torch::serialize::OutputArchive archive;
         net.save(archive);
-        archive.save_to((tmp / kWeightsFile).string());
+        std::ostringstream bytes;
+        archive.save_to(bytes);
+        WriteFileChecked(tmp / kWeightsFile, bytes.str());
     }
-    if (optimizer != nullptr) torch::save(*optimizer, (tmp / kOptimizerFile).string());
+    if (optimizer != nullptr) {
+        std::ostringstream bytes;
+        torch::save(*optimizer, bytes);
+        WriteFileChecked(tmp / kOptimizerFile, bytes.str());
+    }
     nlohmann::json j = meta;
     j["format"] = kFormat;
     j["format_version"] = kFormatVersion;
@@ -40,13 +104,8 @@ void SaveCheckpoint(const std::string& dir,
     j["git_sha"] = BuildGitSha();
     j["weights"] = kWeightsFile;
     j["weights_bytes"] = fs::file_size(tmp / kWeightsFile);
-    {
-        std::ofstream out(tmp / kCheckpointJson);
-        out << j.dump(2) << "\n";
-        if (!out) throw std::runtime_error("cannot write " + (tmp / kCheckpointJson).string());
-    }
-    fs::remove_all(final_dir);
-    fs::rename(tmp, final_dir);
+    WriteFileChecked(tmp / kCheckpointJson,
+                     j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 nlohmann::json ReadCheckpointJson(const std::string& dir) {
@@ -55,7 +114,9 @@ nlohmann::json ReadCheckpointJson(const std::string& dir) {
     if (!in) throw std::runtime_error("checkpoint file " + path.string() + " cannot be opened");
     nlohmann::json j;
     try {
-        in >> j;
+        const std::string text((std::istreambuf_iterator<char>(in)),
+                               std::istreambuf_iterator<char>());
+        j = ParseJsonBounded(text, "checkpoint file " + path.string());
     } catch (const std::exception& e) {
         throw std::runtime_error("checkpoint file " + path.string() +
                                  " is not valid JSON: " + e.what());

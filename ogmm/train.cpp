@@ -258,9 +258,41 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
 nlohmann::json ToJson(const TrainerState& s) { return s; }
 
 /// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
+/// Every counter is checked as written: a count must be a whole number in [0, 2^53] (a step of
+/// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
+/// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
 TrainerState TrainerStateFromJson(nlohmann::json j) {
+    if (!j.is_object()) throw std::invalid_argument("trainer state is not an object");
     if (!j.contains("step")) throw std::invalid_argument("trainer state: no 'step'");
     for (auto it = j.begin(); it != j.end();) it = it->is_null() ? j.erase(it) : std::next(it);
+    const auto bad = [&](const std::string& key, const std::string& need) {
+        throw std::invalid_argument("trainer state: '" + key + "' is " + j.at(key).dump() +
+                                    ", expected " + need);
+    };
+    for (const char* key :
+         {"step", "planned_steps", "pairs_seen", "plateau_bad", "epoch_loss_steps"}) {
+        if (!j.contains(key)) continue;
+        const nlohmann::json& v = j.at(key);
+        if (!v.is_number_integer() || (v.is_number_unsigned() ? v.get<std::uint64_t>() > (1ULL << 53)
+                                                              : v.get<std::int64_t>() < 0)) {
+            bad(key, "a whole number in [0, 2^53]");
+        }
+    }
+    if (j.contains("plateau_bad") && j.at("plateau_bad").get<std::int64_t>() > 1000000000) {
+        bad("plateau_bad", "a whole number in [0, 1e9]");
+    }
+    for (const char* key : {"lr", "elapsed_seconds", "cpu_seconds", "plateau_scale"}) {
+        if (!j.contains(key)) continue;
+        const nlohmann::json& v = j.at(key);
+        if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0) {
+            bad(key, "a finite number >= 0");
+        }
+    }
+    for (const char* key : {"best_mae_r", "plateau_best", "epoch_loss_sum"}) {
+        if (j.contains(key) && (!j.at(key).is_number() || !std::isfinite(j.at(key).get<double>()))) {
+            bad(key, "a finite number (or null)");
+        }
+    }
     return j.get<TrainerState>();
 }
 
@@ -407,7 +439,12 @@ void Trainer::Resume() {
         log_ << "train: note: the training recipe differs from the one in " << last.string()
              << "; continuing with the new one\n";
     }
-    state_ = TrainerStateFromJson(j.at("trainer"));
+    try {
+        state_ = TrainerStateFromJson(j.at("trainer"));
+    } catch (const std::exception& e) {
+        throw std::runtime_error("checkpoint file " + (last / "checkpoint.json").string() + ": " +
+                                 e.what());
+    }
     if (state_.planned_steps <= 0) state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
     elapsed_before_ = state_.elapsed_seconds;
     cpu_before_ = state_.cpu_seconds;

@@ -29,6 +29,8 @@
 #endif
 
 #include "core/atomic_file.hpp"
+#include "core/coordinate_limit.hpp"
+#include "core/json_limits.hpp"
 #include "protocols/hdf5_handle.hpp"
 
 namespace regbench {
@@ -79,7 +81,32 @@ void WriteDoubleAttr(const std::string& path, hid_t obj, const char* name, doubl
     }
 }
 
+std::string ReadStringAttrBytes(const std::string& where, hid_t obj, const char* name);
+
+/// The provenance keys readers use with a fixed type: a mistyped one (a number for `dataset`)
+/// made a bare type_error.302 later, in whichever command read it.
+void CheckProvenanceTypes(const std::string& path, const nlohmann::json& p) {
+    if (!p.is_object()) Fail(path, "provenance is not a JSON object");
+    for (const char* key : {"dataset", "protocol", "pairing", "content_hash", "format"}) {
+        if (p.contains(key) && !p.at(key).is_string()) {
+            Fail(path, std::string("provenance key '") + key + "' must be a string, got " +
+                           p.at(key).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+        }
+    }
+    if (p.contains("params") && !p.at("params").is_object()) {
+        Fail(path, "provenance key 'params' must be an object");
+    }
+}
+
+/// A string attribute, refused naming the file/group and the key unless it is UTF-8 (every
+/// one ends up in JSON rows and reports, where other bytes made a bare type_error.316).
 std::string ReadStringAttr(const std::string& where, hid_t obj, const char* name) {
+    std::string s = ReadStringAttrBytes(where, obj, name);
+    if (!IsValidUtf8(s)) Fail(where, std::string("attribute '") + name + "' is not valid UTF-8");
+    return s;
+}
+
+std::string ReadStringAttrBytes(const std::string& where, hid_t obj, const char* name) {
     if (H5Aexists(obj, name) <= 0) Fail(where, std::string("missing attribute '") + name + "'");
     Handle attr(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
     Handle type(H5Aget_type(attr.get()), H5Tclose);
@@ -183,9 +210,11 @@ void CheckValues(const std::string& where, const char* name, const double* v, st
             Fail(where,
                  std::string(name) + " has a non-finite value (row " + std::to_string(i / 3) + ")");
         }
-        if (std::abs(v[i]) > static_cast<double>(std::numeric_limits<float>::max())) {
+        if (std::abs(v[i]) > kMaxCoordinate) {
             Fail(where, std::string(name) + " row " + std::to_string(i / 3) + ": magnitude " +
-                            std::to_string(v[i]) + " does not fit in a float");
+                            std::to_string(v[i]) +
+                            " is beyond the coordinate limit |x| <= 1e15 (does not fit in a "
+                            "float or in the methods' float arithmetic)");
         }
     }
 }
@@ -267,9 +296,8 @@ void CheckRigid(const std::string& where, const Eigen::Matrix4d& T) {
              "T_gt's rotation is not orthonormal (max |R^T R - I| = " + std::to_string(orth) + ")");
     }
     if (R.determinant() < 0) Fail(where, "T_gt is a reflection (det R = -1)");
-    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() >
-        static_cast<double>(std::numeric_limits<float>::max())) {
-        Fail(where, "T_gt's translation does not fit in a float");
+    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxCoordinate) {
+        Fail(where, "T_gt's translation is beyond the coordinate limit |x| <= 1e15");
     }
 }
 
@@ -302,7 +330,7 @@ Pair ReadPair(const std::string& path, hid_t file, std::size_t k, std::uintmax_t
     }
     if (H5Aexists(g.get(), "meta") > 0) {
         try {
-            p.meta = nlohmann::json::parse(ReadStringAttr(where, g.get(), "meta"));
+            p.meta = ParseJsonBounded(ReadStringAttr(where, g.get(), "meta"), where + " meta");
         } catch (const nlohmann::json::exception& e) {
             Fail(where, std::string("meta is not valid JSON: ") + e.what());
         }
@@ -408,7 +436,9 @@ PairSet ReadPairFileInProcess(const std::string& path) {
     const std::uintmax_t file_size = FileSize(path);
     PairSet set;
     try {
-        set.provenance = nlohmann::json::parse(ReadStringAttr(path, file.get(), "provenance"));
+        set.provenance = ParseJsonBounded(ReadStringAttr(path, file.get(), "provenance"),
+                                          path + " provenance");
+        CheckProvenanceTypes(path, set.provenance);
     } catch (const nlohmann::json::exception& e) {
         Fail(path, std::string("provenance is not valid JSON: ") + e.what());
     }

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/coordinate_limit.hpp"
 #include "core/enum_names.hpp"
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
@@ -276,8 +277,10 @@ void ValidateProtocolOptions(const ProtocolOptions& o) {
     Require(std::isfinite(o.max_rotation_deg) && o.max_rotation_deg >= 0.0 &&
                 o.max_rotation_deg <= 180.0,
             "max_rotation_deg", "must be in [0, 180]");
-    Require(std::isfinite(o.max_translation) && o.max_translation >= 0.0, "max_translation",
-            "must be >= 0");
+    Require(std::isfinite(o.max_translation) && o.max_translation >= 0.0 &&
+                o.max_translation <= kMaxCoordinate / 2,
+            "max_translation",
+            "must be in [0, 5e14] (clouds must stay within the coordinate limit |x| <= 1e15)");
     Require(std::isfinite(o.eta) && o.eta > 0.0, "eta", "must be > 0");
     Require(std::isfinite(o.density_keep) && o.density_keep > 0.0 && o.density_keep <= 1.0,
             "density_keep", "must be in (0, 1]");

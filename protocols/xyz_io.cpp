@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "core/atomic_file.hpp"
+#include "core/coordinate_limit.hpp"
 #include "core/transform.hpp"
 #include "protocols/pair_protocols.hpp"
 
@@ -53,10 +55,13 @@ std::vector<double> ParseNumbers(const std::string& path,
             FailAt(path, line_no, "not a number: '" + std::string(p, token_end) + "'");
         }
         if (!std::isfinite(v)) FailAt(path, line_no, "non-finite value");
-        // Registration libraries (PCL) work in float and abort on overflow.
-        if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+        // Registration libraries (PCL) work in float and abort on overflow: one limit,
+        // kMaxCoordinate (core/point_cloud.hpp).
+        if (std::abs(v) > kMaxCoordinate) {
             FailAt(path, line_no,
-                   "value " + std::string(p, token_end) + " does not fit in a float");
+                   "value " + std::string(p, token_end) +
+                       " is beyond the coordinate limit |x| <= 1e15 (does not fit in a float or "
+                       "in the methods' float arithmetic)");
         }
         values.push_back(v);
         p = next;
@@ -251,6 +256,9 @@ PairSet ImportXyzDir(const std::string& dir, double eta) {
     // Collect the pair numbers present, from any of the three file kinds.
     const std::regex pattern(R"((\d+)_(src\.xyz|tgt\.xyz|gt\.txt))");
     std::map<std::size_t, int> seen;
+    // (number, kind) -> the file name that gave it: 0001_src.xyz and 00001_src.xyz are the same
+    // pair and file kind spelled twice; one would be read and the other ignored silently.
+    std::map<std::pair<std::size_t, std::string>, std::string> spelled;
     for (const auto& entry : fs::directory_iterator(dir)) {
         std::smatch m;
         const std::string name = entry.path().filename().string();
@@ -262,6 +270,13 @@ PairSet ImportXyzDir(const std::string& dir, double eta) {
         if (ec != std::errc() || end != digits.data() + digits.size() || number > kMaxImportPairs) {
             throw std::runtime_error(entry.path().string() + ": pair number " + digits +
                                      " is out of range");
+        }
+        const auto [it, fresh] = spelled.emplace(std::make_pair(number, m[2].str()), name);
+        if (!fresh) {
+            const auto [first, second] = std::minmax(it->second, name);
+            throw std::runtime_error(dir + ": " + first + " and " + second +
+                                     " both name pair " + std::to_string(number) +
+                                     " (ambiguous; keep one)");
         }
         seen[number] += 1;
     }

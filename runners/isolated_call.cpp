@@ -81,20 +81,41 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
         return Failure(Status::kFailed, "fork() failed: " + std::string(strerror(errno)), 0);
     }
     if (pid == 0) {
-        BecomeDisposableChild(parent);  // dies with the parent: no orphan keeps computing
-        if (hooks.child) hooks.child();
-        close(fds[0]);
-        omp_set_num_threads(threads);
-        const std::string payload =
-            AlignResultToJson(method.Align(pair.source, pair.target, context)).dump();
-        size_t off = 0;
-        while (off < payload.size()) {
-            const ssize_t n = write(fds[1], payload.data() + off, payload.size() - off);
-            if (n <= 0) break;
-            off += static_cast<size_t>(n);
+        // The child owns nothing of the parent's: it must never unwind into the parent's
+        // frames (whose destructors would remove the parent's output lock or temporaries) nor
+        // run exit()'s atexit handlers. Everything it does ends in _exit, and an exception is
+        // turned into a `failed` result with the reason.
+        int code = 0;
+        try {
+            BecomeDisposableChild(parent);  // dies with the parent: no orphan keeps computing
+            if (hooks.child) hooks.child();
+            close(fds[0]);
+            omp_set_num_threads(threads);
+            std::string payload;
+            try {
+                // A message holding a library's non-UTF-8 bytes is sent with U+FFFD for them
+                // instead of throwing type_error.316 here.
+                payload = AlignResultToJson(method.Align(pair.source, pair.target, context))
+                              .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+            } catch (const std::exception& e) {
+                AlignResult failed;
+                failed.status = AlignStatus::kFailed;
+                failed.stop_reason = "exception";
+                failed.message = method.Name() + ": " + e.what();
+                payload = AlignResultToJson(failed).dump(-1, ' ', false,
+                                                         nlohmann::json::error_handler_t::replace);
+            }
+            size_t off = 0;
+            while (off < payload.size()) {
+                const ssize_t n = write(fds[1], payload.data() + off, payload.size() - off);
+                if (n <= 0) break;
+                off += static_cast<size_t>(n);
+            }
+            close(fds[1]);
+        } catch (...) {
+            code = 70;  // no result: the parent records `crashed`
         }
-        close(fds[1]);
-        _exit(0);
+        _exit(code);
     }
     close(fds[1]);
     const auto start = std::chrono::steady_clock::now();

@@ -7,6 +7,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/enum_names.hpp"
+#include "core/json_limits.hpp"
 
 namespace regbench {
 namespace {
@@ -216,7 +217,11 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     }
 }
 
-std::string ToJsonLine(const ResultRow& row) { return nlohmann::json(row).dump(); }
+std::string ToJsonLine(const ResultRow& row) {
+    // A method's message may carry a library's non-UTF-8 bytes (a path, a file's content):
+    // written with U+FFFD for them instead of throwing a bare type_error.316 mid-run.
+    return nlohmann::json(row).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 void ForEachJsonlLine(
     const std::string& path,
@@ -232,7 +237,7 @@ void ForEachJsonlLine(
         const std::string where = path + ":" + std::to_string(lineno);
         nlohmann::json value;
         try {
-            value = nlohmann::json::parse(line);
+            value = ParseJsonBounded(line, where);  // depth-limited: no stack overflow later
         } catch (const nlohmann::json::exception& e) {
             // getline sets eof only when the last line ended without a newline.
             if (torn == TornLastLine::kSkip && in.eof()) break;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -61,7 +62,14 @@ std::string ResumeCommand(const RunOptions& o) {
     if (o.shard_count > 1) {
         cmd += " --shard " + std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
     }
-    if (o.timeout_seconds > 0) cmd += " --timeout " + std::to_string(o.timeout_seconds);
+    // --resume refuses rows of another timeout or thread count: repeat them exactly (%.17g
+    // round-trips the double; std::to_string would print 1e-7 as 0.000000).
+    if (o.timeout_seconds > 0) {
+        char timeout[64];
+        std::snprintf(timeout, sizeof(timeout), "%.17g", o.timeout_seconds);
+        cmd += std::string(" --timeout ") + timeout;
+    }
+    if (o.threads_per_call != 1) cmd += " --threads " + std::to_string(o.threads_per_call);
     if (o.max_points != RunOptions{}.max_points) {
         cmd += " --max-points " + std::to_string(o.max_points);
     }
@@ -75,8 +83,15 @@ std::string ResumeCommand(const RunOptions& o) {
 /// written is in the file even if the process is killed right after.
 class PartFile {
 public:
+    /// Replaces whatever plain file is at `path` by a new, empty one: the old one is unlinked
+    /// (never truncated through a link) and the new one created with O_EXCL | O_NOFOLLOW, so a
+    /// link placed there between the check and the open is refused, not followed.
     explicit PartFile(const std::string& path) : path_(path) {
-        fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        RequireRegularOrAbsent(path, "partial results file");
+        if (::unlink(path.c_str()) != 0 && errno != ENOENT) {
+            throw std::runtime_error(path + ": cannot replace: " + strerror(errno));
+        }
+        fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
         if (fd_ < 0) throw std::runtime_error(path + ": cannot write: " + strerror(errno));
     }
     ~PartFile() {
@@ -263,9 +278,64 @@ struct Resumed {
     std::set<std::string> done;
 };
 
+/// The `timeout` a row records: the --timeout it ran under (0: in-process). Rows written
+/// before the key existed ran in-process unless told otherwise, so a missing key reads as 0.
+double RowTimeout(const ResultRow& r) {
+    const auto it = r.other.find("timeout");
+    return it != r.other.end() && it->is_number() ? it->get<double>() : 0.0;
+}
+
+bool SameTransform(const Transform& a, const Transform& b) {
+    // Rows store doubles through JSON, which round-trips them exactly; the slack only forgives
+    // a writer that printed fewer digits, never an edited matrix.
+    for (int r = 0; r < 4; ++r) {
+        for (int c = 0; c < 4; ++c) {
+            if (!(std::abs(a(r, c) - b(r, c)) <= 1e-12 * std::max(1.0, std::abs(b(r, c))))) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+/// Refuses a kept row that this run would not have produced: another --timeout, --threads,
+/// downsampling (--downsample / --max-points), or ground truth / shape that differ from what
+/// the pair file holds now. docs/metrics.md ("What defines a row") lists the fields.
+void CheckRowSettings(const ResultRow& r, const RunOptions& options, const PairSet& set) {
+    const auto refuse = [&](const std::string& what) {
+        throw std::runtime_error(r.origin + ": row was produced under other settings (" + what +
+                                 "); resume with the same settings or start a new file");
+    };
+    if (RowTimeout(r) != options.timeout_seconds) {
+        refuse("--timeout " + std::to_string(RowTimeout(r)) + ", this run " +
+               std::to_string(options.timeout_seconds));
+    }
+    if (r.threads != options.threads_per_call) {
+        refuse("--threads " + std::to_string(r.threads) + ", this run " +
+               std::to_string(options.threads_per_call));
+    }
+    const Pair& pair = set.pairs.at(r.pair);
+    const bool reduce = options.downsample && NeedsScaleGuard(r.method, pair, options.max_points);
+    nlohmann::json expected = nullptr;
+    if (reduce) DownsampleByStride(pair, options.max_points, &expected);
+    const auto got = r.other.find("downsampled");
+    const nlohmann::json recorded = got != r.other.end() ? *got : nlohmann::json(nullptr);
+    if (recorded != expected) {
+        refuse("downsampled " + recorded.dump() + ", this run " + expected.dump());
+    }
+    if (r.gt_transform && !SameTransform(*r.gt_transform, pair.T_gt)) {
+        refuse("gt_transform differs from pair " + std::to_string(r.pair) + " of the pair file");
+    }
+    if (r.shape != pair.shape || r.category != pair.category) {
+        refuse("shape '" + r.shape + "' / category '" + r.category + "', the pair file has '" +
+               pair.shape + "' / '" + pair.category + "'");
+    }
+}
+
 /// Reads the kept rows of an interrupted run (its .part file, else the finished output).
 /// Every kept row is checked against this run; a foreign row is refused, never mixed.
 Resumed LoadResume(const RunOptions& options,
+                   const PairSet& set,
                    const std::string& part_path,
                    const RowExpectation& expect) {
     Resumed resumed;
@@ -281,6 +351,7 @@ Resumed LoadResume(const RunOptions& options,
                                      ToString(r.euler) + "; resume with --euler " +
                                      ToString(r.euler) + " or start a new file");
         }
+        CheckRowSettings(r, options, set);
         resumed.done.insert(RowKey(r.pair, r.method));
     }
     return resumed;
@@ -343,6 +414,8 @@ ResultRow RunCall(const RunPlan& plan,
     row_context.status = outcome.status;
     ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
     if (reduce) row.other["downsampled"] = downsampled;
+    // What defines the row besides method, params and pair: --resume compares it.
+    row.other["timeout"] = options.timeout_seconds;
     return row;
 }
 
@@ -458,6 +531,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
     CheckOutputPath(options.out_path, {options.pairs_path});
     CheckOutputPath(part_path, {options.pairs_path});
     const OutputLock lock(options.out_path);  // one writer per output; names the holder's pid
+    // A link (or FIFO) at OUT.part is refused before anything reads or writes through it.
+    RequireRegularOrAbsent(part_path, "partial results file");
     // Which data every number came from, carried in every row for the reports.
     const DataTag data_tag = DataTagOf(options.pairs_path, set);
     RowExpectation expect;
@@ -471,7 +546,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
 
     // Load resume, and rewrite the kept rows so a torn last line from the interrupted run
     // disappears.
-    Resumed resumed = LoadResume(options, part_path, expect);
+    Resumed resumed = LoadResume(options, set, part_path, expect);
     plan.done = std::move(resumed.done);
     PartFile part(part_path);
     for (const auto& r : resumed.rows) part.Append(r);

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -10,6 +11,8 @@
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
+#include "core/json_limits.hpp"
 #include "core/parse_number.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/result_row.hpp"
@@ -61,7 +64,10 @@ std::size_t CheckedPair(double value, std::size_t num_pairs, const std::string& 
         throw std::runtime_error(where + ": pair index is not a non-negative integer");
     }
     if (value >= static_cast<double>(num_pairs)) {
-        throw std::runtime_error(where + ": pair " + std::to_string(static_cast<long long>(value)) +
+        // %.17g reports the index as written (1e300 was cast to -9223372036854775808).
+        char text[64];
+        std::snprintf(text, sizeof(text), "%.17g", value);
+        throw std::runtime_error(where + ": pair " + text +
                                  " is out of range (the pair file has " +
                                  std::to_string(num_pairs) + " pairs, 0.." +
                                  std::to_string(num_pairs - 1) + ")");
@@ -77,7 +83,7 @@ bool ParseJsonLine(const std::string& line,
                    ExternalTransform* out) {
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(line);
+        j = ParseJsonBounded(line, where);
     } catch (const nlohmann::json::exception& e) {
         throw std::runtime_error(where + ": not JSON: " + e.what());
     }
@@ -188,6 +194,9 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     if (!o.params.is_object()) throw std::invalid_argument("score: --params must be a JSON object");
     // Refused before any work: a directory, a device or one of the inputs as --out.
     CheckOutputPath(o.out_path, {o.pairs_path, o.transforms_path});
+    // One writer per output for the whole scoring, as `run` (a second `score` or a `run` on
+    // the same --out is refused naming this pid).
+    const OutputLock lock(o.out_path);
     const PairSet set = ReadPairFile(o.pairs_path);  // throws naming the file
     const std::vector<ExternalTransform> given = ReadTransforms(
         o.transforms_path, set.pairs.size(), o.method, o.rigid_tolerance, o.allow_scale);

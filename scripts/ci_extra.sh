@@ -52,7 +52,7 @@ t_tests=$(date +%s)
 
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for name in off ply pcd xyz xyz_import pair_file; do
+for name in off ply pcd xyz xyz_import pair_file result_rows; do
   corpus="$(mktemp -d)"
   cp -r "$root/fuzz/corpus/$name/." "$corpus/"
   echo "[ci_extra] fuzz_$name: seed $fuzz_seed, $runs inputs, at most ${seconds}s"

@@ -81,6 +81,23 @@ TEST(CliHostileInput, PointFilesWithLyingHeadersAreRefused) {
          "\nHEIGHT 1\nPOINTS 99999999999999999999\nDATA ascii\n0 0 0\n",
          "bad count"},
         {"overflow.xyz", "0 0 0\n1 1 1\n1e300 0 0\n", "does not fit in a float"},
+        // Issue 27: a list property made the size check give up, and the reader allocated for
+        // 2e9 points first (bare std::bad_alloc). Each point needs at least its 12 bytes of
+        // x y z and the list's 1-byte count, far more than the 4 bytes that follow.
+        {"huge_list.ply",
+         "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nproperty float x\n"
+         "property float y\nproperty float z\nproperty list uchar int ids\nend_header\n"
+         "\x01\x02\x03\x04",
+         "header declares 2000000000 points"},
+        // Issue 27: the count is reported as written (2^64-1, which a cast used to wrap to 0).
+        {"count64.ply",
+         "ply\nformat ascii 1.0\nelement vertex 18446744073709551615\nproperty float x\n"
+         "property float y\nproperty float z\nend_header\n0 0 0\n",
+         "header declares 18446744073709551615 points"},
+        // Issue 27: 1e30 fits in a float but made PCL's gicp abort; the one documented limit
+        // is |x| <= 1e15 (core/coordinate_limit.hpp), refused naming the point (0-based index 3).
+        {"far.xyz", "0 0 0\n1 1 1\n2 2 2\n1e30 0 0\n",
+         "point 3 has a coordinate beyond the limit |x| <= 1e15"},
     };
     for (const auto& [name, text, reason] : files) {
         SCOPED_TRACE(name);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "core/file_lock.hpp"
@@ -110,6 +112,55 @@ TEST(OutputLock, SecondHolderIsRefusedWithThePid) {
     // Released: the next writer gets it, and no lock file is left behind afterwards.
     { const OutputLock again(out); }
     EXPECT_FALSE(fs::exists(out + ".lock"));
+    fs::remove_all(dir);
+}
+
+// Issue 27, item 1: the lock belongs to the pid that took it. A forked child that destroys
+// the parent's OutputLock object (as an exception unwinding through the parent's frames did)
+// must leave the file; the expected facts are that the lock file still exists and that a
+// second writer is still refused, exactly as before the child ran.
+TEST(OutputLock, AForkedChildDestroyingTheLockLeavesItToTheParent) {
+    const fs::path dir = testing::FreshTempDir("lock_owner");
+    const std::string out = (dir / "r.jsonl").string();
+    auto lock = std::make_unique<OutputLock>(out);
+    const pid_t pid = fork();
+    if (pid == 0) {
+        lock.reset();  // the destructor runs in the child
+        _exit(0);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    EXPECT_TRUE(fs::exists(out + ".lock"));
+    EXPECT_NE(testing::ErrorOf([&] { OutputLock second(out); }), "");
+    lock.reset();  // the owner removes it
+    EXPECT_FALSE(fs::exists(out + ".lock"));
+    fs::remove_all(dir);
+}
+
+// Issue 27, item 2: a link pre-placed at OUT.lock (symbolic or hard, to an input or any
+// other file) is refused naming the lock path, and the file it points to keeps its bytes.
+// The expected bytes are the ones this test wrote into the target before taking the lock.
+TEST(OutputLock, RefusesLinksAtTheLockPathAndLeavesTheirTargets) {
+    const fs::path dir = testing::FreshTempDir("lock_links");
+    const std::string out = (dir / "r.jsonl").string();
+    const fs::path target = dir / "input.h5";
+    testing::WriteBytes(target, "precious input bytes\n");
+    for (const bool hard : {false, true}) {
+        fs::remove(out + ".lock");
+        if (hard) {
+            fs::create_hard_link(target, out + ".lock");
+        } else {
+            fs::create_symlink(target, out + ".lock");
+        }
+        const std::string err = testing::ErrorOf([&] { OutputLock lock(out); });
+        EXPECT_NE(err.find(out + ".lock"), std::string::npos) << err;
+        EXPECT_EQ(testing::ReadBytes(target), "precious input bytes\n") << "hard=" << hard;
+    }
+    // A FIFO there is refused too (opening it must not block).
+    fs::remove(out + ".lock");
+    ASSERT_EQ(::mkfifo((out + ".lock").c_str(), 0644), 0);
+    EXPECT_NE(testing::ErrorOf([&] { OutputLock lock(out); }).find("not a regular file"),
+              std::string::npos);
     fs::remove_all(dir);
 }
 

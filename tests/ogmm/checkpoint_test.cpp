@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "ogmm/zoo.hpp"
+#include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/files.hpp"
 
 namespace regbench::ogmm {
@@ -90,6 +91,24 @@ TEST(Checkpoint, RefusesCorruptJsonNamingTheFile) {
         ErrorOf([&] { LoadNetFromCheckpoint((saved.dir / "nowhere").string()); });
     EXPECT_NE(missing.find("nowhere"), std::string::npos) << missing;
     fs::remove_all(saved.dir);
+}
+
+// Issue 27: a full disk (here a 4 KB file-size limit; the weights alone are far bigger) made
+// torch's writer throw a c10::Error with a stack dump and left `ck.tmp/` behind. Expected: a
+// runtime_error naming the checkpoint, no `ck.tmp`, and no `ck` (nothing was saved before).
+TEST(Checkpoint, SaveOnAFullDiskGivesAMessageAndLeavesNoTemporaryFolder) {
+    torch::set_num_threads(1);
+    const fs::path dir = TempDir("full_disk");
+    const fs::path ck = dir / "ck";
+    auto net = MakeNet("deepgmr-orig-xyz");
+    const int status = testing::RunUnderFileSizeLimit<std::runtime_error>(
+        4096, "cannot save checkpoint " + ck.string(),
+        [&] { SaveCheckpoint(ck.string(), *net, {}); });
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 3);
+    EXPECT_FALSE(fs::exists(dir / "ck.tmp"));
+    EXPECT_FALSE(fs::exists(ck));
+    fs::remove_all(dir);
 }
 
 }  // namespace

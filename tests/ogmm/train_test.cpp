@@ -87,6 +87,36 @@ TEST(Train, ResumeContinuesTheSameCurve) {
     fs::remove_all(dir_split);
 }
 
+// Issue 27: a checkpoint whose trainer.step is 1e30 was converted to -9.2e18 and the run then
+// ignored --max-steps. Expected: --resume refuses it naming checkpoint.json and the key, as
+// written (1e30 is not a whole number in [0, 2^53]).
+TEST(Train, ResumeRefusesACheckpointWithCountersOutOfRange) {
+    torch::set_num_threads(1);
+    const TrainData data = testing::SyntheticData(4, 160, 2);
+    std::ostringstream log;
+    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");
+    const fs::path dir = TempDir("counters");
+    TrainOptions first = Options(dir, log);
+    first.max_steps = 2;
+    Train(config, data, first);
+    const fs::path json = dir / "last" / "checkpoint.json";
+    nlohmann::json j;
+    std::ifstream(json) >> j;
+    j["trainer"]["step"] = 1e30;
+    std::ofstream(json) << j.dump();
+    TrainOptions second = Options(dir, log);
+    second.resume = true;
+    std::string err;
+    try {
+        Train(config, data, second);
+    } catch (const std::exception& e) {
+        err = e.what();
+    }
+    EXPECT_NE(err.find(json.string()), std::string::npos) << err;
+    EXPECT_NE(err.find("'step' is 1e+30"), std::string::npos) << err;
+    fs::remove_all(dir);
+}
+
 /// Environment override of a knob of the CI training below (for re-measuring the margin with
 /// other seeds or settings without rebuilding); unset: the default.
 double Knob(const char* name, double fallback) {

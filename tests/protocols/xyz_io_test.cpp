@@ -46,6 +46,20 @@ TEST(XyzIo, PlyExportHasHeaderAndAllPoints) {
     std::filesystem::remove_all(dir);
 }
 
+// Issue 27: 0001_src.xyz and 00001_src.xyz both parse as pair 1's source; one was read and
+// the other ignored without a word. Expected: a refusal naming both files.
+TEST(XyzIo, AmbiguousPairNamesAreRefused) {
+    const std::string dir = testing::FreshTempDir("xyz_ambiguous");
+    const PairSet set =
+        GeneratePairs(test::TestShapes(), DefaultProtocolOptions(Protocol::kJitter), 2, 3);
+    ExportXyz(set, dir);
+    std::filesystem::copy_file(dir + "/0001_src.xyz", dir + "/00001_src.xyz");
+    const std::string err = testing::ErrorOf([&] { ImportXyzDir(dir, 0.1); });
+    EXPECT_NE(err.find("00001_src.xyz and 0001_src.xyz both name pair 1"), std::string::npos)
+        << err;
+    std::filesystem::remove_all(dir);
+}
+
 TEST(XyzIo, MalformedFilesAreRejectedWithFileAndLine) {
     const std::string dir = testing::FreshTempDir("xyz_bad");
     testing::WriteBytes(dir + "/0000_src.xyz", "0 0 0\n1 0 0\n0 1 zero\n");

@@ -158,6 +158,51 @@ TEST_F(Reliability, ResumeRefusesOtherParametersMethodsDuplicatesAndStubs) {
     EXPECT_NE(err.find("not in the pair file"), std::string::npos) << err;
 }
 
+// Issue 27, item 4: a kept row must be one this run would produce. Each row below is a real
+// row of a finished run that differs from the resuming run in exactly one setting (or has its
+// ground truth / shape edited), so the only correct outcome is a refusal naming .part:1 and
+// the setting; the same rows resumed under their own settings are accepted (last check).
+TEST_F(Reliability, ResumeRefusesRowsOfOtherTimeoutThreadsDownsamplingGroundTruthOrShape) {
+    const RunOptions plain = Options("r.jsonl", pairs_);
+    const auto expect_refused = [&](const RunOptions& o, const std::string& line,
+                                    const std::string& what) {
+        const std::string err = ResumeWith(o, {line});
+        EXPECT_NE(err.find(o.out_path + ".part:1: row was produced under other settings"),
+                  std::string::npos)
+            << what << ": " << err;
+        EXPECT_NE(err.find(what), std::string::npos) << err;
+        EXPECT_FALSE(fs::exists(o.out_path));
+    };
+    RunOptions timed = Options("t.jsonl", pairs_);
+    timed.timeout_seconds = 60;  // every call forked; none comes near the limit
+    expect_refused(plain, FinishedLines(timed)[0], "--timeout");
+
+    RunOptions threaded = Options("p.jsonl", pairs_);
+    threaded.threads_per_call = 2;
+    expect_refused(plain, FinishedLines(threaded)[0], "--threads");
+
+    RunOptions reduced = Options("d.jsonl", pairs_);
+    reduced.methods = ParseMethodSpecs("icp,cpd", {});
+    reduced.max_points = 30;  // the fixture's clouds have 40 points: cpd runs on 30
+    reduced.downsample = true;
+    const auto reduced_lines = FinishedLines(reduced);
+    RunOptions other_rule = reduced;
+    other_rule.max_points = 35;
+    expect_refused(other_rule, reduced_lines[1], "downsampled");  // line 1: pair 0, cpd
+
+    const auto lines = FinishedLines(plain);
+    auto edited_gt = nlohmann::json::parse(lines[0]);
+    edited_gt["gt_transform"][0][3] = edited_gt["gt_transform"][0][3].get<double>() + 0.5;
+    expect_refused(plain, edited_gt.dump(), "gt_transform");
+    auto edited_shape = nlohmann::json::parse(lines[0]);
+    edited_shape["shape"] = "another_shape";
+    expect_refused(plain, edited_shape.dump(), "shape");
+
+    // Under their own settings the same rows resume.
+    EXPECT_EQ(ResumeWith(threaded, {FinishedLines(threaded)[0]}), "");
+    EXPECT_EQ(ResumeWith(reduced, {reduced_lines[1]}), "");
+}
+
 TEST_F(Reliability, ResumeKeepsValidRowsAndGivesTheUninterruptedResult) {
     const RunOptions o = Options("r.jsonl", pairs_);
     const auto full = FinishedLines(o);

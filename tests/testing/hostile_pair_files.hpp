@@ -31,6 +31,28 @@ inline void SetDoubleAttr(hid_t obj, const char* name, double v) {
     H5Sclose(space);
 }
 
+/// Replaces attribute `name` of `obj` by the fixed-length string `v` (any bytes).
+inline void SetStringAttr(hid_t obj, const char* name, const std::string& v) {
+    if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);
+    const hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, v.size());
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t attr = H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+    H5Awrite(attr, type, v.data());
+    H5Aclose(attr);
+    H5Sclose(space);
+    H5Tclose(type);
+}
+
+/// Sets a string attribute of pair 1's group.
+inline std::function<void(hid_t)> SetPairString(const char* name, std::string v) {
+    return [name, v](hid_t f) {
+        const hid_t g = H5Gopen2(f, "/pairs/000001", H5P_DEFAULT);
+        SetStringAttr(g, name, v);
+        H5Gclose(g);
+    };
+}
+
 /// Replaces dataset `path` by one of shape `dims`; writes `values` unless empty (then the
 /// dataset has no storage at all: a header that declares data the file does not hold).
 inline void ReplaceDataset(hid_t file,
@@ -94,6 +116,18 @@ inline std::vector<HostileCase> HostileCases() {
              ReplaceDataset(f, "/pairs/000001/source", {60}, std::vector<double>(60, 0.1));
          }},
         {"missing_group", "num_pairs", [](hid_t f) { H5Ldelete(f, "/pairs/000001", H5P_DEFAULT); }},
+        // Issue 27: these ended in a bare [json.exception.type_error.316/302] naming nothing.
+        {"shape_not_utf8", "attribute 'shape' is not valid UTF-8", SetPairString("shape", "a\xFFb")},
+        {"category_not_utf8", "attribute 'category' is not valid UTF-8",
+         SetPairString("category", "\xC3")},
+        {"provenance_not_utf8", "attribute 'provenance' is not valid UTF-8",
+         [](hid_t f) { SetStringAttr(f, "provenance", "{\"protocol\": \"\xFF\"}"); }},
+        {"provenance_mistyped", "provenance key 'dataset' must be a string",
+         [](hid_t f) { SetStringAttr(f, "provenance", R"({"protocol": "test", "dataset": 5})"); }},
+        {"provenance_deep", "JSON nested deeper than 64 levels",
+         [](hid_t f) {
+             SetStringAttr(f, "provenance", std::string(100, '[') + std::string(100, ']'));
+         }},
     };
 }
 
