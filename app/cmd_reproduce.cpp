@@ -1,6 +1,7 @@
 // `regbench reproduce`: every paper table from one command, into one folder.
 #include <iostream>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "reports/reproduce.hpp"
 
@@ -25,14 +26,20 @@ void SetupReproduceCommand(CLI::App* cmd) {
     cmd->add_option("--out", o->out_dir, "Report folder (a second invocation continues it)")
         ->capture_default_str();
     cmd->add_option("--data-dir", o->data_dir, "Data directory of the embedded corpus");
-    cmd->add_option("--jobs", o->jobs, "Pairs run in parallel")->capture_default_str();
+    cmd->add_option("--jobs", o->jobs, "Pairs run in parallel")
+        ->check(PositiveWholeNumber())
+        ->capture_default_str();
     cmd->add_option("--timeout", o->timeout_seconds,
                     "Seconds per call, each in a child process (0: in-process)")
+        ->check(NonNegativeReal())
         ->capture_default_str();
     cmd->add_option("--pairs", o->pairs,
                     "Pairs per experiment (default: 10 with --quick; else 1000 on the fallbacks, "
-                    "one per test item on real data)");
-    cmd->add_option("--seed", o->seed, "Benchmark seed")->capture_default_str();
+                    "one per test item on real data)")
+        ->check(WholeNumber());
+    cmd->add_option("--seed", o->seed, "Benchmark seed")
+        ->check(WholeNumber())
+        ->capture_default_str();
     cmd->add_option("--methods", o->methods, "Methods (default: every registered one)")
         ->delimiter(',');
     cmd->callback([o] {
