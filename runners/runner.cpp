@@ -315,7 +315,7 @@ ResultRow RunCall(const RunPlan& plan,
     // Scale guard: an O(N*M) method on a large cloud runs on the recorded stride-downsampled
     // pair; metrics still compare against the full pair.
     nlohmann::json downsampled;
-    const bool reduce = options.downsample && NeedsScaleGuard(spec.name, pair, options.max_points);
+    const bool reduce = options.downsample && NeedsScaleGuard(spec, pair, options.max_points);
     const Pair reduced =
         reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
     const Pair& input = reduce ? reduced : pair;
