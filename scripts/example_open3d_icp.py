@@ -8,8 +8,13 @@ import json, sys, time
 import h5py, numpy as np, open3d as o3d
 
 f = h5py.File(sys.argv[1], "r")
+# The pairs' content hash (stored at generation / import): `regbench score` refuses transforms
+# that record another pair file's hash.
+content_hash = json.loads(f.attrs["provenance"]).get("content_hash", "")
 reg = o3d.pipelines.registration
 with open(sys.argv[2] + ".jsonl", "w") as js, open(sys.argv[2] + ".csv", "w") as cs:
+    if content_hash:
+        cs.write(f"# content_hash: {content_hash}\n")
     for k in range(len(f["pairs"])):
         g = f["pairs"][f"{k:06d}"]
         src, tgt = (o3d.geometry.PointCloud(o3d.utility.Vector3dVector(g[n][()])) for n in ("source", "target"))
@@ -17,5 +22,6 @@ with open(sys.argv[2] + ".jsonl", "w") as js, open(sys.argv[2] + ".csv", "w") as
         T = reg.registration_icp(src, tgt, 1.0, np.eye(4), reg.TransformationEstimationPointToPoint(),
                                  reg.ICPConvergenceCriteria(1e-6, 1e-6, 30)).transformation
         s = time.perf_counter() - t0
-        js.write(json.dumps({"pair": k, "transform": T.tolist(), "seconds": s}) + "\n")
+        js.write(json.dumps({"pair": k, "content_hash": content_hash, "transform": T.tolist(),
+                             "seconds": s}) + "\n")
         cs.write(",".join([str(k)] + [repr(float(v)) for v in T[:3].ravel()] + [repr(s)]) + "\n")
