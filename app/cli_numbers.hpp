@@ -24,6 +24,17 @@ inline CLI::Validator WholeNumber() {
         "UINT");
 }
 
+/// Digits only, at least 1: refuses "0" as well as everything WholeNumber refuses.
+inline CLI::Validator PositiveWholeNumber() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            const auto v = ParseNumber<std::uint64_t>(s);
+            if (!v || *v == 0) return "expected a whole number >= 1, got '" + s + "'";
+            return "";
+        },
+        "UINT>=1");
+}
+
 /// A finite decimal number >= 0 ("-1", "nan", "inf", "1s" refused).
 inline CLI::Validator NonNegativeReal() {
     return CLI::Validator(
@@ -35,17 +46,6 @@ inline CLI::Validator NonNegativeReal() {
             return "";
         },
         "REAL>=0");
-}
-
-/// Digits only, fitting in 64 bits, at least 1 ("0", "-1", "2.5", "1e3" refused).
-inline CLI::Validator PositiveWholeNumber() {
-    return CLI::Validator(
-        [](std::string& s) -> std::string {
-            const auto v = ParseNumber<std::uint64_t>(s);
-            if (!v || *v < 1) return "expected a whole number >= 1 (digits only), got '" + s + "'";
-            return "";
-        },
-        "UINT>=1");
 }
 
 /// A finite decimal number > 0 ("0", "-1", "nan", "inf" refused).
@@ -87,7 +87,7 @@ inline void ParseShard(const std::string& text, int* index, int* count) {
     };
     if (slash == std::string::npos || !parse(text.substr(0, slash), index) ||
         !parse(text.substr(slash + 1), count) || *count < 1 || *index >= *count) {
-        throw std::invalid_argument(
+        throw CLI::ValidationError(
             "--shard must be i/n with whole numbers 0 <= i < n <= 2147483647, got '" + text + "'");
     }
 }

@@ -1,6 +1,7 @@
 #pragma once
 // The `--params` option shared by run, merge, align and score: a JSON object of method
 // parameters given on the command line.
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
@@ -16,7 +17,7 @@ inline nlohmann::json ParseParamsOption(const std::string& text) {
     try {
         return ParseJsonBounded(text, "--params");
     } catch (const nlohmann::json::exception& e) {
-        throw std::invalid_argument(std::string("--params is not valid JSON: ") + e.what());
+        throw CLI::ValidationError(std::string("--params is not valid JSON: ") + e.what());
     }
 }
 

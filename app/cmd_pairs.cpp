@@ -59,7 +59,15 @@ void SetupExportCommand(CLI::App* cmd) {
         } else {
             ExportXyz(set, *dir);
         }
-        std::cerr << "export: wrote " << set.pairs.size() << " pairs to " << *dir << "\n";
+        // The pairs' content hash, for transforms files computed on these pairs: `score`
+        // refuses transforms that record another pair file's hash.
+        const std::string hash = PairSetContentHash(set);
+        const std::string hash_path = (std::filesystem::path(*dir) / "content_hash.txt").string();
+        WriteFileAtomic(hash_path, hash + "\n", {*file});
+        std::cerr << "export: wrote " << set.pairs.size() << " pairs to " << *dir
+                  << " (content hash " << hash << " in " << hash_path
+                  << ": record it in transforms files as \"content_hash\" or a "
+                     "\"# content_hash: ...\" line)\n";
     });
 }
 

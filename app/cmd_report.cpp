@@ -15,19 +15,33 @@
 namespace regbench::app {
 namespace {
 
-std::string PaperComparison(const std::vector<ReportTable>& tables,
-                            const std::string& paper,
-                            const std::string& paper_file) {
+/// TABLE[:GROUP] of `--paper` beside each result table, in `format`.
+std::string PaperComparisonText(const std::vector<ReportTable>& tables,
+                                const std::string& paper,
+                                const std::string& paper_file,
+                                const std::string& format,
+                                nlohmann::json* json) {
     const auto colon = paper.find(':');
     const std::string table = paper.substr(0, colon);
     const std::string group = colon == std::string::npos ? "" : paper.substr(colon + 1);
     const nlohmann::json published = LoadPaperTables(paper_file);
     std::string text;
     for (const auto& t : tables) {
-        text += "\n" + FormatPaperComparison(t.methods, published, table, group);
-        text += "\nOurs: " + DescribeTable(t) +
-                ". Paper: ModelNet40 / 7Scenes / ICL-NUIM as published (their machine, their "
-                "pairs; mae_r with scipy as_euler('zyx')).\n";
+        const PaperComparison c = BuildPaperComparison(t.methods, published, table, group);
+        const std::string ours = "Ours: " + DescribeTable(t) +
+                                 ". Paper: ModelNet40 / 7Scenes / ICL-NUIM as published (their "
+                                 "machine, their pairs; mae_r with scipy as_euler('zyx')).";
+        if (format == "json") {
+            nlohmann::json j = ToJson(c);
+            j["ours"] = ours;
+            json->push_back(j);
+        } else if (format == "csv") {
+            text += "\n" + FormatPaperComparison(c, "csv");
+        } else if (format == "latex") {
+            text += "\n% " + ours + "\n" + FormatPaperComparison(c, "latex");
+        } else {
+            text += "\n" + FormatPaperComparison(c, "md") + "\n" + ours + "\n";
+        }
     }
     return text;
 }
@@ -62,8 +76,14 @@ void SetupReportCommand(CLI::App* cmd) {
     cmd->add_option("--bootstrap", o->bootstrap_samples, "Bootstrap resamples for the 95% CIs")
         ->capture_default_str();
     cmd->add_option("--paper", *paper,
-                    "Also print the paper's cells side by side: TABLE[:GROUP], e.g. "
-                    "table1_modelnet_partial:same_category (md format)");
+                    "Also print the paper's cells side by side, with our pair counts: "
+                    "TABLE[:GROUP], e.g. table1_modelnet_partial:same_category (every format: "
+                    "md/latex add a table, csv a second header and records, json a "
+                    "\"paper\" array)");
+    cmd->add_flag("--common-pairs", o->common_pairs,
+                  "When the methods of one pair file were run on different pairs (a shard, an "
+                  "unfinished run), compare them on the pairs they share (the caption says so) "
+                  "instead of refusing");
     cmd->add_option("--paper-file", *paper_file, "The paper's tables (JSON)");
     cmd->callback([=] {
         // Refused before reading anything: an input as --out, a directory, a device; then one
@@ -83,15 +103,20 @@ void SetupReportCommand(CLI::App* cmd) {
         if (!euler->empty()) opts.euler = ParseEulerConvention(*euler);
         const std::vector<ReportTable> tables = BuildTables(rows, opts);
         std::string text;
+        nlohmann::json paper_json = nlohmann::json::array();
+        const std::string paper_text =
+            paper->empty() ? ""
+                           : PaperComparisonText(tables, *paper, *paper_file, *format, &paper_json);
         if (*format == "md") {
-            text = FormatMarkdown(tables, opts);
-            if (!paper->empty()) text += PaperComparison(tables, *paper, *paper_file);
+            text = FormatMarkdown(tables, opts) + paper_text;
         } else if (*format == "csv") {
-            text = FormatCsv(tables);
+            text = FormatCsv(tables) + paper_text;
         } else if (*format == "latex") {
-            text = FormatLatex(tables, opts);
+            text = FormatLatex(tables, opts) + paper_text;
         } else {
-            text = nlohmann::json{{"tables", ToJson(tables, opts)}}.dump(2) + "\n";
+            nlohmann::json j{{"tables", ToJson(tables, opts)}};
+            if (!paper->empty()) j["paper"] = paper_json;
+            text = j.dump(2) + "\n";
         }
         if (tables.size() > 1) {
             std::cerr << "[report] rows come from " << tables.size()

@@ -1,7 +1,9 @@
 // `regbench run`: run methods over a frozen pair file, one JSONL row per pair and method.
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <iostream>
+#include <stdexcept>
 
 #include "app/cli_numbers.hpp"
 #include "app/cli_params.hpp"
@@ -20,6 +22,7 @@ void SetupRunCommand(CLI::App* cmd) {
     auto shard = std::make_shared<std::string>("0/1");
     auto quiet = std::make_shared<bool>(false);
     auto euler = std::make_shared<std::string>("zyx");
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("--pairs", opts->pairs_path, "Frozen HDF5 pair file (regbench generate/import)")
         ->required();
     cmd->add_option("--methods", *methods, "Comma-separated method names (see `regbench methods`)")
@@ -30,20 +33,25 @@ void SetupRunCommand(CLI::App* cmd) {
                     "Output JSONL (written as OUT.part, renamed at the end)")
         ->required();
     cmd->add_option("--jobs,-j", opts->jobs, "Pairs processed in parallel")
-        ->check(WholeNumber() & CLI::PositiveNumber);
+        ->check(PositiveWholeNumber());
     cmd->add_option(
            "--threads", opts->threads_per_call,
            "OpenMP threads inside one method call (timings are single-threaded by default)")
-        ->check(WholeNumber() & CLI::PositiveNumber);
+        ->check(PositiveWholeNumber());
     cmd->add_flag("--resume", opts->resume,
-                  "Keep rows of an interrupted run (OUT.part) and skip them");
+                  "Keep rows of an interrupted or finished run (OUT.part, else OUT) and skip "
+                  "them");
+    cmd->add_flag("--force", *force,
+                  "Replace an existing OUT (without --resume or --force an existing OUT is "
+                  "refused and left untouched)");
     cmd->add_option("--shard", *shard,
                     "Process pairs k with k % n == i, given as i/n (Slurm arrays)");
     cmd->add_option("--timeout", opts->timeout_seconds,
                     "Seconds per call; > 0 runs each call in a child process (isolates crashes)")
         ->check(NonNegativeReal());
     cmd->add_option("--max-points", opts->max_points,
-                    "Scale guard: O(N*M) methods (cpd, gmmreg, svr) on clouds above this many "
+                    "Scale guard: calls that stay O(N*M) at scale (cpd e_step dense, gmmreg/svr "
+                    "kernel_sums dense; their defaults approximate) on clouds above this many "
                     "points are refused, or downsampled with --downsample; 0 = no guard")
         ->check(WholeNumber())
         ->capture_default_str();
@@ -58,6 +66,18 @@ void SetupRunCommand(CLI::App* cmd) {
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");
     cmd->callback([=] {
         RunOptions o = *opts;
+        if (o.resume && *force) {
+            throw CLI::ValidationError("--resume and --force exclude each other");
+        }
+        // A finished result file (often a baseline) is never replaced by accident.
+        // (--out naming the pair file or a folder is refused by the runner, with its reason.)
+        std::error_code ec;
+        if (!o.resume && !*force && std::filesystem::is_regular_file(o.out_path) &&
+            !std::filesystem::equivalent(o.out_path, o.pairs_path, ec)) {
+            throw std::runtime_error(o.out_path +
+                                     ": already exists; pass --resume to continue it or --force "
+                                     "to replace it");
+        }
         const nlohmann::json p = ParseParamsOption(*params);
         o.methods = ParseMethodSpecs(*methods, p);
         ParseShard(*shard, &o.shard_index, &o.shard_count);

@@ -3,6 +3,7 @@
 // RegisterCommand line (name, one-line summary, setup function); main.cpp adds the registered
 // commands to the CLI in its help order. A new subcommand is therefore one new file.
 #include <CLI/CLI.hpp>
+#include <string>
 #include <vector>
 
 namespace regbench::app {
@@ -17,6 +18,22 @@ struct Command {
 /// Records a subcommand; called while static objects are initialised, so that a command file
 /// needs no line anywhere else. Returns true for a namespace-scope constant to hold.
 bool RegisterCommand(const Command& command);
+
+/// `text` on one line: newlines and runs of spaces become single spaces, trailing space dropped
+/// (usage errors are printed as one line).
+inline std::string OneLine(const std::string& text) {
+    std::string out;
+    for (const char c : text) {
+        const bool space = c == '\n' || c == '\r' || c == '\t' || c == ' ';
+        if (space) {
+            if (!out.empty() && out.back() != ' ') out += ' ';
+        } else {
+            out += c;
+        }
+    }
+    while (!out.empty() && out.back() == ' ') out.pop_back();
+    return out;
+}
 
 /// Every registered subcommand (registration order across files is unspecified).
 const std::vector<Command>& RegisteredCommands();

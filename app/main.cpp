@@ -85,10 +85,16 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        // --help and --version print and exit 0; every other parse or validation error is a
-        // usage error: one plain line naming the flag and the value, exit status 2.
-        if (e.get_exit_code() == 0) return app.exit(e);
-        std::cerr << "regbench: usage error: " << e.what() << "\n";
+        // --help, --version and a command's own exit status (compare's 1 and 3) as CLI11
+        // prints them; every other parse or validation error is a usage error: exit 2, one
+        // plain line.
+        const std::string name = e.get_name();
+        if (e.get_exit_code() == 0 || name == "RuntimeError" || name == "CallForHelp" ||
+            name == "CallForAllHelp" || name == "CallForVersion") {
+            return app.exit(e);
+        }
+        std::cerr << "regbench: usage error: " << regbench::app::OneLine(e.what())
+                  << " (see regbench --help)\n";
         return 2;
     } catch (const std::exception& e) {
         std::cerr << "regbench: error: " << e.what() << "\n";

@@ -76,7 +76,13 @@ AlignResult AlignGicp(const GicpOptions& o,
     // PCL sets converged on the epsilon test and on the iteration cap; it leaves it unset
     // when the BFGS step throws (e.g. fewer than 4 correspondences within range).
     if (!gicp.hasConverged()) {
+        // An internal error is no result, whatever transform PCL left behind.
         result.stop_reason = "optimizer_error";
+        result.status = AlignStatus::kFailed;
+        result.message =
+            "gicp: optimizer_error: PCL's BFGS step failed after " +
+            std::to_string(result.iterations) +
+            " iteration(s) (e.g. fewer than 4 correspondences within max_correspondence_distance)";
     } else if (result.iterations >= o.max_iterations) {
         result.stop_reason = "max_iterations";
     } else {

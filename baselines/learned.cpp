@@ -176,6 +176,34 @@ private:
     std::string load_error_;
 };
 
+/// Opens the checkpoint's checkpoint.json when the method is created, i.e. before a run
+/// starts: a missing or unreadable checkpoint, or one of another model family (an OGMM
+/// checkpoint under `deepgmr` would run OGMM under DeepGMR's name), is refused naming the
+/// folder. The weights load on first use.
+void CheckCheckpoint(const std::string& name, const std::string& dir) {
+    if (!std::filesystem::is_directory(dir)) {
+        throw std::invalid_argument(name + ": checkpoint directory " + dir +
+                                    " does not exist (train one with `regbench train`, or set "
+                                    "parameter checkpoint / $REGBENCH_MODELS)");
+    }
+    nlohmann::json j;
+    try {
+        j = ogmm::ReadCheckpointJson(dir);
+    } catch (const std::exception& e) {
+        throw std::invalid_argument(name + ": " + e.what());
+    }
+    const nlohmann::json& config = j.contains("config") ? j["config"] : nlohmann::json::object();
+    const std::string arch =
+        config.is_object() ? config.value("arch", std::string("ogmm")) : std::string("ogmm");
+    const std::string family = name.rfind("deepgmr", 0) == 0 ? "deepgmr" : "ogmm";
+    if (arch != family) {
+        throw std::invalid_argument(name + ": checkpoint " + dir + " holds a " + arch +
+                                    " model (config.arch), not " + family + "; run it as " +
+                                    arch + (name.find("-noicp") != std::string::npos ? "-noicp"
+                                                                                     : ""));
+    }
+}
+
 MethodInfo MakeInfo(const std::string& name,
                     const std::string& model_dir,
                     bool icp,
@@ -208,6 +236,8 @@ MethodInfo MakeInfo(const std::string& name,
         Require(o.icp_max_correspondence_distance > 0, name, "icp_max_correspondence_distance",
                 "must be > 0");
         Require(o.icp_max_iterations >= 1, name, "icp_max_iterations", "must be >= 1");
+        CheckCheckpoint(name, o.checkpoint.empty() ? ShippedCheckpointDir(model_dir)
+                                                   : o.checkpoint);
         return std::make_unique<LearnedMethod>(name, model_dir, icp, o);
     };
     return info;

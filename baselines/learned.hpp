@@ -7,8 +7,10 @@
 
 namespace regbench {
 
-/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`. Any checkpoint runs under any of them (the
-/// checkpoint names its model), e.g. `deepgmr` with checkpoint = a deepgmr-orig run.
+/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`. Any checkpoint of the method's family
+/// (config.arch "ogmm" / "deepgmr") runs under it, e.g. `deepgmr` with checkpoint = a
+/// deepgmr-orig run. Creating the method opens checkpoint.json: a missing folder, an unreadable
+/// checkpoint or one of the other family is refused (std::invalid_argument naming the folder).
 MethodInfo OgmmMethodInfo();
 MethodInfo OgmmNoIcpMethodInfo();
 MethodInfo DeepGmrMethodInfo();

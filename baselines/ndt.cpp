@@ -76,6 +76,16 @@ AlignResult AlignNdt(const NdtOptions& o,
     } else {
         result.stop_reason = "no_step";  // PCL: NaN Newton step, returns where it was
     }
+    // PCL returns before its first step when the Newton step at the input is exactly zero,
+    // which happens when no source point scores against any target cell (likelihood 0): the
+    // input is then far from aligned and NDT made no progress, so this is no result.
+    if (result.iterations == 0 && ndt.getTransformationLikelihood() == 0.0) {
+        result.status = AlignStatus::kFailed;
+        result.stop_reason = "no_progress";
+        result.message =
+            "ndt: 0 iterations: no source point lies near a target cell of side " +
+            std::to_string(resolution) + " (likelihood 0), so NDT returned its input";
+    }
     result.extra = {{"transformation_likelihood", ndt.getTransformationLikelihood()},
                     {"target_cells", ndt.TargetCells()},
                     {"resolved",

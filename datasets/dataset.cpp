@@ -416,7 +416,7 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
     if (!exists) {
         throw std::runtime_error(name_or_path +
                                  ": no such dataset file or directory (built-in names: cgal, "
-                                 "procedural)");
+                                 "procedural; indoor-sim with --protocol indoor)");
     }
     if (fs::is_regular_file(path)) {
         const std::string ext = LowerExtension(path);

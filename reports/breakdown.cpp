@@ -124,6 +124,7 @@ Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOption
     t.caption =
         "recall@(r, t): fraction of pairs with mae_r < r degrees and mae_t < t; pairs with null "
         "metrics count as misses";
+    t.columns.push_back({"pairs", "pairs", CellSource::kMeasured, Better::kNone, 0});
     for (const auto& [r, tt] : o.recall) {
         t.columns.push_back({fmt::format("recall@({:g},{:g})", r, tt),
                              fmt::format("@({:g}°, {:g})", r, tt), CellSource::kMeasured,
@@ -131,7 +132,7 @@ Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOption
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
-        TableRow row{method, {}};
+        TableRow row{method, {Value(static_cast<double>(group.size()), group.size())}};
         for (const auto& [r, tt] : o.recall) {
             std::size_t hit = 0;
             for (const auto* x : group) {
@@ -166,7 +167,15 @@ void AddMeanRows(Table& t,
             if (const auto x = RowMetric(*r, o.key_metric)) cells[*column].push_back(*x);
         }
         TableRow row{method, {}};
-        for (const auto& v : cells) row.cells.push_back(Value(SampleMean(v), v.size()));
+        for (std::size_t c = 0; c < cells.size(); ++c) {
+            Cell cell = Value(SampleMean(cells[c]), cells[c].size());
+            // The pairs behind each mean, shown in the cell: bins and categories are uneven.
+            if (!cells[c].empty()) {
+                cell.text = fmt::format("{:.{}f} (n={})", cell.value, t.columns[c].decimals,
+                                        cells[c].size());
+            }
+            row.cells.push_back(cell);
+        }
         t.rows.push_back(row);
     }
 }
@@ -177,7 +186,9 @@ Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOpti
     Table t;
     t.id = "category";
     t.title = "Mean " + o.key_metric + " per category";
-    t.caption = "shape categories of the pairs; each cell averages the pairs of that category";
+    t.caption =
+        "shape categories of the pairs; each cell averages the pairs of that category (n: how "
+        "many)";
     std::set<std::string> categories;
     for (const auto& r : rows) categories.insert(r.value("category", std::string("?")));
     for (const auto& c : categories) {
@@ -196,7 +207,8 @@ Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptio
     t.title = "Mean " + o.key_metric + " by measured overlap";
     t.caption =
         "bins of the pair's measured overlap, min(source ratio, target ratio), as the pair file "
-        "labels it; each cell averages the pairs in the bin (n in the JSON/CSV `pairs` field)";
+        "labels it; each cell averages the pairs in the bin (n: how many; also the JSON/CSV "
+        "`pairs` field)";
     for (std::size_t b = 0; b + 1 < o.overlap_edges.size(); ++b) {
         const double lo = o.overlap_edges[b];
         const double hi = std::min(1.0, o.overlap_edges[b + 1]);

@@ -2,12 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
+#include <algorithm>
 
 #include "core/parse_number.hpp"
 #include "reports/row_access.hpp"
@@ -54,13 +57,70 @@ std::string Describe(const std::map<std::string, std::string>& files) {
     return s;
 }
 
+/// Standard normal quantile by bisection on Phi(x) = erfc(-x / sqrt 2) / 2 (to ~1e-12).
+double NormalQuantile(double p) {
+    double lo = -40.0, hi = 40.0;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+/// Smallest mean worsening detected with probability `power` (see MetricChange::detectable).
+double DetectableWorsening(const std::vector<double>& d, double alpha, double power) {
+    const double n = static_cast<double>(d.size());
+    // The exact test's smallest two-sided p: every difference of one sign, 2 * (1/2)^n.
+    if (d.empty() || std::ldexp(2.0, -static_cast<int>(std::min<double>(n, 1000.0))) >= alpha) {
+        return std::numeric_limits<double>::infinity();
+    }
+    const double sd = SampleStd(d);
+    if (!(sd > 0.0)) return 0.0;
+    const double z = NormalQuantile(1.0 - alpha / 2.0) + NormalQuantile(power);
+    return z * sd / std::sqrt(n * 3.0 / M_PI);
+}
+
+bool IsFailedStatus(const std::string& status) { return status != "ok"; }
+
 }  // namespace
+
+std::map<std::string, double> DefaultTolerances() {
+    return {{"mae_r", 0.1}, {"mae_t", 0.001}, {"ccd", 0.001}, {"rre", 0.2}, {"rte", 0.002}};
+}
+
+int VerdictExitCode(CompareVerdict v) {
+    switch (v) {
+        case CompareVerdict::kPass:
+            return 0;
+        case CompareVerdict::kFail:
+            return 1;
+        case CompareVerdict::kInconclusive:
+            return 3;
+    }
+    return 1;
+}
 
 bool CompareResult::Regressed() const {
     for (const auto& c : changes) {
         if (c.regression) return true;
     }
+    if (!allow_new_failures) {
+        for (const auto& m : calls) {
+            if (m.new_failures > 0) return true;
+        }
+    }
     return false;
+}
+
+CompareVerdict CompareResult::Verdict() const {
+    if (Regressed()) return CompareVerdict::kFail;
+    for (const auto& c : changes) {
+        if (c.underpowered) return CompareVerdict::kInconclusive;
+    }
+    for (const auto& m : calls) {
+        if (m.pairs < min_pairs) return CompareVerdict::kInconclusive;
+    }
+    return CompareVerdict::kPass;
 }
 
 CompareResult CompareResults(const std::vector<nlohmann::json>& base,
@@ -83,6 +143,8 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
     const auto new_index = IndexRows(candidate, new_name);
 
     CompareResult out;
+    out.allow_new_failures = o.allow_new_failures;
+    out.min_pairs = o.min_pairs;
     std::vector<std::string> methods;
     std::map<std::string, std::vector<std::pair<const nlohmann::json*, const nlohmann::json*>>>
         matched;
@@ -96,8 +158,20 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
         if (!matched.count(method)) methods.push_back(method);
         matched[method].emplace_back(row, it->second);
         ++out.matched_rows;
-        if (RowStatus(*row) != "ok") ++out.failures_base;
-        if (RowStatus(*it->second) != "ok") ++out.failures_new;
+        const bool failed_base = IsFailedStatus(RowStatus(*row));
+        const bool failed_new = IsFailedStatus(RowStatus(*it->second));
+        out.failures_base += failed_base;
+        out.failures_new += failed_new;
+        auto calls = std::find_if(out.calls.begin(), out.calls.end(),
+                                  [&](const MethodCalls& m) { return m.method == method; });
+        if (calls == out.calls.end()) {
+            out.calls.push_back(MethodCalls{method});
+            calls = out.calls.end() - 1;
+        }
+        ++calls->pairs;
+        calls->failed_base += failed_base;
+        calls->failed_new += failed_new;
+        calls->new_failures += !failed_base && failed_new;
     }
     out.new_only = new_index.size() - out.matched_rows;
     if (out.matched_rows == 0) {
@@ -120,7 +194,12 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
                 d.push_back(*vn - *vb);
             }
             c.pairs = d.size();
-            if (d.empty()) continue;
+            c.detectable = DetectableWorsening(d, o.alpha, o.power);
+            if (d.empty()) {
+                c.underpowered = true;
+                out.changes.push_back(c);
+                continue;
+            }
             c.base_mean = SampleMean(b);
             c.new_mean = SampleMean(n);
             const BootstrapCi ci =
@@ -129,9 +208,18 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
             c.ci_lo = ci.lo;
             c.ci_hi = ci.hi;
             c.p_value = WilcoxonSignedRank(d).p_value;
-            c.significant = c.p_value < o.alpha && (c.ci_lo > 0.0 || c.ci_hi < 0.0);
+            // Below the exact test's floor nothing is significant: the normal approximation
+            // taken for tied differences would call 5 equal shifts p = 0.043.
+            c.significant = !std::isinf(c.detectable) && c.p_value < o.alpha &&
+                            (c.ci_lo > 0.0 || c.ci_hi < 0.0);
             c.worse = c.significant && c.diff_mean > 0.0;
             c.regression = c.worse && c.diff_mean > c.tolerance;
+            // Conclusive without a regression when the test could detect a worsening of the
+            // tolerance's size, or the CI already bounds the worsening by the tolerance; never
+            // when the exact test cannot reach alpha at all.
+            c.underpowered =
+                !c.regression && (std::isinf(c.detectable) ||
+                                  (c.detectable > c.tolerance && c.ci_hi > c.tolerance));
             out.changes.push_back(c);
         }
     }
@@ -150,8 +238,11 @@ void ParseTolerance(const std::string& text, CompareOptions* o) {
     };
     if (text.find('=') == std::string::npos) {
         o->default_tolerance = number(text);
+        for (auto& [metric, tol] : o->tolerance) tol = o->default_tolerance;
         return;
     }
+    auto known = DefaultTolerances();
+    for (const auto& m : o->metrics) known.emplace(m, 0.0);
     std::stringstream ss(text);
     std::string item;
     while (std::getline(ss, item, ',')) {
@@ -159,7 +250,12 @@ void ParseTolerance(const std::string& text, CompareOptions* o) {
         if (eq == std::string::npos) {
             throw std::invalid_argument("--tolerance: '" + item + "' is not METRIC=VALUE");
         }
-        o->tolerance[item.substr(0, eq)] = number(item.substr(eq + 1));
+        const std::string metric = item.substr(0, eq);
+        if (!known.count(metric)) {
+            throw std::invalid_argument("--tolerance: '" + metric +
+                                        "' is not one of the compared metrics (--metrics)");
+        }
+        o->tolerance[metric] = number(item.substr(eq + 1));
     }
 }
 
@@ -168,6 +264,14 @@ std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& 
         "{} matched rows ({} only in the baseline, {} only in the candidate); failed calls: "
         "{} -> {}\n\n",
         r.matched_rows, r.base_only, r.new_only, r.failures_base, r.failures_new);
+    for (const auto& m : r.calls) {
+        if (m.new_failures == 0) continue;
+        out += fmt::format(
+            "{}: {} call(s) ok in the baseline failed, timed out or crashed in the candidate "
+            "({} of {} pairs failed, {} before){}\n",
+            m.method, m.new_failures, m.failed_new, m.pairs, m.failed_base,
+            r.allow_new_failures ? " (allowed by --allow-new-failures)" : ": FAIL");
+    }
     std::string table =
         "| method | metric | pairs | baseline | candidate | change | 95% CI | Wilcoxon p | "
         "tolerance | verdict |\n|---|---|---:|---:|---:|---:|---|---:|---:|---|\n";
@@ -182,13 +286,46 @@ std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& 
             c.p_value, c.tolerance,
             c.regression ? "**REGRESSION**" : (c.worse ? "worse, within tolerance" : "better"));
     }
+    if (out.substr(out.size() - 2) != "\n\n") out += "\n";
     out += shown == 0 ? fmt::format(
                             "No significant change (Wilcoxon p < {:g} and a 95% CI "
                             "excluding 0) in any method or metric.\n",
                             o.alpha)
                       : table;
-    out += r.Regressed() ? "\nVerdict: FAIL (a method got significantly worse beyond tolerance)\n"
-                         : "\nVerdict: PASS\n";
+    std::string weak;
+    for (const auto& c : r.changes) {
+        if (!c.underpowered) continue;
+        weak += std::isinf(c.detectable)
+                    ? fmt::format("- {} {}: {} pairs; the exact Wilcoxon test cannot reach "
+                                  "p < {:g} with so few pairs (smallest p: {:.3g})\n",
+                                  c.method, c.metric, c.pairs, o.alpha,
+                                  c.pairs == 0 ? 1.0 : std::ldexp(2.0, -int(c.pairs)))
+                    : fmt::format("- {} {}: {} pairs detect a worsening of {:.4g} (power {:g}), "
+                                  "not the tolerance {:g}\n",
+                                  c.method, c.metric, c.pairs, c.detectable, o.power,
+                                  c.tolerance);
+    }
+    for (const auto& m : r.calls) {
+        if (m.pairs < r.min_pairs) {
+            weak += fmt::format("- {}: {} matched pairs, fewer than --min-pairs {}\n", m.method,
+                                m.pairs, r.min_pairs);
+        }
+    }
+    switch (r.Verdict()) {
+        case CompareVerdict::kFail:
+            out += "\nVerdict: FAIL (a method got significantly worse beyond tolerance, or "
+                   "calls failed that did not before)\n";
+            break;
+        case CompareVerdict::kInconclusive:
+            out += "\nUnderpowered (no regression found, but the test could not have found one "
+                   "as large as the tolerance):\n" +
+                   weak +
+                   "\nVerdict: INCONCLUSIVE (use more pairs or a larger --tolerance; exit 3)\n";
+            break;
+        case CompareVerdict::kPass:
+            out += "\nVerdict: PASS\n";
+            break;
+    }
     return out;
 }
 
@@ -206,9 +343,30 @@ nlohmann::json CompareToJson(const CompareResult& r, const CompareOptions& o) {
                            {"significant", c.significant},
                            {"worse", c.worse},
                            {"tolerance", c.tolerance},
+                           {"detectable", std::isinf(c.detectable)
+                                              ? nlohmann::json(nullptr)
+                                              : nlohmann::json(c.detectable)},
+                           {"underpowered", c.underpowered},
                            {"regression", c.regression}});
     }
+    nlohmann::json calls = nlohmann::json::array();
+    for (const auto& m : r.calls) {
+        calls.push_back({{"method", m.method},
+                         {"pairs", m.pairs},
+                         {"failed_base", m.failed_base},
+                         {"failed_new", m.failed_new},
+                         {"new_failures", m.new_failures}});
+    }
+    const CompareVerdict v = r.Verdict();
     return {{"matched_rows", r.matched_rows},
+            {"verdict", v == CompareVerdict::kPass   ? "PASS"
+                        : v == CompareVerdict::kFail ? "FAIL"
+                                                     : "INCONCLUSIVE"},
+            {"exit_code", VerdictExitCode(v)},
+            {"allow_new_failures", r.allow_new_failures},
+            {"min_pairs", r.min_pairs},
+            {"power", o.power},
+            {"calls", calls},
             {"base_only", r.base_only},
             {"new_only", r.new_only},
             {"alpha", o.alpha},

@@ -43,6 +43,45 @@ std::string Escape(const std::string& s) {
 
 std::string Colour(std::size_t i) { return kPalette[i % kPalette.size()]; }
 
+/// Dash pattern of curve i (solid, dashed, dotted, dash-dot), so curves differ by more than
+/// colour (grey-scale print, colour-blind readers).
+std::string Dash(std::size_t i) {
+    static const char* kDashes[] = {"", "7 3", "2 2", "9 3 2 3"};
+    return kDashes[i % 4];
+}
+
+}  // namespace
+
+std::vector<double> NiceTicks(double lo, double hi, bool log) {
+    std::vector<double> ticks;
+    if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return {lo};
+    if (log && lo > 0.0) {
+        // Powers of ten in range; with fewer than two, their 2x and 5x as well.
+        for (double m : {1.0, 2.0, 5.0}) {
+            for (int e = static_cast<int>(std::floor(std::log10(lo)));
+                 e <= static_cast<int>(std::ceil(std::log10(hi))); ++e) {
+                const double v = m * std::pow(10.0, e);
+                if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9)) ticks.push_back(v);
+            }
+            if (ticks.size() >= 2) break;
+        }
+        std::sort(ticks.begin(), ticks.end());
+        return ticks;
+    }
+    // Linear: a step of 1, 2 or 5 times a power of ten giving about four intervals.
+    const double raw = (hi - lo) / 4.0;
+    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+    const double norm = raw / mag;
+    const double step = (norm < 1.5 ? 1.0 : norm < 3.0 ? 2.0 : norm < 7.0 ? 5.0 : 10.0) * mag;
+    for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + 1e-9 * step; k += 1.0) {
+        const double v = k * step;
+        ticks.push_back(std::abs(v) < 1e-12 * step ? 0.0 : v);
+    }
+    return ticks;
+}
+
+namespace {
+
 /// A plot frame: maps data coordinates into a w x h SVG with margins, draws axes and ticks.
 struct Plot {
     double x0, x1, y0, y1;
@@ -65,16 +104,14 @@ struct Plot {
             "<line x1=\"{0}\" y1=\"{1}\" x2=\"{2}\" y2=\"{1}\" stroke=\"#333\"/>"
             "<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{3}\" stroke=\"#333\"/>",
             left, h - bottom, w - right, top);
-        for (int i = 0; i <= 4; ++i) {
-            double xv =
-                log_x ? std::pow(10.0, std::log10(x0) + i * (std::log10(x1) - std::log10(x0)) / 4)
-                      : x0 + i * (x1 - x0) / 4;
-            const double yv = y0 + i * (y1 - y0) / 4;
+        for (const double xv : NiceTicks(x0, x1, log_x)) {
             s += fmt::format(
-                "<text x=\"{:.1f}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{:.3g}</text>",
+                "<text x=\"{:.1f}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{:g}</text>",
                 X(xv), h - bottom + 15, xv);
+        }
+        for (const double yv : NiceTicks(y0, y1, false)) {
             s += fmt::format(
-                "<text x=\"{}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{:.3g}</text>"
+                "<text x=\"{}\" y=\"{:.1f}\" font-size=\"11\" text-anchor=\"end\">{:g}</text>"
                 "<line x1=\"{}\" y1=\"{:.1f}\" x2=\"{}\" y2=\"{:.1f}\" stroke=\"#eee\"/>",
                 left - 4, Y(yv) + 4, yv, left + 1, Y(yv), w - right, Y(yv));
         }
@@ -88,14 +125,22 @@ struct Plot {
         return s;
     }
 
-    std::string Legend(const std::vector<std::string>& names) const {
+    /// Colour swatches, or (lines) short strokes with each curve's dash pattern.
+    std::string Legend(const std::vector<std::string>& names, bool lines = false) const {
         std::string s;
         for (std::size_t i = 0; i < names.size(); ++i) {
             const int y = top + 14 * static_cast<int>(i) + 6;
-            s += fmt::format(
-                "<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>"
-                "<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>",
-                w - right + 10, y - 8, Colour(i), w - right + 24, y + 1, Escape(names[i]));
+            if (lines) {
+                s += fmt::format(
+                    "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke=\"{}\" "
+                    "stroke-width=\"1.6\" stroke-dasharray=\"{}\"/>",
+                    w - right + 4, y - 3, w - right + 20, y - 3, Colour(i), Dash(i));
+            } else {
+                s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>",
+                                 w - right + 10, y - 8, Colour(i));
+            }
+            s += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>",
+                             w - right + 24, y + 1, Escape(names[i]));
         }
         return s;
     }
@@ -130,7 +175,8 @@ Transform RowTransform(const nlohmann::json& row) {
 std::string TableToHtml(const Table& t) {
     std::string s = "<h3>" + Escape(t.title) + "</h3>\n";
     if (!t.caption.empty()) s += "<p class=\"cap\">" + Escape(t.caption) + "</p>\n";
-    s += "<table><tr><th>" + Escape(t.row_header) + "</th>";
+    // Wide tables scroll inside their own box instead of widening the page.
+    s += "<div class=\"tw\"><table><tr><th>" + Escape(t.row_header) + "</th>";
     for (const auto& c : t.columns) {
         s += std::string(c.source == CellSource::kPaper ? "<th class=\"paper\">" : "<th>") +
              Escape(c.header) + "</th>";
@@ -158,7 +204,7 @@ std::string TableToHtml(const Table& t) {
         }
         s += "</tr>\n";
     }
-    s += "</table>\n";
+    s += "</table></div>\n";
     for (const auto& n : t.notes) s += "<p class=\"note\">" + Escape(n) + "</p>\n";
     return s;
 }
@@ -180,10 +226,11 @@ std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg)
         }
         pts += fmt::format(" {:.1f},{:.1f}", p.X(max_deg), p.Y(frac));
         s += fmt::format(
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\"/>", pts,
-            Colour(i));
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"1.6\" "
+            "stroke-dasharray=\"{}\"/>",
+            pts, Colour(i), Dash(i));
     }
-    return s + p.Legend(methods) + "</svg>";
+    return s + p.Legend(methods, /*lines=*/true) + "</svg>";
 }
 
 std::string ErrorVsOverlapSvg(const std::vector<nlohmann::json>& rows) {
@@ -297,6 +344,7 @@ std::string RenderHtmlReport(const HtmlReportOptions& o) {
         Escape(o.title) +
         "</title>\n<style>body{font-family:sans-serif;margin:24px;max-width:1400px;color:#222}"
         "table{border-collapse:collapse;margin:8px 0 4px 0;font-size:13px}"
+        ".tw{max-width:100%;overflow-x:auto}"
         "td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}"
         "td:first-child,th:first-child{text-align:left}th{background:#f2f2f2}"
         ".paper{color:#777}.cap,.note{font-size:12px;color:#444;max-width:1100px}"

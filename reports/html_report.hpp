@@ -38,6 +38,11 @@ std::string RenderHtmlReport(const HtmlReportOptions& options);
 /// A table as an HTML <table> (best cell per column bold, paper cells in grey).
 std::string TableToHtml(const Table& t);
 
+/// Axis ticks at round numbers: linear, multiples of a step of 1, 2 or 5 times a power of ten
+/// (about four intervals) within [lo, hi]; log, the powers of ten within it (with their 2x and
+/// 5x when fewer than two).
+std::vector<double> NiceTicks(double lo, double hi, bool log);
+
 /// Error CDF: fraction of pairs with mae_r below x, one curve per method (inline <svg>).
 std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg);
 

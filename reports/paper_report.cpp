@@ -227,16 +227,19 @@ Table BuildPaperTable(const PaperTableSpec& spec,
                 if (set != nullptr) {
                     std::vector<double> v;
                     std::size_t n = 0;
+                    std::string method;  // the rows' own method name, as the breakdowns use
                     for (const auto& r : set->rows) {
                         if (PaperRowOf(r, *set) != label) continue;
                         ++n;
+                        if (method.empty()) method = r.value("method", label);
                         // Null metrics are failures: they keep the pair count honest but no
                         // number can stand in for them, so the cell says how many.
                         if (const auto x = RowMetric(r, m)) v.push_back(*x);
                     }
-                    const BootstrapCi ci =
-                        BootstrapMean(v, o.bootstrap_samples, o.seed,
-                                      StreamId(spec.id + "/" + g + "/" + label + "/" + m));
+                    // The stream of the breakdowns (reports/breakdown.cpp): one CI per
+                    // (method, metric) on the same pairs, so a report never shows two.
+                    const BootstrapCi ci = BootstrapMean(v, o.bootstrap_samples, o.seed,
+                                                         StreamId(method + "/" + m));
                     measured.value = ci.mean;
                     if (v.size() >= 2) measured.half_width = 0.5 * (ci.hi - ci.lo);
                     measured.pairs = n;

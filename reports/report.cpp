@@ -186,6 +186,55 @@ std::string Fmt(double x, const char* spec) {
 
 }  // namespace
 
+/// The pairs each (method, params) of a table has; refuses different sets naming them, or
+/// (common) drops the rows outside their intersection and says what was dropped.
+static std::string RestrictToCommonPairs(std::vector<const ResultRow*>* group, bool common) {
+    std::vector<std::string> order;
+    std::map<std::string, std::set<std::size_t>> pairs;
+    for (const ResultRow* r : *group) {
+        const std::string label = r->method + " " + r->params.dump();
+        if (!pairs.count(label)) order.push_back(label);
+        pairs[label].insert(r->pair);
+    }
+    std::set<std::size_t> shared = pairs[order.front()];
+    bool differ = false;
+    for (const auto& label : order) {
+        differ |= pairs[label] != shared;
+        std::set<std::size_t> both;
+        for (const std::size_t k : pairs[label]) {
+            if (shared.count(k)) both.insert(k);
+        }
+        shared = std::move(both);
+    }
+    if (!differ) return "";
+    const auto name = [](const std::string& label) { return label.substr(0, label.find(' ')); };
+    std::string counts;
+    for (const auto& label : order) {
+        counts += fmt::format("{}{}: {}", counts.empty() ? "" : ", ", name(label),
+                              pairs[label].size());
+        if (common && pairs[label].size() != shared.size()) {
+            counts += fmt::format(" -> {}", shared.size());
+        }
+    }
+    if (!common) {
+        throw std::runtime_error(fmt::format(
+            "methods of one table were measured on different pairs of {} ({} pairs); "
+            "a table would compare them on different data. Run them on the same pairs, or pass "
+            "--common-pairs to compare them on the {} pairs they share",
+            group->front()->data.pairs_file, counts, shared.size()));
+    }
+    if (shared.empty()) {
+        throw std::runtime_error(fmt::format(
+            "methods of one table share no pair of {} ({} pairs): nothing to compare",
+            group->front()->data.pairs_file, counts));
+    }
+    group->erase(std::remove_if(group->begin(), group->end(),
+                                [&](const ResultRow* r) { return !shared.count(r->pair); }),
+                 group->end());
+    return fmt::format("restricted to the {} pairs every method has (--common-pairs; {} pairs)",
+                       shared.size(), counts);
+}
+
 std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const ReportOptions& o) {
     std::vector<std::string> order;
     std::map<std::string, std::vector<const ResultRow*>> groups;
@@ -197,8 +246,9 @@ std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const R
     }
     std::vector<ReportTable> tables;
     for (const auto& key : order) {
-        const auto& group = groups[key];
+        auto& group = groups[key];
         ReportTable t;
+        t.subset = RestrictToCommonPairs(&group, o.common_pairs);
         t.data = group.front()->data;
         t.euler = o.euler.value_or(group.front()->euler);
         std::set<std::string> files;
@@ -226,6 +276,7 @@ std::string DescribeTable(const ReportTable& t) {
     out += fmt::format("; mae_r/rmse_r: scipy as_euler('{}')", ToString(t.euler));
     if (t.euler == EulerConvention::kZyx) out += ", the paper's convention";
     if (t.euler == EulerConvention::kXyz) out += ", RPMNet's convention";
+    if (!t.subset.empty()) out += "; " + t.subset;
     return out;
 }
 

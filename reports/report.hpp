@@ -29,6 +29,10 @@ struct ReportOptions {
     /// Set: rows in another convention are recomputed from their stored ground truth, or
     /// refused when they carry none (rows written before `gt_transform` existed).
     std::optional<EulerConvention> euler;
+    /// Methods of one table measured on different pairs of its pair file (a shard, a partial
+    /// run) are refused by BuildTables, naming them; with this set, every method of such a
+    /// table is restricted to the pairs all of them have, and the caption says so.
+    bool common_pairs = false;
 };
 
 /// Mean with a 95% bootstrap confidence interval.
@@ -61,11 +65,16 @@ struct ReportTable {
     std::vector<std::string> files;      ///< result files the rows came from
     std::vector<MethodSummary> methods;  ///< in first-seen order
     std::vector<std::string> notes;      ///< "file:line: ..." for rows counted as failed
+    /// Empty, or (with ReportOptions::common_pairs) how the table was restricted to the pairs
+    /// every method has, e.g. "restricted to the 10 pairs every method has (icp: 30 -> 10)".
+    std::string subset;
 };
 
 /// Groups rows by pair file (content hash; file name and provenance for old rows without
 /// one) and Euler convention, and by (method, params) inside a group. Throws
-/// std::runtime_error naming both file:line for a duplicated (pair, method, params) row.
+/// std::runtime_error naming both file:line for a duplicated (pair, method, params) row, and
+/// naming the methods and their pair counts when the methods of one group were measured on
+/// different pairs (unless options.common_pairs: then restricted to the common pairs).
 std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows,
                                      const ReportOptions& options);
 

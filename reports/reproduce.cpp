@@ -303,6 +303,8 @@ namespace {
 /// Refuses table names that match no table and dataset paths that do not exist, before any
 /// work starts.
 void ValidateOptions(const ReproduceOptions& o) {
+    if (o.jobs < 1) throw std::invalid_argument("--jobs must be at least 1");
+    if (!(o.timeout_seconds >= 0.0)) throw std::invalid_argument("--timeout must be >= 0");
     for (const auto& t : o.tables) {
         bool known = false;
         for (const auto& id : ReproducibleTables()) known |= id.rfind(t, 0) == 0;

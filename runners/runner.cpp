@@ -298,6 +298,12 @@ bool SameTransform(const Transform& a, const Transform& b) {
     return true;
 }
 
+/// The caller-supplied method named `name`, or null for a registered one.
+const ExternalMethod* FindExternal(const RunOptions& options, const std::string& name) {
+    const auto it = options.external_methods.find(name);
+    return it == options.external_methods.end() ? nullptr : &it->second;
+}
+
 /// Refuses a kept row that this run would not have produced: another --timeout, --threads,
 /// downsampling (--downsample / --max-points), or ground truth / shape that differ from what
 /// the pair file holds now. docs/metrics.md ("What defines a row") lists the fields.
@@ -315,7 +321,8 @@ void CheckRowSettings(const ResultRow& r, const RunOptions& options, const PairS
                std::to_string(options.threads_per_call));
     }
     const Pair& pair = set.pairs.at(r.pair);
-    const bool reduce = options.downsample && NeedsScaleGuard(r.method, pair, options.max_points);
+    const bool reduce = options.downsample && FindExternal(options, r.method) == nullptr &&
+                        NeedsScaleGuard(MethodSpec{r.method, r.params}, pair, options.max_points);
     nlohmann::json expected = nullptr;
     if (reduce) DownsampleByStride(pair, options.max_points, &expected);
     const auto got = r.other.find("downsampled");
@@ -382,12 +389,6 @@ struct RunState {
     std::exception_ptr error;  ///< first failure in a worker (a write error), rethrown after join
 };
 
-/// The caller-supplied method named `name`, or null for a registered one.
-const ExternalMethod* FindExternal(const RunOptions& options, const std::string& name) {
-    const auto it = options.external_methods.find(name);
-    return it == options.external_methods.end() ? nullptr : &it->second;
-}
-
 /// One (pair, method) call, isolated when a timeout is set, turned into its row.
 ResultRow RunCall(const RunPlan& plan,
                   RegistrationMethod& method,
@@ -400,8 +401,8 @@ ResultRow RunCall(const RunPlan& plan,
     // pair; metrics still compare against the full pair.
     nlohmann::json downsampled;
     const ExternalMethod* external = FindExternal(options, spec.name);
-    const bool reduce = options.downsample && external == nullptr &&
-                        NeedsScaleGuard(spec.name, pair, options.max_points);
+    const bool reduce =
+        options.downsample && external == nullptr && NeedsScaleGuard(spec, pair, options.max_points);
     const Pair reduced =
         reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
     const Pair& input = reduce ? reduced : pair;

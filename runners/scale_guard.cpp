@@ -29,8 +29,8 @@ void Stride(const PointCloud& in,
 
 }  // namespace
 
-bool NeedsScaleGuard(const std::string& method, const Pair& pair, std::size_t max_points) {
-    return max_points > 0 && MethodCost(method) == CostClass::kQuadratic &&
+bool NeedsScaleGuard(const MethodSpec& method, const Pair& pair, std::size_t max_points) {
+    return max_points > 0 && MethodCost(method.name, method.params) == CostClass::kQuadratic &&
            std::max(Points(pair.source), Points(pair.target)) > max_points;
 }
 
@@ -46,7 +46,7 @@ std::string CheckScale(const PairSet& set,
         std::size_t worst_pair = 0;
         for (const std::size_t k : indices) {
             const Pair& p = set.pairs[k];
-            if (!NeedsScaleGuard(spec.name, p, max_points)) continue;
+            if (!NeedsScaleGuard(spec, p, max_points)) continue;
             ++affected;
             const double nm = static_cast<double>(Points(p.source)) * Points(p.target);
             if (nm > worst) {
@@ -58,7 +58,7 @@ std::string CheckScale(const PairSet& set,
         const Pair& w = set.pairs[worst_pair];
         char line[512];
         std::snprintf(line, sizeof(line),
-                      "%s is O(N*M): %zu pair(s) have a cloud above --max-points %zu; the largest, "
+                      "%s (dense) is O(N*M): %zu pair(s) have a cloud above --max-points %zu; the largest, "
                       "pair %zu, is %zu x %zu points = %.3g kernel evaluations per iteration "
                       "(%.2gx a 10,000-point pair, which takes CPD ~4.5 s on one thread)",
                       spec.name.c_str(), affected, max_points, worst_pair, Points(w.source),

@@ -1,5 +1,6 @@
 #pragma once
-// Scale guard: O(N*M) methods on large clouds would run for minutes to hours per call with no
+// Scale guard: O(N*M) methods (dense modes; CPD, GMMReg and SVR approximate by default) on
+// large clouds would run for minutes to hours per call with no
 // sign of life. Before the run, such calls are either refused (default) or run on clouds
 // downsampled by an explicit, recorded rule.
 #include <cstddef>
@@ -16,8 +17,9 @@ namespace regbench {
 /// (1 thread, README); at 20,000 about 4x that, and 200,000 points would take ~30 min.
 constexpr std::size_t kDefaultMaxPoints = 20000;
 
-/// True when `method` is O(N*M) and a cloud of `pair` has more than `max_points` points.
-bool NeedsScaleGuard(const std::string& method, const Pair& pair, std::size_t max_points);
+/// True when `method` with its resolved parameters is O(N*M) (MethodCost: a dense mode, or a
+/// method without approximation) and a cloud of `pair` has more than `max_points` points.
+bool NeedsScaleGuard(const MethodSpec& method, const Pair& pair, std::size_t max_points);
 
 /// Checks every (pair, method) call of the run. Refuses (std::runtime_error with the expected
 /// cost: pairs affected, largest N x M) unless `downsample`; with it, returns the notice that

@@ -99,6 +99,12 @@ bool ParseJsonLine(const std::string& line,
     } catch (const std::exception& e) {
         throw std::runtime_error(where + ": " + e.what());
     }
+    if (j.contains("content_hash") && j["content_hash"].is_string()) {
+        out->content_hash = j["content_hash"].get<std::string>();
+    } else if (j.contains("data") && j["data"].is_object() &&
+               j["data"].contains("content_hash") && j["data"]["content_hash"].is_string()) {
+        out->content_hash = j["data"]["content_hash"].get<std::string>();  // a result row
+    }
     if (j.contains("seconds") && !j["seconds"].is_null()) {
         if (!j["seconds"].is_number()) throw std::runtime_error(where + ": seconds not a number");
         out->seconds = j["seconds"].get<double>();
@@ -154,11 +160,21 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path,
     std::map<std::size_t, std::string> seen;  // pair -> file:line
     std::string line;
     std::size_t lineno = 0;
+    std::string file_hash;  // from a "# content_hash: H" comment
     while (std::getline(in, line)) {
         ++lineno;
         const auto first = line.find_first_not_of(" \t\r");
         if (first == std::string::npos) continue;
-        if (line[first] == '#') continue;
+        if (line[first] == '#') {
+            static const std::string kKey = "content_hash:";
+            const auto key = line.find(kKey, first);
+            if (key != std::string::npos) {
+                file_hash = line.substr(key + kKey.size());
+                file_hash.erase(0, file_hash.find_first_not_of(" \t"));
+                file_hash.erase(file_hash.find_last_not_of(" \t\r") + 1);
+            }
+            continue;
+        }
         const std::string where = path + ":" + std::to_string(lineno);
         ExternalTransform t;
         t.origin = where;
@@ -168,6 +184,7 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path,
         } else if (!ParseJsonLine(line, where, num_pairs, method, &t)) {
             continue;
         }
+        if (t.content_hash.empty()) t.content_hash = file_hash;
         if (!std::isfinite(t.seconds) || t.seconds < 0) {
             throw std::runtime_error(where + ": seconds must be a finite number >= 0");
         }
@@ -207,6 +224,16 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     context.threads = o.threads;
     context.euler = o.euler;
     context.data = DataTagOf(o.pairs_path, set);
+    // Transforms computed on other pairs would be scored against the wrong ground truth.
+    for (const auto& t : given) {
+        if (!t.content_hash.empty() && t.content_hash != context.data.content_hash) {
+            throw std::runtime_error(t.origin + ": the transform was computed on the pair file "
+                                                "with content hash " +
+                                     t.content_hash + ", not on " + o.pairs_path + " (" +
+                                     context.data.content_hash +
+                                     "); score it against the pair file it was computed on");
+        }
+    }
     const MethodSpec spec{o.method, o.params};
     ScoreSummary summary;
     std::vector<ResultRow> rows;

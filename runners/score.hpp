@@ -36,6 +36,10 @@ struct ExternalTransform {
     double seconds = 0.0;                 ///< 0 when the file gives none
     double scale = 1.0;                   ///< cbrt(det) of the 3x3 block when scale is allowed
     std::string origin;                   ///< "file:line"
+    /// Content hash of the pair file the transform was computed on, when the file records it
+    /// (JSONL: "content_hash" or data.content_hash; either format: a "# content_hash: H"
+    /// comment line, which applies to the lines after it); empty when not recorded.
+    std::string content_hash;
 };
 
 /// Reads a transforms file and validates it: JSONL rows {"pair": k, "transform": 4x4,

@@ -34,12 +34,17 @@ def open3d_py_icp(source, target):
 
 
 def write_transforms(pairs, prefix):
+    # The pairs' content hash: `regbench score` refuses transforms that record another file's.
+    content_hash = regbench.PairFile(pairs).content_hash
     with open(prefix + ".jsonl", "w") as js, open(prefix + ".csv", "w") as cs:
+        if content_hash:
+            cs.write(f"# content_hash: {content_hash}\n")
         for pair in regbench.PairFile(pairs):
             t0 = time.perf_counter()
             T = open3d_py_icp(pair.source, pair.target)["transform"]
             s = time.perf_counter() - t0
-            js.write(json.dumps({"pair": pair.index, "transform": T.tolist(), "seconds": s}) + "\n")
+            js.write(json.dumps({"pair": pair.index, "content_hash": content_hash,
+                                 "transform": T.tolist(), "seconds": s}) + "\n")
             cs.write(",".join([str(pair.index)] + [repr(float(v)) for v in T[:3].ravel()] +
                               [repr(s)]) + "\n")
 

@@ -13,20 +13,26 @@
 #include "ogmm/zoo.hpp"
 #include "runners/registry.hpp"
 #include "tests/baselines/registration_fixtures.hpp"
+#include "tests/testing/expect_throw.hpp"
 
 namespace regbench {
 namespace {
 namespace fs = std::filesystem;
 
-TEST(Learned, MissingCheckpointFailsThePairWithItsPath) {
+TEST(Learned, MissingCheckpointIsRefusedWhenTheMethodIsCreated) {
+    // Issue 26: a wrong path used to fail every pair of the run, which then exited 0; it is
+    // now refused before any pair runs, naming the path.
     const std::string missing = (fs::temp_directory_path() / "regbench_no_such_ckpt").string();
     for (const char* name : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp"}) {
-        auto method = CreateMethod(name, {{"checkpoint", missing}});
-        const auto pair = testing::CleanCompletePair(10.0);
-        const AlignResult r = method->Align(pair.source, pair.target);
-        EXPECT_EQ(r.status, AlignStatus::kFailed) << name;
-        EXPECT_NE(r.message.find(missing), std::string::npos) << r.message;
+        testing::ExpectThrowsWith<std::invalid_argument>(
+            [&] { CreateMethod(name, {{"checkpoint", missing}}); }, missing, "does not exist");
     }
+    // A folder without a checkpoint.json is refused too.
+    const fs::path empty = fs::temp_directory_path() / "regbench_empty_ckpt";
+    fs::create_directories(empty);
+    testing::ExpectThrowsWith<std::invalid_argument>(
+        [&] { CreateMethod("ogmm", {{"checkpoint", empty.string()}}); }, "checkpoint.json");
+    fs::remove_all(empty);
 }
 
 /// A checkpoint of the untrained named model (weights from torch::manual_seed(seed)) in a
@@ -59,6 +65,23 @@ TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
         EXPECT_TRUE(a.extra.contains("network_seconds"));
     }
     fs::remove_all(dir);
+}
+
+TEST(Learned, CheckpointOfTheOtherFamilyIsRefused) {
+    // A DeepGMR checkpoint (config.arch "deepgmr") under ogmm would run DeepGMR's network
+    // under OGMM's name (issue 26 saw the reverse); both directions are refused.
+    const fs::path deepgmr = SaveUntrainedCheckpoint("deepgmr-small", 3);
+    for (const char* name : {"ogmm", "ogmm-noicp"}) {
+        testing::ExpectThrowsWith<std::invalid_argument>(
+            [&] { CreateMethod(name, {{"checkpoint", deepgmr.string()}}); }, deepgmr.string(),
+            "holds a deepgmr model");
+    }
+    fs::remove_all(deepgmr);
+    const fs::path ogmm = SaveUntrainedCheckpoint("ogmm-tiny", 5);
+    testing::ExpectThrowsWith<std::invalid_argument>(
+        [&] { CreateMethod("deepgmr", {{"checkpoint", ogmm.string()}}); }, "holds a ogmm model");
+    EXPECT_NO_THROW(CreateMethod("ogmm", {{"checkpoint", ogmm.string()}}));
+    fs::remove_all(ogmm);
 }
 
 // The runner's threads share one method object, so inference must not use torch's

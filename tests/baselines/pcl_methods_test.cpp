@@ -21,13 +21,32 @@ TEST(Gicp, CloudSmallerThanNeighbourhoodFails) {
 }
 
 TEST(Gicp, DistantCloudsStopWithOptimizerError) {
-    // No pair within max_correspondence_distance: PCL's BFGS step throws, the method returns
-    // the identity and says why instead of claiming convergence.
+    // No pair within max_correspondence_distance: PCL's BFGS step throws and leaves the input
+    // unchanged. Issue 26: this was status ok with 0 iterations; an internal error is now a
+    // failed call with the reason (and the identity fallback).
     auto pair = CleanCompletePair(0.0);
     pair.target.col(0).array() += 10.0;
-    const AlignResult r = AlignOk("gicp", pair);
+    const AlignResult r = CreateMethod("gicp")->Align(pair.source, pair.target);
+    EXPECT_EQ(r.status, AlignStatus::kFailed);
     EXPECT_EQ(r.stop_reason, "optimizer_error");
+    EXPECT_NE(r.message.find("optimizer_error"), std::string::npos) << r.message;
     EXPECT_TRUE(r.T_target_source.isIdentity(1e-12));
+}
+
+TEST(Ndt, NoProgressOnADistantPairFailsInsteadOfClaimingConvergence) {
+    // The target 10 units away (the clouds span about 1): no source point lies near any target
+    // cell, so PCL's first Newton step is exactly zero and it returned the identity as
+    // "0 iterations | converged" with status ok (issue 26).
+    auto pair = CleanCompletePair(0.0);
+    pair.target.col(0).array() += 10.0;
+    const AlignResult r = CreateMethod("ndt")->Align(pair.source, pair.target);
+    EXPECT_EQ(r.status, AlignStatus::kFailed);
+    EXPECT_EQ(r.iterations, 0);
+    EXPECT_EQ(r.stop_reason, "no_progress");
+    EXPECT_NE(r.message.find("0 iterations"), std::string::npos) << r.message;
+    // An aligned input is not a failure: NDT still takes steps (or scores > 0).
+    const AlignResult ok = CreateMethod("ndt")->Align(pair.source, pair.source);
+    EXPECT_EQ(ok.status, AlignStatus::kOk) << ok.message;
 }
 
 TEST(Ndt, ResolutionWithoutPopulatedVoxelsFails) {

@@ -68,9 +68,12 @@ TEST(Breakdown, RecallByHand) {
     o.recall = {{1.0, 0.01}, {5.0, 0.1}};
     const Table t = RecallTable(Rows(), o);
     // a: (0.5, 0.005) passes both; (3, 0.02) passes (5, 0.1) only -> 1/4 and 2/4.
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[0].value, 0.25);
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 0.5);
-    EXPECT_DOUBLE_EQ(t.rows[1].cells[1].value, 0.0);  // b: mae_t 0.2
+    // Column 0 is the pair count (issue 26: breakdown tables show pair counts).
+    EXPECT_EQ(t.columns[0].key, "pairs");
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[0].value, 4.0);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 0.25);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[2].value, 0.5);
+    EXPECT_DOUBLE_EQ(t.rows[1].cells[2].value, 0.0);  // b: mae_t 0.2
 }
 
 TEST(Breakdown, PerCategoryMeans) {
@@ -89,6 +92,7 @@ TEST(Breakdown, BinsByMeasuredOverlap) {
     EXPECT_DOUBLE_EQ(t.rows[0].cells[0].value, 0.5);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 5.5);
     EXPECT_EQ(t.rows[0].cells[1].pairs, 2u);
+    EXPECT_EQ(t.rows[0].cells[1].text, "5.500 (n=2)");  // the count is shown in the cell
     EXPECT_DOUBLE_EQ(t.rows[0].cells[2].value, 12.0);
     EXPECT_TRUE(t.notes.empty());
 }

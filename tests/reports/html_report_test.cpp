@@ -85,6 +85,40 @@ TEST(HtmlReport, IsSelfContained) {
     EXPECT_NE(html.find("<table>"), std::string::npos);
 }
 
+TEST(HtmlReport, WideTablesScrollInTheirBoxAndCurvesDifferByDash) {
+    const std::string html = Render();
+    // Every table sits in a box that scrolls sideways (at 1200 px a wide table no longer
+    // widens the page).
+    std::size_t tables = 0, boxed = 0;
+    for (auto p = html.find("<table>"); p != std::string::npos; p = html.find("<table>", p + 1)) {
+        ++tables;
+        boxed += html.compare(p - 16, 16, "<div class=\"tw\">") == 0;
+    }
+    EXPECT_GT(tables, 0u);
+    EXPECT_EQ(boxed, tables);
+    EXPECT_NE(html.find(".tw{max-width:100%;overflow-x:auto}"), std::string::npos);
+    // The CDF's second and third curves are dashed and dotted as well as coloured.
+    const std::string cdf = ErrorCdfSvg(Rows(), 45.0);
+    EXPECT_NE(cdf.find("stroke-dasharray=\"7 3\""), std::string::npos) << cdf;
+    EXPECT_NE(cdf.find("stroke-dasharray=\"2 2\""), std::string::npos) << cdf;
+    // Round ticks: the CDF's x axis 0-45 degrees at 0, 10, ..., 40 (step 10 = 45/4 rounded to
+    // 1, 2 or 5 times a power of ten), not 0, 11.25, 22.5, ...
+    EXPECT_NE(cdf.find(">10</text>"), std::string::npos) << cdf;
+    EXPECT_EQ(cdf.find(">11.2"), std::string::npos) << cdf;
+}
+
+TEST(HtmlReport, NiceTicksAreRoundNumbers) {
+    // Hand-computed: 45/4 = 11.25 -> step 10; 1/4 = 0.25 -> step 0.2; 18.9/4 = 4.7 -> step 5.
+    EXPECT_EQ(NiceTicks(0.0, 45.0, false), (std::vector<double>{0, 10, 20, 30, 40}));
+    const std::vector<double> unit = NiceTicks(0.0, 1.0, false);
+    ASSERT_EQ(unit.size(), 6u);
+    EXPECT_NEAR(unit[3], 0.6, 1e-12);
+    EXPECT_EQ(NiceTicks(0.0, 18.9, false), (std::vector<double>{0, 5, 10, 15}));
+    // Log axis: the powers of ten in range; within one decade, 1-2-5 steps.
+    EXPECT_EQ(NiceTicks(0.004, 3.0, true), (std::vector<double>{0.01, 0.1, 1.0}));
+    EXPECT_EQ(NiceTicks(0.15, 0.9, true), (std::vector<double>{0.2, 0.5}));
+}
+
 /// Decoded 8-bit RGB(A) PNG (the only kind Chromium writes for screenshots).
 struct Image {
     int width = 0, height = 0, channels = 0;

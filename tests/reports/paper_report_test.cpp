@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "reports/breakdown.hpp"
 #include "reports/paper_tables.hpp"
 
 namespace regbench {
@@ -97,6 +98,29 @@ TEST(PaperReport, Tab1MeansArePlainAveragesAndPaperCellsAreTheJsonNumbers) {
     EXPECT_NE(t.caption.find("embedded corpus instead of ModelNet40"), std::string::npos);
     ASSERT_EQ(t.notes.size(), 2u);
     EXPECT_NE(t.notes[0].find("0.1041"), std::string::npos);
+}
+
+TEST(PaperReport, CiIsTheBreakdownsCiForTheSameRows) {
+    // Issue 26: one HTML report showed Tab. 1 ICP "15.4925 ± 9.7854" and its breakdown
+    // "± 10.6347" (two bootstrap streams for one mean). Both now resample with the stream of
+    // (method, metric), 1000 resamples, seed 20230103: the independent computation is the
+    // breakdown's DistributionTable over the same rows.
+    const std::vector<nlohmann::json> rows = {Row(0, "icp", 4.0), Row(1, "icp", 5.0),
+                                              Row(2, "icp", 9.0), Row(3, "icp", 30.0),
+                                              Row(4, "icp", 1.5)};
+    PaperTableOptions o;
+    const Table paper = BuildPaperTable(FindPaperTableSpec("table1_modelnet_partial"),
+                                        {ResultSet{"same_category", rows, Prov("same.h5"), ""}},
+                                        LoadPaperTables(DefaultPaperTablesPath()), o);
+    BreakdownOptions b;
+    b.metrics = {"mae_r"};
+    const Table dist = DistributionTable(rows, b);
+    ASSERT_EQ(dist.rows.size(), 1u);
+    const Cell& ours = RowNamed(paper, "ICP").cells[Col(paper, "same_category.mae_r")];
+    const Cell& breakdown = dist.rows[0].cells[Col(dist, "mae_r.mean")];
+    EXPECT_DOUBLE_EQ(ours.value, breakdown.value);
+    EXPECT_GT(ours.half_width, 0.0);
+    EXPECT_DOUBLE_EQ(ours.half_width, breakdown.half_width);
 }
 
 TEST(PaperReport, SweepTableReadsTransposedPaperCells) {

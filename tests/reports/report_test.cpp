@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "core/transform.hpp"
+#include "tests/testing/expect_throw.hpp"
 
 namespace regbench {
 namespace {
@@ -137,6 +138,47 @@ TEST(Report, ParameterSetsOfOneMethodAreSeparateRows) {
     ASSERT_EQ(tables[0].methods.size(), 2u);
     EXPECT_EQ(tables[0].methods[0].label, "icp {\"max_iterations\":10}");
     EXPECT_NEAR(tables[0].methods[1].mae_r.mean, 3.0, 1e-12);
+}
+
+/// `method` on pairs first..last of a.h5 with mae_r = 1 + pair (so a subset's mean is known).
+std::vector<ResultRow> OnPairs(const std::string& method, std::size_t first, std::size_t last) {
+    std::vector<ResultRow> rows;
+    for (std::size_t k = first; k <= last; ++k) {
+        rows.push_back(Row(method, 1.0 + static_cast<double>(k), 0.01, 1.0, Status::kOk, k));
+    }
+    return rows;
+}
+
+TEST(Report, MethodsOnDifferentPairsOfOneFileAreRefusedNamingThem) {
+    // Issue 26: ogmm on 10 pairs (--shard 0/3) and icp on 30 shared one table silently.
+    std::vector<ResultRow> rows = OnPairs("icp", 0, 29);
+    for (auto& r : OnPairs("ogmm", 0, 9)) rows.push_back(r);
+    testing::ExpectThrowsWith<std::runtime_error>(
+        [&] { BuildTables(rows, ReportOptions{}); }, "different pairs of a.h5", "icp: 30",
+        "ogmm: 10", "--common-pairs");
+}
+
+TEST(Report, CommonPairsRestrictsEveryMethodAndSaysSoInTheCaption) {
+    std::vector<ResultRow> rows = OnPairs("icp", 0, 29);
+    for (auto& r : OnPairs("ogmm", 0, 9)) rows.push_back(r);
+    ReportOptions o;
+    o.common_pairs = true;
+    const auto tables = BuildTables(rows, o);
+    ASSERT_EQ(tables.size(), 1u);
+    ASSERT_EQ(tables[0].methods.size(), 2u);
+    for (const auto& m : tables[0].methods) {
+        EXPECT_EQ(m.pairs, 10u) << m.method;
+        // mae_r = 1 + k over k = 0..9: mean 5.5 (by hand), for both methods.
+        EXPECT_NEAR(m.mae_r.mean, 5.5, 1e-12) << m.method;
+    }
+    const std::string caption = DescribeTable(tables[0]);
+    EXPECT_NE(caption.find("restricted to the 10 pairs every method has"), std::string::npos)
+        << caption;
+    EXPECT_NE(caption.find("icp: 30 -> 10"), std::string::npos) << caption;
+    EXPECT_NE(FormatMarkdown(tables, o).find("restricted to the 10 pairs"), std::string::npos);
+    // Methods on the same pairs need no flag and get no note.
+    const auto same = BuildTables(OnPairs("icp", 0, 4), ReportOptions{});
+    EXPECT_TRUE(same[0].subset.empty());
 }
 
 TEST(Report, DuplicateRowIsAnErrorNamingBothLines) {

@@ -1,0 +1,211 @@
+// One CLI contract (issue 26): usage errors exit 2 with one plain line before any work,
+// refusals of input exit 1, `compare` exits 1 on FAIL and 3 when it cannot tell, and `run`
+// never replaces an existing --out unless told to.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string>
+
+#include "reports/compare.hpp"
+#include "tests/testing/cli.hpp"
+
+namespace regbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+using testing::CliResult;
+using testing::RunCli;
+
+fs::path Dir() {
+    const fs::path dir = fs::temp_directory_path() / "regbench_cli_contract";
+    fs::create_directories(dir);
+    return dir;
+}
+
+std::string Slurp(const fs::path& p) {
+    std::ifstream f(p);
+    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+/// A tolerance as the docs write it (shortest form: 0.1, 0.001).
+std::string Num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+/// `n` JSONL rows of method icp on pairs 0..n-1, mae_r = 1 + k + shift (other metrics alike).
+void WriteRows(const fs::path& path, int n, double shift, const std::string& status) {
+    std::ofstream f(path);
+    for (int k = 0; k < n; ++k) {
+        const double v = 1.0 + k + shift;
+        f << "{\"pair\":" << k << ",\"method\":\"icp\",\"status\":\"" << status
+          << "\",\"data\":{\"pairs_file\":\"p.h5\"},\"metrics\":{\"mae_r\":" << v
+          << ",\"mae_t\":" << v << ",\"ccd\":" << v << ",\"rre\":" << v << ",\"rte\":" << v
+          << "}}\n";
+    }
+}
+
+/// A usage error: exit 2 and exactly one line of output that names `what`.
+void ExpectUsageError(const CliResult& r, const std::string& what) {
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_NE(r.output.find(what), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("1797693"), std::string::npos) << r.output;
+}
+
+TEST(CliContract, CompareFailsWhenEveryCandidateCallFailed) {
+    const fs::path base = Dir() / "base2.jsonl", bad = Dir() / "bad2.jsonl";
+    WriteRows(base, 2, 0.0, "ok");
+    WriteRows(bad, 2, 0.0, "failed");  // same metrics: only the status tells
+    const CliResult r = RunCli("compare " + base.string() + " " + bad.string());
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find("Verdict: FAIL"), std::string::npos) << r.output;
+    EXPECT_EQ(RunCli("compare " + base.string() + " " + bad.string() + " --allow-new-failures")
+                  .exit_code,
+              3);  // 2 pairs cannot reach p < 0.05 (2 / 2^2 = 0.5): inconclusive, never PASS
+}
+
+TEST(CliContract, CompareOnFivePairsIsInconclusive) {
+    const fs::path base = Dir() / "base5.jsonl", worse = Dir() / "worse5.jsonl";
+    WriteRows(base, 5, 0.0, "ok");
+    WriteRows(worse, 5, 5.0, "ok");
+    const CliResult r = RunCli("compare " + base.string() + " " + worse.string());
+    EXPECT_EQ(r.exit_code, 3) << r.output;
+    EXPECT_NE(r.output.find("Verdict: INCONCLUSIVE"), std::string::npos) << r.output;
+    // 50 identical pairs: every difference is zero, nothing changed: PASS.
+    WriteRows(base, 50, 0.0, "ok");
+    EXPECT_EQ(RunCli("compare " + base.string() + " " + base.string()).exit_code, 0);
+}
+
+TEST(CliContract, UsageErrorsExitTwoWithOneLine) {
+    const fs::path base = Dir() / "base_usage.jsonl";
+    WriteRows(base, 6, 0.0, "ok");
+    ExpectUsageError(RunCli("compare " + base.string() + " " + base.string() +
+                            " --tolerance mae_x=1"),
+                     "mae_x");
+    ExpectUsageError(RunCli("compare " + base.string() + " " + base.string() + " --alpha 2"),
+                     "--alpha");
+    ExpectUsageError(RunCli("run --pairs x.h5 --methods identity --out y.jsonl --jobs 0"),
+                     "--jobs");
+    ExpectUsageError(RunCli("run --pairs x.h5 --methods identity --out y.jsonl --shard 2/2"),
+                     "--shard");
+    ExpectUsageError(
+        RunCli("compare " + base.string() + " " + base.string() + " --no-such-flag"),
+        "--no-such-flag");
+    // reproduce refuses --jobs 0 before it generates any pair file.
+    const fs::path out = Dir() / "reproduce_jobs0";
+    fs::remove_all(out);
+    ExpectUsageError(RunCli("reproduce --quick --jobs 0 --out " + out.string()), "--jobs");
+    EXPECT_FALSE(fs::exists(out));
+    // An unknown dataset is a refusal of input naming every built-in name (issue 26: the
+    // message left out indoor-sim).
+    const CliResult dataset =
+        RunCli("generate --protocol partial --dataset nosuch --split test --pairs 1 --seed 1 "
+               "--out " +
+               (Dir() / "nosuch.h5").string());
+    EXPECT_EQ(dataset.exit_code, 1) << dataset.output;
+    EXPECT_NE(dataset.output.find("cgal, procedural; indoor-sim"), std::string::npos)
+        << dataset.output;
+    // A refusal of input (a missing file) is exit 1.
+    EXPECT_EQ(RunCli("compare " + (Dir() / "missing.jsonl").string() + " " + base.string())
+                  .exit_code,
+              1);
+}
+
+TEST(CliContract, RunRefusesAnExistingOutUnlessResumeOrForce) {
+    const fs::path pairs = Dir() / "pairs.h5", out = Dir() / "run.jsonl";
+    fs::remove(pairs);
+    fs::remove(out);
+    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 2 "
+                     "--seed 1 --out " +
+                     pairs.string())
+                  .exit_code,
+              0);
+    const std::string run = "run --pairs " + pairs.string() + " -q --out " + out.string();
+    ASSERT_EQ(RunCli(run + " --methods identity").exit_code, 0);
+    const std::string first = Slurp(out);
+    const CliResult again = RunCli(run + " --methods icp");
+    EXPECT_EQ(again.exit_code, 1) << again.output;
+    EXPECT_NE(again.output.find(out.string() + ": already exists"), std::string::npos)
+        << again.output;
+    EXPECT_EQ(Slurp(out), first);  // untouched
+    EXPECT_EQ(RunCli(run + " --methods identity --resume").exit_code, 0);
+    EXPECT_EQ(Slurp(out), first);  // every row resumed
+    ExpectUsageError(RunCli(run + " --methods identity --resume --force"), "--force");
+    ASSERT_EQ(RunCli(run + " --methods icp --force").exit_code, 0);
+    EXPECT_NE(Slurp(out).find("\"method\":\"icp\""), std::string::npos);
+}
+
+TEST(CliContract, CompareDefaultTolerancesAgreeInCodeHelpAndDocs) {
+    // The one source is DefaultTolerances(); --help and docs/reports.md must print its values.
+    const auto d = DefaultTolerances();
+    const std::string listed = "mae_r=" + Num(d.at("mae_r")) + ",mae_t=" + Num(d.at("mae_t")) +
+                               ",ccd=" + Num(d.at("ccd")) + ",rre=" + Num(d.at("rre")) +
+                               ",rte=" + Num(d.at("rte"));
+    const CliResult help = RunCli("compare --help");
+    EXPECT_EQ(help.exit_code, 0);
+    EXPECT_NE(help.output.find(listed), std::string::npos) << listed << "\n" << help.output;
+    EXPECT_NE(help.output.find("3 INCONCLUSIVE"), std::string::npos) << help.output;
+    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src, nullptr);
+    const std::string docs = Slurp(fs::path(src) / "docs" / "reports.md");
+    const std::string row = "| default tolerance | " + Num(d.at("mae_r")) + " | " +
+                            Num(d.at("mae_t")) + " | " + Num(d.at("ccd")) + " | " +
+                            Num(d.at("rre")) + " | " + Num(d.at("rte")) + " |";
+    EXPECT_NE(docs.find(row), std::string::npos) << row;
+    EXPECT_NE(docs.find("3 `INCONCLUSIVE`"), std::string::npos);
+}
+
+TEST(CliContract, ReportPaperInEveryFormatAndNoMixedSubsets) {
+    const fs::path pairs = Dir() / "pairs4.h5", all = Dir() / "all4.jsonl",
+                   shard = Dir() / "shard4.jsonl";
+    for (const auto& p : {pairs, all, shard}) fs::remove(p);
+    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 4 "
+                     "--seed 1 --out " +
+                     pairs.string())
+                  .exit_code,
+              0);
+    ASSERT_EQ(RunCli("run --pairs " + pairs.string() + " --methods icp -q --out " + all.string())
+                  .exit_code,
+              0);
+    ASSERT_EQ(RunCli("run --pairs " + pairs.string() + " --methods identity --shard 0/2 -q --out " +
+                     shard.string())
+                  .exit_code,
+              0);
+    const std::string paper = " --paper table1_modelnet_partial:same_category";
+    // CSV carries the paper's cells (Tab. 1 same-category ICP MAE(R) 10.333, from
+    // data/paper/ogmm_wacv2023_tables.json) and our pair count.
+    const CliResult csv = RunCli("report " + all.string() + " --format csv" + paper);
+    EXPECT_EQ(csv.exit_code, 0) << csv.output;
+    EXPECT_NE(csv.output.find("paper_table,paper_group,method,pairs,"), std::string::npos)
+        << csv.output;
+    EXPECT_NE(csv.output.find("table1_modelnet_partial,same_category,icp,4,"), std::string::npos)
+        << csv.output;
+    EXPECT_NE(csv.output.find(",10.333,"), std::string::npos) << csv.output;
+    for (const char* format : {"json", "latex", "md"}) {
+        const CliResult r = RunCli("report " + all.string() + " --format " + format + paper);
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_NE(r.output.find("10.333"), std::string::npos) << format << ": " << r.output;
+    }
+    // icp on 4 pairs and identity on 2 (shard 0/2) of one file: refused, or compared on the 2.
+    const CliResult mixed = RunCli("report " + all.string() + " " + shard.string() + paper);
+    EXPECT_EQ(mixed.exit_code, 1) << mixed.output;
+    EXPECT_NE(mixed.output.find("icp: 4"), std::string::npos) << mixed.output;
+    EXPECT_NE(mixed.output.find("identity: 2"), std::string::npos) << mixed.output;
+    const CliResult common =
+        RunCli("report " + all.string() + " " + shard.string() + paper + " --common-pairs");
+    EXPECT_EQ(common.exit_code, 0) << common.output;
+    EXPECT_NE(common.output.find("restricted to the 2 pairs every method has"), std::string::npos)
+        << common.output;
+    EXPECT_NE(common.output.find("| icp | 2 |"), std::string::npos) << common.output;
+}
+
+}  // namespace
+}  // namespace regbench
