@@ -199,9 +199,12 @@ nlohmann::json ParamSchema::Complete(const nlohmann::json& user) const {
         const nlohmann::json& value = merged.at(p.key);
         if (p.type != "integer" || !value.is_number_float()) continue;
         const double v = value.get<double>();
-        if (!std::isfinite(v) || std::trunc(v) != v) {
+        // Beyond 2^53 a float is no whole number one can name exactly, and 1e23 wrapped to
+        // -2147483648 in an int member, which the range check then reported as the value.
+        if (!std::isfinite(v) || std::trunc(v) != v || std::abs(v) > 9007199254740992.0) {
             throw std::invalid_argument(name_ + ": parameter '" + p.key +
-                                        "' must be a whole number, got " + value.dump());
+                                        "' must be a whole number (|x| <= 2^53), got " +
+                                        value.dump());
         }
     }
     // Strict choices: nlohmann's enum conversion alone would fall back to the first name.

@@ -2,6 +2,7 @@
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/io/PointCloudIO.h>
 
+#include <iostream>
 #include <stdexcept>
 #include <string>
 
@@ -12,10 +13,18 @@ namespace regbench {
 PointCloud ReadPointFileOpen3D(const std::string& path, Normals* normals) {
     open3d::geometry::PointCloud cloud;
     open3d::io::ReadPointCloudOption option;
-    option.remove_nan_points = true;
-    option.remove_infinite_points = true;
+    // Non-finite points (organized PCD scans mark missing depth with NaN) are dropped here,
+    // not by Open3D, so the user is told how many: they were dropped without a word.
+    option.remove_nan_points = false;
+    option.remove_infinite_points = false;
     if (!open3d::io::ReadPointCloud(path, cloud, option)) {
         throw std::runtime_error(path + ": cannot read point cloud (corrupt or truncated file)");
+    }
+    const std::size_t read = cloud.points_.size();
+    cloud.RemoveNonFinitePoints(true, true);
+    if (cloud.points_.size() != read) {
+        std::cerr << "regbench: warning: " << path << ": dropped " << read - cloud.points_.size()
+                  << " of " << read << " points with NaN or Inf coordinates\n";
     }
     if (cloud.points_.empty()) throw std::runtime_error(path + ": point cloud file has no points");
     const auto n = static_cast<Eigen::Index>(cloud.points_.size());

@@ -6,6 +6,7 @@
 #include <future>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -258,6 +259,25 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
 nlohmann::json ToJson(const TrainerState& s) { return s; }
 
 /// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
+/// A kill during an append leaves the metrics file's last line without its newline; the
+/// resumed run's first line would be glued onto it. Cut the file after its last newline
+/// (the lost line's epoch is validated again) and say so.
+void DropTornLastLine(const fs::path& path, std::ostream& log) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return;
+    std::string text;
+    {
+        std::ifstream in(path, std::ios::binary);
+        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    if (text.empty() || text.back() == '\n') return;
+    const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+    fs::resize_file(path, keep, ec);
+    if (ec) throw std::runtime_error(path.string() + ": cannot drop a torn last line: " + ec.message());
+    log << "train: dropped a torn last line of " << path.string() << " ("
+        << text.size() - keep << " bytes, cut by an interrupted write)\n";
+}
+
 /// Every counter is checked as written: a count must be a whole number in [0, 2^53] (a step of
 /// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
 /// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
@@ -446,6 +466,7 @@ void Trainer::Resume() {
                                  e.what());
     }
     if (state_.planned_steps <= 0) state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
+    for (const char* name : {"metrics.csv", "metrics.jsonl"}) DropTornLastLine(dir_ / name, log_);
     elapsed_before_ = state_.elapsed_seconds;
     cpu_before_ = state_.cpu_seconds;
     log_ << "train: resumed " << last.string() << " at step " << state_.step << " of "

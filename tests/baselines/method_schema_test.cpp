@@ -168,6 +168,12 @@ TEST_P(MethodSchema, IntegerKeysRefuseFractionsAndAcceptWholeFloats) {
         const nlohmann::json as_float = def.get<double>();  // e.g. 30 -> 30.0
         EXPECT_EQ(Rejection(info(), {{key, as_float}}), "") << key;
         EXPECT_EQ(info().create({{key, as_float}})->Params().at(key), def) << key;
+        // Issue 27: 1e23 wrapped to -2147483648 in an int member and was reported as that.
+        // Expected: refused with the value given (1e30 is exact enough that nlohmann prints
+        // it back as 1e+30), never a wrapped one.
+        const std::string huge = Rejection(info(), {{key, 1e30}});
+        EXPECT_TRUE(Contains(huge, "'" + key + "' must be a whole number")) << key << ": " << huge;
+        EXPECT_TRUE(Contains(huge, "got 1e+30")) << key << ": " << huge;
     }
 }
 

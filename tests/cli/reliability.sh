@@ -278,6 +278,11 @@ hostile)
     [ "$rc" -ne 0 ] && [ "$rc" -lt 128 ] || fail "$method on 1e30: exit $rc: $(cat h.out)"
     grep -q "huge.xyz" h.out && grep -q "1e15" h.out || fail "$method on 1e30: $(cat h.out)"
   done
+  # NaN points of an ASCII PLY are dropped with a count the user sees (1 of 6 here).
+  printf 'ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nnan 0 0\n1 1 1\n' >nan.ply
+  "$bin" align nan.ply small.xyz --method identity >n.out 2>&1
+  grep -q "nan.ply: dropped 1 of 6 points with NaN or Inf coordinates" n.out \
+    || fail "NaN points dropped silently: $(cat n.out)"
   # Within the limit, gicp ends with a result or a clean failure, never a signal.
   printf '0 0 0\n1 0 0\n0 1 0\n0 0 1\n1e15 1 1\n1 2 3\n' >edge.xyz
   "$bin" align edge.xyz small.xyz --method gicp >g.out 2>&1

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -114,6 +115,32 @@ TEST(Train, ResumeRefusesACheckpointWithCountersOutOfRange) {
     }
     EXPECT_NE(err.find(json.string()), std::string::npos) << err;
     EXPECT_NE(err.find("'step' is 1e+30"), std::string::npos) << err;
+    fs::remove_all(dir);
+}
+
+// Issue 27: `train --resume` appended onto a torn metrics.csv line (a kill mid-append). The
+// expected file is what an uninterrupted run writes (SameSeedGivesTheSameLossCurve: a header
+// and one line per epoch, 2 epochs here), every line with the header's number of columns.
+TEST(Train, ResumeDropsATornMetricsLine) {
+    torch::set_num_threads(1);
+    const TrainData data = testing::SyntheticData(4, 160, 2);
+    std::ostringstream log;
+    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");  // 10 steps per epoch
+    const fs::path dir = TempDir("torn");
+    TrainOptions first = Options(dir, log);
+    first.max_steps = 10;
+    Train(config, data, first);
+    std::ofstream(dir / "metrics.csv", std::ios::app) << "2,0.5,0.";  // no newline: torn
+    TrainOptions second = Options(dir, log);
+    second.resume = true;
+    Train(config, data, second);
+    std::ifstream csv(dir / "metrics.csv");
+    std::vector<std::string> lines;
+    for (std::string l; std::getline(csv, l);) lines.push_back(l);
+    ASSERT_EQ(lines.size(), 3u) << log.str();
+    const auto columns = [](const std::string& l) { return std::count(l.begin(), l.end(), ','); };
+    for (const auto& l : lines) EXPECT_EQ(columns(l), columns(lines[0])) << l;
+    EXPECT_NE(log.str().find("dropped a torn last line"), std::string::npos);
     fs::remove_all(dir);
 }
 

@@ -2,11 +2,13 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <set>
 
+#include "core/file_lock.hpp"
 #include "protocols/pair_file.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
@@ -230,6 +232,23 @@ TEST_F(ScoreTest, SlightlyNonOrthonormalFloat32OutputIsAccepted) {
     // A rotation printed with 7 significant digits (float32) is off by ~1e-7: within 1e-4.
     Write("f32.csv", "0,0.8660254,-0.5,0,0.1,0.5,0.8660254,0,0,0,0,1,0\n");
     EXPECT_EQ(ScoreTransforms(Options("f32.csv", "m")).missing, 3u);
+}
+
+// Issue 27: two `score`s on one --out both exited 0 and the last writer won. Expected: while
+// another writer holds the output lock (here an OutputLock of this process, which flock
+// treats as another holder), score is refused naming that pid and writes nothing.
+TEST_F(ScoreTest, SecondWriterOfTheOutputIsRefused) {
+    Write("t.jsonl", "{\"pair\": 0, \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}\n");
+    const ScoreOptions o = Options("t.jsonl", "mine");
+    const OutputLock holder(o.out_path);
+    std::string err;
+    try {
+        ScoreTransforms(o);
+    } catch (const std::exception& e) {
+        err = e.what();
+    }
+    EXPECT_NE(err.find("pid " + std::to_string(::getpid())), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(o.out_path));
 }
 
 }  // namespace
