@@ -183,7 +183,8 @@ TEST_F(Reliability, ResumeRefusesRowsOfOtherTimeoutThreadsDownsamplingGroundTrut
     expect_refused(plain, FinishedLines(threaded)[0], "--threads");
 
     RunOptions reduced = Options("d.jsonl", pairs_);
-    reduced.methods = ParseMethodSpecs("icp,cpd", {});
+    // CPD's dense E-step is the guarded kind (its default, auto, approximates at scale).
+    reduced.methods = ParseMethodSpecs("icp,cpd", {{"cpd", {{"e_step", "dense"}}}});
     reduced.max_points = 30;  // the fixture's clouds have 40 points: cpd runs on 30
     reduced.downsample = true;
     const auto reduced_lines = FinishedLines(reduced);
