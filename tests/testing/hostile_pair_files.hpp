@@ -117,7 +117,7 @@ inline std::vector<HostileCase> HostileCases() {
          }},
         {"missing_group", "num_pairs", [](hid_t f) { H5Ldelete(f, "/pairs/000001", H5P_DEFAULT); }},
         // Issue 27: these ended in a bare [json.exception.type_error.316/302] naming nothing.
-        {"shape_not_utf8", "attribute 'shape' is not valid UTF-8", SetPairString("shape", "a\xFFb")},
+        {"shape_not_utf8", "attribute 'shape' is not valid UTF-8", SetPairString("shape", "a\xFF" "b")},
         {"category_not_utf8", "attribute 'category' is not valid UTF-8",
          SetPairString("category", "\xC3")},
         {"provenance_not_utf8", "attribute 'provenance' is not valid UTF-8",
