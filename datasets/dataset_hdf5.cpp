@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -43,6 +44,15 @@ hid_t NativeType<int>() {
     return H5T_NATIVE_INT;
 }
 
+std::string ShapeString(const std::vector<hsize_t>& dims) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < dims.size(); ++i) s += (i ? ", " : "") + std::to_string(dims[i]);
+    return s + "]";
+}
+
+/// Largest dataset a file may declare: 4 GiB, 80x the largest file of the ModelNet40 release.
+constexpr hsize_t kMaxDatasetBytes = hsize_t{4} << 30;
+
 class H5File {
 public:
     explicit H5File(const std::string& path)
@@ -68,9 +78,26 @@ public:
         Array<T> a;
         a.dims.resize(static_cast<std::size_t>(rank));
         H5Sget_simple_extent_dims(space.get(), a.dims.data(), nullptr);
+        // A tiny file can declare any shape (its storage allocated late or compressed): the
+        // declared size is checked before anything is allocated for it.
         hsize_t count = 1;
-        for (hsize_t d : a.dims) count *= d;
-        a.values.resize(count);
+        bool too_large = false;
+        for (hsize_t d : a.dims) {
+            too_large = too_large || (d != 0 && count > kMaxDatasetBytes / sizeof(T) / d);
+            count *= d;
+        }
+        if (too_large || count > kMaxDatasetBytes / sizeof(T)) {
+            throw std::runtime_error(where + " declares shape " + ShapeString(a.dims) +
+                                     ", more than the " +
+                                     std::to_string(kMaxDatasetBytes >> 30) +
+                                     " GiB a dataset may hold (a ModelNet40 file holds 50 MB)");
+        }
+        try {
+            a.values.resize(count);
+        } catch (const std::bad_alloc&) {
+            throw std::runtime_error(where + " declares shape " + ShapeString(a.dims) +
+                                     ", which does not fit in memory");
+        }
         if (count > 0 && H5Dread(ds.get(), NativeType<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT,
                                  a.values.data()) < 0) {
             throw std::runtime_error(where + " cannot be read (corrupt or truncated file?)");
@@ -83,12 +110,6 @@ private:
     std::string path_;
     H5Id file_;
 };
-
-std::string ShapeString(const std::vector<hsize_t>& dims) {
-    std::string s = "[";
-    for (std::size_t i = 0; i < dims.size(); ++i) s += (i ? ", " : "") + std::to_string(dims[i]);
-    return s + "]";
-}
 
 /// Checks a cloud array is [S, P, 3] (P >= 1) and returns S.
 std::size_t RequireClouds(const Array<float>& a, const std::string& path, const std::string& name) {

@@ -48,7 +48,10 @@ inline std::string WriteH5(const std::filesystem::path& path, const std::vector<
             H5Screate_simple(static_cast<int>(d.dims.size()), d.dims.data(), nullptr);
         const hid_t ds = H5Dcreate2(file, d.name.c_str(), d.file_type, space, H5P_DEFAULT,
                                     H5P_DEFAULT, H5P_DEFAULT);
-        H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, d.values.data());
+        // No values: the dataset keeps only its declared shape (storage allocated late).
+        if (!d.values.empty()) {
+            H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, d.values.data());
+        }
         H5Dclose(ds);
         H5Sclose(space);
     }
