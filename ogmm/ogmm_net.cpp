@@ -251,8 +251,9 @@ REGBENCH_SIMD_CLONES void SinkhornColumns(const double* cost,
     for (long j = 0; j < J; ++j) v[j] = epsilon * (log_q - (column_max[j] + std::log(column_sum[j])));
 }
 
-// gamma_ij = Gamma_ij / max(sum_j Gamma_ij, 1e-3), Gamma_ij = exp((u_i + v_j - C_ij) / eps)
-// with non-finite values set to 0 (the code's nan_to_num).
+// gamma_ij = Gamma_ij / max(sum_j Gamma_ij, 1e-3), Gamma_ij = exp((u_i + v_j - C_ij) / eps),
+// the exponent capped at 700 so that finite inputs give a finite plan (what the tensor path's
+// nan_to_num guards against cannot arise here).
 REGBENCH_SIMD_CLONES void SinkhornPlanRows(const double* cost,
                                            const double* u,
                                            const double* v,
