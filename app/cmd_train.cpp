@@ -15,6 +15,7 @@
 #include "app/commands.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
+#include "core/file_lock.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
@@ -242,6 +243,9 @@ void Run(const TrainArgs& a, const std::string& command_line) {
             "train: --model is required (known: deepgmr, deepgmr-small, "
             "deepgmr-orig, deepgmr-orig-xyz, ogmm, ogmm-small, ogmm-tiny)");
     }
+    // One writer per run directory (OUT.lock beside it), taken before the data are built: a
+    // second train (or any regbench writer) on the same --out is refused naming the pid.
+    const OutputLock lock(a.out);
     const ogmm::TrainData data = MakeData(a);
     if (a.ablation.empty()) {
         RunOne(a, command_line, BuildConfig(a, a.model, nlohmann::json::object()), data, a.out);

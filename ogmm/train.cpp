@@ -1,7 +1,12 @@
 #include "ogmm/train.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <csignal>
 #include <future>
 #include <filesystem>
@@ -13,7 +18,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/atomic_file.hpp"
 #include "core/cpu_time.hpp"
+#include "core/file_lock.hpp"
 #include "core/metrics.hpp"
 #include "core/options.hpp"
 #include "ogmm/checkpoint.hpp"
@@ -262,9 +269,34 @@ nlohmann::json ToJson(const TrainerState& s) { return s; }
 /// A kill during an append leaves the metrics file's last line without its newline; the
 /// resumed run's first line would be glued onto it. Cut the file after its last newline
 /// (the lost line's epoch is validated again) and say so.
+/// Appends `text` to `path` (created when absent; emptied first when `truncate`) with checked
+/// writes. Never through a link: a symbolic or hard link pre-placed at metrics.csv made a fresh
+/// run truncate the file it pointed to. Throws naming the file (ENOSPC, EFBIG, a link).
+void WriteMetricsFile(const fs::path& path, const std::string& text, bool truncate) {
+    RequireRegularOrAbsent(path.string(), "metrics file");
+    const int fd = ::open(path.c_str(),
+                          O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC |
+                              (truncate ? O_TRUNC : 0),
+                          0644);
+    if (fd < 0) {
+        throw std::runtime_error(path.string() + ": cannot open metrics file: " +
+                                 std::strerror(errno));
+    }
+    try {
+        WriteAllOrThrow(fd, text, path.string());
+    } catch (...) {
+        ::close(fd);
+        throw;
+    }
+    if (::close(fd) != 0) {
+        throw std::runtime_error(path.string() + ": write failed: " + std::strerror(errno));
+    }
+}
+
 void DropTornLastLine(const fs::path& path, std::ostream& log) {
     std::error_code ec;
-    if (!fs::exists(path, ec)) return;
+    if (!fs::exists(fs::symlink_status(path, ec))) return;
+    RequireRegularOrAbsent(path.string(), "metrics file");
     std::string text;
     {
         std::ifstream in(path, std::ios::binary);
@@ -334,9 +366,8 @@ std::string CsvLine(const EpochMetrics& m, bool header) {
 }
 
 void AppendMetrics(const fs::path& dir, const EpochMetrics& m) {
-    std::ofstream(dir / "metrics.csv", std::ios::app) << CsvLine(m, /*header=*/false);
-    std::ofstream jsonl(dir / "metrics.jsonl", std::ios::app);
-    jsonl << ToJson(m).dump() << "\n";
+    WriteMetricsFile(dir / "metrics.csv", CsvLine(m, /*header=*/false), /*truncate=*/false);
+    WriteMetricsFile(dir / "metrics.jsonl", ToJson(m).dump() + "\n", /*truncate=*/false);
 }
 
 /// Set by SIGINT / SIGTERM while a Trainer runs: the run ends after the current step with a
@@ -445,8 +476,8 @@ void Trainer::Start() {
                                  " already holds a run (last/); pass --resume or another --out");
     }
     fs::create_directories(dir_);
-    std::ofstream(dir_ / "metrics.csv") << CsvLine({}, /*header=*/true);
-    std::ofstream(dir_ / "metrics.jsonl");
+    WriteMetricsFile(dir_ / "metrics.csv", CsvLine({}, /*header=*/true), /*truncate=*/true);
+    WriteMetricsFile(dir_ / "metrics.jsonl", "", /*truncate=*/true);
     state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
 }
 

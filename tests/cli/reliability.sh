@@ -11,9 +11,10 @@
 #               a non-empty folder is refused
 #   links       a symbolic or hard link pre-placed at OUT.lock or OUT.part is refused naming
 #               the path, and the file it points to keeps its bytes
-#   writers     compare --json / import --out onto one of their inputs are refused; score,
-#               report --out, generate, compare --json and align --out beside a running `run`
-#               on the same path are refused naming its pid
+#   writers     compare --json, import, score, merge and report --out onto one of their inputs
+#               are refused and the input keeps its bytes; score, report --out, generate,
+#               compare --json, merge, export, import, reproduce and train beside a running
+#               `run` on the same path are refused naming its pid
 #   xfsz        a file-size limit without the caller ignoring SIGXFSZ: every writer ends with
 #               a message naming the file, no signal, nothing at the final path, no temporary
 #   usage       numeric flags that would switch a check off (NaN, negative, zero) and unknown
@@ -178,10 +179,29 @@ writers)
   "$bin" import --xyz-dir xyz --out "$victim" 2>e2 && fail "import --out onto an input accepted"
   grep -q "same file as the input" e2 || fail "message: $(cat e2)"
   cmp -s "$victim" victim.before || fail "import replaced its input"
-  # Every writer beside a running `run` on the same path is refused naming its pid.
+  # score, merge and report with --out equal to one of their inputs: refused, input unchanged.
   for k in 0 1 2 3 4 5 6 7; do
     echo "{\"pair\": $k, \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"
   done >T.jsonl
+  cp T.jsonl T.before
+  cp pairs.h5 pairs.before
+  onto_input() {  # onto_input NAME FILE BEFORE CMD...: CMD must be refused and FILE unchanged
+    local name="$1" file="$2" before="$3"
+    shift 3
+    "$@" >"$name.out" 2>&1 && fail "$name onto its input $file accepted"
+    grep -q "same file as the input" "$name.out" || fail "$name: $(cat "$name.out")"
+    cmp -s "$file" "$before" || fail "$name replaced its input $file"
+  }
+  onto_input score-transforms T.jsonl T.before "$bin" score --pairs pairs.h5 --transforms T.jsonl \
+    --method ext --out T.jsonl
+  onto_input score-pairs pairs.h5 pairs.before "$bin" score --pairs pairs.h5 \
+    --transforms T.jsonl --method ext --out pairs.h5
+  onto_input merge base.jsonl base.before "$bin" merge base.jsonl --pairs pairs.h5 \
+    --methods identity --out base.jsonl
+  onto_input merge-pairs pairs.h5 pairs.before "$bin" merge base.jsonl --pairs pairs.h5 \
+    --methods identity --out pairs.h5
+  onto_input report base.jsonl base.before "$bin" report base.jsonl --out base.jsonl
+  # Every writer beside a running `run` on the same path is refused naming its pid.
   "$bin" run --pairs pairs.h5 --methods cpd --params "$slow" --out busy.jsonl -q 2>first.err &
   first=$!
   wait_for_rows busy.jsonl.part 1
@@ -197,6 +217,14 @@ writers)
   refused compare "$bin" compare base.jsonl base.jsonl --json busy.jsonl
   refused generate "$bin" generate --protocol partial --dataset procedural --split test \
     --pairs 2 --seed 1 --out busy.jsonl
+  refused merge "$bin" merge base.jsonl --pairs pairs.h5 --methods identity --out busy.jsonl
+  refused export "$bin" export pairs.h5 --out busy.jsonl
+  refused import "$bin" import --xyz-dir xyz --out busy.jsonl
+  refused reproduce "$bin" reproduce --quick --tables table1 --out busy.jsonl
+  [ ! -e busy.jsonl ] || { kill -CONT "$first"; fail "a refused writer created busy.jsonl"; }
+  if "$bin" train --help >/dev/null 2>&1; then
+    refused train "$bin" train --model ogmm-tiny --max-steps 1 --out busy.jsonl
+  fi
   kill -CONT "$first"
   wait "$first" || fail "first run failed: $(cat first.err)"
   grep -c '"method":"cpd"' busy.jsonl | grep -qx 8 || fail "the run's result was replaced"
