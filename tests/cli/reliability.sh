@@ -20,7 +20,8 @@
 #   usage       numeric flags that would switch a check off (NaN, negative, zero) and unknown
 #               metric names: exit 2 and one line naming the flag and the value
 #   hostile     JSON nested 1M levels deep (compare), coordinates of 1e30 (align gicp):
-#               refused naming the file, never a signal
+#               refused naming the file, never a signal; NaN points of a PLY dropped with a
+#               count, or refused with --nan-points refuse
 set -uo pipefail
 bin="$1"
 scenario="$2"
@@ -311,6 +312,10 @@ hostile)
   "$bin" align nan.ply small.xyz --method identity >n.out 2>&1
   grep -q "nan.ply: dropped 1 of 6 points with NaN or Inf coordinates" n.out \
     || fail "NaN points dropped silently: $(cat n.out)"
+  "$bin" align nan.ply small.xyz --method identity --nan-points refuse >n2.out 2>&1 \
+    && fail "--nan-points refuse accepted a NaN point: $(cat n2.out)"
+  grep -q "nan.ply: 1 of 6 points have NaN or Inf coordinates" n2.out \
+    || fail "--nan-points refuse: $(cat n2.out)"
   # Within the limit, gicp ends with a result or a clean failure, never a signal.
   printf '0 0 0\n1 0 0\n0 1 0\n0 0 1\n1e15 1 1\n1 2 3\n' >edge.xyz
   "$bin" align edge.xyz small.xyz --method gicp >g.out 2>&1
