@@ -24,6 +24,7 @@
 #include "core/metrics.hpp"
 #include "core/options.hpp"
 #include "ogmm/checkpoint.hpp"
+#include "ogmm/checkpoint_json.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::ogmm {
@@ -265,10 +266,6 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
 /// Infinite bests (nothing validated yet) are written as null, JSON having no infinity.
 nlohmann::json ToJson(const TrainerState& s) { return s; }
 
-/// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
-/// A kill during an append leaves the metrics file's last line without its newline; the
-/// resumed run's first line would be glued onto it. Cut the file after its last newline
-/// (the lost line's epoch is validated again) and say so.
 /// Appends `text` to `path` (created when absent; emptied first when `truncate`) with checked
 /// writes. Never through a link: a symbolic or hard link pre-placed at metrics.csv made a fresh
 /// run truncate the file it pointed to. Throws naming the file (ENOSPC, EFBIG, a link).
@@ -293,6 +290,10 @@ void WriteMetricsFile(const fs::path& path, const std::string& text, bool trunca
     }
 }
 
+/// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
+/// A kill during an append leaves the metrics file's last line without its newline; the
+/// resumed run's first line would be glued onto it. Cut the file after its last newline
+/// (the lost line's epoch is validated again) and say so.
 void DropTornLastLine(const fs::path& path, std::ostream& log) {
     std::error_code ec;
     if (!fs::exists(fs::symlink_status(path, ec))) return;
@@ -314,37 +315,8 @@ void DropTornLastLine(const fs::path& path, std::ostream& log) {
 /// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
 /// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
 TrainerState TrainerStateFromJson(nlohmann::json j) {
-    if (!j.is_object()) throw std::invalid_argument("trainer state is not an object");
-    if (!j.contains("step")) throw std::invalid_argument("trainer state: no 'step'");
+    CheckTrainerStateJson(j);  // ogmm/checkpoint_json.cpp: every counter, named when refused
     for (auto it = j.begin(); it != j.end();) it = it->is_null() ? j.erase(it) : std::next(it);
-    const auto bad = [&](const std::string& key, const std::string& need) {
-        throw std::invalid_argument("trainer state: '" + key + "' is " + j.at(key).dump() +
-                                    ", expected " + need);
-    };
-    for (const char* key :
-         {"step", "planned_steps", "pairs_seen", "plateau_bad", "epoch_loss_steps"}) {
-        if (!j.contains(key)) continue;
-        const nlohmann::json& v = j.at(key);
-        if (!v.is_number_integer() || (v.is_number_unsigned() ? v.get<std::uint64_t>() > (1ULL << 53)
-                                                              : v.get<std::int64_t>() < 0)) {
-            bad(key, "a whole number in [0, 2^53]");
-        }
-    }
-    if (j.contains("plateau_bad") && j.at("plateau_bad").get<std::int64_t>() > 1000000000) {
-        bad("plateau_bad", "a whole number in [0, 1e9]");
-    }
-    for (const char* key : {"lr", "elapsed_seconds", "cpu_seconds", "plateau_scale"}) {
-        if (!j.contains(key)) continue;
-        const nlohmann::json& v = j.at(key);
-        if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0) {
-            bad(key, "a finite number >= 0");
-        }
-    }
-    for (const char* key : {"best_mae_r", "plateau_best", "epoch_loss_sum"}) {
-        if (j.contains(key) && (!j.at(key).is_number() || !std::isfinite(j.at(key).get<double>()))) {
-            bad(key, "a finite number (or null)");
-        }
-    }
     return j.get<TrainerState>();
 }
 

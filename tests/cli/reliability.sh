@@ -21,7 +21,8 @@
 #               metric names: exit 2 and one line naming the flag and the value
 #   hostile     JSON nested 1M levels deep (compare), coordinates of 1e30 (align gicp):
 #               refused naming the file, never a signal; NaN points of a PLY dropped with a
-#               count, or refused with --nan-points refuse
+#               count, or refused with --nan-points refuse; train --config nested 1M deep or
+#               not an object refused naming the file
 set -uo pipefail
 bin="$1"
 scenario="$2"
@@ -321,6 +322,18 @@ hostile)
   "$bin" align edge.xyz small.xyz --method gicp >g.out 2>&1
   rc=$?
   [ "$rc" -lt 128 ] || fail "gicp at the limit died by signal $((rc - 128)): $(cat g.out)"
+  if "$bin" train --help >/dev/null 2>&1; then
+    # train --config nested 1M levels deep died by SIGSEGV; an array was silently ignored.
+    python3 -c 'print("{\"a\":" * 1000000 + "1" + "}" * 1000000)' >deep_config.json
+    echo '[1, 2]' >array_config.json
+    for config in deep_config.json array_config.json; do
+      "$bin" train --model ogmm-tiny --config "$config" --out "t_$config" --max-steps 1 >t.out 2>&1
+      rc=$?
+      [ "$rc" -ne 0 ] && [ "$rc" -lt 128 ] || fail "train --config $config: exit $rc: $(tail -c 300 t.out)"
+      grep -q "$config" t.out || fail "train --config $config: file not named: $(tail -c 300 t.out)"
+      [ ! -e "t_$config" ] || fail "train --config $config: trained anyway"
+    done
+  fi
   "$bin" generate --protocol partial --dataset procedural --split test --pairs 2 --seed 1 \
     --max-translation 1e30 --out far.h5 >/dev/null 2>g2.out && fail "generate 1e30 accepted"
   grep -q "max_translation" g2.out || fail "generate message: $(cat g2.out)"
