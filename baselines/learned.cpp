@@ -17,6 +17,7 @@
 #include "core/data_dir.hpp"
 #include "core/options.hpp"
 #include "ogmm/checkpoint.hpp"
+#include "ogmm/checkpoint_json.hpp"
 
 namespace regbench {
 
@@ -192,9 +193,7 @@ void CheckCheckpoint(const std::string& name, const std::string& dir) {
     } catch (const std::exception& e) {
         throw std::invalid_argument(name + ": " + e.what());
     }
-    const nlohmann::json& config = j.contains("config") ? j["config"] : nlohmann::json::object();
-    const std::string arch =
-        config.is_object() ? config.value("arch", std::string("ogmm")) : std::string("ogmm");
+    const std::string arch = ogmm::CheckpointArch(j);  // config.arch, checked a string
     const std::string family = name.rfind("deepgmr", 0) == 0 ? "deepgmr" : "ogmm";
     if (arch != family) {
         throw std::invalid_argument(name + ": checkpoint " + dir + " holds a " + arch +
