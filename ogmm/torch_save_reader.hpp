@@ -10,13 +10,16 @@
 // torch.*Storage). Anything else (a pickled class, a TorchScript archive, a truncated or
 // corrupt file) is refused with a std::runtime_error naming the file; it never executes code.
 // Objects live in one arena (indices, no owning pointers), so hostile nesting cannot overflow
-// the stack. Also a SHA-256 of a file, and a zip-format writer of a state dict.
+// the stack. Also a zip-format writer of a
+// state dict.
 #include <torch/torch.h>
 
 #include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "core/sha256.hpp"
 
 namespace regbench::ogmm {
 
@@ -39,8 +42,7 @@ TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string
 /// contiguous CPU tensors.
 std::string WriteTorchSaveZip(const StateDict& tensors);
 
-/// Lower-case hex SHA-256 of a file's bytes / of bytes. Throws naming the file when unreadable.
-std::string Sha256File(const std::string& path);
-std::string Sha256Hex(const std::string& bytes);
+using regbench::Sha256File;
+using regbench::Sha256Hex;
 
 }  // namespace regbench::ogmm
