@@ -250,3 +250,33 @@ TEST_F(AuthorsCheckpoint, LegacyAndZipReadToTheSameTensors) {
 
 }  // namespace
 }  // namespace regbench::ogmm
+
+namespace regbench::ogmm {
+namespace {
+
+// The fuzz seeds (fuzz/corpus/torch_save, written by python3-torch as noted in
+// docs/learned-methods.md): a state dict wrapped under "state_dict" holding a transposed
+// (non-contiguous) view, and a legacy file holding a view at storage offset 1. Expected values
+// are what torch gave when it wrote them: arange(4).view(2, 2).t() and arange(6)[1:4].
+TEST(TorchSaveReader, ViewsOffsetsAndWrappersReadAsTorchWroteThem) {
+    const std::string dir = std::string(std::getenv("REGBENCH_SOURCE_DIR") != nullptr
+                                            ? std::getenv("REGBENCH_SOURCE_DIR")
+                                            : ".") +
+                            "/fuzz/corpus/torch_save/";
+    const TorchSaveContents w = ReadTorchSaveFile(dir + "wrapped_strided_zip.pth");
+    EXPECT_EQ(w.wrapper, "state_dict");
+    ASSERT_EQ(w.tensors.size(), 1u);
+    EXPECT_TRUE(torch::equal(w.tensors[0].second, torch::tensor({{0.0f, 2.0f}, {1.0f, 3.0f}})));
+    const TorchSaveContents o = ReadTorchSaveFile(dir + "offset_legacy.pth");
+    EXPECT_EQ(o.format, "legacy");
+    ASSERT_EQ(o.tensors.size(), 1u);
+    EXPECT_TRUE(torch::equal(o.tensors[0].second, torch::tensor({1, 2, 3}, torch::kLong)));
+    const TorchSaveContents b = ReadTorchSaveFile(dir + "bn_legacy.pth");
+    ASSERT_EQ(b.tensors.size(), 6u);  // conv weight, BN weight, bias, 3 buffers
+    EXPECT_EQ(b.tensors[5].first, "1.num_batches_tracked");
+    const std::string e = ErrorOf([&] { ReadTorchSaveFile(dir + "plain.pickle"); });
+    EXPECT_NE(e.find("plain.pickle"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace regbench::ogmm
