@@ -8,12 +8,12 @@
 #include <cmath>
 #include <cstring>
 #include <csignal>
-#include <future>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
+#include <future>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -22,7 +22,7 @@
 #include "core/cpu_time.hpp"
 #include "core/file_lock.hpp"
 #include "core/metrics.hpp"
-#include "core/options.hpp"
+#include "core/params.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/checkpoint_json.hpp"
 #include "ogmm/zoo.hpp"
@@ -46,7 +46,7 @@ nlohmann::json ToJson(const TrainConfig& c) { return c; }
 
 TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
     // Unknown keys (a misspelt key in a recipe) and wrong types are errors naming the key.
-    const auto c = ParseOptions<TrainConfig>(j, "train config");
+    const auto c = ParseConfig<TrainConfig>(j, "train config");
     if (c.lr <= 0 || c.batch < 1 || c.epochs < 1 || c.pairs_per_epoch < c.batch) {
         throw std::invalid_argument(
             "train config: need lr > 0, batch >= 1, epochs >= 1 and "
@@ -306,9 +306,10 @@ void DropTornLastLine(const fs::path& path, std::ostream& log) {
     if (text.empty() || text.back() == '\n') return;
     const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
     fs::resize_file(path, keep, ec);
-    if (ec) throw std::runtime_error(path.string() + ": cannot drop a torn last line: " + ec.message());
-    log << "train: dropped a torn last line of " << path.string() << " ("
-        << text.size() - keep << " bytes, cut by an interrupted write)\n";
+    if (ec)
+        throw std::runtime_error(path.string() + ": cannot drop a torn last line: " + ec.message());
+    log << "train: dropped a torn last line of " << path.string() << " (" << text.size() - keep
+        << " bytes, cut by an interrupted write)\n";
 }
 
 /// Every counter is checked as written: a count must be a whole number in [0, 2^53] (a step of
@@ -455,7 +456,8 @@ void Trainer::Start() {
 
 void Trainer::Resume() {
     const fs::path last = dir_ / "last";
-    if (!fs::exists(last)) throw std::runtime_error("--resume: " + last.string() + " does not exist");
+    if (!fs::exists(last))
+        throw std::runtime_error("--resume: " + last.string() + " does not exist");
     const nlohmann::json j = LoadCheckpoint(last.string(), *net_, opt_.get());
     if (j.contains("config") && j.at("config").value("train", nlohmann::json()) !=
                                     config_.value("train", nlohmann::json())) {
@@ -490,7 +492,8 @@ double Trainer::LearningRate() const {
     if (recipe_.schedule == "multistep") {
         double lr = recipe_.lr;
         const double progress =
-            static_cast<double>(state_.step) / static_cast<double>(std::max<std::int64_t>(1, state_.planned_steps));
+            static_cast<double>(state_.step) /
+            static_cast<double>(std::max<std::int64_t>(1, state_.planned_steps));
         for (double m : recipe_.milestones) {
             if (progress >= m) lr *= recipe_.lr_gamma;
         }
@@ -515,9 +518,8 @@ void Trainer::PlanForBudget() {
     if (fit < state_.planned_steps) {
         state_.planned_steps = std::max(fit, kPlanningSteps + 1);
         log_ << "train: LR schedule planned over " << state_.planned_steps
-             << " steps, what fits the " << options_.minutes << "-minute budget at "
-             << per_step << " s a step (the recipe has "
-             << steps_per_epoch_ * recipe_.epochs << ")\n";
+             << " steps, what fits the " << options_.minutes << "-minute budget at " << per_step
+             << " s a step (the recipe has " << steps_per_epoch_ * recipe_.epochs << ")\n";
     }
 }
 
@@ -625,9 +627,10 @@ void Trainer::EndEpoch() {
     AppendMetrics(dir_, m);
     summary_.epochs.push_back(m);
     log_ << "train: validation epoch " << m.epoch << " step " << m.step << ": loss " << m.val_loss
-         << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t "
-         << m.mae_t << ", ccd " << m.ccd << ", recall " << m.recall;
-    if (options_.refine) log_ << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
+         << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t " << m.mae_t
+         << ", ccd " << m.ccd << ", recall " << m.recall;
+    if (options_.refine)
+        log_ << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
     if (!data_.validation.empty() && m.mae_r >= m.identity_mae_r) {
         log_ << "; WORSE THAN THE IDENTITY (network alone)";
     }
@@ -705,10 +708,10 @@ std::vector<Transform> Predict(RegistrationNet& net,
     std::vector<Transform> out;
     for (std::size_t start = 0; start < samples.size(); start += static_cast<std::size_t>(batch)) {
         const std::size_t end = std::min(samples.size(), start + static_cast<std::size_t>(batch));
-        const PairBatch b = Collate(
-            std::vector<TrainSample>(samples.begin() + static_cast<std::ptrdiff_t>(start),
-                                     samples.begin() + static_cast<std::ptrdiff_t>(end)),
-            device);
+        const PairBatch b =
+            Collate(std::vector<TrainSample>(samples.begin() + static_cast<std::ptrdiff_t>(start),
+                                             samples.begin() + static_cast<std::ptrdiff_t>(end)),
+                    device);
         const NetOutput o = net.Forward(b);
         for (int64_t i = 0; i < o.T.size(0); ++i) out.push_back(ToTransform(o.T[i]));
     }
