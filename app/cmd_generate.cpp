@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -14,6 +15,7 @@
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
+#include "core/sha256.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
@@ -152,6 +154,11 @@ void SetupGenerateCommand(CLI::App* cmd) {
         }
         request.extra_provenance = {{"regbench_version", RegbenchVersion()},
                                     {"git_sha", RegbenchGitSha()}};
+        // A dataset given as one file (DeepGMR's test .h5, a ModelNet40 .h5): its content hash
+        // goes into the pair file and every report caption.
+        if (std::filesystem::is_regular_file(request.dataset)) {
+            request.extra_provenance["dataset_sha256"] = Sha256File(request.dataset);
+        }
         DatasetOptions dataset_options;
         dataset_options.data_dir = a->data_dir;
         GenerateToFile(

@@ -450,10 +450,8 @@ std::string DefaultSplit(const std::string& name_or_path) {
     const fs::path path(name_or_path);
     std::error_code ec;
     if (!fs::exists(path, ec)) return "test";  // named datasets (cgal, procedural, indoor-sim)
-    if (fs::is_regular_file(path)) {
-        const std::string ext = LowerExtension(path);
-        return ext == ".h5" || ext == ".hdf5" ? "test" : "all";
-    }
+    // A single file (a ModelNet40 .h5, a DeepGMR test file, a point file) has only "all".
+    if (fs::is_regular_file(path)) return "all";
     return DetectLayout(path) ? "test" : "all";  // a folder of point files has no splits
 }
 

@@ -82,6 +82,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DeepGmrConfig,
                                                 features,
                                                 clusters,
                                                 rri_k,
+                                                d_model,
                                                 rri_variant,
                                                 emb_dims,
                                                 dgcnn_k,
@@ -90,6 +91,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DeepGmrConfig,
 
 nlohmann::json ToJson(const DeepGmrConfig& c) {
     nlohmann::json j = c;
+    if (c.d_model == 1024) j.erase("d_model");
     j["arch"] = "deepgmr";
     return j;
 }
@@ -103,9 +105,10 @@ DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
         fields.erase("arch");
     }
     const auto c = ParseOptions<DeepGmrConfig>(fields, "deepgmr config");
-    if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1) {
+    if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1 ||
+        c.d_model < 1) {
         throw std::invalid_argument(
-            "deepgmr config: clusters, rri_k, emb_dims, dgcnn_k, head_hidden "
+            "deepgmr config: clusters, rri_k, d_model, emb_dims, dgcnn_k, head_hidden "
             "must be positive (rri_k >= 2): " +
             ToJson(c).dump());
     }
@@ -122,8 +125,9 @@ DeepGmrNet::DeepGmrNet(const DeepGmrConfig& config) : config_(config) {
     const int d_in = config_.features == DeepGmrFeatures::kRri ? 4 * config_.rri_k : 3;
     // Module tree backbone.{encoder,decoder}.* mirrors the original's state-dict keys.
     auto backbone = register_module("backbone", std::make_shared<torch::nn::Module>());
-    encoder_ = torch::nn::Sequential(Cbr(d_in, 64), Cbr(64, 128), Cbr(128, 256), Cbr(256, 1024));
-    decoder_ = torch::nn::Sequential(Cbr(2048, 512), Cbr(512, 256), Cbr(256, 128),
+    const int d = config_.d_model;
+    encoder_ = torch::nn::Sequential(Cbr(d_in, 64), Cbr(64, 128), Cbr(128, 256), Cbr(256, d));
+    decoder_ = torch::nn::Sequential(Cbr(2 * d, 512), Cbr(512, 256), Cbr(256, 128),
                                      torch::nn::Conv1d(torch::nn::Conv1dOptions(128, J, 1)));
     backbone->register_module("encoder", encoder_);
     backbone->register_module("decoder", decoder_);
@@ -140,7 +144,7 @@ torch::Tensor DeepGmrNet::Assign(const torch::Tensor& xyz) {
         } else {
             input = (xyz - xyz.mean(1, true)).transpose(1, 2).contiguous();
         }
-        const torch::Tensor local = encoder_->forward(input);  // [B, 1024, N]
+        const torch::Tensor local = encoder_->forward(input);  // [B, d_model, N]
         const torch::Tensor global = std::get<0>(local.max(2, true)).expand_as(local);
         logits = decoder_->forward(torch::cat({local, global}, 1));
     }

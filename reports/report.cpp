@@ -270,8 +270,10 @@ std::vector<MethodSummary> Summarize(const std::vector<ResultRow>& rows, const R
 
 std::string DescribeTable(const ReportTable& t) {
     const DataTag& d = t.data;
-    std::string out = fmt::format("dataset `{}`, protocol `{}`, pairing `{}`, seed {}, file `{}`",
-                                  d.dataset, d.protocol, d.pairing, d.seed.dump(), d.pairs_file);
+    std::string out = fmt::format("dataset `{}`", d.dataset);
+    if (!d.dataset_sha256.empty()) out += fmt::format(" (sha256 {})", d.dataset_sha256);
+    out += fmt::format(", protocol `{}`, pairing `{}`, seed {}, file `{}`", d.protocol, d.pairing,
+                       d.seed.dump(), d.pairs_file);
     if (!d.content_hash.empty()) out += fmt::format(" (content {})", d.content_hash);
     out += fmt::format("; mae_r/rmse_r: scipy as_euler('{}')", ToString(t.euler));
     if (t.euler == EulerConvention::kZyx) out += ", the paper's convention";

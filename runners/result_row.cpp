@@ -113,6 +113,7 @@ void to_json(nlohmann::json& j, const DataTag& d) {
          {"pairing", d.pairing},
          {"seed", d.seed}};
     if (!d.content_hash.empty()) j["content_hash"] = d.content_hash;
+    if (!d.dataset_sha256.empty()) j["dataset_sha256"] = d.dataset_sha256;
 }
 
 void from_json(const nlohmann::json& j, DataTag& d) {
@@ -122,6 +123,7 @@ void from_json(const nlohmann::json& j, DataTag& d) {
     d.pairing = j.value("pairing", "unknown");
     d.seed = j.value("seed", nlohmann::json());
     d.content_hash = j.value("content_hash", "");
+    d.dataset_sha256 = j.value("dataset_sha256", "");
 }
 
 nlohmann::json TransformToJson(const Transform& T) {

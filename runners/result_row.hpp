@@ -36,6 +36,7 @@ struct DataTag {
     std::string pairing = "unknown";
     nlohmann::json seed;       ///< generation seed (null when unknown)
     std::string content_hash;  ///< hash of the pair file's arrays; empty in old rows
+    std::string dataset_sha256;  ///< sha256 of the dataset file it came from (a single .h5 etc.)
 };
 void to_json(nlohmann::json& j, const DataTag& d);
 void from_json(const nlohmann::json& j, DataTag& d);

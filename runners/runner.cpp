@@ -221,6 +221,7 @@ DataTag DataTagOf(const std::string& pairs_path, const PairSet& set) {
     d.pairing =
         p.value("pairing", p.value("params", nlohmann::json::object()).value("pairing", "unknown"));
     d.seed = p.value("seed", nlohmann::json());
+    d.dataset_sha256 = p.value("dataset_sha256", "");
     // Hashed on every read, so files written before hashes existed get one too; a stored hash
     // that disagrees means the arrays changed after generation.
     d.content_hash = PairSetContentHash(set);

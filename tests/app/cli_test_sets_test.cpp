@@ -152,6 +152,59 @@ TEST(CliTestSets, ReproduceUsesTheStoredIclNuimPairs) {
     fs::remove_all(dir);
 }
 
+// A DeepGMR test file given as the dataset (any name; detected by its source / target /
+// transform datasets): `generate --pairing stored --pairs all` needs no --split, uses each pair
+// as stored, and the pair file and the report caption carry the file's sha256 (expected value:
+// coreutils' sha256sum of the same file).
+TEST(CliTestSets, DeepGmrTestFileByItselfGivesItsStoredPairsAndHash) {
+    const fs::path dir = FreshDir("deepgmr_file");
+    std::vector<double> source, target, transform;
+    for (int s = 0; s < 3; ++s) {
+        for (int i = 0; i < 8; ++i) {
+            const std::vector<double> p = {0.125 * i, 0.25 * (i % 2) - s, 0.5 * (i % 3)};
+            source.insert(source.end(), p.begin(), p.end());
+            target.insert(target.end(), {p[0], p[1] + 0.25 * s, p[2]});
+        }
+        const std::vector<double> T = {1, 0, 0, 0, 0, 1, 0, 0.25 * s, 0, 0, 1, 0, 0, 0, 0, 1};
+        transform.insert(transform.end(), T.begin(), T.end());
+    }
+    const fs::path h5 = dir / "my_copy_of_the_clean_set.h5";
+    const hid_t file = H5Fcreate(h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    WriteDataset(file, "source", {3, 8, 3}, source, H5T_IEEE_F32LE);
+    WriteDataset(file, "target", {3, 8, 3}, target, H5T_IEEE_F32LE);
+    WriteDataset(file, "transform", {3, 4, 4}, transform, H5T_IEEE_F32LE);
+    H5Fclose(file);
+    const fs::path pairs = dir / "pairs.h5";
+    const CliResult g = RunCli("generate --dataset " + h5.string() +
+                               " --pairing stored --pairs all --points 8 --out " + pairs.string());
+    ASSERT_EQ(g.exit_code, 0) << g.output;
+    const PairSet set = ReadPairFile(pairs.string());
+    ASSERT_EQ(set.pairs.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+        for (int i = 0; i < 8; ++i) {
+            for (int d = 0; d < 3; ++d) {
+                EXPECT_EQ(set.pairs[k].source(i, d), source[k * 24 + i * 3 + d]);
+                EXPECT_EQ(set.pairs[k].target(i, d), target[k * 24 + i * 3 + d]);
+            }
+        }
+        EXPECT_EQ(set.pairs[k].T_gt(1, 3), 0.25 * static_cast<double>(k));
+    }
+    FILE* p = ::popen(("sha256sum " + h5.string()).c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    char buf[65] = {0};
+    ASSERT_EQ(std::fread(buf, 1, 64, p), 64u);
+    ::pclose(p);
+    EXPECT_EQ(set.provenance.at("dataset_sha256"), std::string(buf));
+    const fs::path rows = dir / "rows.jsonl";
+    ASSERT_EQ(RunCli("run --pairs " + pairs.string() + " --methods identity -q --out " +
+                     rows.string()).exit_code, 0);
+    const CliResult rep = RunCli("report " + rows.string());
+    ASSERT_EQ(rep.exit_code, 0) << rep.output;
+    EXPECT_NE(rep.output.find("dataset `" + h5.string() + "` (sha256 " + std::string(buf) + ")"),
+              std::string::npos) << rep.output;
+    fs::remove_all(dir);
+}
+
 TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
     // Tab. 4 rows come from checkpoints under $REGBENCH_MODELS/ablation/components/<paper row>.
     // Here only no_SPE has one (any OGMM checkpoint will do: the row is named by its folder),

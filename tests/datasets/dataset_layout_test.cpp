@@ -37,6 +37,10 @@ TEST_F(DatasetLayoutTest, FolderOfPointFilesDefaultsToSplitAll) {
     std::ofstream(dir_ / "a.xyz") << "0 0 0\n1 0 0\n0 1 0\n";
     EXPECT_EQ(DefaultSplit(dir_.string()), "all");
     EXPECT_EQ(DefaultSplit((dir_ / "a.xyz").string()), "all");
+    // A single .h5 (DeepGMR's test files): OpenDataset accepts only "all" for it.
+    std::ofstream((dir_ / "modelnet_clean.h5").string()) << "x";
+    EXPECT_EQ(DefaultSplit((dir_ / "modelnet_clean.h5").string()), "all");
+    fs::remove(dir_ / "modelnet_clean.h5");
     EXPECT_EQ(DefaultSplit("cgal"), "test");
     fs::create_directories(dir_ / "ModelNet40" / "airplane" / "test");
     EXPECT_EQ(DefaultSplit(dir_.string()), "test");  // one dataset below: its splits apply

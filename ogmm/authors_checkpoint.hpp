@@ -1,0 +1,51 @@
+#pragma once
+// The authors' own checkpoints in and out of regbench: DeepGMR's (wentaoyuan/deepgmr,
+// `DeepGMR(args).state_dict()`, e.g. the released modelnet_*.pth / icl_nuim.pth) and OGMM's
+// (gfmei/ogmm, `GMMReg(emb_dims, n_clusters, config).state_dict()`). Import infers the
+// architecture from tensor names and shapes, maps every tensor onto regbench's `deepgmr-orig*`
+// / `ogmm` modules, refuses missing, unexpected or mis-shaped tensors by name, and writes a
+// regbench checkpoint folder whose checkpoint.json records the source's sha256 and the mapping.
+// Export writes the reverse: a zip-format .pth the authors' modules load strictly.
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ogmm/torch_save_reader.hpp"
+
+namespace regbench::ogmm {
+
+struct ImportOptions {
+    std::string from;                 ///< "deepgmr" or "ogmm"
+    std::string rri_variant = "cuda";  ///< DeepGMR RRI: "cuda" (released models) or "numpy"
+    /// OGMM settings that no tensor shape fixes (the authors' mnet() defaults): GMM clusters J
+    /// (n_clusters), attention anchors (km_clusters), heads (num_heads), DGCNN k (gnn_k).
+    int64_t ogmm_clusters = 128;
+    int64_t ogmm_anchors = 128;
+    int64_t ogmm_heads = 4;
+    int64_t ogmm_k = 20;
+};
+
+/// Pairs (authors' state-dict key, regbench parameter/buffer name) for a regbench config, in
+/// the authors' module order. `from`: "deepgmr" or "ogmm".
+std::vector<std::pair<std::string, std::string>> AuthorsKeyMapping(const std::string& from,
+                                                                    const nlohmann::json& config);
+
+/// The regbench model config (zoo form, with "arch", "name" and "train") the state dict
+/// `tensors` of file `file` describes. Throws std::runtime_error naming the file and tensor.
+nlohmann::json InferAuthorsConfig(const StateDict& tensors,
+                                  const std::string& file,
+                                  const ImportOptions& options);
+
+/// Reads `pth`, checks and maps it, writes the checkpoint folder `out_dir` (atomically).
+/// Returns the checkpoint.json written. Throws std::runtime_error naming the file and every
+/// missing, unexpected or mis-shaped tensor.
+nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
+                                       const std::string& out_dir,
+                                       const ImportOptions& options);
+
+/// The state dict the authors' module `to` ("deepgmr" | "ogmm") would have for the checkpoint
+/// in `dir`, in their key order. Throws naming the folder when it is of another family.
+StateDict ExportAuthorsStateDict(const std::string& dir, const std::string& to);
+
+}  // namespace regbench::ogmm

@@ -1,0 +1,48 @@
+#pragma once
+// Reads PyTorch `torch.save(state_dict)` files natively (no Python): the zip archive of PyTorch
+// >= 1.6 (data.pkl + data/<key> records) and the legacy stream of PyTorch <= 1.5 (five pickles:
+// magic number, protocol version, sys_info, the object with persistent ids for its storages,
+// the sorted storage keys; then each storage as an int64 element count and its raw bytes).
+//
+// The pickle is run by a small restricted interpreter written for this format: it knows the
+// opcodes pickle protocols 2-4 use for a state dict and accepts only the globals a plain state
+// dict needs (collections.OrderedDict, torch._utils._rebuild_tensor{,_v2}, _rebuild_parameter,
+// torch.*Storage). Anything else (a pickled class, a TorchScript archive, a truncated or
+// corrupt file) is refused with a std::runtime_error naming the file; it never executes code.
+// Objects live in one arena (indices, no owning pointers), so hostile nesting cannot overflow
+// the stack. Also a zip-format writer of a
+// state dict.
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/sha256.hpp"
+
+namespace regbench::ogmm {
+
+/// One state dict in file order.
+using StateDict = std::vector<std::pair<std::string, torch::Tensor>>;
+
+struct TorchSaveContents {
+    StateDict tensors;
+    std::string format;    ///< "zip" or "legacy"
+    std::string wrapper;   ///< "" or the key ("state_dict", "model", ...) the dict was found under
+};
+
+/// Reads `path`. `name` (default: path) is how errors name the file.
+TorchSaveContents ReadTorchSaveFile(const std::string& path);
+/// Same for bytes in memory (fuzzing, tests); errors name `name`.
+TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string& name);
+
+/// Serialises a state dict in PyTorch's zip format (what `torch.save(sd)` of PyTorch >= 1.6
+/// writes; `torch.load` returns a dict of str -> Tensor in this order). Tensors are made
+/// contiguous CPU tensors.
+std::string WriteTorchSaveZip(const StateDict& tensors);
+
+using regbench::Sha256File;
+using regbench::Sha256Hex;
+
+}  // namespace regbench::ogmm
