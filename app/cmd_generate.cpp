@@ -4,8 +4,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -78,6 +80,31 @@ ShapeLoader WarnIndoorOnObjects(ShapeLoader loader, Protocol protocol) {
     };
 }
 
+/// `generate --out` onto a file of its own dataset replaced that input with the pair file, exit
+/// 0 (found by hand: --dataset plyd --out plyd/0000_src.ply). Refused when --out already exists
+/// and is a dataset file given as a path or lies inside a dataset folder given as a path. A new
+/// file there is allowed.
+void RefuseOutputInsideInputs(const std::string& out, const std::string& datasets) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(out, ec))) return;
+    const fs::path target = fs::weakly_canonical(out, ec);
+    std::vector<std::string> roots;
+    std::stringstream list(datasets);
+    for (std::string item; std::getline(list, item, ',');) {
+        if (fs::exists(item, ec)) roots.push_back(item);
+    }
+    for (const auto& root : roots) {
+        const fs::path r = fs::weakly_canonical(root, ec);
+        if (ec) continue;
+        const auto [end, _] = std::mismatch(r.begin(), r.end(), target.begin(), target.end());
+        if (end == r.end() || fs::equivalent(r, target, ec)) {
+            throw std::runtime_error(out + ": output is an existing file of the input dataset " +
+                                     root + "; refusing to replace it (pick another --out)");
+        }
+    }
+}
+
 void SetupGenerateCommand(CLI::App* cmd) {
     auto a = std::make_shared<GenerateArgs>();
     std::string protocols;
@@ -117,6 +144,7 @@ void SetupGenerateCommand(CLI::App* cmd) {
     cmd->callback([cmd, a] {
         GenerateRequest request = a->request;
         CheckOutputPath(request.out);  // a directory, a device: refused before any work
+        RefuseOutputInsideInputs(request.out, request.dataset);
         const OutputLock lock(request.out);  // one writer per --out while generating
         request.options = BuildOptions(*cmd, *a);
         request.one_per_item = a->pairs == "all";

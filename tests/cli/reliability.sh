@@ -11,7 +11,7 @@
 #               a non-empty folder is refused
 #   links       a symbolic or hard link pre-placed at OUT.lock or OUT.part is refused naming
 #               the path, and the file it points to keeps its bytes
-#   writers     compare --json, import, score, merge and report --out onto one of their inputs
+#   writers     compare --json, import, score, merge, report and generate --out onto an input
 #               are refused and the input keeps its bytes; score, report --out, generate,
 #               compare --json, merge, export, import, reproduce and train beside a running
 #               `run` on the same path are refused naming its pid
@@ -203,6 +203,13 @@ writers)
   onto_input merge-pairs pairs.h5 pairs.before "$bin" merge base.jsonl --pairs pairs.h5 \
     --methods identity --out pairs.h5
   onto_input report base.jsonl base.before "$bin" report base.jsonl --out base.jsonl
+  # generate --out onto a file of its own dataset folder replaced that PLY with a pair file.
+  "$bin" export pairs.h5 --out plyd --format ply >/dev/null 2>&1 || fail "export ply"
+  cp plyd/0000_src.ply ply.before
+  "$bin" generate --protocol partial --dataset plyd --split all --pairs 2 --seed 1 --points 500 \
+    --out plyd/0000_src.ply >gen.out 2>&1 && fail "generate onto its dataset accepted"
+  grep -q "existing file of the input dataset" gen.out || fail "generate: $(cat gen.out)"
+  cmp -s plyd/0000_src.ply ply.before || fail "generate replaced a file of its dataset"
   # Every writer beside a running `run` on the same path is refused naming its pid.
   "$bin" run --pairs pairs.h5 --methods cpd --params "$slow" --out busy.jsonl -q 2>first.err &
   first=$!
