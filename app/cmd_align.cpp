@@ -42,6 +42,7 @@ void SetupAlignCommand(CLI::App* cmd) {
     auto euler = std::make_shared<std::string>("zyx");
     auto seed = std::make_shared<std::uint64_t>(0);
     auto threads = std::make_shared<int>(1);
+    auto nan_points = std::make_shared<std::string>("drop");
     cmd->add_option("source", *src, "Source point file (.ply .pcd .xyz .txt .off)")->required();
     cmd->add_option("target", *tgt, "Target point file")->required();
     cmd->add_option("--method", *method, "Method name (see `regbench methods`)")->required();
@@ -63,6 +64,11 @@ void SetupAlignCommand(CLI::App* cmd) {
     cmd->add_option("--threads", *threads, "Threads inside the method")
         ->check(PositiveWholeNumber())
         ->capture_default_str();
+    cmd->add_option("--nan-points", *nan_points,
+                    "Points of a PLY/PCD with a NaN or Inf coordinate: drop (with a warning "
+                    "giving their count) | refuse (the file, naming it and the count)")
+        ->check(CLI::IsMember({"drop", "refuse"}))
+        ->capture_default_str();
     cmd->callback([=] {
         std::optional<OutputLock> lock;  // one writer per --out, inputs refused before work
         if (!out->empty()) {
@@ -73,8 +79,10 @@ void SetupAlignCommand(CLI::App* cmd) {
         }
         const nlohmann::json p = ParseParamsOption(*params);
         const auto reg = CreateMethod(*method, p);  // validates name and params
-        const PointCloud source = ReadCloudFile(*src);
-        const PointCloud target = ReadCloudFile(*tgt);
+        const NonFinitePoints non_finite =
+            *nan_points == "refuse" ? NonFinitePoints::kRefuse : NonFinitePoints::kDrop;
+        const PointCloud source = ReadCloudFile(*src, non_finite);
+        const PointCloud target = ReadCloudFile(*tgt, non_finite);
         const Transform T_gt = gt->empty() ? Transform::Identity() : ReadTransformTxt(*gt);
         AlignContext context;
         context.seed = *seed;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -15,6 +16,8 @@
 #include "app/commands.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
+#include "core/file_lock.hpp"
+#include "core/json_limits.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
@@ -151,14 +154,24 @@ ogmm::TrainData MakeData(const TrainArgs& a) {
     return data;
 }
 
+/// The --config file: depth-limited (a file nested 1M levels deep crashed the process with
+/// SIGSEGV) and a JSON object (an array or a string was silently ignored and the run trained
+/// on the named config alone). Throws naming the file.
 nlohmann::json ReadJsonFile(const std::string& path) {
-    std::ifstream in(path);
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error("train: cannot open --config " + path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    nlohmann::json j;
     try {
-        return nlohmann::json::parse(in);
+        j = ParseJsonBounded(text, "--config " + path);
     } catch (const std::exception& e) {
         throw std::runtime_error("train: --config " + path + " is not valid JSON: " + e.what());
     }
+    if (!j.is_object()) {
+        throw std::runtime_error("train: --config " + path + " must hold a JSON object, got " +
+                                 std::string(j.type_name()));
+    }
+    return j;
 }
 
 /// Named config + --config file + the command-line recipe flags.
@@ -242,6 +255,10 @@ void Run(const TrainArgs& a, const std::string& command_line) {
             "train: --model is required (known: deepgmr, deepgmr-small, "
             "deepgmr-orig, deepgmr-orig-xyz, ogmm, ogmm-small, ogmm-tiny)");
     }
+    // One writer per run directory (OUT.lock beside it), taken before the data are built: a
+    // second train (or any regbench writer) on the same --out is refused naming the pid.
+    if (!a.config_file.empty()) (void)ReadJsonFile(a.config_file);  // refused before any work
+    const OutputLock lock(a.out);
     const ogmm::TrainData data = MakeData(a);
     if (a.ablation.empty()) {
         RunOne(a, command_line, BuildConfig(a, a.model, nlohmann::json::object()), data, a.out);

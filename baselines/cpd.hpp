@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/registration.hpp"
 #include "gmm/gauss_sum.hpp"
 
@@ -16,31 +16,78 @@ enum class CpdSigma2Formula {
     kMl,       ///< (cx - 2sa + s^2 b)/(Np D): the maximum-likelihood update
     kProbreg,  ///< (cx + b - a)/(Np D): probreg's formula (stalls without scale)
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(CpdSigma2Formula,
-                             {{CpdSigma2Formula::kMl, "ml"},
-                              {CpdSigma2Formula::kProbreg, "probreg"}})
+REGBENCH_CHOICES(CpdSigma2Formula,
+                 {{CpdSigma2Formula::kMl, "ml"}, {CpdSigma2Formula::kProbreg, "probreg"}})
 
-/// Options of `cpd` (docs, defaults and ranges: baselines/cpd.schema.json). compat "probreg"
-/// presets update_scale = true and sigma2_formula = probreg; explicit values always win.
+/// Options of `cpd`: the correct rigid CPD by default; compat "probreg" presets
+/// update_scale = true and sigma2_formula = probreg (ApplyCompat); explicit values always win.
 struct CpdOptions {
-    double w;
-    int maxiter;
-    double tol;
-    bool update_scale;
-    CpdSigma2Formula sigma2_formula;
-    double sigma2;
-    Compat compat;
-    GaussSumMode e_step;
-    double truncation_sigmas;
-    int truncation_min_points;
-    double cluster_cell_sigmas;
-    int cluster_min_points;
+    double w = 0.0;             ///< weight of the uniform outlier component, in [0, 1)
+    int maxiter = 50;           ///< maximum EM iterations (>= 1)
+    double tol = 0.001;         ///< stop when |q - q_prev| < tol, absolute on the objective q
+    bool update_scale = false;  ///< estimate a scale s (similarity transform)
+    CpdSigma2Formula sigma2_formula = CpdSigma2Formula::kMl;  ///< "ml" or "probreg"
+    double sigma2 = 0.0;                                      ///< initial sigma^2 (> 0)
+    Compat compat = Compat::kNone;                            ///< "none" or "probreg"
+    GaussSumMode e_step = GaussSumMode::kAuto;                ///< "auto", "dense" or "truncated"
+    double truncation_sigmas = 4.0;  ///< truncated E-step radius in sigmas (> 0)
+    /// auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal
+    int truncation_min_points = 20000;
+    /// auto, at scale: while a cloud has under half as many cells of edge cluster_cell_sigmas *
+    /// sigma as points, each E-step pass sums over its cells' weighted centroids
+    /// (docs/performance.md: accuracy cost)
+    double cluster_cell_sigmas = 0.25;
+    int cluster_min_points = 20000;  ///< auto: compress only if max(M, N) >= this
+
+    template <class F>
+    void Fields(F&& f) {
+        f("w", w, "weight of the uniform outlier component, in [0, 1); probreg default 0");
+        f("maxiter", maxiter, "maximum EM iterations (>= 1); probreg 50");
+        f("tol", tol, "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3");
+        f("update_scale", update_scale,
+          "estimate a scale s (similarity transform); default false, true under compat=probreg");
+        f("sigma2_formula", sigma2_formula,
+          "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without scale "
+          "(probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg");
+        f("sigma2", sigma2, "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg");
+        f("compat", compat,
+          "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's sigma^2 "
+          "formula unless those are given explicitly)");
+        f("e_step", e_step,
+          "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" "
+          "(exact up to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)");
+        f("truncation_sigmas", truncation_sigmas,
+          "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4");
+        f("truncation_min_points", truncation_min_points,
+          "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal");
+        f("cluster_cell_sigmas", cluster_cell_sigmas,
+          "auto, at scale: while a cloud has under half as many cells of edge cluster_cell_sigmas "
+          "* sigma as points, each E-step pass sums over its cells' weighted centroids "
+          "(docs/performance.md: accuracy cost); 0 = never");
+        f("cluster_min_points", cluster_min_points, "auto: compress only if max(M, N) >= this");
+    }
+    void Validate(ParamCheck& c) const {
+        c.AtLeast("w", w, 0.0);
+        c.Below("w", w, 1.0);
+        c.AtLeast("maxiter", maxiter, 1);
+        c.AtLeast("tol", tol, 0.0);
+        c.Finite("tol", tol);
+        c.AtLeast("sigma2", sigma2, 0.0);
+        c.Finite("sigma2", sigma2);
+        c.Above("truncation_sigmas", truncation_sigmas, 0.0);
+        c.Finite("truncation_sigmas", truncation_sigmas);
+        c.AtLeast("truncation_min_points", truncation_min_points, 0);
+        c.AtLeast("cluster_cell_sigmas", cluster_cell_sigmas, 0.0);
+        c.AtMost("cluster_cell_sigmas", cluster_cell_sigmas, 1.0);
+        c.AtLeast("cluster_min_points", cluster_min_points, 0);
+    }
+    /// compat "probreg": probreg 0.3.7's defaults for these keys.
+    void ApplyCompat() {
+        if (compat != Compat::kProbreg) return;
+        update_scale = true;
+        sigma2_formula = CpdSigma2Formula::kProbreg;
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(CpdOptions, w, maxiter, tol, update_scale, sigma2_formula, sigma2, compat,
-                       e_step, truncation_sigmas, truncation_min_points, cluster_cell_sigmas,
-                       cluster_min_points)
-// clang-format on
 
 /// Sufficient statistics of one CPD E-step (Myronenko & Song 2010, eq. (7) and Fig. 2), in the
 /// clouds' input order, all in double.

@@ -12,8 +12,7 @@
 #include <mutex>
 
 #include "baselines/open3d_adapter.hpp"
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/rng.hpp"
 #include "core/scale_rule.hpp"
 
@@ -22,30 +21,83 @@ namespace {
 
 /// Radii follow the Open3D tutorial (and the OGMM repo's unused FPFH helper) as multiples of
 /// one voxel size; the FGR solver settings are Open3D's Python defaults.
-struct FgrOptions {  // documented in baselines/fgr.schema.json (defaults too)
-    double voxel_size;
-    bool voxel_downsample;
-    double normal_radius_voxels;
-    int normal_max_nn;
-    double fpfh_radius_voxels;
-    int fpfh_max_nn;
-    double max_correspondence_distance_voxels;
-    double division_factor;
-    bool use_absolute_scale;
-    bool decrease_mu;
-    int iteration_number;
-    double tuple_scale;
-    int maximum_tuple_count;
-    bool tuple_test;
-    int seed;
-    ScaleRuleMode scale_rule;
+struct FgrOptions {
+    double voxel_size = 0.05;  ///< base length for the radii below [unit-sphere units], > 0
+    /// voxel-downsample both clouds first (tutorial step for dense scans)
+    bool voxel_downsample = false;
+    double normal_radius_voxels = 2.0;  ///< normal radius in voxels, > 0
+    int normal_max_nn = 30;             ///< neighbour cap per normal, >= 3
+    double fpfh_radius_voxels = 5.0;    ///< FPFH radius in voxels, > 0
+    int fpfh_max_nn = 100;              ///< neighbour cap per FPFH, >= 1
+    /// FGR max correspondence distance in voxels (used for the mu floor when decrease_mu and for
+    /// the reported fitness), > 0
+    double max_correspondence_distance_voxels = 0.5;
+    double division_factor = 1.4;  ///< graduated non-convexity divisor of mu, > 1
+    /// measure distances absolutely instead of relative to the object size
+    bool use_absolute_scale = false;
+    bool decrease_mu = false;        ///< anneal mu by division_factor every 4 iterations
+    int iteration_number = 64;       ///< number of FGR iterations (fixed), >= 1
+    double tuple_scale = 0.95;       ///< tuple-test edge-length ratio, in (0, 1)
+    int maximum_tuple_count = 1000;  ///< tuples kept at most, >= 1
+    bool tuple_test = true;          ///< run the tuple (geometric consistency) test
+    int seed = 0;  ///< seed for Open3D's global RNG, set right before each call (tuple sampling)
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+
+    template <class F>
+    void Fields(F&& f) {
+        f("voxel_size", voxel_size,
+          "base length for the radii below [unit-sphere units], > 0; 0.05 ~ the sample spacing "
+          "sqrt(area / 1024) of a unit-sphere object, so FPFH (0.25) sees 50-100 neighbours");
+        f("voxel_downsample", voxel_downsample,
+          "voxel-downsample both clouds first (tutorial step for dense scans); false: 717 points "
+          "are already at ~voxel spacing");
+        f("normal_radius_voxels", normal_radius_voxels,
+          "normal radius in voxels, > 0; 2 = Open3D tutorial / OGMM helper");
+        f("normal_max_nn", normal_max_nn,
+          "neighbour cap per normal, >= 3; 30 = Open3D tutorial / OGMM helper");
+        f("fpfh_radius_voxels", fpfh_radius_voxels,
+          "FPFH radius in voxels, > 0; 5 = Open3D tutorial / OGMM helper");
+        f("fpfh_max_nn", fpfh_max_nn,
+          "neighbour cap per FPFH, >= 1; 100 = Open3D tutorial / OGMM helper");
+        f("max_correspondence_distance_voxels", max_correspondence_distance_voxels,
+          "FGR max correspondence distance in voxels (used for the mu floor when decrease_mu and "
+          "for the reported fitness), > 0; 0.5 = Open3D tutorial");
+        f("division_factor", division_factor,
+          "graduated non-convexity divisor of mu, > 1; 1.4 = Open3D default");
+        f("use_absolute_scale", use_absolute_scale,
+          "measure distances absolutely instead of relative to the object size; false = Open3D "
+          "default");
+        f("decrease_mu", decrease_mu,
+          "anneal mu by division_factor every 4 iterations; false = Open3D Python default");
+        f("iteration_number", iteration_number,
+          "number of FGR iterations (fixed), >= 1; 64 = Open3D default");
+        f("tuple_scale", tuple_scale,
+          "tuple-test edge-length ratio, in (0, 1); 0.95 = Open3D default");
+        f("maximum_tuple_count", maximum_tuple_count,
+          "tuples kept at most, >= 1; 1000 = Open3D default");
+        f("tuple_test", tuple_test,
+          "run the tuple (geometric consistency) test; true = Open3D default");
+        f("seed", seed,
+          "seed for Open3D's global RNG, set right before each call (tuple sampling); 0");
+        f("scale_rule", scale_rule,
+          "\"auto\": voxel_size scaled by the pair's unit (RMS radius / 0.6 when outside [0.5, "
+          "2], else 1) and voxel downsampling when a cloud has > 2048 points "
+          "(docs/performance.md); used values in extra.resolved; \"preset\": as given");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("voxel_size", voxel_size, 0.0);
+        c.Above("normal_radius_voxels", normal_radius_voxels, 0.0);
+        c.AtLeast("normal_max_nn", normal_max_nn, 3);
+        c.Above("fpfh_radius_voxels", fpfh_radius_voxels, 0.0);
+        c.AtLeast("fpfh_max_nn", fpfh_max_nn, 1);
+        c.Above("max_correspondence_distance_voxels", max_correspondence_distance_voxels, 0.0);
+        c.Above("division_factor", division_factor, 1.0);
+        c.AtLeast("iteration_number", iteration_number, 1);
+        c.Above("tuple_scale", tuple_scale, 0.0);
+        c.Below("tuple_scale", tuple_scale, 1.0);
+        c.AtLeast("maximum_tuple_count", maximum_tuple_count, 1);
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(FgrOptions, voxel_size, voxel_downsample, normal_radius_voxels, normal_max_nn,
-                       fpfh_radius_voxels, fpfh_max_nn, max_correspondence_distance_voxels,
-                       division_factor, use_absolute_scale, decrease_mu, iteration_number,
-                       tuple_scale, maximum_tuple_count, tuple_test, seed, scale_rule)
-// clang-format on
 
 /// Optional voxel downsampling, then normals (FPFH needs them).
 std::shared_ptr<open3d::geometry::PointCloud> Prepare(const FgrOptions& o,
@@ -119,7 +171,11 @@ AlignResult AlignFgr(const FgrOptions& o,
 }  // namespace
 
 MethodInfo FgrMethodInfo() {
-    return MakeMethodInfo(SpecOf<FgrOptions>(BaselineSchema("fgr")), AlignFgr);
+    return MakeMethodInfo<FgrOptions>(
+        "fgr",
+        "Fast Global Registration on FPFH features (Open3D ComputeFPFHFeature + "
+        "FastGlobalRegistrationBasedOnFeatureMatching), Open3D tutorial radii",
+        AlignFgr);
 }
 
 }  // namespace regbench

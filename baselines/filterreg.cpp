@@ -9,7 +9,6 @@
 #include <utility>
 #include <vector>
 
-#include "baselines/schemas.hpp"
 #include "core/kabsch.hpp"
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
@@ -454,16 +453,20 @@ FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
 
 namespace {
 
-const MethodSpec<FilterRegOptions>& Spec() {
-    return SpecOf<FilterRegOptions>(BaselineSchema("filterreg"));
-}
+constexpr char kFilterRegName[] = "filterreg";
 
 }  // namespace
 
 FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
-    return Spec().Parse(params);  // sigma2: null means "auto" (the schema's [number, null])
+    return ParseParams<FilterRegOptions>(kFilterRegName, params);  // sigma2: null = "auto"
 }
 
-MethodInfo FilterRegMethodInfo() { return MakeMethodInfo(Spec(), AlignFilterReg); }
+MethodInfo FilterRegMethodInfo() {
+    return MakeMethodInfo<FilterRegOptions>(
+        kFilterRegName,
+        "FilterReg (Gao & Tedrake 2019) as probreg's registration_filterreg: permutohedral-lattice "
+        "E-step, weighted Kabsch (pt2pt) or twist (pt2pl) M-step; regbench C++",
+        AlignFilterReg);
+}
 
 }  // namespace regbench

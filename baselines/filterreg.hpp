@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
 
@@ -20,38 +20,78 @@ enum class FilterRegObjective {
     kPt2Pt,  ///< weighted Kabsch to the filtered target mean
     kPt2Pl,  ///< twist Gauss-Newton on filtered target normals
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(FilterRegObjective,
-                             {{FilterRegObjective::kPt2Pt, "pt2pt"},
-                              {FilterRegObjective::kPt2Pl, "pt2pl"}})
+REGBENCH_CHOICES(FilterRegObjective,
+                 {{FilterRegObjective::kPt2Pt, "pt2pt"}, {FilterRegObjective::kPt2Pl, "pt2pl"}})
 
 /// How the E-step evaluates the Gaussian filter.
 enum class FilterRegEstimator {
     kLattice,  ///< permutohedral lattice (probreg)
     kExact,    ///< Gaussian sums within 3 sigma
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(FilterRegEstimator,
-                             {{FilterRegEstimator::kLattice, "lattice"},
-                              {FilterRegEstimator::kExact, "exact"}})
+REGBENCH_CHOICES(FilterRegEstimator,
+                 {{FilterRegEstimator::kLattice, "lattice"}, {FilterRegEstimator::kExact, "exact"}})
 
-/// Options of `filterreg`, documented in baselines/filterreg.schema.json with their defaults
-/// (probreg's `registration_filterreg` ones, except that compat "probreg" switches
-/// update_sigma2 off unless it is given) and ranges.
+/// Options of `filterreg`: probreg's `registration_filterreg` defaults, except that compat
+/// "probreg" switches update_sigma2 off unless it is given.
 struct FilterRegOptions {
-    double sigma2;
-    bool update_sigma2;
-    double w;
-    int maxiter;
-    double tol;
-    double min_sigma2;
-    FilterRegObjective objective;
-    FilterRegEstimator estimator;
-    Compat compat;
-    int normals_k;
+    double sigma2 = 0.0;        ///< initial kernel variance [length^2]
+    bool update_sigma2 = true;  ///< re-estimate sigma2 in every M-step
+    double w = 0.0;             ///< weight of the uniform outlier component, in [0, 1)
+    int maxiter = 50;           ///< maximum EM iterations (>= 1)
+    /// stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration
+    double tol = 0.001;
+    /// floor on sigma2 after each iteration and on the auto init (> 0)
+    double min_sigma2 = 0.0001;
+    FilterRegObjective objective = FilterRegObjective::kPt2Pt;    ///< "pt2pt" or "pt2pl"
+    FilterRegEstimator estimator = FilterRegEstimator::kLattice;  ///< "lattice" or "exact"
+    Compat compat = Compat::kNone;                                ///< "none" or "probreg"
+    int normals_k = 30;  ///< pt2pl only: neighbours for the target's PCA normals (>= 3)
+
+    template <class F>
+    void Fields(F&& f) {
+        f("sigma2", sigma2,
+          "initial kernel variance [length^2]; 0 or null = max(sqsum(Y,X), min_sigma2) (probreg)",
+          Nullable::kYes);
+        f("update_sigma2", update_sigma2,
+          "re-estimate sigma2 in every M-step; default true; false under compat = \"probreg\" "
+          "unless given (probreg keeps sigma fixed)");
+        f("w", w, "weight of the uniform outlier component, in [0, 1); probreg default 0");
+        f("maxiter", maxiter, "maximum EM iterations (>= 1); probreg default 50");
+        f("tol", tol,
+          "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3");
+        f("min_sigma2", min_sigma2,
+          "floor on sigma2 after each iteration and on the auto init (> 0); 1e-4");
+        f("objective", objective,
+          "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton on "
+          "filtered target normals, normals by PCA of normals_k neighbours; give a small sigma2, "
+          "e.g. 0.01 as probreg's example: from sqsum its undamped steps can flip the cloud)");
+        f("estimator", estimator,
+          "\"lattice\": permutohedral lattice, blurred only while <= 0.015 N vertices (probreg); "
+          "\"exact\": Gaussian sums within 3 sigma (kd-tree), not probreg-equivalent");
+        f("compat", compat,
+          "\"none\" (default): consistent w_i^2 weights and update_sigma2 on unless given; "
+          "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by w_i, "
+          "sigma fixed");
+        f("normals_k", normals_k, "pt2pl only: neighbours for the target's PCA normals (>= 3); 30");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Finite("sigma2", sigma2);
+        c.AtLeast("sigma2", sigma2, 0.0);
+        c.AtLeast("w", w, 0.0);
+        c.Below("w", w, 1.0);
+        c.AtLeast("maxiter", maxiter, 1);
+        c.Finite("tol", tol);
+        c.AtLeast("tol", tol, 0.0);
+        c.Finite("min_sigma2", min_sigma2);
+        c.Above("min_sigma2", min_sigma2, 0.0);
+        c.AtLeast("normals_k", normals_k, 3);
+    }
+    /// compat "probreg": probreg 0.3.7's defaults for these keys.
+    void ApplyCompat() {
+        if (compat != Compat::kProbreg) return;
+        update_sigma2 = false;
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(FilterRegOptions, sigma2, update_sigma2, w, maxiter, tol, min_sigma2,
-                       objective, estimator, compat, normals_k)
-// clang-format on
 
 /// Parses and validates `filterreg` parameters: unknown keys, wrong types and out-of-range
 /// values throw std::invalid_argument naming the parameter. Applies the compat "none"

@@ -11,28 +11,57 @@
 #include <string>
 
 #include "baselines/pcl_adapter.hpp"
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 
 namespace regbench {
 namespace {
 
-struct GicpOptions {  // documented in baselines/gicp.schema.json (defaults too)
-    double max_correspondence_distance;
-    int max_iterations;
-    double transformation_epsilon;
-    double rotation_epsilon;
-    int correspondence_randomness;
-    int max_optimizer_iterations;
-    double translation_gradient_tolerance;
-    double rotation_gradient_tolerance;
+struct GicpOptions {
+    /// pairs farther apart are ignored [unit-sphere units], > 0
+    double max_correspondence_distance = 1.0;
+    int max_iterations = 200;  ///< outer iteration cap, >= 1
+    /// stop when every translation entry changes less than this, > 0
+    double transformation_epsilon = 0.0005;
+    /// stop when every rotation-matrix entry changes less than this, > 0
+    double rotation_epsilon = 0.002;
+    /// k nearest neighbours per point covariance, >= 3 (clouds need >= k points)
+    int correspondence_randomness = 20;
+    int max_optimizer_iterations = 20;             ///< BFGS iterations per outer step, >= 1
+    double translation_gradient_tolerance = 0.01;  ///< BFGS translation gradient stop, > 0
+    double rotation_gradient_tolerance = 0.01;     ///< BFGS rotation gradient stop, > 0
+
+    template <class F>
+    void Fields(F&& f) {
+        f("max_correspondence_distance", max_correspondence_distance,
+          "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp` (covers the "
+          "protocols' motions from the identity)");
+        f("max_iterations", max_iterations, "outer iteration cap, >= 1; 200 = PCL default");
+        f("transformation_epsilon", transformation_epsilon,
+          "stop when every translation entry changes less than this, > 0; 5e-4 = PCL default "
+          "(0.05% of the object radius)");
+        f("rotation_epsilon", rotation_epsilon,
+          "stop when every rotation-matrix entry changes less than this, > 0; 2e-3 = PCL default");
+        f("correspondence_randomness", correspondence_randomness,
+          "k nearest neighbours per point covariance, >= 3 (clouds need >= k points); 20 = PCL "
+          "default (Segal et al.)");
+        f("max_optimizer_iterations", max_optimizer_iterations,
+          "BFGS iterations per outer step, >= 1; 20 = PCL default");
+        f("translation_gradient_tolerance", translation_gradient_tolerance,
+          "BFGS translation gradient stop, > 0; 1e-2 = PCL");
+        f("rotation_gradient_tolerance", rotation_gradient_tolerance,
+          "BFGS rotation gradient stop, > 0; 1e-2 = PCL");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
+        c.AtLeast("max_iterations", max_iterations, 1);
+        c.Above("transformation_epsilon", transformation_epsilon, 0.0);
+        c.Above("rotation_epsilon", rotation_epsilon, 0.0);
+        c.AtLeast("correspondence_randomness", correspondence_randomness, 3);
+        c.AtLeast("max_optimizer_iterations", max_optimizer_iterations, 1);
+        c.Above("translation_gradient_tolerance", translation_gradient_tolerance, 0.0);
+        c.Above("rotation_gradient_tolerance", rotation_gradient_tolerance, 0.0);
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(GicpOptions, max_correspondence_distance, max_iterations,
-                       transformation_epsilon, rotation_epsilon, correspondence_randomness,
-                       max_optimizer_iterations, translation_gradient_tolerance,
-                       rotation_gradient_tolerance)
-// clang-format on
 
 using PclGicp = pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ>;
 
@@ -98,7 +127,9 @@ AlignResult AlignGicp(const GicpOptions& o,
 }  // namespace
 
 MethodInfo GicpMethodInfo() {
-    return MakeMethodInfo(SpecOf<GicpOptions>(BaselineSchema("gicp")), AlignGicp);
+    return MakeMethodInfo<GicpOptions>(
+        "gicp", "Generalized-ICP from the identity (PCL GeneralizedIterativeClosestPoint, float32)",
+        AlignGicp);
 }
 
 }  // namespace regbench

@@ -7,8 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/rng.hpp"
 #include "gmm/bfgs.hpp"
 #include "gmm/gmm_common.hpp"
@@ -27,28 +26,95 @@ enum class GmmFeatures {
     kSklearn,  ///< sklearn-style spherical GMM fit (probreg)
     kPoints,   ///< every point a component (Jian & Vemuri)
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(GmmFeatures,
-                             {{GmmFeatures::kSklearn, "sklearn"}, {GmmFeatures::kPoints, "points"}})
+REGBENCH_CHOICES(GmmFeatures,
+                 {{GmmFeatures::kSklearn, "sklearn"}, {GmmFeatures::kPoints, "points"}})
 
-/// Documented in baselines/gmmreg.schema.json (defaults too); the annealing, BFGS and
-/// kernel-sum keys are the shared AnnealedL2MethodOptions base (gmm/gmm_l2.hpp).
+/// Options of `gmmreg`; the annealing, BFGS and kernel-sum fields are the shared
+/// AnnealedL2MethodOptions base (gmm/gmm_l2.hpp), bound here with gmmreg's docs.
 struct GmmRegOptions : AnnealedL2MethodOptions {
-    Compat compat;
-    GmmFeatures gmm;
-    int n_gmm_components;
-    bool normalize;
-    double sigma;
-    bool use_estimated_sigma;
-    int gmm_max_iter;
-    double gmm_tol;
-    int seed;
+    Compat compat = Compat::kNone;           ///< "none" or "probreg"
+    GmmFeatures gmm = GmmFeatures::kPoints;  ///< "sklearn" or "points"
+    int n_gmm_components = 800;              ///< GMM components
+    /// optimise with both clouds centred and divided by sigma (unit-free gtol)
+    bool normalize = true;
+    /// kernel bandwidth [input units], used only if use_estimated_sigma is false
+    double sigma = 1.0;
+    bool use_estimated_sigma = true;  ///< sigma = det(cov(source))^(1/6) (probreg default true)
+    int gmm_max_iter = 100;           ///< EM iterations of each GMM fit (sklearn 100)
+    /// EM stops when the mean log-likelihood changes by < gmm_tol (sklearn 1e-3)
+    double gmm_tol = 0.001;
+    int seed = 0;  ///< seed of the k-means++ initialisation (sklearn's is unseeded in probreg)
+
+    template <class F>
+    void Fields(F&& f) {
+        f("compat", compat,
+          "\"none\" (default, the correct algorithm: defaults become gmm=points, gradient=exact, "
+          "normalize=true, gtol=1e-6, maxiter=200) or \"probreg\" (probreg v0.3.7 behaviour); "
+          "explicit keys win");
+        f("gmm", gmm,
+          "features: \"sklearn\" = GaussianMixture(K, spherical) means/weights (probreg), "
+          "\"points\" = every point with weight 1/N (Jian & Vemuri, faster)");
+        f("n_gmm_components", n_gmm_components,
+          "GMM components; K = min(this, floor(0.8 M)) from the source size M");
+        f("gradient", gradient,
+          "\"probreg_half\" = probreg's gradient (exactly 1/2 of the true one), \"exact\"");
+        f("normalize", normalize,
+          "optimise with both clouds centred and divided by sigma (unit-free gtol); probreg: "
+          "false");
+        f("sigma", sigma,
+          "kernel bandwidth [input units], used only if use_estimated_sigma is false");
+        f("use_estimated_sigma", use_estimated_sigma,
+          "sigma = det(cov(source))^(1/6) (probreg default true)");
+        f("delta", delta, "sigma *= delta after each outer iteration, in (0, 1] (probreg 0.9)");
+        f("outer_iterations", outer_iterations,
+          "BFGS runs on a coarse-to-fine sigma schedule; probreg's gmmreg always runs 1");
+        f("outer_tol", outer_tol, "stop the schedule when |f - f_prev| < outer_tol (probreg 1e-3)");
+        f("maxiter", maxiter, "BFGS iterations per run (probreg opt_maxiter 50)");
+        f("gtol", gtol, "BFGS stops when |grad|_inf <= gtol (probreg tol 1e-3, absolute)");
+        f("gmm_max_iter", gmm_max_iter, "EM iterations of each GMM fit (sklearn 100)");
+        f("gmm_tol", gmm_tol,
+          "EM stops when the mean log-likelihood changes by < gmm_tol (sklearn 1e-3)");
+        f("seed", seed, "seed of the k-means++ initialisation (sklearn's is unseeded in probreg)");
+        f("kernel_sums", kernel_sums,
+          "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per cell of "
+          "compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1 / cutoff_tolerance)) "
+          "are skipped (docs/performance.md: accuracy cost); \"dense\": always exact");
+        f("approx_min_pairs", approx_min_pairs,
+          "component pairs K_s * K_t from which kernel_sums=auto approximates");
+        f("cutoff_tolerance", cutoff_tolerance,
+          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
+        f("compress_cell_sigmas", compress_cell_sigmas,
+          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
+    }
+    void Validate(ParamCheck& c) const {
+        c.AtLeast("n_gmm_components", n_gmm_components, 1);
+        c.Above("sigma", sigma, 0.0);
+        c.Finite("sigma", sigma);
+        c.Above("delta", delta, 0.0);
+        c.AtMost("delta", delta, 1.0);
+        c.AtLeast("outer_iterations", outer_iterations, 1);
+        c.AtLeast("outer_tol", outer_tol, 0.0);
+        c.AtLeast("maxiter", maxiter, 0);
+        c.AtLeast("gtol", gtol, 0.0);
+        c.AtLeast("gmm_max_iter", gmm_max_iter, 1);
+        c.AtLeast("gmm_tol", gmm_tol, 0.0);
+        c.AtLeast("seed", seed, 0);
+        c.AtLeast("approx_min_pairs", approx_min_pairs, 0.0);
+        c.Above("cutoff_tolerance", cutoff_tolerance, 0.0);
+        c.Below("cutoff_tolerance", cutoff_tolerance, 1.0);
+        c.AtLeast("compress_cell_sigmas", compress_cell_sigmas, 0.0);
+        c.AtMost("compress_cell_sigmas", compress_cell_sigmas, 1.0);
+    }
+    /// compat "probreg": probreg 0.3.7's defaults for these keys.
+    void ApplyCompat() {
+        if (compat != Compat::kProbreg) return;
+        gmm = GmmFeatures::kSklearn;
+        gradient = L2Gradient::kProbregHalf;
+        normalize = false;
+        gtol = 0.001;
+        maxiter = 50;
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(GmmRegOptions, compat, gmm, n_gmm_components, gradient, normalize, sigma,
-                       use_estimated_sigma, delta, outer_iterations, outer_tol, maxiter, gtol,
-                       gmm_max_iter, gmm_tol, seed, kernel_sums, approx_min_pairs, cutoff_tolerance,
-                       compress_cell_sigmas)
-// clang-format on
 
 /// (mu, phi) of one cloud: sklearn-style spherical GMM or the points themselves.
 MixtureFeatures Features(const GmmRegOptions& options,
@@ -106,7 +172,11 @@ AlignResult AlignGmmReg(const GmmRegOptions& o,
 }  // namespace
 
 MethodInfo GmmRegMethodInfo() {
-    return MakeMethodInfo(SpecOf<GmmRegOptions>(BaselineSchema("gmmreg")), AlignGmmReg);
+    return MakeMethodInfo<GmmRegOptions>(
+        "gmmreg",
+        "GMMReg rigid as probreg runs it: spherical GMM features (k-means++/EM, seeded), L2 cost, "
+        "scipy-like BFGS (More-Thuente); exact Gauss sums instead of IFGT (approximated at scale)",
+        AlignGmmReg);
 }
 
 }  // namespace regbench

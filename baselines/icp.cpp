@@ -4,24 +4,48 @@
 #include <open3d/pipelines/registration/TransformationEstimation.h>
 
 #include "baselines/open3d_adapter.hpp"
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
 
-struct IcpOptions {  // documented in baselines/icp.schema.json (defaults too)
-    double max_correspondence_distance;
-    int max_iterations;
-    double relative_fitness;
-    double relative_rmse;
-    ScaleRuleMode scale_rule;
+struct IcpOptions {
+    /// pairs farther apart are ignored [unit-sphere units], > 0
+    double max_correspondence_distance = 1.0;
+    int max_iterations = 30;                          ///< iteration cap, >= 1
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    /// stop when the fitness change is below this (and the RMSE change too), >= 0
+    double relative_fitness = 1e-6;
+    /// stop when the inlier-RMSE change is below this (and the fitness change too), >= 0
+    double relative_rmse = 1e-6;
+
+    template <class F>
+    void Fields(F&& f) {
+        f("max_correspondence_distance", max_correspondence_distance,
+          "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 covers the protocols' "
+          "motions (translation up to 0.5 per axis) from the identity; 0.07 = 2 * overlap_radius "
+          "is the OGMM code's radius for refining a network's estimate, where ICP barely moves");
+        f("max_iterations", max_iterations,
+          "iteration cap, >= 1; 30 = Open3D default, as the OGMM code");
+        f("scale_rule", scale_rule,
+          "\"auto\": max_correspondence_distance is scaled by the pair's unit (RMS radius / 0.6 "
+          "when outside [0.5, 2], else 1: unit-sphere objects keep the preset; "
+          "docs/performance.md), the value used is in extra.resolved; \"preset\": as given");
+        f("relative_fitness", relative_fitness,
+          "stop when the fitness change is below this (and the RMSE change too), >= 0; 1e-6 = "
+          "Open3D default");
+        f("relative_rmse", relative_rmse,
+          "stop when the inlier-RMSE change is below this (and the fitness change too), >= 0; "
+          "1e-6 = Open3D default");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
+        c.AtLeast("max_iterations", max_iterations, 1);
+        c.AtLeast("relative_fitness", relative_fitness, 0.0);
+        c.AtLeast("relative_rmse", relative_rmse, 0.0);
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(IcpOptions, max_correspondence_distance, max_iterations, relative_fitness,
-                       relative_rmse, scale_rule)
-// clang-format on
 
 AlignResult AlignIcp(const IcpOptions& o,
                      const PointCloud& source,
@@ -44,7 +68,10 @@ AlignResult AlignIcp(const IcpOptions& o,
 }  // namespace
 
 MethodInfo IcpMethodInfo() {
-    return MakeMethodInfo(SpecOf<IcpOptions>(BaselineSchema("icp")), AlignIcp);
+    return MakeMethodInfo<IcpOptions>(
+        "icp",
+        "point-to-point ICP from the identity (Open3D RegistrationICP), Open3D/OGMM-code criteria",
+        AlignIcp);
 }
 
 }  // namespace regbench

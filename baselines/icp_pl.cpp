@@ -5,24 +5,45 @@
 #include <open3d/pipelines/registration/TransformationEstimation.h>
 
 #include "baselines/open3d_adapter.hpp"
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 
 namespace regbench {
 namespace {
 
-struct IcpPlOptions {  // documented in baselines/icp_pl.schema.json (defaults too)
-    double max_correspondence_distance;
-    int max_iterations;
-    double relative_fitness;
-    double relative_rmse;
-    double normal_radius;
-    int normal_max_nn;
+struct IcpPlOptions {
+    /// pairs farther apart are ignored [unit-sphere units], > 0
+    double max_correspondence_distance = 1.0;
+    int max_iterations = 30;         ///< iteration cap, >= 1
+    double relative_fitness = 1e-6;  ///< stop threshold on the fitness change, >= 0
+    double relative_rmse = 1e-6;     ///< stop threshold on the inlier-RMSE change, >= 0
+    double normal_radius = 0.1;      ///< target-normal neighbourhood radius, > 0
+    int normal_max_nn = 30;          ///< neighbour cap per normal, >= 3
+
+    template <class F>
+    void Fields(F&& f) {
+        f("max_correspondence_distance", max_correspondence_distance,
+          "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp`, so the two "
+          "ICPs differ only in the cost");
+        f("max_iterations", max_iterations, "iteration cap, >= 1; 30 = Open3D default, as `icp`");
+        f("relative_fitness", relative_fitness,
+          "stop threshold on the fitness change, >= 0; 1e-6 = Open3D default");
+        f("relative_rmse", relative_rmse,
+          "stop threshold on the inlier-RMSE change, >= 0; 1e-6 = Open3D default");
+        f("normal_radius", normal_radius,
+          "target-normal neighbourhood radius, > 0; 0.1 = 2 * voxel (0.05), Open3D tutorial "
+          "recipe, ~2x the sample spacing of a unit-sphere object");
+        f("normal_max_nn", normal_max_nn,
+          "neighbour cap per normal, >= 3; 30 = Open3D tutorial recipe");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
+        c.AtLeast("max_iterations", max_iterations, 1);
+        c.AtLeast("relative_fitness", relative_fitness, 0.0);
+        c.AtLeast("relative_rmse", relative_rmse, 0.0);
+        c.Above("normal_radius", normal_radius, 0.0);
+        c.AtLeast("normal_max_nn", normal_max_nn, 3);
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(IcpPlOptions, max_correspondence_distance, max_iterations, relative_fitness,
-                       relative_rmse, normal_radius, normal_max_nn)
-// clang-format on
 
 AlignResult AlignIcpPl(const IcpPlOptions& o,
                        const PointCloud& source,
@@ -43,7 +64,11 @@ AlignResult AlignIcpPl(const IcpPlOptions& o,
 }  // namespace
 
 MethodInfo IcpPlMethodInfo() {
-    return MakeMethodInfo(SpecOf<IcpPlOptions>(BaselineSchema("icp_pl")), AlignIcpPl);
+    return MakeMethodInfo<IcpPlOptions>(
+        "icp-pl",
+        "point-to-plane ICP from the identity (Open3D RegistrationICP), target normals by Open3D "
+        "EstimateNormals (hybrid radius/kNN)",
+        AlignIcpPl);
 }
 
 }  // namespace regbench

@@ -1,7 +1,6 @@
 #include "baselines/identity.hpp"
 
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 
 namespace regbench {
 namespace {
@@ -18,7 +17,8 @@ AlignResult AlignIdentity(const NoOptions&,
 }  // namespace
 
 MethodInfo IdentityMethodInfo() {
-    return MakeMethodInfo(SpecOf<NoOptions>(BaselineSchema("identity")), AlignIdentity);
+    return MakeMethodInfo<NoOptions>(
+        "identity", "no motion (returns I); the floor every method must beat", AlignIdentity);
 }
 
 }  // namespace regbench

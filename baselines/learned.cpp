@@ -6,7 +6,6 @@
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
-
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -15,8 +14,9 @@
 
 #include "baselines/icp.hpp"
 #include "core/data_dir.hpp"
-#include "core/options.hpp"
+#include "core/params.hpp"
 #include "ogmm/checkpoint.hpp"
+#include "ogmm/checkpoint_json.hpp"
 
 namespace regbench {
 
@@ -49,16 +49,34 @@ Transform IcpRefine(const PointCloud& source,
 
 namespace {
 
+/// The parameters of the learned methods. The variants with ICP refinement (`ogmm`, `deepgmr`;
+/// kIcp) have the icp_* keys, the network-alone ones (`-noicp`) the checkpoint only.
+template <bool kIcp>
 struct LearnedOptions {
     /// Checkpoint directory; "" = the shipped one (ShippedCheckpointDir of the method's model).
     std::string checkpoint;
-    double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius (icp variants)
-    int icp_max_iterations = 30;                    ///< ICP iterations (icp variants)
+    double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius, > 0
+    int icp_max_iterations = 30;                    ///< ICP iterations, >= 1
+
+    template <class F>
+    void Fields(F&& f) {
+        // MakeInfo appends the shipped folder of the method's model to this doc.
+        f("checkpoint", checkpoint,
+          "checkpoint directory from `regbench train`; \"\" = the shipped one, ");
+        if constexpr (kIcp) {
+            f("icp_max_correspondence_distance", icp_max_correspondence_distance,
+              "ICP refinement radius, > 0; 0.07 = 2 * overlap_radius of the OGMM code");
+            f("icp_max_iterations", icp_max_iterations,
+              "ICP iterations, >= 1 (30, Open3D default)");
+        }
+    }
+    void Validate(ParamCheck& c) const {
+        if constexpr (kIcp) {
+            c.Above("icp_max_correspondence_distance", icp_max_correspondence_distance, 0.0);
+            c.AtLeast("icp_max_iterations", icp_max_iterations, 1);
+        }
+    }
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(LearnedOptions,
-                                                checkpoint,
-                                                icp_max_correspondence_distance,
-                                                icp_max_iterations)
 
 torch::Tensor ToTensor(const PointCloud& cloud) {
     torch::Tensor t = torch::empty({1, cloud.rows(), 3}, torch::kDouble);
@@ -86,20 +104,18 @@ Transform ToTransform(const torch::Tensor& T) {
 
 class LearnedMethod final : public RegistrationMethod {
 public:
-    LearnedMethod(std::string name, std::string model_dir, bool icp, LearnedOptions options)
-        : name_(std::move(name)), icp_(icp), options_(std::move(options)) {
+    template <bool kIcp>
+    LearnedMethod(std::string name, std::string model_dir, const LearnedOptions<kIcp>& options)
+        : name_(std::move(name)),
+          icp_(kIcp),
+          params_(ParamsToJson(options)),  // "" = shipped; the path used is in each row's extra
+          options_{options.checkpoint, options.icp_max_correspondence_distance,
+                   options.icp_max_iterations} {
         checkpoint_ =
             options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
     }
     std::string Name() const override { return name_; }
-    nlohmann::json Params() const override {
-        nlohmann::json j = options_;  // "" = shipped; the resolved path is in each result's extra
-        if (!icp_) {
-            j.erase("icp_max_correspondence_distance");
-            j.erase("icp_max_iterations");
-        }
-        return j;
-    }
+    nlohmann::json Params() const override { return params_; }
 
 protected:
     AlignResult DoAlign(const PointCloud& source,
@@ -169,7 +185,8 @@ private:
 
     std::string name_;
     bool icp_;
-    LearnedOptions options_;
+    nlohmann::json params_;
+    LearnedOptions<true> options_;
     std::string checkpoint_;
     std::mutex load_mutex_;
     std::shared_ptr<ogmm::RegistrationNet> net_;
@@ -192,53 +209,34 @@ void CheckCheckpoint(const std::string& name, const std::string& dir) {
     } catch (const std::exception& e) {
         throw std::invalid_argument(name + ": " + e.what());
     }
-    const nlohmann::json& config = j.contains("config") ? j["config"] : nlohmann::json::object();
-    const std::string arch =
-        config.is_object() ? config.value("arch", std::string("ogmm")) : std::string("ogmm");
+    const std::string arch = ogmm::CheckpointArch(j);  // config.arch, checked a string
     const std::string family = name.rfind("deepgmr", 0) == 0 ? "deepgmr" : "ogmm";
     if (arch != family) {
         throw std::invalid_argument(name + ": checkpoint " + dir + " holds a " + arch +
-                                    " model (config.arch), not " + family + "; run it as " +
-                                    arch + (name.find("-noicp") != std::string::npos ? "-noicp"
-                                                                                     : ""));
+                                    " model (config.arch), not " + family + "; run it as " + arch +
+                                    (name.find("-noicp") != std::string::npos ? "-noicp" : ""));
     }
 }
 
+template <bool kIcp>
 MethodInfo MakeInfo(const std::string& name,
                     const std::string& model_dir,
-                    bool icp,
                     const std::string& summary) {
-    MethodInfo info;
-    info.name = name;
-    info.summary = summary;
-    info.param_docs = {
-        {"checkpoint", "checkpoint directory from `regbench train`; \"\" = the shipped one, " +
-                           ShippedCheckpointDir(model_dir) + " ($REGBENCH_MODELS overrides)"}};
-    LearnedOptions defaults;
-    nlohmann::json d = defaults;
-    if (icp) {
-        info.param_docs["icp_max_correspondence_distance"] =
-            "ICP refinement radius, > 0; 0.07 = 2 * overlap_radius of the OGMM code";
-        info.param_docs["icp_max_iterations"] = "ICP iterations, >= 1 (30, Open3D default)";
-    } else {
-        d.erase("icp_max_correspondence_distance");
-        d.erase("icp_max_iterations");
-    }
-    info.defaults = d;
-    info.create = [name, model_dir,
-                   icp](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
-        if (!icp && j.is_object() &&
+    MethodInfo info = DescribeMethod<LearnedOptions<kIcp>>(name, summary);
+    const std::string shipped = ShippedCheckpointDir(model_dir) + " ($REGBENCH_MODELS overrides)";
+    info.param_docs.at("checkpoint") += shipped;
+    info.schema["properties"]["checkpoint"]["description"] = info.param_docs.at("checkpoint");
+    info.create = [name,
+                   model_dir](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
+        if (!kIcp && j.is_object() &&
             (j.contains("icp_max_correspondence_distance") || j.contains("icp_max_iterations"))) {
             throw std::invalid_argument(name +
                                         ": no ICP in this variant; drop the icp_* parameters");
         }
-        const auto o = ParseOptions<LearnedOptions>(j, name);
-        Require(o.icp_max_correspondence_distance > 0, name, "icp_max_correspondence_distance",
-                "must be > 0");
-        Require(o.icp_max_iterations >= 1, name, "icp_max_iterations", "must be >= 1");
-        CheckCheckpoint(name, o.checkpoint.empty() ? ShippedCheckpointDir(model_dir)
-                                                   : o.checkpoint);
-        return std::make_unique<LearnedMethod>(name, model_dir, icp, o);
+        const auto o = ParseParams<LearnedOptions<kIcp>>(name, j);
+        CheckCheckpoint(name,
+                        o.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : o.checkpoint);
+        return std::make_unique<LearnedMethod>(name, model_dir, o);
     };
     return info;
 }
@@ -246,18 +244,19 @@ MethodInfo MakeInfo(const std::string& name,
 }  // namespace
 
 MethodInfo OgmmMethodInfo() {
-    return MakeInfo("ogmm", "ogmm", true,
-                    "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement");
+    return MakeInfo<true>(
+        "ogmm", "ogmm",
+        "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement");
 }
 MethodInfo OgmmNoIcpMethodInfo() {
-    return MakeInfo("ogmm-noicp", "ogmm", false, "OGMM network alone (LibTorch, CPU batch 1)");
+    return MakeInfo<false>("ogmm-noicp", "ogmm", "OGMM network alone (LibTorch, CPU batch 1)");
 }
 MethodInfo DeepGmrMethodInfo() {
-    return MakeInfo("deepgmr", "deepgmr", true,
-                    "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement");
+    return MakeInfo<true>("deepgmr", "deepgmr",
+                          "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement");
 }
 MethodInfo DeepGmrNoIcpMethodInfo() {
-    return MakeInfo("deepgmr-noicp", "deepgmr", false,
-                    "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
+    return MakeInfo<false>("deepgmr-noicp", "deepgmr",
+                           "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
 }
 }  // namespace regbench

@@ -6,8 +6,7 @@
 #include <string>
 
 #include "baselines/pcl_adapter.hpp"
-#include "baselines/schemas.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/scale_rule.hpp"
 
 namespace regbench {
@@ -15,21 +14,52 @@ namespace {
 
 /// PCL's defaults are tuned for metre-scale lidar maps; the scale-dependent ones are
 /// rescaled here for unit-sphere objects with ~717 points.
-struct NdtOptions {  // documented in baselines/ndt.schema.json (defaults too)
-    double resolution;
-    int min_points_per_voxel;
-    double step_size;
-    double outlier_ratio;
-    int max_iterations;
-    double transformation_epsilon;
-    double transformation_rotation_epsilon;
-    ScaleRuleMode scale_rule;
+struct NdtOptions {
+    double resolution = 0.25;      ///< target voxel side [unit-sphere units], > 0
+    int min_points_per_voxel = 6;  ///< cells with fewer points are dropped, >= 3
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    double step_size = 0.1;                           ///< More-Thuente maximum step length, > 0
+    double outlier_ratio = 0.55;  ///< uniform outlier weight of the NDT mixture, [0, 1)
+    int max_iterations = 35;      ///< Newton iteration cap, >= 1
+    /// stop when the last step's squared translation is <= this, > 0
+    double transformation_epsilon = 1e-6;
+    /// and when cos(last step's rotation angle) >= this, [0, 1), 0 disables
+    double transformation_rotation_epsilon = 0.9999995;
+
+    template <class F>
+    void Fields(F&& f) {
+        f("resolution", resolution,
+          "target voxel side [unit-sphere units], > 0; 0.25: ~10-20 points per occupied cell of a "
+          "717-point crop (PCL's 1.0 is metre-scale)");
+        f("min_points_per_voxel", min_points_per_voxel,
+          "cells with fewer points are dropped, >= 3; 6 = PCL default");
+        f("scale_rule", scale_rule,
+          "\"auto\": resolution and step_size scaled by the pair's unit (RMS radius / 0.6 when "
+          "outside [0.5, 2], else 1; docs/performance.md), used values in extra.resolved; "
+          "\"preset\": as given");
+        f("step_size", step_size, "More-Thuente maximum step length, > 0; 0.1 = PCL default");
+        f("outlier_ratio", outlier_ratio,
+          "uniform outlier weight of the NDT mixture, [0, 1); 0.55 = PCL default");
+        f("max_iterations", max_iterations, "Newton iteration cap, >= 1; 35 = PCL default");
+        f("transformation_epsilon", transformation_epsilon,
+          "stop when the last step's squared translation is <= this, > 0; 1e-6 (a 1e-3 step; "
+          "PCL's 0.1 is metre-scale)");
+        f("transformation_rotation_epsilon", transformation_rotation_epsilon,
+          "and when cos(last step's rotation angle) >= this, [0, 1), 0 disables; 0.9999995 = "
+          "cos(1e-3 rad)");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("resolution", resolution, 0.0);
+        c.AtLeast("min_points_per_voxel", min_points_per_voxel, 3);
+        c.Above("step_size", step_size, 0.0);
+        c.AtLeast("outlier_ratio", outlier_ratio, 0.0);
+        c.Below("outlier_ratio", outlier_ratio, 1.0);
+        c.AtLeast("max_iterations", max_iterations, 1);
+        c.Above("transformation_epsilon", transformation_epsilon, 0.0);
+        c.AtLeast("transformation_rotation_epsilon", transformation_rotation_epsilon, 0.0);
+        c.Below("transformation_rotation_epsilon", transformation_rotation_epsilon, 1.0);
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(NdtOptions, resolution, min_points_per_voxel, step_size, outlier_ratio,
-                       max_iterations, transformation_epsilon, transformation_rotation_epsilon,
-                       scale_rule)
-// clang-format on
 
 using PclNdt = pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>;
 
@@ -82,9 +112,8 @@ AlignResult AlignNdt(const NdtOptions& o,
     if (result.iterations == 0 && ndt.getTransformationLikelihood() == 0.0) {
         result.status = AlignStatus::kFailed;
         result.stop_reason = "no_progress";
-        result.message =
-            "ndt: 0 iterations: no source point lies near a target cell of side " +
-            std::to_string(resolution) + " (likelihood 0), so NDT returned its input";
+        result.message = "ndt: 0 iterations: no source point lies near a target cell of side " +
+                         std::to_string(resolution) + " (likelihood 0), so NDT returned its input";
     }
     result.extra = {{"transformation_likelihood", ndt.getTransformationLikelihood()},
                     {"target_cells", ndt.TargetCells()},
@@ -98,7 +127,11 @@ AlignResult AlignNdt(const NdtOptions& o,
 }  // namespace
 
 MethodInfo NdtMethodInfo() {
-    return MakeMethodInfo(SpecOf<NdtOptions>(BaselineSchema("ndt")), AlignNdt);
+    return MakeMethodInfo<NdtOptions>(
+        "ndt",
+        "3-D Normal Distributions Transform from the identity (PCL NormalDistributionsTransform, "
+        "float32), rescaled for unit-sphere objects",
+        AlignNdt);
 }
 
 }  // namespace regbench

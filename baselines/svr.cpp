@@ -14,9 +14,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "baselines/schemas.hpp"
 #include "core/math_constants.hpp"
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "gmm/bfgs.hpp"
 #include "gmm/gmm_common.hpp"
 #include "gmm/gmm_l2.hpp"
@@ -29,25 +28,97 @@ constexpr double kLibsvmCacheMb = 200.0;  // sklearn's OneClassSVM cache_size
 
 void QuietLibsvm(const char*) {}
 
-/// Documented in baselines/svr.schema.json (defaults too); the annealing, BFGS and
-/// kernel-sum keys are the shared AnnealedL2MethodOptions base (gmm/gmm_l2.hpp).
+/// Options of `svr`; the annealing, BFGS and kernel-sum fields are the shared
+/// AnnealedL2MethodOptions base (gmm/gmm_l2.hpp), bound here with svr's docs.
 struct SvrOptions : AnnealedL2MethodOptions {
-    Compat compat;
-    double nu;
-    bool normalize;
-    double sigma;
-    double gamma;
-    bool use_estimated_sigma;
-    double gamma_delta;
-    double svm_tol;
-    int svm_max_points;
+    Compat compat = Compat::kNone;  ///< "none" or "probreg"
+    /// one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)
+    double nu = 0.1;
+    bool normalize = true;  ///< optimise with both clouds centred and divided by sigma
+    /// bandwidth [input units] when use_estimated_sigma is false (probreg 1.0)
+    double sigma = 1.0;
+    double gamma = 0.5;  ///< RBF gamma when use_estimated_sigma is false (probreg 0.5)
+    /// sigma = det(cov(source))^(1/6), gamma = 1/(2 sigma^2) (true)
+    bool use_estimated_sigma = true;
+    /// compat probreg: SVM gamma *= gamma_delta per outer iteration (10)
+    double gamma_delta = 10.0;
+    double svm_tol = 0.001;  ///< libsvm stopping tolerance eps (sklearn tol 1e-3)
+    /// fit each one-class SVM on a seeded random subsample of this many points when the cloud is
+    /// larger (alphas scaled by n / subsample)
+    int svm_max_points = 8000;
+
+    template <class F>
+    void Fields(F&& f) {
+        f("compat", compat,
+          "\"none\" (default, correct: gradient=exact, normalize=true, gtol=1e-6, maxiter=200, "
+          "consistent sigma schedule) or \"probreg\" (probreg v0.3.7, incl. its gamma*=10 "
+          "annealing); explicit keys win");
+        f("nu", nu,
+          "one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)");
+        f("gradient", gradient,
+          "\"probreg_half\" = probreg's gradient (1/2 of the true one), \"exact\"");
+        f("normalize", normalize,
+          "optimise with both clouds centred and divided by sigma; probreg: false");
+        f("sigma", sigma,
+          "bandwidth [input units] when use_estimated_sigma is false (probreg 1.0)");
+        f("gamma", gamma, "RBF gamma when use_estimated_sigma is false (probreg 0.5)");
+        f("use_estimated_sigma", use_estimated_sigma,
+          "sigma = det(cov(source))^(1/6), gamma = 1/(2 sigma^2) (true)");
+        f("delta", delta, "cost sigma *= delta per outer iteration, in (0, 1] (probreg 0.9)");
+        f("gamma_delta", gamma_delta,
+          "compat probreg: SVM gamma *= gamma_delta per outer iteration (10)");
+        f("outer_iterations", outer_iterations,
+          "outer loop steps, SVMs refitted each step (probreg maxiter 1)");
+        f("outer_tol", outer_tol,
+          "stop the outer loop when |f - f_prev| < outer_tol (probreg tol 1e-3)");
+        f("maxiter", maxiter, "BFGS iterations per outer step (probreg opt_maxiter 50)");
+        f("gtol", gtol, "BFGS stops when |grad|_inf <= gtol (probreg opt_tol 1e-3)");
+        f("svm_tol", svm_tol, "libsvm stopping tolerance eps (sklearn tol 1e-3)");
+        f("svm_max_points", svm_max_points,
+          "fit each one-class SVM on a seeded random subsample of this many points when the cloud "
+          "is larger (alphas scaled by n / subsample); >= 10");
+        f("kernel_sums", kernel_sums,
+          "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed mixtures and "
+          "a kd-tree cutoff (as gmmreg); \"dense\": always exact");
+        f("approx_min_pairs", approx_min_pairs,
+          "S_s * S_t from which kernel_sums=auto approximates");
+        f("cutoff_tolerance", cutoff_tolerance,
+          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
+        f("compress_cell_sigmas", compress_cell_sigmas,
+          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("nu", nu, 0.0);
+        c.AtMost("nu", nu, 1.0);
+        c.Above("sigma", sigma, 0.0);
+        c.Finite("sigma", sigma);
+        c.Above("gamma", gamma, 0.0);
+        c.Finite("gamma", gamma);
+        c.Above("delta", delta, 0.0);
+        c.AtMost("delta", delta, 1.0);
+        c.Above("gamma_delta", gamma_delta, 0.0);
+        c.Finite("gamma_delta", gamma_delta);
+        c.AtLeast("outer_iterations", outer_iterations, 1);
+        c.AtLeast("outer_tol", outer_tol, 0.0);
+        c.AtLeast("maxiter", maxiter, 0);
+        c.AtLeast("gtol", gtol, 0.0);
+        c.Above("svm_tol", svm_tol, 0.0);
+        c.AtLeast("svm_max_points", svm_max_points, 10);
+        c.AtLeast("approx_min_pairs", approx_min_pairs, 0.0);
+        c.Above("cutoff_tolerance", cutoff_tolerance, 0.0);
+        c.Below("cutoff_tolerance", cutoff_tolerance, 1.0);
+        c.AtLeast("compress_cell_sigmas", compress_cell_sigmas, 0.0);
+        c.AtMost("compress_cell_sigmas", compress_cell_sigmas, 1.0);
+    }
+    /// compat "probreg": probreg 0.3.7's defaults for these keys.
+    void ApplyCompat() {
+        if (compat != Compat::kProbreg) return;
+        gradient = L2Gradient::kProbregHalf;
+        normalize = false;
+        gtol = 0.001;
+        maxiter = 50;
+    }
 };
-// clang-format off
-REGBENCH_OPTION_FIELDS(SvrOptions, compat, nu, gradient, normalize, sigma, gamma,
-                       use_estimated_sigma, delta, gamma_delta, outer_iterations, outer_tol, maxiter,
-                       gtol, svm_tol, svm_max_points, kernel_sums, approx_min_pairs,
-                       cutoff_tolerance, compress_cell_sigmas)
-// clang-format on
 
 /// A seeded uniform random subset of `max_points` rows (all rows when the cloud is smaller),
 /// in increasing row order.
@@ -197,7 +268,12 @@ OneClassSvm FitOneClassSvm(const PointCloud& X, double nu, double gamma, double 
 }
 
 MethodInfo SvrMethodInfo() {
-    return MakeMethodInfo(SpecOf<SvrOptions>(BaselineSchema("svr")), AlignSvr);
+    return MakeMethodInfo<SvrOptions>(
+        "svr",
+        "Support Vector Registration rigid as probreg runs it: libsvm one-class nu-SVM per cloud "
+        "(support vectors = GMM means), L2 cost, scipy-like BFGS; exact Gauss sums (approximated "
+        "at scale)",
+        AlignSvr);
 }
 
 }  // namespace regbench

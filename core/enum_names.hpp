@@ -1,16 +1,18 @@
 #pragma once
 // Enum <-> name conversion from one table of {value, name} pairs, so that an enum's names are
 // written once instead of in a ToString switch and again in a Parse function. (Enums that are
-// method parameters use NLOHMANN_JSON_SERIALIZE_ENUM instead: see core/method_spec.hpp.)
+// method parameters declare theirs with REGBENCH_CHOICES, below.)
 //
 //   constexpr EnumName<Colour> kColourNames[] = {{Colour::kRed, "red"}, {Colour::kBlue, "blue"}};
 //   EnumToString(kColourNames, Colour::kRed)    -> "red"
 //   ParseEnum(kColourNames, "colour", "green")  -> throws std::invalid_argument
 //                                                  "unknown colour 'green' (known: red, blue)"
 #include <cstddef>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace regbench {
 
@@ -62,5 +64,16 @@ Enum ParseEnum(const EnumName<Enum> (&table)[N],
     throw std::invalid_argument(prefix + "unknown " + what + " '" + name +
                                 "' (known: " + EnumNameList(table) + ")");
 }
+
+/// The names of a choice enum, after the enum: REGBENCH_CHOICES(Centre, {{Centre::kMean,
+/// "mean"}, {Centre::kMedian, "median"}}). Defines ChoicesOf(Centre{}) (the table, in this
+/// order) and nlohmann's to_json/from_json (NLOHMANN_JSON_SERIALIZE_ENUM); parameters are
+/// read strictly (an unknown name is an error listing the names).
+#define REGBENCH_CHOICES(Enum, ...)                                            \
+    inline const std::vector<EnumName<Enum>>& ChoicesOf(Enum /*tag*/) {        \
+        static const std::vector<EnumName<Enum>> regbench_names = __VA_ARGS__; \
+        return regbench_names;                                                 \
+    }                                                                          \
+    NLOHMANN_JSON_SERIALIZE_ENUM(Enum, __VA_ARGS__)
 
 }  // namespace regbench

@@ -24,6 +24,13 @@ std::string ReadHolder(int fd) {
     return pid.empty() ? "unknown" : pid;
 }
 
+/// "dir/" and "dir//" name the folder "dir": its lock is "dir.lock" beside it, not "dir/.lock"
+/// inside a folder that may not exist yet (export --out dir/ failed with ENOENT on the lock).
+std::string WithoutTrailingSlashes(std::string path) {
+    while (path.size() > 1 && path.back() == '/') path.pop_back();
+    return path;
+}
+
 }  // namespace
 
 void RequireRegularOrAbsent(const std::string& path, const std::string& what) {
@@ -48,7 +55,7 @@ void RequireRegularOrAbsent(const std::string& path, const std::string& what) {
 }
 
 OutputLock::OutputLock(const std::string& path)
-    : lock_path_(path + ".lock"), owner_(::getpid()) {
+    : lock_path_(WithoutTrailingSlashes(path) + ".lock"), owner_(::getpid()) {
     // Retry when the file we locked was unlinked by a finishing holder between our open and
     // our flock: that inode no longer guards the path.
     for (int attempt = 0; attempt < 100; ++attempt) {

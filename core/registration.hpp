@@ -100,7 +100,7 @@ struct MethodInfo {
     std::map<std::string, std::string> param_docs;
     /// Default parameters (what Params() returns for an empty JSON object).
     nlohmann::json defaults;
-    /// The parameters' JSON Schema (baselines/<method>.schema.json; core/param_schema.hpp),
+    /// The parameters' JSON Schema (core/params.hpp ParamSchemaOf),
     /// or null for methods described by hand.
     nlohmann::json schema;
     /// Creates an instance; throws std::invalid_argument on unknown keys / bad values.

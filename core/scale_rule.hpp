@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "core/enum_names.hpp"
 #include "core/point_cloud.hpp"
 
 namespace regbench {
@@ -25,8 +26,8 @@ enum class ScaleRuleMode {
     kAuto,    ///< length parameters times the pair's unit (and FGR downsampling when dense)
     kPreset,  ///< the values as given (the paper's setting)
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(ScaleRuleMode,
-                             {{ScaleRuleMode::kAuto, "auto"}, {ScaleRuleMode::kPreset, "preset"}})
+REGBENCH_CHOICES(ScaleRuleMode,
+                 {{ScaleRuleMode::kAuto, "auto"}, {ScaleRuleMode::kPreset, "preset"}})
 
 struct ScaleRule {
     double rms_radius = 0.0;  ///< L of the target

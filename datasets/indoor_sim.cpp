@@ -13,7 +13,7 @@
 
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
-#include "core/options.hpp"
+#include "core/params.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 #include "datasets/off_reader.hpp"
@@ -412,7 +412,7 @@ void ValidateIndoorSimOptions(const IndoorSimOptions& o) {
 }
 
 IndoorSimOptions ParseIndoorSimOptions(const nlohmann::json& j) {
-    IndoorSimOptions options = ParseOptions<IndoorSimOptions>(j, kName);
+    IndoorSimOptions options = ParseConfig<IndoorSimOptions>(j, kName);
     ValidateIndoorSimOptions(options);
     return options;
 }

@@ -31,7 +31,7 @@
 
 namespace regbench {
 
-/// All simulation parameters (flat, so core/options.hpp's ParseOptions checks every key).
+/// All simulation parameters (flat, so core/params.hpp's ParseConfig checks every key).
 struct IndoorSimOptions {
     // Room (uniform ranges).
     double room_min_side_m = 3.0;       ///< floor width and depth drawn in [min, max]
@@ -153,7 +153,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IndoorSimOptions,
 
 /// Throws std::invalid_argument("indoor: parameter '<name>' ...") on an inconsistent option.
 void ValidateIndoorSimOptions(const IndoorSimOptions& options);
-/// ParseOptions + ValidateIndoorSimOptions.
+/// ParseConfig + ValidateIndoorSimOptions.
 IndoorSimOptions ParseIndoorSimOptions(const nlohmann::json& j);
 
 /// Meshes from the corpus, read once and shared by every room (no global cache: the caller owns

@@ -299,15 +299,15 @@ void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
 
 }  // namespace
 
-PointCloud ReadCloudFile(const std::string& path) {
+PointCloud ReadCloudFile(const std::string& path, NonFinitePoints non_finite) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     if (ext == ".off") return ReadOff(path).vertices;
-    return ReadPointFile(path);
+    return ReadPointFile(path, nullptr, non_finite);
 }
 
-PointCloud ReadPointFile(const std::string& path, Normals* normals) {
+PointCloud ReadPointFile(const std::string& path, Normals* normals, NonFinitePoints non_finite) {
     if (!std::filesystem::is_regular_file(path)) {
         throw std::runtime_error(path + ": no such point file");
     }
@@ -320,7 +320,7 @@ PointCloud ReadPointFile(const std::string& path, Normals* normals) {
     if (ext == ".ply" || ext == ".pcd") {
         const DeclaredCloud declared = ext == ".ply" ? ReadPlyHeader(path) : ReadPcdHeader(path);
         CheckDeclaredCloud(path, declared);
-        PointCloud points = ReadPointFileOpen3D(path, normals);
+        PointCloud points = ReadPointFileOpen3D(path, normals, non_finite);
         if (static_cast<double>(points.rows()) > declared.points) {
             throw std::runtime_error(path + ": " + std::to_string(points.rows()) +
                                      " points read but the header declares " +

@@ -10,7 +10,9 @@
 
 namespace regbench {
 
-PointCloud ReadPointFileOpen3D(const std::string& path, Normals* normals) {
+PointCloud ReadPointFileOpen3D(const std::string& path,
+                               Normals* normals,
+                               NonFinitePoints non_finite) {
     open3d::geometry::PointCloud cloud;
     open3d::io::ReadPointCloudOption option;
     // Non-finite points (organized PCD scans mark missing depth with NaN) are dropped here,
@@ -22,6 +24,12 @@ PointCloud ReadPointFileOpen3D(const std::string& path, Normals* normals) {
     }
     const std::size_t read = cloud.points_.size();
     cloud.RemoveNonFinitePoints(true, true);
+    if (cloud.points_.size() != read && non_finite == NonFinitePoints::kRefuse) {
+        throw std::runtime_error(path + ": " + std::to_string(read - cloud.points_.size()) +
+                                 " of " + std::to_string(read) +
+                                 " points have NaN or Inf coordinates (refused by "
+                                 "--nan-points refuse; --nan-points drop drops them)");
+    }
     if (cloud.points_.size() != read) {
         std::cerr << "regbench: warning: " << path << ": dropped " << read - cloud.points_.size()
                   << " of " << read << " points with NaN or Inf coordinates\n";

@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "core/enum_names.hpp"
 #include "core/point_cloud.hpp"
 
 namespace regbench {
@@ -212,10 +213,10 @@ enum class GaussSumMode {
     kDense,      ///< exact up to float underflow
     kTruncated,  ///< always truncate at truncation_sigmas * sigma
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(GaussSumMode,
-                             {{GaussSumMode::kAuto, "auto"},
-                              {GaussSumMode::kDense, "dense"},
-                              {GaussSumMode::kTruncated, "truncated"}})
+REGBENCH_CHOICES(GaussSumMode,
+                 {{GaussSumMode::kAuto, "auto"},
+                  {GaussSumMode::kDense, "dense"},
+                  {GaussSumMode::kTruncated, "truncated"}})
 
 /// Switch rule for GaussSumMode::kAuto (docs/probabilistic-baselines.md, CPD cost): truncate
 /// when max(M, N) >= truncation_min_points and r = truncation_sigmas * sigma is below

@@ -11,6 +11,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "core/enum_names.hpp"
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
 #include "gmm/bfgs.hpp"
@@ -22,9 +23,8 @@ enum class L2Gradient {
     kProbregHalf,  ///< probreg's g_i = ... / (2 sigma^2): exactly 1/2 of the true gradient
     kExact,        ///< the true gradient of f
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(L2Gradient,
-                             {{L2Gradient::kProbregHalf, "probreg_half"},
-                              {L2Gradient::kExact, "exact"}})
+REGBENCH_CHOICES(L2Gradient,
+                 {{L2Gradient::kProbregHalf, "probreg_half"}, {L2Gradient::kExact, "exact"}})
 
 /// Component means and (unnormalised) weights of one mixture.
 struct MixtureFeatures {
@@ -57,8 +57,7 @@ enum class L2KernelSums {
     kAuto,   ///< approximate from L2SumOptions::min_pairs on
     kDense,  ///< always dense and exact
 };
-NLOHMANN_JSON_SERIALIZE_ENUM(L2KernelSums,
-                             {{L2KernelSums::kAuto, "auto"}, {L2KernelSums::kDense, "dense"}})
+REGBENCH_CHOICES(L2KernelSums, {{L2KernelSums::kAuto, "auto"}, {L2KernelSums::kDense, "dense"}})
 
 struct L2SumOptions {
     bool approximate = true;            ///< false: always dense and exact
@@ -174,20 +173,20 @@ struct AnnealedL2Options {
     L2SumOptions sums;  ///< dense or approximated Gaussian sums in every inner run
 };
 
-/// The options GMMReg and SVR share, under the same JSON keys in both schemas: the annealing
-/// schedule, the inner BFGS and the kernel sums. Both methods' options structs derive from it
-/// (no defaults here: they are the schemas').
+/// The options GMMReg and SVR share, under the same JSON keys in both: the annealing schedule,
+/// the inner BFGS and the kernel sums. Both methods' options structs derive from it and bind
+/// these fields with their own docs (their Fields).
 struct AnnealedL2MethodOptions {
-    L2Gradient gradient;
-    double delta;
-    int outer_iterations;
-    double outer_tol;
-    int maxiter;
-    double gtol;
-    L2KernelSums kernel_sums;
-    double approx_min_pairs;
-    double cutoff_tolerance;
-    double compress_cell_sigmas;
+    L2Gradient gradient = L2Gradient::kExact;  ///< "probreg_half" (probreg's) or "exact"
+    double delta = 0.9;                        ///< sigma *= delta per outer step, in (0, 1]
+    int outer_iterations = 1;                  ///< outer (annealing) steps, >= 1
+    double outer_tol = 0.001;  ///< stop the schedule when |f - f_prev| < outer_tol, >= 0
+    int maxiter = 200;         ///< BFGS iterations per outer step, >= 0
+    double gtol = 1e-6;        ///< BFGS stops when |grad|_inf <= gtol, >= 0
+    L2KernelSums kernel_sums = L2KernelSums::kAuto;  ///< "auto" or "dense"
+    double approx_min_pairs = 1e8;      ///< pairs from which kernel_sums=auto approximates, >= 0
+    double cutoff_tolerance = 1e-4;     ///< kernel value at the cutoff radius, in (0, 1)
+    double compress_cell_sigmas = 0.1;  ///< compression cell edge [sigma], in [0, 1]
 };
 
 /// The schedule from the shared options.

@@ -13,8 +13,8 @@
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
-#include "core/json_limits.hpp"
 #include "core/version.hpp"
+#include "ogmm/checkpoint_json.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::ogmm {
@@ -112,20 +112,8 @@ nlohmann::json ReadCheckpointJson(const std::string& dir) {
     const fs::path path = fs::path(dir) / kCheckpointJson;
     std::ifstream in(path);
     if (!in) throw std::runtime_error("checkpoint file " + path.string() + " cannot be opened");
-    nlohmann::json j;
-    try {
-        const std::string text((std::istreambuf_iterator<char>(in)),
-                               std::istreambuf_iterator<char>());
-        j = ParseJsonBounded(text, "checkpoint file " + path.string());
-    } catch (const std::exception& e) {
-        throw std::runtime_error("checkpoint file " + path.string() +
-                                 " is not valid JSON: " + e.what());
-    }
-    if (!j.is_object() || j.value("format", "") != kFormat || !j.contains("model_config")) {
-        throw std::runtime_error("checkpoint file " + path.string() +
-                                 " is not a regbench checkpoint (no format/model_config)");
-    }
-    return j;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return ParseCheckpointJson(text, path.string());  // every check, torch-free (fuzzed)
 }
 
 nlohmann::json LoadCheckpoint(const std::string& dir,

@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "core/enum_names.hpp"
-#include "core/options.hpp"
+#include "core/params.hpp"
 #include "ogmm/gmm_head.hpp"
 
 namespace regbench::ogmm {
@@ -42,7 +42,9 @@ static void from_json(const nlohmann::json& j, DeepGmrFeatures& f) {
     f = ParseFeatures(j.get<std::string>());
 }
 static void to_json(nlohmann::json& j, DeepGmrLoss l) { j = ToString(l); }
-static void from_json(const nlohmann::json& j, DeepGmrLoss& l) { l = ParseLoss(j.get<std::string>()); }
+static void from_json(const nlohmann::json& j, DeepGmrLoss& l) {
+    l = ParseLoss(j.get<std::string>());
+}
 static void to_json(nlohmann::json& j, RriVariant v) { j = ToString(v); }
 static void from_json(const nlohmann::json& j, RriVariant& v) {
     v = ParseRriVariant(j.get<std::string>());
@@ -104,7 +106,7 @@ DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
         }
         fields.erase("arch");
     }
-    const auto c = ParseOptions<DeepGmrConfig>(fields, "deepgmr config");
+    const auto c = ParseConfig<DeepGmrConfig>(fields, "deepgmr config");
     if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1 ||
         c.d_model < 1) {
         throw std::invalid_argument(

@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/options.hpp"
+#include "core/params.hpp"
 #include "gmm/simd_exp.hpp"
 #include "ogmm/gmm_head.hpp"
 
@@ -52,16 +52,6 @@ constexpr double kMeanDenominator = 1e-5;    // mu, nu = sum gamma x / (sum gamm
 constexpr double kOverlapSumFloor = 1e-4;    // w = op / max(sum op, 1e-4)
 constexpr double kKabschRegulariser = 1e-5;  // H + 1e-5 I before the SVD
 
-// Integer fields must get integers (ParseOptions accepts any number for a numeric default).
-void RequireIntegers(const nlohmann::json& config) {
-    const nlohmann::json defaults = OgmmConfig{};
-    for (const auto& item : config.items()) {
-        if (defaults.at(item.key()).is_number_integer() && !item.value().is_number_integer()) {
-            Require(false, kName, item.key(), "must be an integer, got " + item.value().dump());
-        }
-    }
-}
-
 void ValidateValues(const OgmmConfig& c) {
     Require(c.emb_dims >= 2 && c.emb_dims % 2 == 0, kName, "emb_dims", "must be even and >= 2");
     Require(c.heads >= 1, kName, "heads", "must be >= 1");
@@ -70,7 +60,8 @@ void ValidateValues(const OgmmConfig& c) {
     Require(c.clusters >= 3, kName, "clusters", "must be >= 3 (a rigid fit needs 3 means)");
     Require(c.k >= 1, kName, "k", "must be >= 1");
     Require(c.spe_k >= 2, kName, "spe_k", "must be >= 2 (the first neighbour is the point)");
-    RequireOneOf(c.attention, {"clustered", "full"}, kName, "attention");
+    Require(c.attention == "clustered" || c.attention == "full", kName, "attention",
+            "must be \"clustered\" or \"full\", got \"" + c.attention + "\"");
     Require(c.gmm_iterations >= 1, kName, "gmm_iterations", "must be >= 1");
     Require(c.sinkhorn_epsilon > 0, kName, "sinkhorn_epsilon", "must be > 0");
     Require(c.sinkhorn_threshold >= 0, kName, "sinkhorn_threshold", "must be >= 0");
@@ -129,8 +120,7 @@ torch::Tensor WelschOfTopLabelled(const torch::Tensor& from,
 }  // namespace
 
 OgmmConfig ParseOgmmConfig(const nlohmann::json& config) {
-    OgmmConfig c = ParseOptions<OgmmConfig>(config, kName);
-    if (config.is_object()) RequireIntegers(config);
+    OgmmConfig c = ParseConfig<OgmmConfig>(config, kName);
     ValidateValues(c);
     return c;
 }
@@ -159,9 +149,9 @@ std::shared_ptr<RegistrationNet> MakeOgmmNet(const nlohmann::json& config) {
 }
 
 OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz,
-                         const torch::Tensor& overlap,
-                         int64_t clusters,
-                         const GmmFitOptions& options) {
+                                  const torch::Tensor& overlap,
+                                  int64_t clusters,
+                                  const GmmFitOptions& options) {
     torch::NoGradGuard no_grad;
     const int64_t batch = xyz.size(0);
     const torch::Tensor w = overlap / overlap.sum(1, true).clamp_min(kOverlapSumFloor);
@@ -246,9 +236,11 @@ REGBENCH_SIMD_CLONES void SinkhornColumns(const double* cost,
     for (long i = 0; i < n; ++i) {
         const double* c = cost + i * J;
 #pragma omp simd
-        for (long j = 0; j < J; ++j) column_sum[j] += ExpClamped((u[i] - c[j]) * inv - column_max[j]);
+        for (long j = 0; j < J; ++j)
+            column_sum[j] += ExpClamped((u[i] - c[j]) * inv - column_max[j]);
     }
-    for (long j = 0; j < J; ++j) v[j] = epsilon * (log_q - (column_max[j] + std::log(column_sum[j])));
+    for (long j = 0; j < J; ++j)
+        v[j] = epsilon * (log_q - (column_max[j] + std::log(column_sum[j])));
 }
 
 // gamma_ij = Gamma_ij / max(sum_j Gamma_ij, 1e-3), Gamma_ij = exp((u_i + v_j - C_ij) / eps),
@@ -290,10 +282,10 @@ void FitOverlapGmmCloud(const double* xyz,
                         double* mu) {
     constexpr double kLogFloor = 1e-8;  // the code's log(p + 1e-8)
     const double eps = options.epsilon;
-    std::vector<double> cost(static_cast<size_t>(n * J)), u(static_cast<size_t>(n)), v(static_cast<size_t>(J)),
-        log_p(static_cast<size_t>(n)), u_new(static_cast<size_t>(n)), v_new(static_cast<size_t>(J)),
-        scratch(static_cast<size_t>(std::max(J, 1L))), column_max(static_cast<size_t>(J)),
-        column_sum(static_cast<size_t>(J));
+    std::vector<double> cost(static_cast<size_t>(n * J)), u(static_cast<size_t>(n)),
+        v(static_cast<size_t>(J)), log_p(static_cast<size_t>(n)), u_new(static_cast<size_t>(n)),
+        v_new(static_cast<size_t>(J)), scratch(static_cast<size_t>(std::max(J, 1L))),
+        column_max(static_cast<size_t>(J)), column_sum(static_cast<size_t>(J));
     for (long j = 0; j < J; ++j) {
         for (int d = 0; d < 3; ++d) mu[j * 3 + d] = xyz[first[j] * 3 + d];
     }
@@ -353,8 +345,9 @@ OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
     }
     torch::NoGradGuard no_grad;
     // Masses in the input's precision (as the tensor-op path), the fit itself in double.
-    const torch::Tensor w =
-        (overlap / overlap.sum(1, true).clamp_min(kOverlapSumFloor)).to(torch::kDouble).contiguous();
+    const torch::Tensor w = (overlap / overlap.sum(1, true).clamp_min(kOverlapSumFloor))
+                                .to(torch::kDouble)
+                                .contiguous();
     const torch::Tensor points = xyz.to(torch::kDouble).contiguous();
     const torch::Tensor first = FpsCentroid(xyz.transpose(1, 2), clusters).contiguous();
     const int64_t batch = points.size(0), n = points.size(1);
@@ -477,8 +470,7 @@ NetOutput OgmmNet::Forward(const PairBatch& batch) {
     xp = conv3_a_(xp);
     xq = conv3_a_(xq);
     // 6: cross-attention to the other cloud's anchors (one module, both directions).
-    const torch::Tensor bp = Anchors(xp, p, batch.generator),
-                        bq = Anchors(xq, q, batch.generator);
+    const torch::Tensor bp = Anchors(xp, p, batch.generator), bq = Anchors(xq, q, batch.generator);
     const torch::Tensor gp = att_c_(xp, bq) + xp, gq = att_c_(xq, bp) + xq;
     // 7: overlap scores.
     torch::Tensor op, oq;

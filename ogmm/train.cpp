@@ -1,22 +1,30 @@
 #include "ogmm/train.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <csignal>
-#include <future>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
+#include <future>
 #include <iomanip>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
 
+#include "core/atomic_file.hpp"
 #include "core/cpu_time.hpp"
+#include "core/file_lock.hpp"
 #include "core/metrics.hpp"
-#include "core/options.hpp"
+#include "core/params.hpp"
 #include "ogmm/checkpoint.hpp"
+#include "ogmm/checkpoint_json.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::ogmm {
@@ -38,7 +46,7 @@ nlohmann::json ToJson(const TrainConfig& c) { return c; }
 
 TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
     // Unknown keys (a misspelt key in a recipe) and wrong types are errors naming the key.
-    const auto c = ParseOptions<TrainConfig>(j, "train config");
+    const auto c = ParseConfig<TrainConfig>(j, "train config");
     if (c.lr <= 0 || c.batch < 1 || c.epochs < 1 || c.pairs_per_epoch < c.batch) {
         throw std::invalid_argument(
             "train config: need lr > 0, batch >= 1, epochs >= 1 and "
@@ -258,13 +266,38 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
 /// Infinite bests (nothing validated yet) are written as null, JSON having no infinity.
 nlohmann::json ToJson(const TrainerState& s) { return s; }
 
+/// Appends `text` to `path` (created when absent; emptied first when `truncate`) with checked
+/// writes. Never through a link: a symbolic or hard link pre-placed at metrics.csv made a fresh
+/// run truncate the file it pointed to. Throws naming the file (ENOSPC, EFBIG, a link).
+void WriteMetricsFile(const fs::path& path, const std::string& text, bool truncate) {
+    RequireRegularOrAbsent(path.string(), "metrics file");
+    const int fd = ::open(path.c_str(),
+                          O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC |
+                              (truncate ? O_TRUNC : 0),
+                          0644);
+    if (fd < 0) {
+        throw std::runtime_error(path.string() + ": cannot open metrics file: " +
+                                 std::strerror(errno));
+    }
+    try {
+        WriteAllOrThrow(fd, text, path.string());
+    } catch (...) {
+        ::close(fd);
+        throw;
+    }
+    if (::close(fd) != 0) {
+        throw std::runtime_error(path.string() + ": write failed: " + std::strerror(errno));
+    }
+}
+
 /// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
 /// A kill during an append leaves the metrics file's last line without its newline; the
 /// resumed run's first line would be glued onto it. Cut the file after its last newline
 /// (the lost line's epoch is validated again) and say so.
 void DropTornLastLine(const fs::path& path, std::ostream& log) {
     std::error_code ec;
-    if (!fs::exists(path, ec)) return;
+    if (!fs::exists(fs::symlink_status(path, ec))) return;
+    RequireRegularOrAbsent(path.string(), "metrics file");
     std::string text;
     {
         std::ifstream in(path, std::ios::binary);
@@ -273,46 +306,18 @@ void DropTornLastLine(const fs::path& path, std::ostream& log) {
     if (text.empty() || text.back() == '\n') return;
     const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
     fs::resize_file(path, keep, ec);
-    if (ec) throw std::runtime_error(path.string() + ": cannot drop a torn last line: " + ec.message());
-    log << "train: dropped a torn last line of " << path.string() << " ("
-        << text.size() - keep << " bytes, cut by an interrupted write)\n";
+    if (ec)
+        throw std::runtime_error(path.string() + ": cannot drop a torn last line: " + ec.message());
+    log << "train: dropped a torn last line of " << path.string() << " (" << text.size() - keep
+        << " bytes, cut by an interrupted write)\n";
 }
 
 /// Every counter is checked as written: a count must be a whole number in [0, 2^53] (a step of
 /// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
 /// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
 TrainerState TrainerStateFromJson(nlohmann::json j) {
-    if (!j.is_object()) throw std::invalid_argument("trainer state is not an object");
-    if (!j.contains("step")) throw std::invalid_argument("trainer state: no 'step'");
+    CheckTrainerStateJson(j);  // ogmm/checkpoint_json.cpp: every counter, named when refused
     for (auto it = j.begin(); it != j.end();) it = it->is_null() ? j.erase(it) : std::next(it);
-    const auto bad = [&](const std::string& key, const std::string& need) {
-        throw std::invalid_argument("trainer state: '" + key + "' is " + j.at(key).dump() +
-                                    ", expected " + need);
-    };
-    for (const char* key :
-         {"step", "planned_steps", "pairs_seen", "plateau_bad", "epoch_loss_steps"}) {
-        if (!j.contains(key)) continue;
-        const nlohmann::json& v = j.at(key);
-        if (!v.is_number_integer() || (v.is_number_unsigned() ? v.get<std::uint64_t>() > (1ULL << 53)
-                                                              : v.get<std::int64_t>() < 0)) {
-            bad(key, "a whole number in [0, 2^53]");
-        }
-    }
-    if (j.contains("plateau_bad") && j.at("plateau_bad").get<std::int64_t>() > 1000000000) {
-        bad("plateau_bad", "a whole number in [0, 1e9]");
-    }
-    for (const char* key : {"lr", "elapsed_seconds", "cpu_seconds", "plateau_scale"}) {
-        if (!j.contains(key)) continue;
-        const nlohmann::json& v = j.at(key);
-        if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0) {
-            bad(key, "a finite number >= 0");
-        }
-    }
-    for (const char* key : {"best_mae_r", "plateau_best", "epoch_loss_sum"}) {
-        if (j.contains(key) && (!j.at(key).is_number() || !std::isfinite(j.at(key).get<double>()))) {
-            bad(key, "a finite number (or null)");
-        }
-    }
     return j.get<TrainerState>();
 }
 
@@ -334,9 +339,8 @@ std::string CsvLine(const EpochMetrics& m, bool header) {
 }
 
 void AppendMetrics(const fs::path& dir, const EpochMetrics& m) {
-    std::ofstream(dir / "metrics.csv", std::ios::app) << CsvLine(m, /*header=*/false);
-    std::ofstream jsonl(dir / "metrics.jsonl", std::ios::app);
-    jsonl << ToJson(m).dump() << "\n";
+    WriteMetricsFile(dir / "metrics.csv", CsvLine(m, /*header=*/false), /*truncate=*/false);
+    WriteMetricsFile(dir / "metrics.jsonl", ToJson(m).dump() + "\n", /*truncate=*/false);
 }
 
 /// Set by SIGINT / SIGTERM while a Trainer runs: the run ends after the current step with a
@@ -445,14 +449,15 @@ void Trainer::Start() {
                                  " already holds a run (last/); pass --resume or another --out");
     }
     fs::create_directories(dir_);
-    std::ofstream(dir_ / "metrics.csv") << CsvLine({}, /*header=*/true);
-    std::ofstream(dir_ / "metrics.jsonl");
+    WriteMetricsFile(dir_ / "metrics.csv", CsvLine({}, /*header=*/true), /*truncate=*/true);
+    WriteMetricsFile(dir_ / "metrics.jsonl", "", /*truncate=*/true);
     state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
 }
 
 void Trainer::Resume() {
     const fs::path last = dir_ / "last";
-    if (!fs::exists(last)) throw std::runtime_error("--resume: " + last.string() + " does not exist");
+    if (!fs::exists(last))
+        throw std::runtime_error("--resume: " + last.string() + " does not exist");
     const nlohmann::json j = LoadCheckpoint(last.string(), *net_, opt_.get());
     if (j.contains("config") && j.at("config").value("train", nlohmann::json()) !=
                                     config_.value("train", nlohmann::json())) {
@@ -487,7 +492,8 @@ double Trainer::LearningRate() const {
     if (recipe_.schedule == "multistep") {
         double lr = recipe_.lr;
         const double progress =
-            static_cast<double>(state_.step) / static_cast<double>(std::max<std::int64_t>(1, state_.planned_steps));
+            static_cast<double>(state_.step) /
+            static_cast<double>(std::max<std::int64_t>(1, state_.planned_steps));
         for (double m : recipe_.milestones) {
             if (progress >= m) lr *= recipe_.lr_gamma;
         }
@@ -512,9 +518,8 @@ void Trainer::PlanForBudget() {
     if (fit < state_.planned_steps) {
         state_.planned_steps = std::max(fit, kPlanningSteps + 1);
         log_ << "train: LR schedule planned over " << state_.planned_steps
-             << " steps, what fits the " << options_.minutes << "-minute budget at "
-             << per_step << " s a step (the recipe has "
-             << steps_per_epoch_ * recipe_.epochs << ")\n";
+             << " steps, what fits the " << options_.minutes << "-minute budget at " << per_step
+             << " s a step (the recipe has " << steps_per_epoch_ * recipe_.epochs << ")\n";
     }
 }
 
@@ -622,9 +627,10 @@ void Trainer::EndEpoch() {
     AppendMetrics(dir_, m);
     summary_.epochs.push_back(m);
     log_ << "train: validation epoch " << m.epoch << " step " << m.step << ": loss " << m.val_loss
-         << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t "
-         << m.mae_t << ", ccd " << m.ccd << ", recall " << m.recall;
-    if (options_.refine) log_ << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
+         << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t " << m.mae_t
+         << ", ccd " << m.ccd << ", recall " << m.recall;
+    if (options_.refine)
+        log_ << "; with ICP mae_r " << m.mae_r_refined << ", ccd " << m.ccd_refined;
     if (!data_.validation.empty() && m.mae_r >= m.identity_mae_r) {
         log_ << "; WORSE THAN THE IDENTITY (network alone)";
     }
@@ -702,10 +708,10 @@ std::vector<Transform> Predict(RegistrationNet& net,
     std::vector<Transform> out;
     for (std::size_t start = 0; start < samples.size(); start += static_cast<std::size_t>(batch)) {
         const std::size_t end = std::min(samples.size(), start + static_cast<std::size_t>(batch));
-        const PairBatch b = Collate(
-            std::vector<TrainSample>(samples.begin() + static_cast<std::ptrdiff_t>(start),
-                                     samples.begin() + static_cast<std::ptrdiff_t>(end)),
-            device);
+        const PairBatch b =
+            Collate(std::vector<TrainSample>(samples.begin() + static_cast<std::ptrdiff_t>(start),
+                                             samples.begin() + static_cast<std::ptrdiff_t>(end)),
+                    device);
         const NetOutput o = net.Forward(b);
         for (int64_t i = 0; i < o.T.size(0); ++i) out.push_back(ToTransform(o.T[i]));
     }

@@ -122,6 +122,9 @@ std::string TransformText(const Transform& T) {
 class ExportDir {
 public:
     explicit ExportDir(const std::string& dir) : dir_(dir) {
+        // "out/" is the folder "out": without this its temporary went inside it (parent_path of
+        // "out/" is "out"), and the rename over the then non-empty folder failed.
+        while (dir_.size() > 1 && dir_.back() == '/') dir_.pop_back();
         std::error_code ec;
         if (fs::exists(dir_, ec)) {
             if (!fs::is_directory(dir_))

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "core/atomic_file.hpp"
+#include "core/file_lock.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
@@ -506,6 +507,11 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     ValidateOptions(o);
     ReproduceSummary summary;
     const fs::path out = fs::absolute(o.out_dir);
+    // One reproduce per folder (OUT.lock beside it): a second one, or any regbench writer on
+    // the same path, is refused naming the pid before anything is generated.
+    fs::path folder = out.lexically_normal();
+    if (folder.filename().empty() && folder.has_parent_path()) folder = folder.parent_path();
+    const OutputLock lock(folder.string());
     fs::create_directories(out / "pairs");
     fs::create_directories(out / "results");
     summary.out_dir = out.string();

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "runners/result_row.hpp"
-#include "runners/runner.hpp"
+#include "runners/run_options.hpp"
 
 namespace regbench {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "protocols/pair.hpp"
-#include "runners/runner.hpp"
+#include "runners/run_options.hpp"
 
 namespace regbench {
 

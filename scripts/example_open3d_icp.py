@@ -4,11 +4,11 @@
   PYTHONPATH=build/python /usr/bin/python3 scripts/example_open3d_icp.py PAIRS.h5 OUT.jsonl [--methods icp,cpd]
 runs `open3d-py-icp` beside the built-in methods in one regbench.run (same rows, timing, failure
 handling and resume as `regbench run`), prints each method's median wall and CPU seconds and
-`regbench report OUT.jsonl` (README "From Python").
+`regbench report OUT.jsonl` (docs/usage.md "From Python").
 
   PYTHONPATH=build/python /usr/bin/python3 scripts/example_open3d_icp.py PAIRS.h5 --transforms PREFIX
 only writes the transforms as PREFIX.jsonl and PREFIX.csv, the two formats `regbench score`
-reads (README "Your own method: score"; docs/metrics.md).
+reads (docs/usage.md "Your own method: score"; docs/metrics.md).
 """
 import argparse
 import json

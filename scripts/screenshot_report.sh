@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Screenshots of a `regbench reproduce` HTML report with Debian's headless Chromium, as in the
-# README: the top of the page (the paper's tables) and one experiment's plots. The second shot
+# Screenshots of a `regbench reproduce` HTML report with Debian's headless Chromium, as in
+# docs/reproducing.md: the top of the page (the paper's tables) and one experiment's plots. The second shot
 # loads the report in an iframe shifted up by OFFSET pixels, so the picture is the real render
 # of that part of the page.
 # Usage: scripts/screenshot_report.sh REPORT.html OUT_DIR [OFFSET]   (OFFSET default 5640: the

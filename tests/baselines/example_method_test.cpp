@@ -1,7 +1,7 @@
 // The worked example of docs/adding-a-method.md, compiled and tested so the document cannot rot:
 // a `centroid` method (not in the registry) that only translates the source's centre onto the
 // target's. The block between the EXAMPLE markers is the document's baselines/centroid.cpp
-// body verbatim, and kCentroidSchema its baselines/centroid.schema.json; keep them in step.
+// body verbatim; keep them in step.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,13 +10,14 @@
 #include <utility>
 #include <vector>
 
-#include "core/method_spec.hpp"
+#include "core/params.hpp"
 #include "core/transform.hpp"
 
 namespace regbench {
 namespace {
 
-/// The document's baselines/centroid.schema.json verbatim; keep the two in step.
+/// The JSON Schema `regbench methods --json` should print for the example, written by hand
+/// from the JSON Schema 2020-12 keywords: the expected value of the generated one.
 constexpr const char* kCentroidSchema = R"json({
   "$schema": "https://json-schema.org/draft/2020-12/schema",
   "title": "centroid",
@@ -40,21 +41,24 @@ constexpr const char* kCentroidSchema = R"json({
   }
 })json";
 
-/// In the tree, baselines/schemas.hpp's BaselineSchema returns the compiled-in file.
-const char* BaselineSchema(const std::string& stem) {
-    if (stem != "centroid") throw std::logic_error("no schema " + stem);
-    return kCentroidSchema;
-}
-
 // EXAMPLE BEGIN
 enum class Centre { kMean, kMedian };
-NLOHMANN_JSON_SERIALIZE_ENUM(Centre, {{Centre::kMean, "mean"}, {Centre::kMedian, "median"}})
+REGBENCH_CHOICES(Centre, {{Centre::kMean, "mean"}, {Centre::kMedian, "median"}})
 
-struct CentroidOptions {  // documented in baselines/centroid.schema.json (defaults too)
-    Centre centre;
-    double step;
+struct CentroidOptions {
+    Centre centre = Centre::kMean;  ///< "mean" or "median"
+    double step = 1.0;              ///< fraction of the offset applied, in (0, 1]
+
+    template <class F>
+    void Fields(F&& f) {
+        f("centre", centre, "\"mean\" or \"median\" (per axis; robust to outliers)");
+        f("step", step, "fraction of the offset applied, in (0, 1]");
+    }
+    void Validate(ParamCheck& c) const {
+        c.Above("step", step, 0.0);
+        c.AtMost("step", step, 1.0);
+    }
 };
-REGBENCH_OPTION_FIELDS(CentroidOptions, centre, step)
 
 Eigen::Vector3d Centre3(const PointCloud& p, Centre how) {
     if (how == Centre::kMean) return p.colwise().mean().transpose();
@@ -79,9 +83,8 @@ AlignResult AlignCentroid(const CentroidOptions& o,
 }
 
 MethodInfo CentroidMethodInfo() {
-    // SpecOf builds the MethodSpec once; checks across parameters, if any, would be its second
-    // argument, a validate function.
-    return MakeMethodInfo(SpecOf<CentroidOptions>(BaselineSchema("centroid")), AlignCentroid);
+    return MakeMethodInfo<CentroidOptions>(
+        "centroid", "translation only: moves the source's centre onto the target's", AlignCentroid);
 }
 // EXAMPLE END
 
@@ -92,7 +95,7 @@ PointCloud Line() {
     return p;
 }
 
-TEST(ExampleMethod, RegistryEntryComesFromTheSchema) {
+TEST(ExampleMethod, RegistryEntryAndSchemaComeFromTheStruct) {
     const MethodInfo info = CentroidMethodInfo();
     EXPECT_EQ(info.name, "centroid");
     EXPECT_EQ(info.summary, "translation only: moves the source's centre onto the target's");

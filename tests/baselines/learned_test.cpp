@@ -5,7 +5,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
@@ -82,6 +84,35 @@ TEST(Learned, CheckpointOfTheOtherFamilyIsRefused) {
         [&] { CreateMethod("deepgmr", {{"checkpoint", ogmm.string()}}); }, "holds a ogmm model");
     EXPECT_NO_THROW(CreateMethod("ogmm", {{"checkpoint", ogmm.string()}}));
     fs::remove_all(ogmm);
+}
+
+// A checkpoint.json whose config.arch is a number (or config not an object) made
+// `regbench align ... --method ogmm --params '{"checkpoint": DIR}'` end with a bare
+// "[json.exception.type_error.302] type must be string, but is number" naming nothing (found
+// by hand on main's binary). Expected: refused when the method is created, naming the file and
+// the key; likewise a trainer counter out of range (trainer.step = 1e30).
+TEST(Learned, CheckpointJsonWithMistypedKeysIsRefusedNamingFileAndKey) {
+    const fs::path dir = SaveUntrainedCheckpoint("ogmm-tiny", 5);
+    const fs::path json = dir / "checkpoint.json";
+    nlohmann::json good;
+    std::ifstream(json) >> good;
+    struct Case {
+        const char* pointer;
+        nlohmann::json value;
+        const char* expected;
+    };
+    const std::vector<Case> cases = {{"/config/arch", 5, "'config.arch' must be a string, got 5"},
+                                     {"/config", 5, "'config' must be an object, got 5"},
+                                     {"/trainer/step", 1e30, "'step' is 1e+30"}};
+    for (const Case& c : cases) {
+        nlohmann::json j = good;
+        j[nlohmann::json::json_pointer(c.pointer)] = c.value;
+        std::ofstream(json, std::ios::trunc) << j.dump();
+        testing::ExpectThrowsWith<std::invalid_argument>(
+            [&] { CreateMethod("ogmm", {{"checkpoint", dir.string()}}); }, json.string(),
+            c.expected);
+    }
+    fs::remove_all(dir);
 }
 
 // The runner's threads share one method object, so inference must not use torch's

@@ -11,15 +11,18 @@
 #               a non-empty folder is refused
 #   links       a symbolic or hard link pre-placed at OUT.lock or OUT.part is refused naming
 #               the path, and the file it points to keeps its bytes
-#   writers     compare --json / import --out onto one of their inputs are refused; score,
-#               report --out, generate, compare --json and align --out beside a running `run`
-#               on the same path are refused naming its pid
+#   writers     compare --json, import, score, merge and report --out onto one of their inputs
+#               are refused and the input keeps its bytes; score, report --out, generate,
+#               compare --json, merge, export, import, reproduce and train beside a running
+#               `run` on the same path are refused naming its pid
 #   xfsz        a file-size limit without the caller ignoring SIGXFSZ: every writer ends with
 #               a message naming the file, no signal, nothing at the final path, no temporary
 #   usage       numeric flags that would switch a check off (NaN, negative, zero) and unknown
 #               metric names: exit 2 and one line naming the flag and the value
 #   hostile     JSON nested 1M levels deep (compare), coordinates of 1e30 (align gicp):
-#               refused naming the file, never a signal
+#               refused naming the file, never a signal; NaN points of a PLY dropped with a
+#               count, or refused with --nan-points refuse; train --config nested 1M deep or
+#               not an object refused naming the file
 set -uo pipefail
 bin="$1"
 scenario="$2"
@@ -178,10 +181,29 @@ writers)
   "$bin" import --xyz-dir xyz --out "$victim" 2>e2 && fail "import --out onto an input accepted"
   grep -q "same file as the input" e2 || fail "message: $(cat e2)"
   cmp -s "$victim" victim.before || fail "import replaced its input"
-  # Every writer beside a running `run` on the same path is refused naming its pid.
+  # score, merge and report with --out equal to one of their inputs: refused, input unchanged.
   for k in 0 1 2 3 4 5 6 7; do
     echo "{\"pair\": $k, \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"
   done >T.jsonl
+  cp T.jsonl T.before
+  cp pairs.h5 pairs.before
+  onto_input() {  # onto_input NAME FILE BEFORE CMD...: CMD must be refused and FILE unchanged
+    local name="$1" file="$2" before="$3"
+    shift 3
+    "$@" >"$name.out" 2>&1 && fail "$name onto its input $file accepted"
+    grep -q "same file as the input" "$name.out" || fail "$name: $(cat "$name.out")"
+    cmp -s "$file" "$before" || fail "$name replaced its input $file"
+  }
+  onto_input score-transforms T.jsonl T.before "$bin" score --pairs pairs.h5 --transforms T.jsonl \
+    --method ext --out T.jsonl
+  onto_input score-pairs pairs.h5 pairs.before "$bin" score --pairs pairs.h5 \
+    --transforms T.jsonl --method ext --out pairs.h5
+  onto_input merge base.jsonl base.before "$bin" merge base.jsonl --pairs pairs.h5 \
+    --methods identity --out base.jsonl
+  onto_input merge-pairs pairs.h5 pairs.before "$bin" merge base.jsonl --pairs pairs.h5 \
+    --methods identity --out pairs.h5
+  onto_input report base.jsonl base.before "$bin" report base.jsonl --out base.jsonl
+  # Every writer beside a running `run` on the same path is refused naming its pid.
   "$bin" run --pairs pairs.h5 --methods cpd --params "$slow" --out busy.jsonl -q 2>first.err &
   first=$!
   wait_for_rows busy.jsonl.part 1
@@ -197,6 +219,14 @@ writers)
   refused compare "$bin" compare base.jsonl base.jsonl --json busy.jsonl
   refused generate "$bin" generate --protocol partial --dataset procedural --split test \
     --pairs 2 --seed 1 --out busy.jsonl
+  refused merge "$bin" merge base.jsonl --pairs pairs.h5 --methods identity --out busy.jsonl
+  refused export "$bin" export pairs.h5 --out busy.jsonl
+  refused import "$bin" import --xyz-dir xyz --out busy.jsonl
+  refused reproduce "$bin" reproduce --quick --tables table1 --out busy.jsonl
+  [ ! -e busy.jsonl ] || { kill -CONT "$first"; fail "a refused writer created busy.jsonl"; }
+  if "$bin" train --help >/dev/null 2>&1; then
+    refused train "$bin" train --model ogmm-tiny --max-steps 1 --out busy.jsonl
+  fi
   kill -CONT "$first"
   wait "$first" || fail "first run failed: $(cat first.err)"
   grep -c '"method":"cpd"' busy.jsonl | grep -qx 8 || fail "the run's result was replaced"
@@ -283,11 +313,27 @@ hostile)
   "$bin" align nan.ply small.xyz --method identity >n.out 2>&1
   grep -q "nan.ply: dropped 1 of 6 points with NaN or Inf coordinates" n.out \
     || fail "NaN points dropped silently: $(cat n.out)"
+  "$bin" align nan.ply small.xyz --method identity --nan-points refuse >n2.out 2>&1 \
+    && fail "--nan-points refuse accepted a NaN point: $(cat n2.out)"
+  grep -q "nan.ply: 1 of 6 points have NaN or Inf coordinates" n2.out \
+    || fail "--nan-points refuse: $(cat n2.out)"
   # Within the limit, gicp ends with a result or a clean failure, never a signal.
   printf '0 0 0\n1 0 0\n0 1 0\n0 0 1\n1e15 1 1\n1 2 3\n' >edge.xyz
   "$bin" align edge.xyz small.xyz --method gicp >g.out 2>&1
   rc=$?
   [ "$rc" -lt 128 ] || fail "gicp at the limit died by signal $((rc - 128)): $(cat g.out)"
+  if "$bin" train --help >/dev/null 2>&1; then
+    # train --config nested 1M levels deep died by SIGSEGV; an array was silently ignored.
+    python3 -c 'print("{\"a\":" * 1000000 + "1" + "}" * 1000000)' >deep_config.json
+    echo '[1, 2]' >array_config.json
+    for config in deep_config.json array_config.json; do
+      "$bin" train --model ogmm-tiny --config "$config" --out "t_$config" --max-steps 1 >t.out 2>&1
+      rc=$?
+      [ "$rc" -ne 0 ] && [ "$rc" -lt 128 ] || fail "train --config $config: exit $rc: $(tail -c 300 t.out)"
+      grep -q "$config" t.out || fail "train --config $config: file not named: $(tail -c 300 t.out)"
+      [ ! -e "t_$config" ] || fail "train --config $config: trained anyway"
+    done
+  fi
   "$bin" generate --protocol partial --dataset procedural --split test --pairs 2 --seed 1 \
     --max-translation 1e30 --out far.h5 >/dev/null 2>g2.out && fail "generate 1e30 accepted"
   grep -q "max_translation" g2.out || fail "generate message: $(cat g2.out)"

@@ -115,6 +115,24 @@ TEST(OutputLock, SecondHolderIsRefusedWithThePid) {
     fs::remove_all(dir);
 }
 
+// `export --out dir/` failed with "dir/.lock: cannot create lock file: No such file or
+// directory": a folder named with a trailing slash is the same output as without it. Expected
+// (from the path rules, not the code): the lock is "<dir>.lock" beside the folder, taken while
+// the folder does not exist yet, and "dir" and "dir//" are refused as the same output.
+TEST(OutputLock, AFolderWithATrailingSlashLocksBesideIt) {
+    const fs::path dir = testing::FreshTempDir("lock_slash");
+    const std::string folder = (dir / "xyz").string();
+    {
+        const OutputLock lock(folder + "/");
+        EXPECT_EQ(lock.lock_path(), folder + ".lock");
+        EXPECT_TRUE(fs::exists(folder + ".lock"));
+        EXPECT_FALSE(fs::exists(folder));
+        EXPECT_NE(testing::ErrorOf([&] { OutputLock second(folder); }), "");
+        EXPECT_NE(testing::ErrorOf([&] { OutputLock third(folder + "//"); }), "");
+    }
+    fs::remove_all(dir);
+}
+
 // Issue 27, item 1: the lock belongs to the pid that took it. A forked child that destroys
 // the parent's OutputLock object (as an exception unwinding through the parent's frames did)
 // must leave the file; the expected facts are that the lock file still exists and that a

@@ -78,6 +78,30 @@ TEST(ReadPointFile, ReadsPlyAndPcdThroughOpen3D) {
     EXPECT_NEAR((pcd.row(1) - Eigen::RowVector3d(4, 5, 6)).norm(), 0.0, kTol);
 }
 
+// Issue 27 item 5: NaN points are refused or dropped with a count, a flag (align
+// --nan-points) chooses. Files written here: a PLY with 1 NaN point of 4 and a PCD with 2 of 3
+// (NaN and inf), so the expected counts are those written, and the kept points are the finite
+// rows in file order.
+TEST(ReadPointFile, NonFinitePointsAreDroppedOrRefusedAsChosen) {
+    const auto dir = FreshDir();
+    const std::string ply = WriteText(dir / "nan.ply",
+                                      "ply\nformat ascii 1.0\nelement vertex 4\n"
+                                      "property float x\nproperty float y\nproperty float z\n"
+                                      "end_header\n0 0 0\nnan 1 1\n1 2 3\n4 5 6\n");
+    const std::string pcd = WriteText(dir / "nan.pcd",
+                                      "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                                      "COUNT 1 1 1\nWIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n"
+                                      "POINTS 3\nDATA ascii\n1 2 3\nnan nan nan\n4 inf 6\n");
+    const PointCloud kept = ReadPointFile(ply, nullptr, NonFinitePoints::kDrop);
+    ASSERT_EQ(kept.rows(), 3);
+    EXPECT_NEAR((kept.row(1) - Eigen::RowVector3d(1, 2, 3)).norm(), 0.0, kTol);
+    EXPECT_EQ(ReadPointFile(pcd).rows(), 1);  // the default drops
+    ExpectThrowsWith([&] { ReadPointFile(ply, nullptr, NonFinitePoints::kRefuse); },
+                     ply + ": 1 of 4 points have NaN or Inf coordinates");
+    ExpectThrowsWith([&] { ReadCloudFile(pcd, NonFinitePoints::kRefuse); },
+                     pcd + ": 2 of 3 points have NaN or Inf coordinates");
+}
+
 TEST(ReadPointFile, RejectsTruncatedPlyNamingPath) {
     const auto dir = FreshDir();
     std::string text = kPlyAscii;

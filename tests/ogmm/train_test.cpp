@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 
 #include "ogmm/zoo.hpp"
@@ -142,6 +143,39 @@ TEST(Train, ResumeDropsATornMetricsLine) {
     for (const auto& l : lines) EXPECT_EQ(columns(l), columns(lines[0])) << l;
     EXPECT_NE(log.str().find("dropped a torn last line"), std::string::npos);
     fs::remove_all(dir);
+}
+
+// Issue 27 item 2/3: a symbolic link pre-placed at RUN/metrics.csv made a fresh `train`
+// truncate the file it pointed to (found by hand: `ln -s ../victim.txt t/metrics.csv`, then
+// `regbench train --out t` left victim.txt holding the CSV header). Expected: refused naming
+// metrics.csv before any step, and the target keeps the bytes written here.
+TEST(Train, RefusesALinkAtAMetricsFileAndLeavesItsTarget) {
+    torch::set_num_threads(1);
+    const TrainData data = testing::SyntheticData(4, 160, 2);
+    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");
+    for (const char* name : {"metrics.csv", "metrics.jsonl"}) {
+        std::ostringstream log;
+        const fs::path dir = TempDir(std::string("link_") + name);
+        fs::create_directories(dir);
+        const fs::path victim = dir.string() + ".victim";
+        std::ofstream(victim) << "victim bytes\n";
+        fs::create_symlink(victim, dir / name);
+        TrainOptions o = Options(dir, log);
+        o.max_steps = 1;
+        try {
+            Train(config, data, o);
+            ADD_FAILURE() << name << ": a link at the metrics file was accepted";
+        } catch (const std::runtime_error& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("symbolic link"), std::string::npos) << e.what();
+        }
+        std::ifstream in(victim);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        EXPECT_EQ(bytes, "victim bytes\n") << name;
+        EXPECT_FALSE(fs::exists(dir / "last")) << name << ": trained through the link";
+        fs::remove_all(dir);
+        fs::remove(victim);
+    }
 }
 
 /// Environment override of a knob of the CI training below (for re-measuring the margin with

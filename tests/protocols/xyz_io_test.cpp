@@ -28,6 +28,25 @@ TEST(XyzIo, ExportThenImportRoundTripsExactly) {
     std::filesystem::remove_all(dir);
 }
 
+// `regbench export pairs.h5 --out ex/` failed ("ex/: cannot move the export into place:
+// Directory not empty"): its temporary folder went inside ex/. Expected: the same export as
+// without the slash, and no temporary left in the folder or beside it (only the 3 pairs' files).
+TEST(XyzIo, ExportIntoAFolderNamedWithATrailingSlash) {
+    const std::string parent = testing::FreshTempDir("xyz_slash");
+    const std::string dir = parent + "/ex";
+    const PairSet set =
+        GeneratePairs(test::TestShapes(), DefaultProtocolOptions(Protocol::kJitter), 3, 3);
+    ExportXyz(set, dir + "/");
+    EXPECT_EQ(ImportXyzDir(dir, 0.1).pairs.size(), 3u);
+    std::size_t entries = 0;
+    for (const auto& e : std::filesystem::directory_iterator(parent)) {
+        EXPECT_EQ(e.path().filename(), "ex") << "left beside the export: " << e.path();
+        ++entries;
+    }
+    EXPECT_EQ(entries, 1u);
+    std::filesystem::remove_all(parent);
+}
+
 TEST(XyzIo, PlyExportHasHeaderAndAllPoints) {
     const std::string dir = testing::FreshTempDir("ply_export");
     const PairSet set = GeneratePairs(test::TestShapes(), ProtocolOptions{}, 3, 1);

@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Produces the output of every command block in README.md and docs/ that shows output, so the
+# documentation can be regenerated instead of edited by hand, and checked (CTest docs_examples:
+# scripts/check_docs_examples.py compares each documented block with a fresh transcript).
+#
+#   scripts/docs_examples.sh [--fast] [--build DIR] OUTDIR [NAME...]
+#
+# Each example runs in OUTDIR/work (so every path it prints is relative: out/...), and its
+# transcript goes to OUTDIR/NAME.txt: each command as the documentation shows it ("$ regbench
+# ..."), then what it printed (stdout and stderr). A documented block is tied to its example by
+# the line `<!-- docs_examples: NAME -->` just above it.
+#
+# Examples (fast: seconds; slow: minutes, run when asked for by name or without --fast):
+#   align       (fast) generate the embedded-corpus pairs, export pair 88 as PLY, align it
+#   score       (fast) transforms of Open3D's Python ICP scored and reported beside icp
+#   python_run  (slow) Open3D's Python ICP beside icp and cpd in one regbench.run
+#   quick_run   (slow) the main job: reproduce --quick, its Tab. 1 and where the report is
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+fast=0
+build="$root/build"
+while [ $# -gt 0 ]; do
+  case "$1" in
+  --fast) fast=1; shift ;;
+  --build) build="$2"; shift 2 ;;
+  *) break ;;
+  esac
+done
+[ $# -ge 1 ] || { echo "usage: $0 [--fast] [--build DIR] OUTDIR [NAME...]" >&2; exit 2; }
+outdir="$(mkdir -p "$1" && cd "$1" && pwd)"
+shift
+wanted=("$@")
+if [ ${#wanted[@]} -eq 0 ]; then
+  wanted=(align score)
+  [ "$fast" = 1 ] || wanted+=(python_run quick_run)
+fi
+bin="$build/app/regbench"
+[ -x "$bin" ] || { echo "$0: $bin not built" >&2; exit 1; }
+work="$outdir/work"
+rm -rf "$work"  # fresh: every example regenerates what it uses
+mkdir -p "$work/out"
+cd "$work"
+transcript=""
+
+# show 'DISPLAYED COMMAND': prints "$ DISPLAYED COMMAND" into the transcript, then runs it with
+# `regbench` meaning the built binary; its output follows. A failing command fails the script.
+show() {
+  printf '$ %s\n' "$1" >>"$transcript"
+  local cmd="${1//regbench /\"\$bin\" }"
+  if ! (eval "$cmd") >>"$transcript" 2>&1; then
+    echo "$0: command failed: $1 (transcript $transcript)" >&2
+    tail -20 "$transcript" >&2
+    exit 1
+  fi
+}
+# quiet COMMAND: set-up a documented block does not show (not in the transcript).
+quiet() {
+  local cmd="${1//regbench /\"\$bin\" }"
+  (eval "$cmd") >/dev/null 2>&1 || { echo "$0: set-up failed: $1" >&2; exit 1; }
+}
+
+pairs() {  # the embedded-corpus pairs most examples use (100 test pairs, partial, seed 1)
+  [ -f out/partial_cgal_test.h5 ] || quiet "regbench generate --protocol partial --dataset cgal \
+--split test --pairs 100 --seed 1 --out out/partial_cgal_test.h5"
+}
+
+example_align() {
+  pairs
+  rm -rf out/pairs_ply T.txt
+  show "regbench export out/partial_cgal_test.h5 --out out/pairs_ply --format ply"
+  show "regbench align out/pairs_ply/0088_src.ply out/pairs_ply/0088_tgt.ply --method icp \\
+      --gt out/pairs_ply/0088_gt.txt --out T.txt"
+}
+
+example_score() {
+  pairs
+  rm -f out/partial_cgal_icp.jsonl out/py_icp* out/py_icp_scored.jsonl out/py_icp_csv_scored.jsonl
+  show "regbench run --pairs out/partial_cgal_test.h5 --methods icp --out out/partial_cgal_icp.jsonl -q"
+  show "PYTHONPATH=build/python /usr/bin/python3 scripts/example_open3d_icp.py \\
+      out/partial_cgal_test.h5 --transforms out/py_icp"
+  show "regbench score --pairs out/partial_cgal_test.h5 --transforms out/py_icp.jsonl \\
+      --method open3d-py-icp --out out/py_icp_scored.jsonl"
+  show "regbench score --pairs out/partial_cgal_test.h5 --transforms out/py_icp.csv \\
+      --method open3d-py-icp-csv --out out/py_icp_csv_scored.jsonl"
+  show "regbench report out/partial_cgal_icp.jsonl out/py_icp_scored.jsonl out/py_icp_csv_scored.jsonl"
+}
+
+example_python_run() {
+  pairs
+  rm -f out/py_icp_run.jsonl
+  show "PYTHONPATH=build/python /usr/bin/python3 scripts/example_open3d_icp.py \\
+      out/partial_cgal_test.h5 out/py_icp_run.jsonl"
+}
+
+example_quick_run() {
+  rm -rf out/reproduce out/reproduce.lock
+  show "regbench reproduce --quick --jobs 2 --out out/reproduce"
+  show "sed -n '/^### Tab. 1/,/^### Tab. 2/p' out/reproduce/tables.md | head -n 16"
+}
+
+# The examples call scripts/ and build/python by relative path, as the documentation shows them.
+ln -sfn "$root/scripts" scripts
+ln -sfn "$build" build
+for name in "${wanted[@]}"; do
+  if ! declare -F "example_$name" >/dev/null; then
+    echo "$0: no example '$name'" >&2
+    exit 2
+  fi
+  transcript="$outdir/$name.txt"
+  : >"$transcript"
+  start=$(date +%s)
+  "example_$name"
+  echo "[docs_examples] $name: $(( $(date +%s) - start )) s -> $transcript"
+done
