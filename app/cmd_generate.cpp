@@ -114,7 +114,7 @@ void SetupGenerateCommand(CLI::App* cmd) {
     cmd->add_option("--dataset", a->request.dataset, "Dataset name or path (see docs/datasets.md)")
         ->capture_default_str();
     cmd->add_option("--split", a->request.split,
-                    "Dataset split (default: test; all for a folder or file of point clouds)");
+                    "Dataset split (default: test; all for a single file or a folder of point files)");
     cmd->add_option("--data-dir", a->data_dir,
                     "Data directory for named datasets (default: ./data)");
     cmd->add_option("--pairs", a->pairs,
