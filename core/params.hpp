@@ -288,8 +288,11 @@ nlohmann::json ParamSchemaOf(const std::string& name, const std::string& summary
     o.Fields([&](const char* key, auto& field, const char* doc, Nullable nullable = Nullable::kNo) {
         using T = std::decay_t<decltype(field)>;
         nlohmann::json& p = properties[key];
-        p["type"] = params_detail::SchemaType<T>();
-        if (nullable == Nullable::kYes) p["type"] = {p["type"], "null"};
+        // Not `p["type"] = {p["type"], "null"}`: nlohmann 3.11.2 leaks the old string when an
+        // initializer list reads the element it is assigned to (LeakSanitizer found it).
+        const char* type = params_detail::SchemaType<T>();
+        p["type"] = nullable == Nullable::kYes ? nlohmann::json::array({type, "null"})
+                                               : nlohmann::json(type);
         p["description"] = doc;
         p["default"] = params_detail::ValueJson(field);
         if constexpr (std::is_enum_v<T>) {
