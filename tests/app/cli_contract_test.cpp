@@ -13,6 +13,7 @@
 
 #include "reports/compare.hpp"
 #include "tests/testing/cli.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -23,7 +24,7 @@ using testing::CliResult;
 using testing::RunCli;
 
 fs::path Dir() {
-    const fs::path dir = fs::temp_directory_path() / "regbench_cli_contract";
+    const fs::path dir = regbench::testing::TempPath("cli_contract");
     fs::create_directories(dir);
     return dir;
 }

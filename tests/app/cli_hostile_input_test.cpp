@@ -13,6 +13,7 @@
 
 #include "tests/testing/hostile_pair_files.hpp"
 #include "tests/testing/cli.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -34,7 +35,7 @@ void ExpectCleanRefusal(const CliResult& r, const std::string& name) {
 }
 
 fs::path Dir() {
-    const fs::path dir = fs::temp_directory_path() / "regbench_cli_hostile";
+    const fs::path dir = regbench::testing::TempPath("cli_hostile");
     fs::create_directories(dir);
     return dir;
 }

@@ -15,6 +15,7 @@
 
 #include "protocols/pair_file.hpp"
 #include "tests/testing/cli.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -25,7 +26,7 @@ using testing::CliResult;
 using testing::RunCli;
 
 fs::path FreshDir(const std::string& name) {
-    const fs::path dir = fs::temp_directory_path() / ("regbench_cli_sets_" + name);
+    const fs::path dir = regbench::testing::TempPath("cli_sets_" + name);
     fs::remove_all(dir);
     fs::create_directories(dir);
     return dir;

@@ -10,6 +10,7 @@
 #include "core/transform.hpp"
 #include "runners/runner.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -43,7 +44,7 @@ TEST(OmpWaitPolicy, UnsetBecomesPassiveInsideTheBinary) {
 }
 
 TEST(OmpWaitPolicy, ThreadedRunsGiveIdenticalTransformsUnderEveryPolicy) {
-    const auto dir = std::filesystem::temp_directory_path() / "regbench_omp_wait_policy";
+    const auto dir = regbench::testing::TempPath("omp_wait_policy");
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     const std::string pairs = (dir / "pairs.h5").string();

@@ -16,6 +16,7 @@
 #include "runners/registry.hpp"
 #include "tests/baselines/registration_fixtures.hpp"
 #include "tests/testing/expect_throw.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -24,13 +25,13 @@ namespace fs = std::filesystem;
 TEST(Learned, MissingCheckpointIsRefusedWhenTheMethodIsCreated) {
     // Issue 26: a wrong path used to fail every pair of the run, which then exited 0; it is
     // now refused before any pair runs, naming the path.
-    const std::string missing = (fs::temp_directory_path() / "regbench_no_such_ckpt").string();
+    const std::string missing = regbench::testing::TempPath("no_such_ckpt").string();
     for (const char* name : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp"}) {
         testing::ExpectThrowsWith<std::invalid_argument>(
             [&] { CreateMethod(name, {{"checkpoint", missing}}); }, missing, "does not exist");
     }
     // A folder without a checkpoint.json is refused too.
-    const fs::path empty = fs::temp_directory_path() / "regbench_empty_ckpt";
+    const fs::path empty = regbench::testing::TempPath("empty_ckpt");
     fs::create_directories(empty);
     testing::ExpectThrowsWith<std::invalid_argument>(
         [&] { CreateMethod("ogmm", {{"checkpoint", empty.string()}}); }, "checkpoint.json");
@@ -41,8 +42,7 @@ TEST(Learned, MissingCheckpointIsRefusedWhenTheMethodIsCreated) {
 /// fresh temporary folder, with the zoo config that rebuilds it.
 fs::path SaveUntrainedCheckpoint(const std::string& model, std::uint64_t seed) {
     torch::set_num_threads(1);
-    const fs::path dir = fs::temp_directory_path() /
-                         ("regbench_learned_" + model + "_" + std::to_string(::getpid()));
+    const fs::path dir = regbench::testing::TempPath("learned_" + model);
     torch::manual_seed(seed);
     auto net = ogmm::MakeNet(model);
     ogmm::SaveCheckpoint(dir.string(), *net,

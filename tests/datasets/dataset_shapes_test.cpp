@@ -12,12 +12,13 @@
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
 #include "tests/datasets/test_files.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
 
 std::string FreshDir(const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() / ("regbench_test_" + name);
+    const auto dir = regbench::testing::TempPath("test_" + name);
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir.string();

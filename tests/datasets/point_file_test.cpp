@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tests/datasets/test_files.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -159,7 +160,7 @@ TEST(ReadPointFile, RefusesInconsistentPcdFieldLists) {
 
 TEST(ReadCloudFile, ReadsOffVerticesAndPointFiles) {
     // A hand-written triangle: the three vertices in file order, faces ignored.
-    const auto path = std::filesystem::temp_directory_path() / "regbench_cloud_tri.off";
+    const auto path = regbench::testing::TempPath("cloud_tri.off");
     std::ofstream(path) << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     const PointCloud p = ReadCloudFile(path.string());
     ASSERT_EQ(p.rows(), 3);

@@ -7,12 +7,13 @@
 
 #include "tests/testing/same_pairs.hpp"
 #include "tests/testing/synthetic.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
 
 std::string TempPath(const std::string& name) {
-    return (std::filesystem::temp_directory_path() / ("regbench_" + name)).string();
+    return regbench::testing::TempPath(name).string();
 }
 
 PairSet TwoPairs() {

@@ -10,6 +10,7 @@
 #include "tests/testing/expect_throw.hpp"
 #include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/hostile_pair_files.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -20,7 +21,7 @@ class HostilePairFile : public ::testing::TestWithParam<testing::HostileCase> {}
 
 TEST_P(HostilePairFile, IsRefusedNamingFileAndProblem) {
     const testing::HostileCase& c = GetParam();
-    const fs::path path = fs::temp_directory_path() / ("regbench_hostile_" + c.name + ".h5");
+    const fs::path path = regbench::testing::TempPath("hostile_" + c.name + ".h5");
     testing::WriteHostile(path.string(), c);
     testing::ExpectThrowsWith([&] { ReadPairFile(path.string()); }, path.string(), c.expect);
     fs::remove(path);
@@ -36,7 +37,7 @@ TEST(PairFileValidation, ProperRotationIsAccepted) {
     const double c = std::cos(M_PI / 6), s = std::sin(M_PI / 6);
     const testing::HostileCase ok{
         "ok", "", testing::SetTgt({c, -s, 0, 1, s, c, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1})};
-    const fs::path path = fs::temp_directory_path() / "regbench_valid_rotation.h5";
+    const fs::path path = regbench::testing::TempPath("valid_rotation.h5");
     testing::WriteHostile(path.string(), ok);
     const PairSet set = ReadPairFile(path.string());
     ASSERT_EQ(set.pairs.size(), 2u);
@@ -47,7 +48,7 @@ TEST(PairFileValidation, ProperRotationIsAccepted) {
 TEST(PairFileValidation, FileSizeLimitLeavesNoPairFileAndNoSignal) {
     // RLIMIT_FSIZE in a child (SIGXFSZ ignored) stands in for a full disk: every HDF5 write,
     // flush or close past 16 KB fails with EFBIG.
-    const fs::path dir = fs::temp_directory_path() / "regbench_pairfile_fsize";
+    const fs::path dir = regbench::testing::TempPath("pairfile_fsize");
     fs::remove_all(dir);
     fs::create_directories(dir);
     const std::string path = (dir / "big.h5").string();
@@ -85,7 +86,7 @@ TEST(PairFileValidation, FuzzFindingUseAfterFreeInsideHdf5IsRefused) {
 }
 
 TEST(PairFileValidation, OutputThatIsADirectoryIsRefused) {
-    const fs::path dir = fs::temp_directory_path() / "regbench_pairfile_dir_out";
+    const fs::path dir = regbench::testing::TempPath("pairfile_dir_out");
     fs::create_directories(dir);
     PairSet set;
     set.pairs.push_back(testing::SyntheticPair(20, 1, Transform::Identity()));

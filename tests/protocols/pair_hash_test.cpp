@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "protocols/pair_file.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -35,7 +36,7 @@ TEST(PairHash, MatchesAnIndependentFnv1aOfTheDocumentedBytes) {
 
 TEST(PairHash, SurvivesAFileRoundTripAndSeesOneChangedCoordinate) {
     const PairSet set = OnePointPair();
-    const auto path = std::filesystem::temp_directory_path() / "regbench_pair_hash.h5";
+    const auto path = regbench::testing::TempPath("pair_hash.h5");
     WritePairFile(path.string(), set);
     EXPECT_EQ(PairSetContentHash(ReadPairFile(path.string())), PairSetContentHash(set));
     std::filesystem::remove(path);

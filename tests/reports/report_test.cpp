@@ -10,6 +10,7 @@
 
 #include "core/transform.hpp"
 #include "tests/testing/expect_throw.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -86,7 +87,7 @@ TEST(Report, MedianOfEvenCountAveragesTheMiddle) {
 }
 
 TEST(Report, RowWithoutMetricsIsRejectedWhenRead) {
-    const auto path = std::filesystem::temp_directory_path() / "regbench_report_nometrics.jsonl";
+    const auto path = regbench::testing::TempPath("report_nometrics.jsonl");
     std::ofstream(path) << "{\"method\": \"a\", \"pair\": 0}\n";
     try {
         ReadResultRows(path.string());

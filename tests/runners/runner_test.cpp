@@ -12,6 +12,7 @@
 #include "runners/registry.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/temp_dir_test.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -187,13 +188,13 @@ TEST(MethodSpecs, UnknownMethodOrParameterIsAClearError) {
 }
 
 TEST(ResultsFile, CorruptLineIsReportedWithFileAndLine) {
-    const auto path = std::filesystem::temp_directory_path() / "regbench_corrupt.jsonl";
+    const auto path = regbench::testing::TempPath("corrupt.jsonl");
     std::ofstream(path) << "{\"a\": 1}\n{broken\n";
     try {
         ReadJsonl(path.string());
         FAIL();
     } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find("regbench_corrupt.jsonl:2"), std::string::npos);
+        EXPECT_NE(std::string(e.what()).find(path.string() + ":2"), std::string::npos);
     }
     std::filesystem::remove(path);
 }

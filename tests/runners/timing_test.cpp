@@ -8,6 +8,7 @@
 #include "runners/runner.hpp"
 #include "runners/timing_summary.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -27,7 +28,7 @@ TEST(CpuTime, ThreadClockAdvancesWithWorkAndStopwatchPicksItsScope) {
 }
 
 TEST(RunnerTiming, EveryOkRowHasPositiveCpuSecondsAndTheMachineLoad) {
-    const auto dir = std::filesystem::temp_directory_path() / "regbench_runner_timing";
+    const auto dir = regbench::testing::TempPath("runner_timing");
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     RunOptions o;

@@ -12,6 +12,16 @@
 
 namespace regbench::testing {
 
+/// `<temp>/regbench_<stem>_<pid><extension>` for `name` = "<stem><extension>", not created: a
+/// path of this test process's own, so two ctest runs on one machine never share a file. The
+/// extension stays last because readers pick the format by it.
+inline std::filesystem::path TempPath(const std::string& name) {
+    const std::filesystem::path n(name);
+    return std::filesystem::temp_directory_path() /
+           ("regbench_" + n.stem().string() + "_" + std::to_string(::getpid()) +
+            n.extension().string());
+}
+
 /// An empty folder `<temp>/regbench_test_<name>_<pid>` (emptied if it exists): the pid keeps
 /// two test binaries that ctest runs at once apart.
 inline std::filesystem::path FreshTempDir(const std::string& name) {
