@@ -9,178 +9,119 @@
 #include <stdexcept>
 
 #include "core/json_limits.hpp"
+#include "core/params.hpp"
 #include "protocols/pair_protocols.hpp"
 #include "reports/paper_report.hpp"
 
 namespace regbench {
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PairCount, scale, min, quick, count)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentSpec,
+                                                id,
+                                                group,
+                                                protocol,
+                                                split,
+                                                dataset,
+                                                root,
+                                                fallback_note,
+                                                pairing,
+                                                root_pairing,
+                                                noise_free,
+                                                seed_offset,
+                                                pairs,
+                                                sweep,
+                                                comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Variant, row, config)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
+    VariantSpec, kind, method, model, pairs_of, rows, comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile,
+                                                table,
+                                                title,
+                                                caption,
+                                                methods,
+                                                learned,
+                                                metrics,
+                                                experiments,
+                                                variants,
+                                                timing_of,
+                                                comment)
+
 namespace {
 
-[[noreturn]] void Fail(const std::string& file, const std::string& key, const std::string& why) {
-    throw std::invalid_argument("experiment file " + file + ": key '" + key + "' " + why);
+/// Runs `check` (a parser of the value of `key`) and rethrows its error naming the key.
+template <class F>
+void Check(const std::string& what, const char* key, F&& check) {
+    try {
+        check();
+    } catch (const std::exception& e) {
+        Require(false, what, key, std::string("is not valid: ") + e.what());
+    }
 }
 
-/// One JSON object of an experiment file, read key by key; every message names the file and
-/// the key's path (e.g. "experiments[1].pairs.scale").
-class Reader {
-public:
-    Reader(const nlohmann::json& j, std::string file, std::string path)
-        : j_(j), file_(std::move(file)), path_(std::move(path)) {
-        if (!j_.is_object()) Fail(file_, Where(), "must be a JSON object, got " + j_.dump());
+/// ParseConfig of `j` without its keys `nested` (their values are parsed on their own, so a
+/// message names the key inside them).
+template <class T>
+T ParseWithout(const nlohmann::json& j, const std::string& what, std::vector<const char*> nested) {
+    nlohmann::json rest = j;
+    for (const char* key : nested) {
+        if (rest.is_object()) rest.erase(key);
     }
-    /// Refuses keys not in `known` ("comment" is allowed everywhere).
-    void Only(std::initializer_list<const char*> known) const {
-        for (const auto& item : j_.items()) {
-            const bool ok = item.key() == "comment" ||
-                            std::any_of(known.begin(), known.end(),
-                                        [&](const char* k) { return item.key() == k; });
-            if (ok) continue;
-            std::string list;
-            for (const char* k : known) list += (list.empty() ? "" : ", ") + std::string(k);
-            Fail(file_, Key(item.key().c_str()), "is not known (known: " + list + ", comment)");
-        }
-    }
-    const nlohmann::json* Find(const char* key, bool required) const {
-        const auto it = j_.find(key);
-        if (it != j_.end()) return &*it;
-        if (required) Fail(file_, Key(key), "is required");
-        return nullptr;
-    }
-    std::string Str(const char* key, bool required = false) const {
-        const nlohmann::json* v = Find(key, required);
-        if (v == nullptr) return "";
-        if (!v->is_string() || v->get<std::string>().empty()) Expect(key, *v, "a non-empty string");
-        return v->get<std::string>();
-    }
-    bool Bool(const char* key) const {
-        const nlohmann::json* v = Find(key, false);
-        if (v != nullptr && !v->is_boolean()) Expect(key, *v, "true or false");
-        return v != nullptr && v->get<bool>();
-    }
-    std::size_t Count(const char* key, std::size_t fallback) const {
-        const nlohmann::json* v = Find(key, false);
-        if (v == nullptr) return fallback;
-        return Count(key, *v);
-    }
-    std::size_t Count(const char* key, const nlohmann::json& v) const {
-        // The one integer rule of core/params.hpp: 2 and 2.0 are whole, 2.5 is not.
-        const double d = v.is_number() ? v.get<double>() : -1.0;
-        if (!(d >= 0.0 && d <= 1e9 && std::trunc(d) == d))
-            Expect(key, v, "a whole number in [0, 1e9]");
-        return static_cast<std::size_t>(d);
-    }
-    std::vector<std::string> Strings(const char* key) const {
-        const nlohmann::json* v = Find(key, false);
-        if (v == nullptr) return {};
-        std::vector<std::string> out;
-        const bool ok = v->is_array() && !v->empty() &&
-                        std::all_of(v->begin(), v->end(), [](const nlohmann::json& s) {
-                            return s.is_string() && !s.get<std::string>().empty();
-                        });
-        if (!ok) Expect(key, *v, "a non-empty list of non-empty strings");
-        for (const auto& s : *v) out.push_back(s.get<std::string>());
-        return out;
-    }
-    /// The objects of list `key`, each with its own path ("key[i]").
-    std::vector<Reader> Objects(const char* key) const {
-        const nlohmann::json* v = Find(key, false);
-        std::vector<Reader> out;
-        if (v == nullptr) return out;
-        if (!v->is_array() || v->empty()) Expect(key, *v, "a non-empty list of objects");
-        for (std::size_t i = 0; i < v->size(); ++i)
-            out.emplace_back((*v)[i], file_, Key(key) + "[" + std::to_string(i) + "]");
-        return out;
-    }
-    Reader Object(const char* key) const { return Reader(*Find(key, true), file_, Key(key)); }
-    [[noreturn]] void Expect(const char* key, const nlohmann::json& v, const char* what) const {
-        Fail(file_, Key(key), std::string("must be ") + what + ", got " + v.dump());
-    }
-    /// Runs `check` (a parser of this key's value) and rethrows its error naming the key.
-    template <class F>
-    void Check(const char* key, F&& check) const {
-        try {
-            check();
-        } catch (const std::exception& e) {
-            Fail(file_, Key(key), std::string("is not valid: ") + e.what());
-        }
-    }
-    std::string Key(const char* key) const { return path_.empty() ? key : path_ + "." + key; }
-    std::string Where() const { return path_.empty() ? "(top level)" : path_; }
-    const nlohmann::json& json() const { return j_; }
-    const std::string& file() const { return file_; }
-
-private:
-    const nlohmann::json& j_;
-    std::string file_;
-    std::string path_;
-};
-
-PairCount ReadPairCount(const Reader& e) {
-    PairCount c;
-    const nlohmann::json* v = e.Find("pairs", false);
-    if (v == nullptr) return c;
-    if (v->is_number()) {
-        c.fixed = e.Count("pairs", *v);
-        if (c.fixed == 0) e.Expect("pairs", *v, "at least 1");
-        return c;
-    }
-    const Reader p = e.Object("pairs");
-    p.Only({"scale", "min", "quick"});
-    if (const nlohmann::json* s = p.Find("scale", false)) {
-        if (!s->is_number() || !(s->get<double>() > 0.0) || !(s->get<double>() <= 1e6))
-            p.Expect("scale", *s, "a number in (0, 1e6]");
-        c.scale = s->get<double>();
-    }
-    c.min = p.Count("min", 0);
-    c.quick = p.Count("quick", 0);
-    return c;
+    return ParseConfig<T>(rest, what);
 }
 
-ExperimentSpec ReadExperiment(const Reader& e) {
-    e.Only({"id", "group", "protocol", "split", "dataset", "root", "fallback_note", "pairing",
-            "root_pairing", "noise_free", "seed_offset", "pairs", "sweep"});
-    ExperimentSpec s;
-    s.id = e.Str("id", true);
-    if (s.id.find_first_of("/\\") != std::string::npos || s.id[0] == '.')
-        e.Expect("id", s.id, "a file stem (no '/', no leading '.')");
-    s.group = e.Str("group");
-    s.protocol = e.Str("protocol", true);
-    e.Check("protocol", [&] { (void)ParseProtocol(s.protocol); });
-    s.split = e.Str("split", true);
-    s.dataset = e.Str("dataset", true);
-    s.root = e.Str("root");
-    if (!s.root.empty() && s.root != "modelnet40" && s.root != "7scenes" && s.root != "icl-nuim")
-        e.Expect("root", s.root, "one of \"modelnet40\", \"7scenes\", \"icl-nuim\"");
-    s.fallback_note = e.Str("fallback_note");
-    for (const auto& field :
-         {std::pair{"pairing", &s.pairing}, {"root_pairing", &s.root_pairing}}) {
-        std::string& value = *field.second;
-        value = e.Str(field.first);
-        if (!value.empty()) e.Check(field.first, [&] { (void)ParsePairing(value); });
+/// Each item of list `key` of `j`, parsed by `read`.
+template <class Item, class F>
+std::vector<Item> ReadList(const nlohmann::json& j,
+                           const std::string& what,
+                           const char* key,
+                           F read) {
+    const nlohmann::json list = j.value(key, nlohmann::json::array());
+    Require(list.is_array(), what, key, "expects array, got " + list.dump());
+    std::vector<Item> out;
+    for (std::size_t i = 0; i < list.size(); ++i)
+        out.push_back(read(list[i], what + ": " + key + "[" + std::to_string(i) + "]"));
+    return out;
+}
+
+ExperimentSpec ReadExperiment(const nlohmann::json& j, const std::string& what) {
+    auto s = ParseWithout<ExperimentSpec>(j, what, {"pairs"});
+    s.pairs = ParseConfig<PairCount>(j.value("pairs", nlohmann::json()), what + ": pairs");
+    for (const auto& [key, value] : {std::pair{"id", s.id},
+                                     {"protocol", s.protocol},
+                                     {"split", s.split},
+                                     {"dataset", s.dataset}}) {
+        Require(!value.empty(), what, key, "is required");
     }
-    s.noise_free = e.Bool("noise_free");
-    s.seed_offset = e.Count("seed_offset", 0);
-    s.pairs = ReadPairCount(e);
-    s.sweep = e.Strings("sweep");
-    if (!s.sweep.empty() && !s.group.empty())
-        e.Expect("group", s.group, "absent for a sweep (its groups are the sweep's levels)");
+    Require(s.id.find_first_of("/\\") == std::string::npos && s.id[0] != '.', what, "id",
+            "must be a file stem (no '/', no leading '.'), got '" + s.id + "'");
+    Check(what, "protocol", [&] { (void)ParseProtocol(s.protocol); });
+    Require(s.root.empty() || s.root == "modelnet40" || s.root == "7scenes" || s.root == "icl-nuim",
+            what, "root", "must be modelnet40, 7scenes or icl-nuim, got '" + s.root + "'");
+    if (!s.pairing.empty()) Check(what, "pairing", [&] { (void)ParsePairing(s.pairing); });
+    if (!s.root_pairing.empty())
+        Check(what, "root_pairing", [&] { (void)ParsePairing(s.root_pairing); });
+    Require(s.pairs.scale > 0.0 && s.pairs.scale <= 1e6, what + ": pairs", "scale",
+            "must be in (0, 1e6], got " + nlohmann::json(s.pairs.scale).dump());
+    Require(s.sweep.empty() || s.group.empty(), what, "group",
+            "must be absent for a sweep (its groups are the sweep's levels)");
     return s;
 }
 
-VariantSpec ReadVariants(const Reader& v) {
-    v.Only({"kind", "method", "model", "pairs_of", "rows"});
-    VariantSpec s;
-    s.kind = v.Str("kind", true);
-    s.method = v.Str("method", true);
-    s.model = v.Str("model", true);
-    s.pairs_of = v.Str("pairs_of");
-    (void)v.Find("rows", true);
-    for (const Reader& r : v.Objects("rows")) {
-        r.Only({"row", "config"});
-        const nlohmann::json& config = *r.Find("config", true);
-        if (!config.is_object()) r.Expect("config", config, "a JSON object of config overrides");
-        s.rows.push_back({r.Str("row", true), config});
+Variant ReadVariant(const nlohmann::json& j, const std::string& what) {
+    auto v = ParseConfig<Variant>(j, what);
+    Require(!v.row.empty(), what, "row", "is required");
+    return v;
+}
+
+VariantSpec ReadVariants(const nlohmann::json& j, const std::string& what) {
+    auto v = ParseWithout<VariantSpec>(j, what, {"rows"});
+    v.rows = ReadList<Variant>(j, what, "rows", ReadVariant);
+    for (const auto& [key, value] :
+         {std::pair{"kind", v.kind}, {"method", v.method}, {"model", v.model}}) {
+        Require(!value.empty(), what, key, "is required");
     }
-    return s;
+    Require(!v.rows.empty(), what, "rows", "must list at least one variant");
+    return v;
 }
 
 bool IsPaperTable(const std::string& id) {
@@ -192,25 +133,18 @@ bool IsPaperTable(const std::string& id) {
 }  // namespace
 
 ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& file) {
-    const Reader r(j, file, "");
-    r.Only({"table", "title", "caption", "methods", "learned", "metrics", "experiments", "variants",
-            "timing_of"});
-    ExperimentFile f;
+    const std::string what = "experiment file " + file;
+    ExperimentFile f = ParseWithout<ExperimentFile>(j, what, {"experiments", "variants"});
     f.file = file;
-    f.table = r.Str("table", true);
-    f.title = r.Str("title", true);
-    f.caption = r.Str("caption");
-    f.methods = r.Strings("methods");
-    f.learned = r.Strings("learned");
-    f.metrics = r.Strings("metrics");
-    for (const Reader& e : r.Objects("experiments")) f.experiments.push_back(ReadExperiment(e));
-    if (r.Find("variants", false) != nullptr) f.variants = ReadVariants(r.Object("variants"));
-    f.timing_of = r.Str("timing_of");
-    if (f.experiments.empty() && !f.variants && f.timing_of.empty() && !IsPaperTable(f.table)) {
-        Fail(file, "experiments",
-             "is required: table '" + f.table +
-                 "' is not one of the paper's, so only this file's experiments can fill it");
-    }
+    Require(!f.table.empty(), what, "table", "is required");
+    Require(!f.title.empty(), what, "title", "is required");
+    f.experiments = ReadList<ExperimentSpec>(j, what, "experiments", ReadExperiment);
+    if (j.contains("variants")) f.variants = ReadVariants(j["variants"], what + ": variants");
+    Require(!f.experiments.empty() || !f.variants.rows.empty() || !f.timing_of.empty() ||
+                IsPaperTable(f.table),
+            what, "experiments",
+            "is required: table '" + f.table +
+                "' is not one of the paper's, so only this file's experiments can fill it");
     return f;
 }
 
@@ -231,20 +165,20 @@ void CheckExperimentFiles(const std::vector<ExperimentFile>& files) {
     std::set<std::string> tables;
     std::map<std::string, std::string> ids;  // experiment id -> its file
     for (const auto& f : files) {
-        if (!tables.insert(f.table).second)
-            Fail(f.file, "table", "'" + f.table + "' is another file's table too");
+        const std::string what = "experiment file " + f.file;
+        Require(tables.insert(f.table).second, what, "table",
+                "names table '" + f.table + "', which another file of this run fills too");
         for (const auto& e : f.experiments) {
-            if (!ids.emplace(e.id, f.file).second)
-                Fail(f.file, "experiments", "repeats id '" + e.id + "' of " + ids[e.id]);
+            const auto [it, fresh] = ids.emplace(e.id, f.file);
+            Require(fresh, what, "experiments", "repeats id '" + e.id + "' of " + it->second);
         }
     }
     for (const auto& f : files) {
-        const auto refer = [&](const std::string& key, const std::string& id) {
-            if (!id.empty() && ids.count(id) == 0)
-                Fail(f.file, key, "names experiment '" + id + "', which no file of this run has");
-        };
-        refer("timing_of", f.timing_of);
-        if (f.variants) refer("variants.pairs_of", f.variants->pairs_of);
+        for (const auto& [key, id] :
+             {std::pair{"timing_of", f.timing_of}, {"variants.pairs_of", f.variants.pairs_of}}) {
+            Require(id.empty() || ids.count(id) > 0, "experiment file " + f.file, key,
+                    "names experiment '" + id + "', which no file of this run has");
+        }
     }
 }
 

@@ -5,7 +5,6 @@
 // is described in docs/reproducing.md, "Adding an experiment".
 #include <cstdint>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,12 +12,12 @@ namespace regbench {
 
 /// How many pairs an experiment gets from the run's count n (--pairs; else 10 with --quick,
 /// else 1000): max(min, floor(scale * n)); `quick` replaces that with --quick and no --pairs;
-/// `fixed` (the file gives a number) replaces everything.
+/// `count` replaces everything.
 struct PairCount {
     double scale = 1.0;
     std::size_t min = 0;
     std::size_t quick = 0;  ///< 0: the rule
-    std::size_t fixed = 0;  ///< 0: the rule
+    std::size_t count = 0;  ///< 0: the rule
 };
 
 /// One pair file and its results: one column group of one table.
@@ -39,23 +38,25 @@ struct ExperimentSpec {
     PairCount pairs;
     /// Non-empty: pair k belongs to group sweep[k % size] (the overlap-sweep protocol's levels).
     std::vector<std::string> sweep;
+    std::string comment;  ///< free text, ignored
 };
 
 /// One learned variant: a paper row and the config overrides it trains with.
 struct Variant {
     std::string row;
-    nlohmann::json config;
+    nlohmann::json config = nlohmann::json::object();
 };
 
 /// Learned variants (ablation rows): `regbench train --ablation KIND` trains each over `model`
 /// into OUT/ROW; `reproduce` runs those shipped in data/models/ablation/KIND/ROW as `method`
-/// on the pairs of experiment `pairs_of` ("" = none runs them).
+/// on the pairs of experiment `pairs_of` ("" = none runs them). Absent: no rows.
 struct VariantSpec {
     std::string kind;
     std::string method;
     std::string model;
     std::string pairs_of;
     std::vector<Variant> rows;
+    std::string comment;
 };
 
 struct ExperimentFile {
@@ -67,12 +68,14 @@ struct ExperimentFile {
     std::vector<std::string> learned;  ///< rows say "not trained" when these cannot run
     std::vector<std::string> metrics;  ///< empty: mae_r, mae_t, ccd
     std::vector<ExperimentSpec> experiments;
-    std::optional<VariantSpec> variants;
+    VariantSpec variants;
     std::string timing_of;  ///< a timing table (Tab. 6) of this experiment's rows
+    std::string comment;
 };
 
-/// Parses and checks one file's JSON; throws std::invalid_argument "experiment file FILE: key
-/// 'KEY' ..." naming the file and the key.
+/// Parses and checks one file's JSON (core/params.hpp's ParseConfig: unknown keys and wrong
+/// types are refused); throws std::invalid_argument "experiment file FILE[: experiments[i]]:
+/// parameter 'KEY' ..." naming the file and the key.
 ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& file);
 
 /// Reads, parses and checks a file; throws naming the file.

@@ -54,7 +54,7 @@ std::string RootPath(const std::string& root, const ReproduceOptions& o) {
 
 /// The pair count of PairCount's rule for this run.
 std::size_t PairsOf(const PairCount& c, const ReproduceOptions& o) {
-    if (c.fixed > 0) return c.fixed;
+    if (c.count > 0) return c.count;
     if (o.quick && o.pairs == 0 && c.quick > 0) return c.quick;
     const std::size_t n = o.pairs > 0 ? o.pairs : (o.quick ? 10 : 1000);
     return std::max(c.min, static_cast<std::size_t>(std::floor(c.scale * static_cast<double>(n))));
@@ -74,7 +74,7 @@ PlannedExperiment Resolve(const ExperimentSpec& s,
     e.seed = o.seed + s.seed_offset;
     // Full runs on real data use every test item once (as the authors evaluate), unless
     // --pairs or the file fixes the count; --quick and the fallbacks keep the count.
-    e.one_per_item = !root.empty() && o.pairs == 0 && !o.quick && s.pairs.fixed == 0;
+    e.one_per_item = !root.empty() && o.pairs == 0 && !o.quick && s.pairs.count == 0;
     return e;
 }
 
@@ -86,7 +86,7 @@ std::vector<PlannedExperiment> PlanExperiments(const std::vector<ExperimentFile>
     for (const auto& f : files) {
         if (!Wanted(o.tables, f.table)) continue;
         used.insert(f.timing_of);
-        if (f.variants) used.insert(f.variants->pairs_of);
+        used.insert(f.variants.pairs_of);
     }
     std::vector<PlannedExperiment> out;
     for (const auto& f : files) {
@@ -345,9 +345,8 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
     std::map<std::string, std::vector<ResultSet>> variant_sets;
 #ifdef REGBENCH_HAVE_LEARNED
     for (const auto& f : files) {
-        if (!f.variants || !Wanted(o.tables, f.table) || !x.rows.count(f.variants->pairs_of))
-            continue;
-        const VariantSpec& v = *f.variants;
+        if (!Wanted(o.tables, f.table) || !x.rows.count(f.variants.pairs_of)) continue;
+        const VariantSpec& v = f.variants;
         const auto& m = methods.at(f.table);
         if (std::none_of(m.begin(), m.end(),
                          [&](const MethodSpec& s) { return s.name == v.method; })) {

@@ -106,13 +106,14 @@ ogmm::TrainData MakeTrainingData(const TrainingDataOptions& a) {
 LearnedVariants AblationVariants(const std::string& kind) {
     std::vector<std::string> kinds;
     for (const auto& f : PaperPlan()) {
-        if (!f.variants) continue;
-        if (f.variants->kind == kind) {
-            LearnedVariants v{f.variants->model, {}};
-            for (const auto& r : f.variants->rows) v.rows.emplace_back(r.row, r.config);
-            return v;
+        const VariantSpec& v = f.variants;
+        if (v.rows.empty()) continue;
+        if (v.kind == kind) {
+            LearnedVariants out{v.model, {}};
+            for (const auto& r : v.rows) out.rows.emplace_back(r.row, r.config);
+            return out;
         }
-        kinds.push_back(f.variants->kind);
+        kinds.push_back(v.kind);
     }
     std::string list;
     for (std::size_t i = 0; i < kinds.size(); ++i)

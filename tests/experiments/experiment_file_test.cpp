@@ -34,16 +34,16 @@ TEST(PaperPlan, HasOneFilePerTableInThePapersOrder) {
 TEST(PaperPlan, VariantsAreThePapersAblationRows) {
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     for (const auto& f : PaperPlan()) {
-        if (!f.variants || f.variants->pairs_of.empty()) continue;
+        if (f.variants.pairs_of.empty()) continue;
         std::vector<std::string> ours, papers;
-        for (const auto& r : f.variants->rows) ours.push_back(r.row);
+        for (const auto& r : f.variants.rows) ours.push_back(r.row);
         for (const auto& r : paper["tables"][f.table]["row_order"]) papers.push_back(r);
         std::sort(ours.begin(), ours.end());
         std::sort(papers.begin(), papers.end());
         EXPECT_EQ(ours, papers) << f.table;
-        EXPECT_EQ(f.variants->pairs_of, "tab1_same") << f.table;
-        EXPECT_EQ(f.variants->method, "ogmm");
-        EXPECT_EQ(f.variants->model, "ogmm-small");
+        EXPECT_EQ(f.variants.pairs_of, "tab1_same") << f.table;
+        EXPECT_EQ(f.variants.method, "ogmm");
+        EXPECT_EQ(f.variants.model, "ogmm-small");
     }
 }
 
@@ -51,8 +51,8 @@ TEST(PaperPlan, VariantsAreThePapersAblationRows) {
 TEST(PaperPlan, VariantConfigsAreTheTrainedOnes) {
     std::map<std::string, std::vector<std::pair<std::string, nlohmann::json>>> kinds;
     for (const auto& f : PaperPlan()) {
-        if (!f.variants) continue;
-        for (const auto& r : f.variants->rows) kinds[f.variants->kind].push_back({r.row, r.config});
+        if (f.variants.rows.empty()) continue;
+        for (const auto& r : f.variants.rows) kinds[f.variants.kind].push_back({r.row, r.config});
     }
     ASSERT_EQ(kinds.size(), 3u);
     using V = std::vector<std::pair<std::string, nlohmann::json>>;
@@ -102,25 +102,29 @@ TEST_F(ExperimentFileTest, MalformedFilesAreRefusedNamingFileAndKey) {
         R"("id": "a", "protocol": "partial", "split": "test", "dataset": "procedural")";
     const std::vector<std::pair<std::string, std::string>> cases = {
         {"{\"table\": ", "not valid JSON"},
-        {"[1, 2]", "key '(top level)' must be a JSON object"},
-        {R"({"title": "x", "experiments": []})", "key 'table' is required"},
-        {head + R"("experiment": []})", "key 'experiment' is not known"},
-        {head + R"("experiments": [{"id": "a"}]})", "key 'experiments[0].protocol' is required"},
-        {head + R"("experiments": [{)" + good + R"(, "pairs": 2.5}]})",
-         "'experiments[0].pairs' must be a whole number"},
+        {"[1, 2]", "parameters must be a JSON object"},
+        {R"({"title": "x", "experiments": []})", ": parameter 'table' is required"},
+        {head + R"("experiment": []})", ": unknown parameter 'experiment'"},
+        {head + R"("experiments": {"id": "a"}})", ": parameter 'experiments' expects array"},
+        {head + R"("experiments": [{"id": "a"}]})",
+         ": experiments[0]: parameter 'protocol' is required"},
+        {head + R"("experiments": [{)" + good + R"(, "pairs": {"count": 2.5}}]})",
+         ": experiments[0]: pairs: parameter 'count' must be a whole number"},
+        {head + R"("experiments": [{)" + good + R"(, "pairs": 3}]})",
+         ": experiments[0]: pairs: parameters must be a JSON object, got 3"},
         {head + R"("experiments": [{)" + good + R"(, "pairs": {"scale": -1}}]})",
-         "key 'experiments[0].pairs.scale' must be a number in (0, 1e6]"},
+         ": experiments[0]: pairs: parameter 'scale' must be in (0, 1e6]"},
         {head + R"("experiments": [{"id": "a", "protocol": "parital", "split": "test", )" +
              R"("dataset": "procedural"}]})",
-         "key 'experiments[0].protocol'"},
+         ": experiments[0]: parameter 'protocol' is not valid: unknown protocol 'parital'"},
         {head + R"("experiments": [{)" + good + R"(, "root": "modelnet"}]})",
-         "key 'experiments[0].root' must be one of"},
+         ": experiments[0]: parameter 'root' must be modelnet40, 7scenes or icl-nuim"},
         {head + R"("methods": "icp", "experiments": [{)" + good + "}]}",
-         "key 'methods' must be a non-empty list of non-empty strings"},
-        {head +
-             R"("variants": {"kind": "k", "method": "ogmm", "model": "m", "rows": [{"row": "r", "config": 3}]}})",
-         "key 'variants.rows[0].config' must be a JSON object"},
-        {head + "\"caption\": \"c\"}", "key 'experiments' is required"},
+         ": parameter 'methods' expects array"},
+        {head + R"("variants": {"kind": "k", "method": "ogmm", "model": "m", )" +
+             R"("rows": [{"row": "r", "config": 3}]}})",
+         ": variants: rows[0]: parameter 'config' expects object, got 3"},
+        {head + "\"caption\": \"c\"}", ": parameter 'experiments' is required"},
     };
     for (const auto& [text, expected] : cases) {
         const std::string message = Refusal(path, text);
@@ -149,12 +153,13 @@ TEST_F(ExperimentFileTest, ReferencesAndIdsAreCheckedAcrossTheRunsFiles) {
         return "(accepted)";
     };
     EXPECT_EQ(refusal({file("a", "x", ""), file("b", "y", "z")}),
-              "experiment file b.json: key 'timing_of' names experiment 'z', which no file of "
-              "this run has");
+              "experiment file b.json: parameter 'timing_of' names experiment 'z', which no "
+              "file of this run has");
     EXPECT_EQ(refusal({file("a", "x", ""), file("b", "x", "")}),
-              "experiment file b.json: key 'experiments' repeats id 'x' of a.json");
+              "experiment file b.json: parameter 'experiments' repeats id 'x' of a.json");
     EXPECT_EQ(refusal({file("a", "x", ""), file("a", "y", "")}),
-              "experiment file a.json: key 'table' 'a' is another file's table too");
+              "experiment file a.json: parameter 'table' names table 'a', which another file of "
+              "this run fills too");
 }
 
 }  // namespace

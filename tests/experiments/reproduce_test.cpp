@@ -140,7 +140,7 @@ TEST_F(UserExperiment, RunsEndToEndAndResumes) {
       "methods": ["identity", "icp"],
       "experiments": [
         {"id": "mine_partial", "group": "partial", "protocol": "partial", "split": "test",
-         "dataset": "procedural", "pairs": 3},
+         "dataset": "procedural", "pairs": {"count": 3}},
         {"id": "mine_jitter", "group": "jitter", "protocol": "jitter", "split": "test",
          "dataset": "procedural", "pairs": {"scale": 0.2}, "comment": "2 pairs of --pairs 10"}
       ]
@@ -180,7 +180,7 @@ TEST_F(UserExperiment, RunsEndToEndAndResumes) {
 TEST_F(UserExperiment, UnknownTableOfTheFilesIsRefused) {
     std::ofstream(Path("mine.json"))
         << R"({"table": "mine", "title": "t", "experiments": [{"id": "a", "protocol": "partial",
-              "split": "test", "dataset": "procedural", "pairs": 2}]})";
+              "split": "test", "dataset": "procedural"}]})";
     ReproduceOptions o;
     o.experiment_files = {Path("mine.json")};
     o.out_dir = Path("out");
