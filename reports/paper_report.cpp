@@ -70,6 +70,24 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
     }
 }
 
+/// Per group and metric a measured column and (for a table the paper has) the paper's.
+void AddColumns(const PaperTableSpec& spec, bool published, Table* t) {
+    for (const auto& g : spec.groups) {
+        for (const auto& m : spec.metrics) {
+            const std::string key = g.empty() ? m : g + "." + m;
+            const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
+            t->columns.push_back({key, head, CellSource::kMeasured, Better::kLower, 4});
+            if (!published) continue;
+            // A regbench-only group's paper column names the paper group it shows.
+            const std::string pg = PaperGroupOf(spec, g);
+            const std::string paper_head =
+                pg.empty() ? MetricHeader(m) : MetricHeader(m) + " " + pg;
+            t->columns.push_back(
+                {"paper:" + key, "paper " + paper_head, CellSource::kPaper, Better::kNone, 4});
+        }
+    }
+}
+
 /// The caption (its first sentence, then each side's data), provenance and floor notes of a
 /// paper table; a table the paper lacks (`published` false) has no paper side.
 void DescribeSides(const PaperTableSpec& spec,
@@ -221,20 +239,7 @@ Table BuildPaperTable(const PaperTableSpec& spec,
             if (std::find(order.begin(), order.end(), label) == order.end()) order.push_back(label);
         }
     }
-    for (const auto& g : spec.groups) {
-        for (const auto& m : spec.metrics) {
-            const std::string key = g.empty() ? m : g + "." + m;
-            const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
-            t.columns.push_back({key, head, CellSource::kMeasured, Better::kLower, 4});
-            if (!published) continue;
-            // A regbench-only group's paper column names the paper group it shows.
-            const std::string pg = PaperGroupOf(spec, g);
-            const std::string paper_head =
-                pg.empty() ? MetricHeader(m) : MetricHeader(m) + " " + pg;
-            t.columns.push_back(
-                {"paper:" + key, "paper " + paper_head, CellSource::kPaper, Better::kNone, 4});
-        }
-    }
+    AddColumns(spec, published, &t);
     // Reasons for rows that could not be measured, keyed by paper row name.
     std::map<std::string, std::string> reasons;
     for (const auto& [method, why] : o.unavailable)
