@@ -3,7 +3,7 @@
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
-#include "reports/reproduce.hpp"
+#include "experiments/reproduce.hpp"
 
 namespace regbench::app {
 
@@ -18,6 +18,10 @@ void SetupReproduceCommand(CLI::App* cmd) {
                   "overlap level), learned methods without their -noicp variants");
     cmd->add_option("--tables", o->tables, "Tables (ids or prefixes, e.g. table1,supp): " + tables)
         ->delimiter(',');
+    cmd->add_option("--experiment", o->experiment_files,
+                    "Experiment file (JSON, docs/reproducing.md) run instead of the paper's "
+                    "plan; repeatable")
+        ->check(CLI::ExistingFile);
     cmd->add_option("--modelnet40", o->modelnet40,
                     "ModelNet40 root (OFF tree or modelnet40_ply_hdf5_2048); default: the "
                     "embedded mesh corpus, and every table says so");

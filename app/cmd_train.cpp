@@ -1,14 +1,13 @@
 // `regbench train`: train a learned network (DeepGMR, OGMM) on pairs made on the fly by a pair
 // protocol (or read from a pair file), with validation, checkpoints and a wall-clock budget; and
-// `--ablation` to train the paper's ablation variants.
+// `--ablation` to train the paper's ablation variants. The data and the variants come from
+// experiments/training.hpp.
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
 #include <memory>
-#include <sstream>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -18,11 +17,9 @@
 #include "baselines/learned.hpp"
 #include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
-#include "datasets/dataset_shapes.hpp"
+#include "experiments/training.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
-#include "protocols/pair_file.hpp"
-#include "protocols/pair_protocols.hpp"
 #endif
 
 namespace regbench::app {
@@ -33,15 +30,7 @@ struct TrainArgs {
     std::string model;
     std::string config_file;
     std::string out;
-    std::string protocol = "partial";
-    std::string dataset = "cgal,procedural";
-    std::string split = "train";
-    std::string val_split = "val";
-    std::string pairing = "shared";
-    bool jitter = true;
-    std::string pairs_file;
-    double val_fraction = 0.2;
-    int val_pairs = 200;
+    TrainingDataOptions data;  ///< its seed is --seed (train.seed)
     int batch = 0;
     int epochs = 0;
     int pairs_per_epoch = 0;
@@ -51,7 +40,6 @@ struct TrainArgs {
     ogmm::TrainOptions train;
     bool val_icp = true;
     std::string ablation;
-    std::string data_dir;
 };
 
 /// The command as given, for checkpoints' provenance.
@@ -63,95 +51,6 @@ std::string CommandLine(const CLI::App& cmd) {
         for (const auto& r : o->results()) line += " " + r;
     }
     return line;
-}
-
-std::vector<std::string> SplitList(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    for (std::string item; std::getline(in, item, ',');) {
-        if (!item.empty()) out.push_back(item);
-    }
-    return out;
-}
-
-ogmm::TrainSample ToSample(const Pair& p) {
-    ogmm::TrainSample s;
-    s.source = p.source;
-    s.target = p.target;
-    s.T_gt = p.T_gt;
-    s.source_overlap = p.source_overlap.cast<double>();
-    s.target_overlap = p.target_overlap.cast<double>();
-    return s;
-}
-
-/// Shapes of every dataset in the comma-separated list, for one split.
-std::vector<ShapeSource> LoadShapes(const TrainArgs& a, const std::string& split) {
-    DatasetOptions options;
-    options.data_dir = a.data_dir;
-    const ShapeLoader load = DatasetShapeLoader(options);
-    std::vector<ShapeSource> shapes;
-    for (const auto& name : SplitList(a.dataset)) {
-        auto part = load(name, split);
-        shapes.insert(shapes.end(), part.begin(), part.end());
-    }
-    if (shapes.empty()) {
-        throw std::runtime_error("train: dataset '" + a.dataset + "' split '" + split +
-                                 "' holds no shapes");
-    }
-    return shapes;
-}
-
-/// Training stream and validation pairs from a protocol over datasets, or from a pair file.
-ogmm::TrainData MakeData(const TrainArgs& a) {
-    ogmm::TrainData data;
-    if (!a.pairs_file.empty()) {
-        auto set = std::make_shared<PairSet>(ReadPairFile(a.pairs_file));
-        const std::size_t n = set->pairs.size();
-        const auto n_val = static_cast<std::size_t>(a.val_fraction * static_cast<double>(n));
-        if (n_val < 1 || n_val >= n) {
-            throw std::invalid_argument("train: pair file " + a.pairs_file + " has " +
-                                        std::to_string(n) + " pairs; --val-fraction " +
-                                        std::to_string(a.val_fraction) +
-                                        " leaves no training or no validation pair");
-        }
-        const std::size_t n_train = n - n_val;  // the last n_val pairs validate
-        for (std::size_t i = n_train; i < n; ++i)
-            data.validation.push_back(ToSample(set->pairs[i]));
-        data.train_pair = [set, n_train](std::uint64_t k) {
-            return ToSample(set->pairs[k % n_train]);
-        };
-        data.provenance = {{"pairs_file", a.pairs_file},
-                           {"pairs_file_provenance", set->provenance},
-                           {"train_pairs", n_train},
-                           {"val_pairs", n_val}};
-        return data;
-    }
-    Protocol protocol = ParseProtocol(a.protocol);
-    if (a.jitter && protocol == Protocol::kPartial) protocol = Protocol::kJitter;
-    ProtocolOptions options = DefaultProtocolOptions(protocol);
-    options.pairing = ParsePairing(a.pairing);
-    ValidateProtocolOptions(options);
-    auto train_shapes = std::make_shared<std::vector<ShapeSource>>(LoadShapes(a, a.split));
-    const std::vector<ShapeSource> val_shapes = LoadShapes(a, a.val_split);
-    // Validation pairs come from another seed stream than training pairs.
-    const std::uint64_t val_seed = a.train.seed ^ 0x76616c6964ULL;
-    for (int i = 0; i < a.val_pairs; ++i) {
-        data.validation.push_back(ToSample(GeneratePair(val_shapes, options, val_seed, i)));
-    }
-    const std::uint64_t seed = a.train.seed;
-    data.train_pair = [train_shapes, options, seed](std::uint64_t k) {
-        return ToSample(GeneratePair(*train_shapes, options, seed, k));
-    };
-    data.provenance = {{"protocol", ProtocolProvenance(options)},
-                       {"dataset", a.dataset},
-                       {"split", a.split},
-                       {"val_split", a.val_split},
-                       {"train_shapes", train_shapes->size()},
-                       {"val_shapes", val_shapes.size()},
-                       {"val_pairs", a.val_pairs},
-                       {"seed", a.train.seed},
-                       {"val_seed", val_seed}};
-    return data;
 }
 
 /// The --config file: depth-limited (a file nested 1M levels deep crashed the process with
@@ -189,42 +88,6 @@ nlohmann::json BuildConfig(const TrainArgs& a,
     return config;
 }
 
-/// Variants of the paper's ablation tables (config overrides of the small OGMM config).
-std::vector<std::pair<std::string, nlohmann::json>> AblationVariants(const std::string& which) {
-    if (which == "components") {  // Tab. 4; variant names are the paper's row names
-        return {{"full", nlohmann::json::object()},
-                {"no_SPE", {{"spe", false}}},
-                {"no_CSA", {{"csa", false}}},
-                {"no_OSP", {{"osp", false}}}};
-    }
-    if (which == "losses") {  // Tab. 5: GR = 10 L_pose + 0.01 L_W, CL = NT-Xent, OS = overlap MSE
-        std::vector<std::pair<std::string, nlohmann::json>> v;
-        for (const auto& [name, gr, cl, os] :
-             std::vector<std::tuple<std::string, bool, bool, bool>>{
-                 {"GR", true, false, false},
-                 {"CL", false, true, false},
-                 {"OS", false, false, true},
-                 {"GR+CL", true, true, false},
-                 {"CL+OS", false, true, true},
-                 {"GR+OS", true, false, true},
-                 {"GR+CL+OS", true, true, true}}) {
-            v.push_back({name,
-                         {{"w_pose", gr ? 10.0 : 0.0},
-                          {"w_welsch", gr ? 0.01 : 0.0},
-                          {"w_clu", cl ? 1.0 : 0.0},
-                          {"w_ovl", os ? 1.0 : 0.0}}});
-        }
-        return v;
-    }
-    if (which == "clusters") {  // supplementary cluster-count table
-        std::vector<std::pair<std::string, nlohmann::json>> v;
-        for (int j : {8, 16, 32, 48, 64}) v.push_back({"J" + std::to_string(j), {{"clusters", j}}});
-        return v;
-    }
-    throw std::invalid_argument("--ablation must be components, losses or clusters, got '" + which +
-                                "'");
-}
-
 void RunOne(const TrainArgs& a,
             const std::string& command_line,
             const nlohmann::json& config,
@@ -233,8 +96,8 @@ void RunOne(const TrainArgs& a,
     ogmm::TrainOptions o = a.train;
     o.out_dir = out;
     // A budget without an explicit length plans the LR schedule to what fits the budget.
-    o.plan_to_budget = a.train.minutes > 0 && !a.train.resume && a.epochs == 0 &&
-                       a.train.max_steps == 0;
+    o.plan_to_budget =
+        a.train.minutes > 0 && !a.train.resume && a.epochs == 0 && a.train.max_steps == 0;
     o.run_info = {{"command", command_line}};
     if (a.val_icp) {
         o.refine = [](const PointCloud& s, const PointCloud& t, const Transform& init) {
@@ -259,13 +122,16 @@ void Run(const TrainArgs& a, const std::string& command_line) {
     // second train (or any regbench writer) on the same --out is refused naming the pid.
     if (!a.config_file.empty()) (void)ReadJsonFile(a.config_file);  // refused before any work
     const OutputLock lock(a.out);
-    const ogmm::TrainData data = MakeData(a);
+    TrainingDataOptions data_options = a.data;
+    data_options.seed = a.train.seed;
+    const ogmm::TrainData data = MakeTrainingData(data_options);
     if (a.ablation.empty()) {
         RunOne(a, command_line, BuildConfig(a, a.model, nlohmann::json::object()), data, a.out);
         return;
     }
-    const std::string base = a.model.empty() ? "ogmm-small" : a.model;
-    for (const auto& [variant, overrides] : AblationVariants(a.ablation)) {
+    const LearnedVariants variants = AblationVariants(a.ablation);
+    const std::string base = a.model.empty() ? variants.model : a.model;
+    for (const auto& [variant, overrides] : variants.rows) {
         nlohmann::json config = BuildConfig(a, base, overrides);
         config["name"] = config.value("name", base);
         RunOne(a, command_line, config, data, (std::filesystem::path(a.out) / variant).string());
@@ -280,21 +146,22 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--config", a->config_file, "JSON file merged over the named config");
     cmd->add_option("--out", a->out, "Run directory (checkpoints last/ best/, metrics.csv)")
         ->required();
-    cmd->add_option("--protocol", a->protocol, "Pair protocol")->capture_default_str();
-    cmd->add_option("--dataset", a->dataset, "Dataset(s), comma-separated: cgal, procedural, PATH")
+    cmd->add_option("--protocol", a->data.protocol, "Pair protocol")->capture_default_str();
+    cmd->add_option("--dataset", a->data.dataset,
+                    "Dataset(s), comma-separated: cgal, procedural, PATH")
         ->capture_default_str();
-    cmd->add_option("--split", a->split, "Training split")->capture_default_str();
-    cmd->add_option("--val-split", a->val_split, "Validation split")->capture_default_str();
-    cmd->add_option("--pairing", a->pairing, "shared | independent")->capture_default_str();
-    cmd->add_flag("--jitter,!--no-jitter", a->jitter, "Jitter both clouds (default on)");
-    cmd->add_option("--pairs-file", a->pairs_file, "Train on a frozen pair file instead");
+    cmd->add_option("--split", a->data.split, "Training split")->capture_default_str();
+    cmd->add_option("--val-split", a->data.val_split, "Validation split")->capture_default_str();
+    cmd->add_option("--pairing", a->data.pairing, "shared | independent")->capture_default_str();
+    cmd->add_flag("--jitter,!--no-jitter", a->data.jitter, "Jitter both clouds (default on)");
+    cmd->add_option("--pairs-file", a->data.pairs_file, "Train on a frozen pair file instead");
     // Every number is checked before any work: a value that is NaN, negative or zero where
     // the recipe needs a positive one used to fall back to the full recipe silently.
-    cmd->add_option("--val-fraction", a->val_fraction,
+    cmd->add_option("--val-fraction", a->data.val_fraction,
                     "Fraction of --pairs-file pairs held out for validation")
         ->check(OpenInterval(0.0, 1.0))
         ->capture_default_str();
-    cmd->add_option("--val-pairs", a->val_pairs, "Validation pairs (protocol data)")
+    cmd->add_option("--val-pairs", a->data.val_pairs, "Validation pairs (protocol data)")
         ->check(PositiveWholeNumber())
         ->capture_default_str();
     cmd->add_option("--batch", a->batch, "Batch size (default: the model's recipe)")
@@ -321,7 +188,7 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_flag("!--no-val-icp", a->val_icp, "Skip the with-ICP validation metrics");
     cmd->add_option("--ablation", a->ablation,
                     "components | losses | clusters: train every variant into OUT/<variant>");
-    cmd->add_option("--data-dir", a->data_dir, "Data directory for named datasets");
+    cmd->add_option("--data-dir", a->data.data_dir, "Data directory for named datasets");
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
 

@@ -70,6 +70,49 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
     }
 }
 
+/// Per group and metric a measured column and (for a table the paper has) the paper's.
+void AddColumns(const PaperTableSpec& spec, bool published, Table* t) {
+    for (const auto& g : spec.groups) {
+        for (const auto& m : spec.metrics) {
+            const std::string key = g.empty() ? m : g + "." + m;
+            const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
+            t->columns.push_back({key, head, CellSource::kMeasured, Better::kLower, 4});
+            if (!published) continue;
+            // A regbench-only group's paper column names the paper group it shows.
+            const std::string pg = PaperGroupOf(spec, g);
+            const std::string paper_head =
+                pg.empty() ? MetricHeader(m) : MetricHeader(m) + " " + pg;
+            t->columns.push_back(
+                {"paper:" + key, "paper " + paper_head, CellSource::kPaper, Better::kNone, 4});
+        }
+    }
+}
+
+/// The caption (its first sentence, then each side's data), provenance and floor notes of a
+/// paper table; a table the paper lacks (`published` false) has no paper side.
+void DescribeSides(const PaperTableSpec& spec,
+                   const nlohmann::json& pt,
+                   bool published,
+                   const std::vector<ResultSet>& sets,
+                   Table* t) {
+    std::string ours;
+    for (const auto& s : sets) {
+        ours += (ours.empty() ? "" : "; ") + DescribeSet(s);
+        t->provenance.push_back(s.provenance);
+        t->provenance.back().group = s.group;
+    }
+    AddFloorNotes(sets, t);
+    const std::string paper_side =
+        published
+            ? fmt::format(" Paper: {} as published (their pairs, their machine).", spec.paper_data)
+            : "";
+    t->caption = fmt::format(
+        "{}. Ours: {}.{} Measured cells are mean ± 95% bootstrap half-width; '-' = not run{}.",
+        spec.caption.empty() ? pt.value("caption", std::string()) : spec.caption,
+        ours.empty() ? "no result rows" : ours, paper_side,
+        published ? " or not in the paper" : "");
+}
+
 }  // namespace
 
 const std::vector<PaperTableSpec>& PaperTableSpecs() {
@@ -181,6 +224,7 @@ Table BuildPaperTable(const PaperTableSpec& spec,
     // Row order: the paper's (for sweep tables: OGMM), then measured rows the paper lacks.
     std::vector<std::string> order;
     const auto& pt = paper.at("tables").value(spec.id, nlohmann::json::object());
+    const bool published = paper.at("tables").contains(spec.id);
     const bool sweep = pt.contains("rows") && pt["rows"].contains("mae_r");
     if (sweep) {
         order.push_back("OGMM");
@@ -195,19 +239,7 @@ Table BuildPaperTable(const PaperTableSpec& spec,
             if (std::find(order.begin(), order.end(), label) == order.end()) order.push_back(label);
         }
     }
-    for (const auto& g : spec.groups) {
-        for (const auto& m : spec.metrics) {
-            const std::string key = g.empty() ? m : g + "." + m;
-            const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
-            t.columns.push_back({key, head, CellSource::kMeasured, Better::kLower, 4});
-            // A regbench-only group's paper column names the paper group it shows.
-            const std::string pg = PaperGroupOf(spec, g);
-            const std::string paper_head =
-                pg.empty() ? MetricHeader(m) : MetricHeader(m) + " " + pg;
-            t.columns.push_back(
-                {"paper:" + key, "paper " + paper_head, CellSource::kPaper, Better::kNone, 4});
-        }
-    }
+    AddColumns(spec, published, &t);
     // Reasons for rows that could not be measured, keyed by paper row name.
     std::map<std::string, std::string> reasons;
     for (const auto& [method, why] : o.unavailable)
@@ -250,6 +282,7 @@ Table BuildPaperTable(const PaperTableSpec& spec,
                     measured.text = reasons[label];
                 }
                 row.cells.push_back(measured);
+                if (!published) continue;
                 Cell p;
                 p.source = CellSource::kPaper;
                 p.value = PaperCell(paper, spec.id, label, PaperGroupOf(spec, g), m);
@@ -258,18 +291,7 @@ Table BuildPaperTable(const PaperTableSpec& spec,
         }
         t.rows.push_back(row);
     }
-    std::string ours;
-    for (const auto& s : sets) {
-        ours += (ours.empty() ? "" : "; ") + DescribeSet(s);
-        t.provenance.push_back(s.provenance);
-        t.provenance.back().group = s.group;
-    }
-    AddFloorNotes(sets, &t);
-    t.caption = fmt::format(
-        "{}. Ours: {}. Paper: {} as published (their pairs, their machine). Measured cells are "
-        "mean ± 95% bootstrap half-width; '-' = not run or not in the paper.",
-        pt.value("caption", std::string()), ours.empty() ? "no result rows" : ours,
-        spec.paper_data);
+    DescribeSides(spec, pt, published, sets, &t);
     return t;
 }
 

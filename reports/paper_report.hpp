@@ -31,6 +31,9 @@ struct PaperTableSpec {
     /// Groups regbench adds beside the paper's, and the paper group their paper column shows
     /// (e.g. "c2c_clean" -> "c2c": the noise-free shared-sample variant of the noisy c2c).
     std::map<std::string, std::string> paper_group_of = {};
+    /// First sentence of the caption; "" = the paper's. A table the paper lacks (an
+    /// experiment file of a user) has no paper columns.
+    std::string caption = {};
 };
 
 /// The paper group whose published cells sit beside group `g` of `spec` (g itself unless

@@ -1,9 +1,10 @@
-#include "reports/reproduce.hpp"
+#include "experiments/reproduce.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -16,6 +17,7 @@
 #include "core/file_lock.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
+#include "experiments/experiment_file.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -35,28 +37,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// One pair file and its results: fills one column group of one paper table.
-struct Experiment {
-    std::string id;     ///< file stem, e.g. "tab1_same"
-    std::string table;  ///< paper table id
-    std::string group;  ///< column group ("" for none)
-    std::string protocol;
-    std::string dataset;  ///< name or path
-    std::string split;
-    std::string fallback;  ///< non-empty when standing in for the paper's dataset
-    std::size_t pairs = 0;
-    std::uint64_t seed = 1;
-    bool sweep = false;         ///< overlap-sweep: rows split into groups by pair % levels
-    std::string pairing;        ///< "" = the protocol's default (independent)
-    bool noise_free = false;    ///< noise sigma 0 (the clean c2c variant)
-    bool one_per_item = false;  ///< one pair per item of the split (`generate --pairs all`)
-};
-
-const std::vector<std::string> kSweepGroups = {"30%", "40%", "50%", "60%", "70%"};
-
-/// Learned methods whose rows say "not trained" when they cannot be created.
-const std::set<std::string> kLearned = {"ogmm", "deepgmr"};
-
 bool Wanted(const std::vector<std::string>& wanted, const std::string& table) {
     if (wanted.empty()) return true;
     for (const auto& w : wanted) {
@@ -65,106 +45,76 @@ bool Wanted(const std::vector<std::string>& wanted, const std::string& table) {
     return false;
 }
 
-/// Every experiment of the paper's tables, in the paper's order, then those the wanted tables
-/// need. Long because it is the list itself: one entry (and its stand-in data) per table part.
-std::vector<Experiment> PlanExperiments(const ReproduceOptions& o) {
+/// The command-line root of `root` ("" when not given).
+std::string RootPath(const std::string& root, const ReproduceOptions& o) {
+    if (root == "modelnet40") return o.modelnet40;
+    if (root == "7scenes") return o.sevenscenes;
+    return root == "icl-nuim" ? o.icl_nuim : "";
+}
+
+/// The pair count of PairCount's rule for this run.
+std::size_t PairsOf(const PairCount& c, const ReproduceOptions& o) {
+    if (c.count > 0) return c.count;
+    if (o.quick && o.pairs == 0 && c.quick > 0) return c.quick;
     const std::size_t n = o.pairs > 0 ? o.pairs : (o.quick ? 10 : 1000);
-    const bool mn = !o.modelnet40.empty();
-    const std::string objects = mn ? o.modelnet40 : "cgal";
-    const std::string object_fallback = mn ? "" : "embedded CGAL mesh corpus instead of ModelNet40";
-    const auto make = [&](std::string id, std::string table, std::string group,
-                          std::string protocol, std::string dataset, std::string split,
-                          std::string fallback, std::size_t pairs, std::uint64_t seed) {
-        Experiment e;
-        e.id = std::move(id);
-        e.table = std::move(table);
-        e.group = std::move(group);
-        e.protocol = std::move(protocol);
-        e.dataset = std::move(dataset);
-        e.split = std::move(split);
-        e.fallback = std::move(fallback);
-        e.pairs = pairs;
-        e.seed = seed;
-        return e;
-    };
-    const auto obj = [&](std::string id, std::string table, std::string group, std::string protocol,
-                         std::string split, std::size_t pairs) {
-        return make(std::move(id), std::move(table), std::move(group), std::move(protocol),
-                    objects, std::move(split), object_fallback, pairs, o.seed);
-    };
-    std::vector<Experiment> all = {
-        obj("tab1_same", "table1_modelnet_partial", "same_category", "partial",
-            "same_category/test", n),
-        obj("tab1_cross", "table1_modelnet_partial", "cross_category", "partial",
-            "cross_category/test", n),
-        obj("tab2_jitter", "table2_modelnet_noise_density", "jitter", "jitter",
-            "same_category/test", n),
-        obj("tab2_density", "table2_modelnet_noise_density", "density", "density",
-            "same_category/test", n),
-    };
-    // Indoor scenes: real data when given, else the indoor simulation (different seeds so
-    // the two columns are not the same pairs).
-    const std::size_t n_indoor = std::max<std::size_t>(4, n / 2);
-    all.push_back(make("tab3_7scenes", "table3_indoor", "7scenes", "indoor",
-                       o.sevenscenes.empty() ? "indoor-sim" : o.sevenscenes, "test",
-                       o.sevenscenes.empty() ? "simulated indoor scans instead of 7Scenes" : "",
-                       n_indoor, o.seed));
-    all.push_back(make("tab3_icl_nuim", "table3_indoor", "icl_nuim", "indoor",
-                       o.icl_nuim.empty() ? "indoor-sim" : o.icl_nuim, "test",
-                       o.icl_nuim.empty() ? "simulated indoor scans instead of ICL-NUIM" : "",
-                       n_indoor, o.seed + 1));
-    // Real ICL-NUIM: its test file's stored pairs, as DeepGMR's and the authors' evaluation.
-    if (!o.icl_nuim.empty()) all.back().pairing = "stored";
-    // Sweep: half the pairs per level (500 of 1000); --quick 2 per level.
-    const std::size_t n_sweep =
-        o.quick && o.pairs == 0 ? 2 * kSweepGroups.size() : n * kSweepGroups.size() / 2;
-    Experiment sweep = obj("supp_overlap", "supp_overlap_ratio", "", "overlap-sweep",
-                           "same_category/test", n_sweep);
-    sweep.sweep = true;
-    all.push_back(sweep);
-    all.push_back(obj("supp_c2c", "supp_complete", "c2c", "complete", "same_category/test", n));
-    all.push_back(
-        obj("supp_c2p", "supp_complete", "c2p", "complete-to-partial", "same_category/test", n));
-    // The paper's CPD c2c CCD (0.0037) is below the noisy protocol's floor: offer the clean,
-    // shared-sample variant beside it.
-    Experiment clean =
-        obj("supp_c2c_clean", "supp_complete", "c2c_clean", "complete", "same_category/test", n);
-    clean.pairing = "shared";
-    clean.noise_free = true;
-    all.push_back(clean);
+    return std::max(c.min, static_cast<std::size_t>(std::floor(c.scale * static_cast<double>(n))));
+}
+
+PlannedExperiment Resolve(const ExperimentSpec& s,
+                          const std::string& table,
+                          const ReproduceOptions& o) {
+    PlannedExperiment e;
+    e.spec = s;
+    e.table = table;
+    const std::string root = s.root.empty() ? "" : RootPath(s.root, o);
+    e.dataset = root.empty() ? s.dataset : root;
+    e.fallback = root.empty() ? s.fallback_note : "";
+    e.pairing = !root.empty() && !s.root_pairing.empty() ? s.root_pairing : s.pairing;
+    e.pairs = PairsOf(s.pairs, o);
+    e.seed = o.seed + s.seed_offset;
     // Full runs on real data use every test item once (as the authors evaluate), unless
-    // --pairs fixes the count; --quick and the fallbacks keep the fixed count.
-    if (o.pairs == 0 && !o.quick) {
-        for (auto& e : all) {
-            const bool real = e.fallback.empty();
-            e.one_per_item = real;
-        }
+    // --pairs or the file fixes the count; --quick and the fallbacks keep the count.
+    e.one_per_item = !root.empty() && o.pairs == 0 && !o.quick && s.pairs.count == 0;
+    return e;
+}
+
+}  // namespace
+
+std::vector<PlannedExperiment> PlanExperiments(const std::vector<ExperimentFile>& files,
+                                               const ReproduceOptions& o) {
+    std::set<std::string> used;
+    for (const auto& f : files) {
+        if (!Wanted(o.tables, f.table)) continue;
+        used.insert(f.timing_of);
+        used.insert(f.variants.pairs_of);
     }
-    std::vector<Experiment> out;
-    for (const auto& e : all) {
-        // Tab. 6 times the Tab. 1 same-category runs; the ablations (Tab. 4, 5) run their
-        // variants on the same pairs.
-        if (Wanted(o.tables, e.table) ||
-            (e.id == "tab1_same" && (Wanted(o.tables, "table6_inference_time") ||
-                                     Wanted(o.tables, "table4_ablation_components") ||
-                                     Wanted(o.tables, "table5_ablation_losses")))) {
-            out.push_back(e);
+    std::vector<PlannedExperiment> out;
+    for (const auto& f : files) {
+        for (const auto& s : f.experiments) {
+            if (Wanted(o.tables, f.table) || used.count(s.id))
+                out.push_back(Resolve(s, f.table, o));
         }
     }
     return out;
 }
+
+namespace {
 
 /// Writes `text` to `path` atomically and checked (core/atomic_file).
 void WriteText(const fs::path& path, const std::string& text) {
     WriteFileAtomic(path.string(), text);
 }
 
-/// Methods to run, and the reasons the wanted ones that cannot run are left out.
-std::vector<MethodSpec> ChooseMethods(const ReproduceOptions& o,
+/// Methods to run: `names` (a file's or --methods; empty: every registered one), and the
+/// reasons the wanted ones that cannot run are left out. Only methods in `learned` may be left
+/// out of a list that names them.
+std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
+                                      const std::set<std::string>& learned,
+                                      const ReproduceOptions& o,
                                       std::map<std::string, std::string>* unavailable,
                                       std::ostream& log) {
-    std::vector<std::string> names = o.methods;
-    if (names.empty()) {
+    const bool named = !names.empty();
+    if (!named) {
         for (const auto& m : AllMethods()) {
             // --quick leaves out the learned methods' "-noicp" variants: no paper row, and the
             // network calls dominate a quick run's time (docs/reports.md).
@@ -183,59 +133,82 @@ std::vector<MethodSpec> ChooseMethods(const ReproduceOptions& o,
             CreateMethod(name, nlohmann::json::object());  // checkpoints load here
             specs.push_back({name, FindMethod(name).defaults});
         } catch (const std::exception& e) {
-            if (!o.methods.empty() && !kLearned.count(name)) throw;
+            if (named && !learned.count(name)) throw;
             (*unavailable)[name] = "not trained";
             log << "reproduce: " << name << " left out (not trained: " << e.what() << ")\n";
-        }
-    }
-    for (const auto& learned : kLearned) {
-        bool registered = false;
-        for (const auto& m : AllMethods()) registered |= m.name == learned;
-        if (!registered && !unavailable->count(learned)) {
-            (*unavailable)[learned] = "not trained";
-            log << "reproduce: " << learned << " is not registered in this build: not trained\n";
         }
     }
     if (specs.empty()) throw std::runtime_error("reproduce: no method can run");
     return specs;
 }
 
+/// Each file's methods (ChooseMethods once per distinct list), by table id; learned methods
+/// this build does not register are marked "not trained".
+std::map<std::string, std::vector<MethodSpec>> ChooseAllMethods(
+    const std::vector<ExperimentFile>& files,
+    const ReproduceOptions& o,
+    std::map<std::string, std::string>* unavailable,
+    std::ostream& log) {
+    std::set<std::string> learned;
+    for (const auto& f : files) learned.insert(f.learned.begin(), f.learned.end());
+    std::map<std::vector<std::string>, std::vector<MethodSpec>> by_list;
+    std::map<std::string, std::vector<MethodSpec>> by_table;
+    for (const auto& f : files) {
+        const auto& names = o.methods.empty() ? f.methods : o.methods;
+        if (!by_list.count(names))
+            by_list[names] = ChooseMethods(names, learned, o, unavailable, log);
+        by_table[f.table] = by_list[names];
+    }
+    for (const auto& name : learned) {
+        bool registered = false;
+        for (const auto& m : AllMethods()) registered |= m.name == name;
+        if (!registered && !unavailable->count(name)) {
+            (*unavailable)[name] = "not trained";
+            log << "reproduce: " << name << " is not registered in this build: not trained\n";
+        }
+    }
+    return by_table;
+}
+
 /// Generates the pair file unless a previous invocation did.
-bool EnsurePairs(const Experiment& e,
+bool EnsurePairs(const PlannedExperiment& e,
                  const fs::path& path,
                  const ReproduceOptions& o,
                  std::ostream& log) {
     if (fs::exists(path)) return false;
     GenerateRequest request;
+    const ExperimentSpec& s = e.spec;
     request.dataset = e.dataset;
-    request.split = e.split;
+    request.split = s.split;
     request.num_pairs = e.pairs;
     request.seed = e.seed;
-    request.options = DefaultProtocolOptions(ParseProtocol(e.protocol));
+    request.options = DefaultProtocolOptions(ParseProtocol(s.protocol));
     if (!e.pairing.empty()) request.options.pairing = ParsePairing(e.pairing);
-    if (e.noise_free) request.options.noise_sigma = 0.0;
+    if (s.noise_free) request.options.noise_sigma = 0.0;
     request.one_per_item = e.one_per_item;
     request.out = path.string();
     request.extra_provenance = {{"regbench_version", RegbenchVersion()},
-                                {"reproduce_experiment", e.id}};
+                                {"reproduce_experiment", s.id}};
     if (!e.fallback.empty()) request.extra_provenance["fallback"] = e.fallback;
     DatasetOptions dataset_options;
     dataset_options.data_dir = o.data_dir;
-    log << fmt::format("reproduce: {}: generating {} {} pairs ({} pairing{}) from {} ({})\n", e.id,
-                       e.one_per_item ? "one per item" : std::to_string(e.pairs), e.protocol,
+    log << fmt::format("reproduce: {}: generating {} {} pairs ({} pairing{}) from {} ({})\n", s.id,
+                       e.one_per_item ? "one per item" : std::to_string(e.pairs), s.protocol,
                        e.pairing.empty() ? "independent" : e.pairing,
-                       e.noise_free ? ", noise-free" : "", e.dataset, e.split);
+                       s.noise_free ? ", noise-free" : "", e.dataset, s.split);
     GenerateToFile(request, DatasetShapeLoader(dataset_options));
     return true;
 }
 
 /// Splits a sweep's rows into its levels (pair k has level k % levels).
-std::vector<ResultSet> SweepSets(const std::vector<nlohmann::json>& rows, const Provenance& p) {
+std::vector<ResultSet> SweepSets(const std::vector<std::string>& levels,
+                                 const std::vector<nlohmann::json>& rows,
+                                 const Provenance& p) {
     std::vector<ResultSet> sets;
-    for (std::size_t l = 0; l < kSweepGroups.size(); ++l) {
-        ResultSet s{kSweepGroups[l], {}, p, ""};
+    for (std::size_t l = 0; l < levels.size(); ++l) {
+        ResultSet s{levels[l], {}, p, ""};
         for (const auto& r : rows) {
-            if (r.value("pair", 0UL) % kSweepGroups.size() == l) s.rows.push_back(r);
+            if (r.value("pair", 0UL) % levels.size() == l) s.rows.push_back(r);
         }
         sets.push_back(s);
     }
@@ -294,24 +267,23 @@ Provenance ProvenanceOfPairFile(const std::string& path) {
 
 std::vector<std::string> ReproducibleTables() {
     std::vector<std::string> ids;
-    for (const auto& s : PaperTableSpecs()) ids.push_back(s.id);
-    ids.insert(ids.begin() + 5, "table6_inference_time");
+    for (const auto& f : PaperPlan()) ids.push_back(f.table);
     return ids;
 }
 
 namespace {
 
-/// Refuses table names that match no table and dataset paths that do not exist, before any
-/// work starts.
-void ValidateOptions(const ReproduceOptions& o) {
+/// Refuses table names that match no table of `files` and dataset paths that do not exist,
+/// before any work starts.
+void ValidateOptions(const ReproduceOptions& o, const std::vector<ExperimentFile>& files) {
     if (o.jobs < 1) throw std::invalid_argument("--jobs must be at least 1");
     if (!(o.timeout_seconds >= 0.0)) throw std::invalid_argument("--timeout must be >= 0");
     for (const auto& t : o.tables) {
         bool known = false;
-        for (const auto& id : ReproducibleTables()) known |= id.rfind(t, 0) == 0;
+        for (const auto& f : files) known |= f.table.rfind(t, 0) == 0;
         if (!known) {
             std::string list;
-            for (const auto& id : ReproducibleTables()) list += (list.empty() ? "" : ", ") + id;
+            for (const auto& f : files) list += (list.empty() ? "" : ", ") + f.table;
             throw std::invalid_argument("--tables: '" + t + "' names no table (" + list + ")");
         }
     }
@@ -334,117 +306,164 @@ struct ExperimentOutputs {
 };
 
 /// Generates and runs every experiment; each step is skipped or resumed when done before.
-ExperimentOutputs RunExperiments(const std::vector<Experiment>& experiments,
-                                 const std::vector<MethodSpec>& methods,
+ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experiments,
+                                 const std::map<std::string, std::vector<MethodSpec>>& methods,
                                  const ReproduceOptions& o,
                                  const fs::path& out,
                                  ReproduceSummary& summary,
                                  std::ostream& log) {
     ExperimentOutputs x;
     for (const auto& e : experiments) {
-        const fs::path pairs = out / "pairs" / (e.id + ".h5");
-        const fs::path results = out / "results" / (e.id + ".jsonl");
+        const std::string& id = e.spec.id;
+        const fs::path pairs = out / "pairs" / (id + ".h5");
+        const fs::path results = out / "results" / (id + ".jsonl");
         summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
-        const RunOptions run = ExperimentRun(o, pairs, methods, results);
-        log << "reproduce: " << e.id << ": running " << methods.size() << " methods\n";
+        const auto& m = methods.at(e.table);
+        const RunOptions run = ExperimentRun(o, pairs, m, results);
+        log << "reproduce: " << id << ": running " << m.size() << " methods\n";
         summary.rows_run += RunBenchmark(run).rows_written;
-        x.rows[e.id] = ReadJsonl(results.string());
-        x.provenance[e.id] = ProvenanceOfPairFile(pairs.string());
-        x.provenance[e.id].fallback = e.fallback;
-        x.pairs[e.id] = ReadPairFile(pairs.string());
+        x.rows[id] = ReadJsonl(results.string());
+        x.provenance[id] = ProvenanceOfPairFile(pairs.string());
+        x.provenance[id].fallback = e.fallback;
+        x.pairs[id] = ReadPairFile(pairs.string());
     }
     return x;
 }
 
-/// Ablation rows (Tab. 4, 5): every variant with a shipped checkpoint
-/// (data/models/ablation/<kind>/<paper row>, written by `regbench train --ablation`) runs as
-/// `ogmm` on the Tab. 1 same-category pairs; variants without one say "not trained" (in
-/// BuildTables). Returns the variants' result sets by table id.
-std::map<std::string, std::vector<ResultSet>> RunAblations(
-    [[maybe_unused]] const std::vector<MethodSpec>& methods,
+/// Learned variants (the ablations, Tab. 4, 5): every variant with a shipped checkpoint
+/// (data/models/ablation/<kind>/<row>, written by `regbench train --ablation`) runs as its
+/// method on the pairs of its `pairs_of` experiment; variants without one say "not trained"
+/// (in BuildTables). Returns the variants' result sets by table id.
+std::map<std::string, std::vector<ResultSet>> RunVariants(
+    [[maybe_unused]] const std::vector<ExperimentFile>& files,
+    [[maybe_unused]] const std::map<std::string, std::vector<MethodSpec>>& methods,
     [[maybe_unused]] const ExperimentOutputs& x,
-    [[maybe_unused]] const nlohmann::json& paper,
     [[maybe_unused]] const ReproduceOptions& o,
     [[maybe_unused]] const fs::path& out,
     [[maybe_unused]] ReproduceSummary& summary,
     [[maybe_unused]] std::ostream& log) {
-    std::map<std::string, std::vector<ResultSet>> ablation_sets;
+    std::map<std::string, std::vector<ResultSet>> variant_sets;
 #ifdef REGBENCH_HAVE_LEARNED
-    const bool ogmm_runs = std::any_of(methods.begin(), methods.end(),
-                                       [](const MethodSpec& m) { return m.name == "ogmm"; });
-    for (const auto& [table, kind] :
-         {std::pair<std::string, std::string>{"table4_ablation_components", "components"},
-          {"table5_ablation_losses", "losses"}}) {
-        if (!Wanted(o.tables, table) || !x.rows.count("tab1_same")) continue;
-        if (!ogmm_runs) {
-            log << "reproduce: " << table << ": ogmm cannot run, its variants are not run\n";
+    for (const auto& f : files) {
+        if (!Wanted(o.tables, f.table) || !x.rows.count(f.variants.pairs_of)) continue;
+        const VariantSpec& v = f.variants;
+        const auto& m = methods.at(f.table);
+        if (std::none_of(m.begin(), m.end(),
+                         [&](const MethodSpec& s) { return s.name == v.method; })) {
+            log << "reproduce: " << f.table << ": " << v.method
+                << " cannot run, its variants are not run\n";
             continue;
         }
-        for (const auto& [row, cells] : paper["tables"][table]["rows"].items()) {
-            (void)cells;
-            const std::string dir = ShippedCheckpointDir("ablation/" + kind + "/" + row);
+        // In row-name order, as before the plan was data (the paper JSON's rows, a sorted map).
+        std::vector<Variant> rows = v.rows;
+        std::sort(rows.begin(), rows.end(),
+                  [](const auto& a, const auto& b) { return a.row < b.row; });
+        for (const auto& row : rows) {
+            const std::string dir = ShippedCheckpointDir("ablation/" + v.kind + "/" + row.row);
             if (!fs::exists(fs::path(dir) / "checkpoint.json")) continue;
-            MethodSpec spec{"ogmm", FindMethod("ogmm").defaults};
+            MethodSpec spec{v.method, FindMethod(v.method).defaults};
             spec.params["checkpoint"] = dir;
-            std::string stem = "ablation_" + kind + "_" + row;
+            std::string stem = "ablation_" + v.kind + "_" + row.row;
             std::replace(stem.begin(), stem.end(), '+', '_');
-            const RunOptions run = ExperimentRun(o, out / "pairs" / "tab1_same.h5", {spec},
+            const RunOptions run = ExperimentRun(o, out / "pairs" / (v.pairs_of + ".h5"), {spec},
                                                  out / "results" / (stem + ".jsonl"));
-            log << "reproduce: " << table << ": variant " << row << " (checkpoint " << dir << ")\n";
+            log << "reproduce: " << f.table << ": variant " << row.row << " (checkpoint " << dir
+                << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
-            ablation_sets[table].push_back(
-                {"", ReadJsonl(run.out_path), x.provenance.at("tab1_same"), row});
+            variant_sets[f.table].push_back(
+                {"", ReadJsonl(run.out_path), x.provenance.at(v.pairs_of), row.row});
         }
     }
 #endif
-    return ablation_sets;
+    return variant_sets;
 }
 
-/// The paper's tables filled from the experiments (and the ablation variants), in the
-/// paper's order, with Tab. 6 (timing) after Tab. 5.
-std::vector<Table> BuildTables(const std::vector<Experiment>& experiments,
+/// The table of a file: the paper's spec of its id, or (a table the paper lacks) one whose
+/// column groups are its experiments'; the file's title, caption and metrics win.
+PaperTableSpec SpecOf(const ExperimentFile& f) {
+    PaperTableSpec spec;
+    spec.metrics = {"mae_r", "mae_t", "ccd"};
+    const auto& paper = PaperTableSpecs();
+    const auto it = std::find_if(paper.begin(), paper.end(),
+                                 [&](const PaperTableSpec& s) { return s.id == f.table; });
+    if (it != paper.end()) spec = *it;
+    spec.id = f.table;
+    spec.title = f.title;
+    if (!f.caption.empty()) spec.caption = f.caption;
+    if (!f.metrics.empty()) spec.metrics = f.metrics;
+    if (it == paper.end()) {
+        for (const auto& e : f.experiments) {
+            for (const auto& g : e.sweep.empty() ? std::vector<std::string>{e.group} : e.sweep) {
+                if (std::find(spec.groups.begin(), spec.groups.end(), g) == spec.groups.end())
+                    spec.groups.push_back(g);
+            }
+        }
+    }
+    return spec;
+}
+
+/// The result sets of a file's table: its experiments' rows (a sweep's split into its
+/// levels), then its variants', with every unmeasured variant row of the paper marked.
+std::vector<ResultSet> SetsOf(const ExperimentFile& f,
+                              const PaperTableSpec& spec,
+                              const std::vector<PlannedExperiment>& experiments,
+                              ExperimentOutputs& x,
+                              std::map<std::string, std::vector<ResultSet>>& variant_sets,
+                              const nlohmann::json& paper,
+                              PaperTableOptions* to) {
+    std::vector<ResultSet> sets;
+    for (const auto& e : experiments) {
+        if (e.table != f.table) continue;
+        const std::string& id = e.spec.id;
+        if (!e.spec.sweep.empty()) {
+            for (auto& s : SweepSets(e.spec.sweep, x.rows[id], x.provenance[id])) sets.push_back(s);
+        } else {
+            sets.push_back({e.spec.group, x.rows[id], x.provenance[id], ""});
+        }
+    }
+    if (!spec.rows_are_methods) {
+        // Variants run only where a checkpoint of theirs is shipped.
+        for (const auto& s : variant_sets[f.table]) sets.push_back(s);
+        for (const auto& [row, cells] : paper["tables"][f.table]["rows"].items()) {
+            (void)cells;
+            const bool measured =
+                std::any_of(sets.begin(), sets.end(),
+                            [&row = row](const ResultSet& s) { return s.row_label == row; });
+            if (!measured) to->unavailable[row] = "not trained";
+        }
+    }
+    return sets;
+}
+
+/// Every wanted table filled from the experiments (and the variants), in file order.
+std::vector<Table> BuildTables(const std::vector<ExperimentFile>& files,
+                               const std::vector<PlannedExperiment>& experiments,
                                ExperimentOutputs& x,
-                               std::map<std::string, std::vector<ResultSet>>& ablation_sets,
+                               std::map<std::string, std::vector<ResultSet>>& variant_sets,
                                const std::map<std::string, std::string>& unavailable,
                                const nlohmann::json& paper,
                                const ReproduceOptions& o) {
-    PaperTableOptions table_options;
-    table_options.unavailable = unavailable;
     std::vector<Table> tables;
-    for (const auto& spec : PaperTableSpecs()) {
-        if (!Wanted(o.tables, spec.id)) continue;
-        std::vector<ResultSet> sets;
-        for (const auto& e : experiments) {
-            if (e.table != spec.id) continue;
-            if (e.sweep) {
-                for (auto& s : SweepSets(x.rows[e.id], x.provenance[e.id])) sets.push_back(s);
-            } else {
-                sets.push_back({e.group, x.rows[e.id], x.provenance[e.id], ""});
-            }
+    for (const auto& f : files) {
+        if (!Wanted(o.tables, f.table)) continue;
+        if (!f.timing_of.empty()) {
+            if (!x.rows.count(f.timing_of)) continue;
+            tables.push_back(BuildTimingTable(
+                {{"", x.rows[f.timing_of], x.provenance[f.timing_of], ""}}, paper, CpuModel(),
+                "none (Eigen's own kernels; the classical methods link no BLAS)"));
+            tables.back().title = f.title;
+            continue;
         }
-        PaperTableOptions to = table_options;
-        if (!spec.rows_are_methods) {
-            // Ablation variants run only where a checkpoint of theirs is shipped.
-            for (const auto& s : ablation_sets[spec.id]) sets.push_back(s);
-            for (const auto& [row, cells] : paper["tables"][spec.id]["rows"].items()) {
-                (void)cells;
-                const bool measured =
-                    std::any_of(sets.begin(), sets.end(),
-                                [&row = row](const ResultSet& s) { return s.row_label == row; });
-                if (!measured) to.unavailable[row] = "not trained";
-            }
-        }
+        const PaperTableSpec spec = SpecOf(f);
+        PaperTableOptions to;
+        to.unavailable = unavailable;
+        const std::vector<ResultSet> sets =
+            SetsOf(f, spec, experiments, x, variant_sets, paper, &to);
         tables.push_back(BuildPaperTable(spec, sets, paper, to));
         if (sets.empty()) {
             tables.back().notes.push_back(
                 "No regbench run fills this table: OGMM (and its variants) are not trained in "
                 "this build; the paper's numbers are shown for reference.");
-        }
-        if (spec.id == "table5_ablation_losses" && Wanted(o.tables, "table6_inference_time") &&
-            x.rows.count("tab1_same")) {
-            tables.push_back(BuildTimingTable(
-                {{"", x.rows["tab1_same"], x.provenance["tab1_same"], ""}}, paper, CpuModel(),
-                "none (Eigen's own kernels; the classical methods link no BLAS)"));
         }
     }
     return tables;
@@ -464,7 +483,7 @@ void WriteTables(const fs::path& out, const std::string& intro, const std::vecto
 void WriteBreakdownsAndHtml(const fs::path& out,
                             const std::string& intro,
                             const std::vector<Table>& tables,
-                            const std::vector<Experiment>& experiments,
+                            const std::vector<PlannedExperiment>& experiments,
                             ExperimentOutputs& x) {
     HtmlReportOptions html;
     html.title = "regbench: reproducing the OGMM paper";
@@ -475,19 +494,20 @@ void WriteBreakdownsAndHtml(const fs::path& out,
     std::string breakdowns = "# regbench: breakdowns per experiment\n\n";
     BreakdownOptions bo;
     for (const auto& e : experiments) {
-        const auto& rows = x.rows[e.id];
-        const Provenance& p = x.provenance[e.id];
+        const std::string& id = e.spec.id;
+        const auto& rows = x.rows[id];
+        const Provenance& p = x.provenance[id];
         HtmlSection sec;
-        sec.title = fmt::format("{}: {} on {} ({})", e.id, e.protocol, p.dataset, e.split);
+        sec.title = fmt::format("{}: {} on {} ({})", id, e.spec.protocol, p.dataset, e.spec.split);
         sec.description = fmt::format(
             "{} pairs, pairing {}, seed {}, {} points, keep {:g}{}; ground-truth CCD floor "
             "{:.4f}.",
-            x.pairs[e.id].pairs.size(), p.pairing, p.seed.dump(), p.points, p.keep,
+            x.pairs[id].pairs.size(), p.pairing, p.seed.dump(), p.points, p.keep,
             e.fallback.empty() ? "" : "; " + e.fallback, p.gt_ccd_floor);
         sec.rows = rows;
         sec.tables = {DistributionTable(rows, bo), StatusTable(rows), RecallTable(rows, bo),
                       CategoryTable(rows, bo), OverlapTable(rows, bo)};
-        const PairSet* set = &x.pairs[e.id];
+        const PairSet* set = &x.pairs[id];
         sec.pair_lookup = [set](const nlohmann::json& row) -> const Pair* {
             const auto k = row.value("pair", static_cast<std::size_t>(-1));
             return k < set->pairs.size() ? &set->pairs[k] : nullptr;
@@ -504,7 +524,11 @@ void WriteBreakdownsAndHtml(const fs::path& out,
 
 ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     const auto start = std::chrono::steady_clock::now();
-    ValidateOptions(o);
+    std::vector<ExperimentFile> files;
+    for (const auto& path : o.experiment_files) files.push_back(ReadExperimentFile(path));
+    if (files.empty()) files = PaperPlan();
+    CheckExperimentFiles(files);
+    ValidateOptions(o, files);
     ReproduceSummary summary;
     const fs::path out = fs::absolute(o.out_dir);
     // One reproduce per folder (OUT.lock beside it): a second one, or any regbench writer on
@@ -516,15 +540,15 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     fs::create_directories(out / "results");
     summary.out_dir = out.string();
     std::map<std::string, std::string> unavailable;
-    const auto methods = ChooseMethods(o, &unavailable, log);
-    const auto experiments = PlanExperiments(o);
+    const auto methods = ChooseAllMethods(files, o, &unavailable, log);
+    const std::vector<PlannedExperiment> experiments = PlanExperiments(files, o);
     summary.experiments = experiments.size();
 
     ExperimentOutputs x = RunExperiments(experiments, methods, o, out, summary, log);
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
-    auto ablation_sets = RunAblations(methods, x, paper, o, out, summary, log);
+    auto variant_sets = RunVariants(files, methods, x, o, out, summary, log);
     const std::vector<Table> tables =
-        BuildTables(experiments, x, ablation_sets, unavailable, paper, o);
+        BuildTables(files, experiments, x, variant_sets, unavailable, paper, o);
 
     const std::string intro = fmt::format(
         "regbench {} reproduce{}: {} experiments, seed {}, {} jobs, per-call timeout {} s, "

@@ -1,10 +1,13 @@
 #pragma once
-// `regbench reproduce`: generate the pairs of every paper table, run the methods on them
-// (isolated, resumable) and write every report into one folder.
+// `regbench reproduce`: the executor of experiment files (experiments/experiment_file.hpp).
+// Generates their pairs, runs the methods on them (isolated, resumable, through runners/) and
+// hands the rows to reports/, which renders every report into one folder.
 #include <cstdint>
 #include <iosfwd>
 #include <string>
 #include <vector>
+
+#include "experiments/experiment_file.hpp"
 
 namespace regbench {
 
@@ -13,9 +16,11 @@ struct ReproduceOptions {
     /// level) and the learned methods without their "-noicp" variants.
     bool quick = false;
     std::vector<std::string> tables;  ///< table ids or prefixes ("table1", "supp"); empty: all
-    std::string modelnet40;           ///< ModelNet40 root (OFF tree or HDF5); empty: fallback
-    std::string sevenscenes;          ///< 7Scenes root; empty: simulated indoor scans
-    std::string icl_nuim;             ///< ICL-NUIM root; empty: simulated indoor scans
+    /// Experiment files run instead of the paper's plan (experiments/plan, embedded).
+    std::vector<std::string> experiment_files;
+    std::string modelnet40;   ///< ModelNet40 root (OFF tree or HDF5); empty: fallback
+    std::string sevenscenes;  ///< 7Scenes root; empty: simulated indoor scans
+    std::string icl_nuim;     ///< ICL-NUIM root; empty: simulated indoor scans
     std::string out_dir = "out/reproduce";
     std::string data_dir;            ///< where the embedded corpus lives (default: ./data)
     int jobs = 1;                    ///< pairs in parallel
@@ -43,7 +48,25 @@ struct Provenance;
 /// pairing, seed, points, keep, version, content hash) plus its ground-truth CCD floor.
 Provenance ProvenanceOfPairFile(const std::string& path);
 
-/// Table ids `reproduce` knows (paper order).
+/// One experiment of an experiment file, resolved for a run: one pair file and its results,
+/// filling one column group of one table.
+struct PlannedExperiment {
+    ExperimentSpec spec;
+    std::string table;     ///< the table of its file
+    std::string dataset;   ///< the command-line root of spec.root when given, else spec.dataset
+    std::string fallback;  ///< non-empty when standing in for the root's dataset
+    std::string pairing;   ///< "" = the protocol's default (independent)
+    std::size_t pairs = 0;
+    std::uint64_t seed = 1;
+    bool one_per_item = false;  ///< one pair per item of the split (`generate --pairs all`)
+};
+
+/// The experiments of the wanted tables (--tables) in file order, and those that wanted
+/// tables use from other files (`timing_of`, `variants.pairs_of`), resolved for the options.
+std::vector<PlannedExperiment> PlanExperiments(const std::vector<ExperimentFile>& files,
+                                               const ReproduceOptions& o);
+
+/// Table ids of the paper's plan (paper order).
 std::vector<std::string> ReproducibleTables();
 
 /// Runs everything; progress and decisions go to `log`. Throws std::runtime_error naming the

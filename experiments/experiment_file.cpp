@@ -1,0 +1,198 @@
+#include "experiments/experiment_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "core/json_limits.hpp"
+#include "core/params.hpp"
+#include "protocols/pair_protocols.hpp"
+#include "reports/paper_report.hpp"
+
+namespace regbench {
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PairCount, scale, min, quick, count)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentSpec,
+                                                id,
+                                                group,
+                                                protocol,
+                                                split,
+                                                dataset,
+                                                root,
+                                                fallback_note,
+                                                pairing,
+                                                root_pairing,
+                                                noise_free,
+                                                seed_offset,
+                                                pairs,
+                                                sweep,
+                                                comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Variant, row, config)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
+    VariantSpec, kind, method, model, pairs_of, rows, comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile,
+                                                table,
+                                                title,
+                                                caption,
+                                                methods,
+                                                learned,
+                                                metrics,
+                                                experiments,
+                                                variants,
+                                                timing_of,
+                                                comment)
+
+namespace {
+
+/// Runs `check` (a parser of the value of `key`) and rethrows its error naming the key.
+template <class F>
+void Check(const std::string& what, const char* key, F&& check) {
+    try {
+        check();
+    } catch (const std::exception& e) {
+        Require(false, what, key, std::string("is not valid: ") + e.what());
+    }
+}
+
+/// ParseConfig of `j` without its keys `nested` (their values are parsed on their own, so a
+/// message names the key inside them).
+template <class T>
+T ParseWithout(const nlohmann::json& j, const std::string& what, std::vector<const char*> nested) {
+    nlohmann::json rest = j;
+    for (const char* key : nested) {
+        if (rest.is_object()) rest.erase(key);
+    }
+    return ParseConfig<T>(rest, what);
+}
+
+/// Each item of list `key` of `j`, parsed by `read`.
+template <class Item, class F>
+std::vector<Item> ReadList(const nlohmann::json& j,
+                           const std::string& what,
+                           const char* key,
+                           F read) {
+    const nlohmann::json list = j.value(key, nlohmann::json::array());
+    Require(list.is_array(), what, key, "expects array, got " + list.dump());
+    std::vector<Item> out;
+    for (std::size_t i = 0; i < list.size(); ++i)
+        out.push_back(read(list[i], what + ": " + key + "[" + std::to_string(i) + "]"));
+    return out;
+}
+
+ExperimentSpec ReadExperiment(const nlohmann::json& j, const std::string& what) {
+    auto s = ParseWithout<ExperimentSpec>(j, what, {"pairs"});
+    s.pairs = ParseConfig<PairCount>(j.value("pairs", nlohmann::json()), what + ": pairs");
+    for (const auto& [key, value] : {std::pair{"id", s.id},
+                                     {"protocol", s.protocol},
+                                     {"split", s.split},
+                                     {"dataset", s.dataset}}) {
+        Require(!value.empty(), what, key, "is required");
+    }
+    Require(s.id.find_first_of("/\\") == std::string::npos && s.id[0] != '.', what, "id",
+            "must be a file stem (no '/', no leading '.'), got '" + s.id + "'");
+    Check(what, "protocol", [&] { (void)ParseProtocol(s.protocol); });
+    Require(s.root.empty() || s.root == "modelnet40" || s.root == "7scenes" || s.root == "icl-nuim",
+            what, "root", "must be modelnet40, 7scenes or icl-nuim, got '" + s.root + "'");
+    if (!s.pairing.empty()) Check(what, "pairing", [&] { (void)ParsePairing(s.pairing); });
+    if (!s.root_pairing.empty())
+        Check(what, "root_pairing", [&] { (void)ParsePairing(s.root_pairing); });
+    Require(s.pairs.scale > 0.0 && s.pairs.scale <= 1e6, what + ": pairs", "scale",
+            "must be in (0, 1e6], got " + nlohmann::json(s.pairs.scale).dump());
+    Require(s.sweep.empty() || s.group.empty(), what, "group",
+            "must be absent for a sweep (its groups are the sweep's levels)");
+    return s;
+}
+
+Variant ReadVariant(const nlohmann::json& j, const std::string& what) {
+    auto v = ParseConfig<Variant>(j, what);
+    Require(!v.row.empty(), what, "row", "is required");
+    return v;
+}
+
+VariantSpec ReadVariants(const nlohmann::json& j, const std::string& what) {
+    auto v = ParseWithout<VariantSpec>(j, what, {"rows"});
+    v.rows = ReadList<Variant>(j, what, "rows", ReadVariant);
+    for (const auto& [key, value] :
+         {std::pair{"kind", v.kind}, {"method", v.method}, {"model", v.model}}) {
+        Require(!value.empty(), what, key, "is required");
+    }
+    Require(!v.rows.empty(), what, "rows", "must list at least one variant");
+    return v;
+}
+
+bool IsPaperTable(const std::string& id) {
+    if (id == "table6_inference_time") return true;
+    const auto& specs = PaperTableSpecs();
+    return std::any_of(specs.begin(), specs.end(), [&](const auto& s) { return s.id == id; });
+}
+
+}  // namespace
+
+ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& file) {
+    const std::string what = "experiment file " + file;
+    ExperimentFile f = ParseWithout<ExperimentFile>(j, what, {"experiments", "variants"});
+    f.file = file;
+    Require(!f.table.empty(), what, "table", "is required");
+    Require(!f.title.empty(), what, "title", "is required");
+    f.experiments = ReadList<ExperimentSpec>(j, what, "experiments", ReadExperiment);
+    if (j.contains("variants")) f.variants = ReadVariants(j["variants"], what + ": variants");
+    Require(!f.experiments.empty() || !f.variants.rows.empty() || !f.timing_of.empty() ||
+                IsPaperTable(f.table),
+            what, "experiments",
+            "is required: table '" + f.table +
+                "' is not one of the paper's, so only this file's experiments can fill it");
+    return f;
+}
+
+ExperimentFile ReadExperimentFile(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("experiment file " + path + ": cannot open");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    nlohmann::json j;
+    try {
+        j = ParseJsonBounded(text, "experiment file " + path);
+    } catch (const std::exception& e) {
+        throw std::invalid_argument("experiment file " + path + ": not valid JSON: " + e.what());
+    }
+    return ParseExperimentFile(j, path);
+}
+
+void CheckExperimentFiles(const std::vector<ExperimentFile>& files) {
+    std::set<std::string> tables;
+    std::map<std::string, std::string> ids;  // experiment id -> its file
+    for (const auto& f : files) {
+        const std::string what = "experiment file " + f.file;
+        Require(tables.insert(f.table).second, what, "table",
+                "names table '" + f.table + "', which another file of this run fills too");
+        for (const auto& e : f.experiments) {
+            const auto [it, fresh] = ids.emplace(e.id, f.file);
+            Require(fresh, what, "experiments", "repeats id '" + e.id + "' of " + it->second);
+        }
+    }
+    for (const auto& f : files) {
+        for (const auto& [key, id] :
+             {std::pair{"timing_of", f.timing_of}, {"variants.pairs_of", f.variants.pairs_of}}) {
+            Require(id.empty() || ids.count(id) > 0, "experiment file " + f.file, key,
+                    "names experiment '" + id + "', which no file of this run has");
+        }
+    }
+}
+
+const std::vector<ExperimentFile>& PaperPlan() {
+    static const std::vector<ExperimentFile> kPlan = [] {
+        std::vector<ExperimentFile> plan;
+        for (const auto& f : EmbeddedPlanFiles()) {
+            const std::string name = std::string("experiments/plan/") + f.name;
+            plan.push_back(ParseExperimentFile(ParseJsonBounded(f.text, name), name));
+        }
+        CheckExperimentFiles(plan);
+        return plan;
+    }();
+    return kPlan;
+}
+
+}  // namespace regbench
