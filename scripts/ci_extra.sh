@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # CI extras after the main test suite (scripts/test.sh runs this):
 #  1. an AddressSanitizer + UndefinedBehaviorSanitizer build with clang in build-san/ (no
-#     LibTorch, no benchmarks) and its test suite: core, protocols, baselines, runners, reports,
-#     app and the CLI reliability scenarios (the Slurm test runs in the main build only);
+#     ogmm/, no benchmarks; LibTorch only for fuzz_torch_save) and its test suite: core,
+#     protocols, baselines, runners, reports, app and the CLI reliability scenarios (the Slurm test runs in the main build only);
 #  2. every libFuzzer target (fuzz/) on a copy of its seed corpus fuzz/corpus/<name>/, with a
 #     fixed seed and a fixed number of inputs (REGBENCH_FUZZ_RUNS, default 20000) capped at
 #     REGBENCH_FUZZ_SECONDS (default 60) of wall time: the same binary explores the same inputs on
@@ -52,7 +52,7 @@ t_tests=$(date +%s)
 
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for name in off ply pcd xyz xyz_import pair_file result_rows checkpoint_json pair_attributes; do
+for name in off ply pcd xyz xyz_import pair_file result_rows checkpoint_json pair_attributes torch_save; do
   corpus="$(mktemp -d)"
   cp -r "$root/fuzz/corpus/$name/." "$corpus/"
   # pair_attributes writes an HDF5 file and reads it in a forked child for every input (about
