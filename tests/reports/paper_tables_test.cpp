@@ -5,17 +5,20 @@
 namespace regbench {
 namespace {
 
+/// Our side: cpd (MAE(R) 1.5) and identity (all zero), each over `pairs` pairs.
+ReportTable CpdAndIdentity(std::size_t pairs) {
+    ReportTable ours;
+    ours.methods.resize(2);
+    ours.methods[0].method = "cpd";
+    ours.methods[0].mae_r.mean = 1.5;
+    ours.methods[1].method = "identity";
+    for (auto& m : ours.methods) m.pairs = pairs;
+    return ours;
+}
+
 TEST(PaperTables, ComparisonPutsThePaperCellNextToOurs) {
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
-    MethodSummary cpd;
-    cpd.method = "cpd";
-    cpd.pairs = 30;
-    cpd.mae_r.mean = 1.5;
-    MethodSummary mine;
-    mine.method = "identity";
-    mine.pairs = 30;
-    ReportTable ours;
-    ours.methods = {cpd, mine};
+    const ReportTable ours = CpdAndIdentity(30);
     const std::string md = TableToMarkdown(
         PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category"));
     // Paper Tab. 1 cross-category CPD: MAE(R) 12.681, MAE(t) 0.1153, CCD 0.1154; Tab. 6: 4.347 s.
@@ -31,15 +34,7 @@ TEST(PaperTables, ComparisonPutsThePaperCellNextToOurs) {
 TEST(PaperTables, EveryFormatCarriesThePapersCellsAndOurPairs) {
     // Issue 26: --paper was dropped silently with --format csv|latex|json.
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
-    MethodSummary cpd;
-    cpd.method = "cpd";
-    cpd.pairs = 10;
-    cpd.mae_r.mean = 1.5;
-    MethodSummary mine;
-    mine.method = "identity";
-    mine.pairs = 10;
-    ReportTable ours;
-    ours.methods = {cpd, mine};
+    const ReportTable ours = CpdAndIdentity(10);
     const Table t = PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category");
     const std::string csv = TablesToCsv({t});
     // Same cells as the Markdown test above (the paper's JSON), one record each.
