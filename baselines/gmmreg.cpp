@@ -81,7 +81,10 @@ struct GmmRegOptions : AnnealedL2Options {
           "are skipped (docs/performance.md: accuracy cost); \"dense\": always exact");
         f("approx_min_pairs", sums.min_pairs,
           "component pairs K_s * K_t from which kernel_sums=auto approximates");
-        CutoffFields(f);
+        f("cutoff_tolerance", sums.cutoff_tolerance,
+          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
+        f("compress_cell_sigmas", sums.compress_cell_sigmas,
+          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
     }
     void Validate(ParamCheck& c) const {
         AnnealedL2Options::Validate(c);

@@ -81,7 +81,10 @@ struct SvrOptions : AnnealedL2Options {
           "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed mixtures and "
           "a kd-tree cutoff (as gmmreg); \"dense\": always exact");
         f("approx_min_pairs", sums.min_pairs, "S_s * S_t from which kernel_sums=auto approximates");
-        CutoffFields(f);
+        f("cutoff_tolerance", sums.cutoff_tolerance,
+          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
+        f("compress_cell_sigmas", sums.compress_cell_sigmas,
+          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
     }
     void Validate(ParamCheck& c) const {
         AnnealedL2Options::Validate(c);

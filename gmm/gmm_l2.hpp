@@ -176,14 +176,6 @@ struct AnnealedL2Options {
     BfgsOptions bfgs = {200, 1e-6};  ///< every inner BFGS run: maxiter >= 0, gtol >= 0
     L2SumOptions sums;               ///< dense or approximated Gaussian sums in every inner run
 
-    /// Binds the two approximation keys both methods document alike (core/params.hpp Fields).
-    template <class F>
-    void CutoffFields(F&& f) {
-        f("cutoff_tolerance", sums.cutoff_tolerance,
-          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
-        f("compress_cell_sigmas", sums.compress_cell_sigmas,
-          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
-    }
     /// The ranges above, under the methods' JSON keys (core/params.hpp).
     void Validate(ParamCheck& c) const {
         c.Above("delta", delta, 0.0);
