@@ -9,6 +9,7 @@
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
 #include "reports/compare.hpp"
+#include "reports/row_access.hpp"
 #include "runners/runner.hpp"
 
 namespace regbench::app {
@@ -32,8 +33,7 @@ void SetupCompareCommand(CLI::App* cmd) {
     // A misspelt metric (mae_R) would be missing from every row and compare nothing: refused.
     cmd->add_option("--metrics", *metrics, "Metrics to test (lower is better)")
         ->delimiter(',')
-        ->check(CLI::IsMember({"mae_r", "mae_t", "mse_r", "mse_t", "rre", "rte", "ccd", "chamfer",
-                               "overlap_rmse"}))
+        ->check(CLI::IsMember(MetricNames()))
         ->capture_default_str();
     // alpha outside (0, 1) or NaN makes no change significant: the gate would always pass.
     cmd->add_option("--alpha", o->alpha, "Significance level of the Wilcoxon test, in (0, 1)")

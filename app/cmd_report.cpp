@@ -15,37 +15,6 @@
 namespace regbench::app {
 namespace {
 
-/// TABLE[:GROUP] of `--paper` beside each result table, in `format`.
-std::string PaperComparisonText(const std::vector<ReportTable>& tables,
-                                const std::string& paper,
-                                const std::string& paper_file,
-                                const std::string& format,
-                                nlohmann::json* json) {
-    const auto colon = paper.find(':');
-    const std::string table = paper.substr(0, colon);
-    const std::string group = colon == std::string::npos ? "" : paper.substr(colon + 1);
-    const nlohmann::json published = LoadPaperTables(paper_file);
-    std::string text;
-    for (const auto& t : tables) {
-        const PaperComparison c = BuildPaperComparison(t.methods, published, table, group);
-        const std::string ours = "Ours: " + DescribeTable(t) +
-                                 ". Paper: ModelNet40 / 7Scenes / ICL-NUIM as published (their "
-                                 "machine, their pairs; mae_r with scipy as_euler('zyx')).";
-        if (format == "json") {
-            nlohmann::json j = ToJson(c);
-            j["ours"] = ours;
-            json->push_back(j);
-        } else if (format == "csv") {
-            text += "\n" + FormatPaperComparison(c, "csv");
-        } else if (format == "latex") {
-            text += "\n% " + ours + "\n" + FormatPaperComparison(c, "latex");
-        } else {
-            text += "\n" + FormatPaperComparison(c, "md") + "\n" + ours + "\n";
-        }
-    }
-    return text;
-}
-
 void SetupReportCommand(CLI::App* cmd) {
     auto files = std::make_shared<std::vector<std::string>>();
     auto format = std::make_shared<std::string>("md");
@@ -77,9 +46,8 @@ void SetupReportCommand(CLI::App* cmd) {
         ->capture_default_str();
     cmd->add_option("--paper", *paper,
                     "Also print the paper's cells side by side, with our pair counts: "
-                    "TABLE[:GROUP], e.g. table1_modelnet_partial:same_category (every format: "
-                    "md/latex add a table, csv a second header and records, json a "
-                    "\"paper\" array)");
+                    "TABLE[:GROUP], e.g. table1_modelnet_partial:same_category (every format: one "
+                    "more table after each result table)");
     cmd->add_flag("--common-pairs", o->common_pairs,
                   "When the methods of one pair file were run on different pairs (a shard, an "
                   "unfinished run), compare them on the pairs they share (the caption says so) "
@@ -102,21 +70,26 @@ void SetupReportCommand(CLI::App* cmd) {
         ReportOptions opts = *o;
         if (!euler->empty()) opts.euler = ParseEulerConvention(*euler);
         const std::vector<ReportTable> tables = BuildTables(rows, opts);
+        std::vector<Table> out_tables = SummaryTables(tables, opts);
+        if (!paper->empty()) {
+            // TABLE[:GROUP] of the paper beside each result table.
+            const auto colon = paper->find(':');
+            const std::string group = colon == std::string::npos ? "" : paper->substr(colon + 1);
+            const nlohmann::json published = LoadPaperTables(*paper_file);
+            for (const auto& t : tables) {
+                out_tables.push_back(
+                    PaperComparisonTable(t, published, paper->substr(0, colon), group));
+            }
+        }
         std::string text;
-        nlohmann::json paper_json = nlohmann::json::array();
-        const std::string paper_text =
-            paper->empty() ? ""
-                           : PaperComparisonText(tables, *paper, *paper_file, *format, &paper_json);
         if (*format == "md") {
-            text = FormatMarkdown(tables, opts) + paper_text;
+            text = TablesToMarkdown(out_tables);
         } else if (*format == "csv") {
-            text = FormatCsv(tables) + paper_text;
+            text = TablesToCsv(out_tables);
         } else if (*format == "latex") {
-            text = FormatLatex(tables, opts) + paper_text;
+            for (const auto& t : out_tables) text += (text.empty() ? "" : "\n") + TableToLatex(t);
         } else {
-            nlohmann::json j{{"tables", ToJson(tables, opts)}};
-            if (!paper->empty()) j["paper"] = paper_json;
-            text = j.dump(2) + "\n";
+            text = TablesToJson(out_tables).dump(2) + "\n";
         }
         if (tables.size() > 1) {
             std::cerr << "[report] rows come from " << tables.size()

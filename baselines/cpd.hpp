@@ -8,6 +8,7 @@
 #include "core/params.hpp"
 #include "core/registration.hpp"
 #include "gmm/gauss_sum.hpp"
+#include "gmm/gmm_common.hpp"
 
 namespace regbench {
 
@@ -21,13 +22,10 @@ REGBENCH_CHOICES(CpdSigma2Formula,
 
 /// Options of `cpd`: the correct rigid CPD by default; compat "probreg" presets
 /// update_scale = true and sigma2_formula = probreg (ApplyCompat); explicit values always win.
-struct CpdOptions {
-    double w = 0.0;             ///< weight of the uniform outlier component, in [0, 1)
-    int maxiter = 50;           ///< maximum EM iterations (>= 1)
-    double tol = 0.001;         ///< stop when |q - q_prev| < tol, absolute on the objective q
+/// w, maxiter, tol and sigma2 are the GmmEmOptions base (gmm/gmm_common.hpp).
+struct CpdOptions : GmmEmOptions {
     bool update_scale = false;  ///< estimate a scale s (similarity transform)
     CpdSigma2Formula sigma2_formula = CpdSigma2Formula::kMl;  ///< "ml" or "probreg"
-    double sigma2 = 0.0;                                      ///< initial sigma^2 (> 0)
     Compat compat = Compat::kNone;                            ///< "none" or "probreg"
     GaussSumMode e_step = GaussSumMode::kAuto;                ///< "auto", "dense" or "truncated"
     double truncation_sigmas = 4.0;  ///< truncated E-step radius in sigmas (> 0)
@@ -67,13 +65,7 @@ struct CpdOptions {
         f("cluster_min_points", cluster_min_points, "auto: compress only if max(M, N) >= this");
     }
     void Validate(ParamCheck& c) const {
-        c.AtLeast("w", w, 0.0);
-        c.Below("w", w, 1.0);
-        c.AtLeast("maxiter", maxiter, 1);
-        c.AtLeast("tol", tol, 0.0);
-        c.Finite("tol", tol);
-        c.AtLeast("sigma2", sigma2, 0.0);
-        c.Finite("sigma2", sigma2);
+        GmmEmOptions::Validate(c);
         c.Above("truncation_sigmas", truncation_sigmas, 0.0);
         c.Finite("truncation_sigmas", truncation_sigmas);
         c.AtLeast("truncation_min_points", truncation_min_points, 0);

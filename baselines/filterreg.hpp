@@ -12,6 +12,7 @@
 #include "core/params.hpp"
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
+#include "gmm/gmm_common.hpp"
 
 namespace regbench {
 
@@ -33,13 +34,10 @@ REGBENCH_CHOICES(FilterRegEstimator,
 
 /// Options of `filterreg`: probreg's `registration_filterreg` defaults, except that compat
 /// "probreg" switches update_sigma2 off unless it is given.
-struct FilterRegOptions {
-    double sigma2 = 0.0;        ///< initial kernel variance [length^2]
+/// sigma2 (the initial kernel variance [length^2]), w, maxiter and tol (checked from the 2nd
+/// iteration) are the GmmEmOptions base (gmm/gmm_common.hpp).
+struct FilterRegOptions : GmmEmOptions {
     bool update_sigma2 = true;  ///< re-estimate sigma2 in every M-step
-    double w = 0.0;             ///< weight of the uniform outlier component, in [0, 1)
-    int maxiter = 50;           ///< maximum EM iterations (>= 1)
-    /// stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration
-    double tol = 0.001;
     /// floor on sigma2 after each iteration and on the auto init (> 0)
     double min_sigma2 = 0.0001;
     FilterRegObjective objective = FilterRegObjective::kPt2Pt;    ///< "pt2pt" or "pt2pl"
@@ -75,13 +73,7 @@ struct FilterRegOptions {
         f("normals_k", normals_k, "pt2pl only: neighbours for the target's PCA normals (>= 3); 30");
     }
     void Validate(ParamCheck& c) const {
-        c.Finite("sigma2", sigma2);
-        c.AtLeast("sigma2", sigma2, 0.0);
-        c.AtLeast("w", w, 0.0);
-        c.Below("w", w, 1.0);
-        c.AtLeast("maxiter", maxiter, 1);
-        c.Finite("tol", tol);
-        c.AtLeast("tol", tol, 0.0);
+        GmmEmOptions::Validate(c);
         c.Finite("min_sigma2", min_sigma2);
         c.Above("min_sigma2", min_sigma2, 0.0);
         c.AtLeast("normals_k", normals_k, 3);

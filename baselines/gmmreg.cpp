@@ -30,8 +30,8 @@ REGBENCH_CHOICES(GmmFeatures,
                  {{GmmFeatures::kSklearn, "sklearn"}, {GmmFeatures::kPoints, "points"}})
 
 /// Options of `gmmreg`; the annealing, BFGS and kernel-sum fields are the shared
-/// AnnealedL2MethodOptions base (gmm/gmm_l2.hpp), bound here with gmmreg's docs.
-struct GmmRegOptions : AnnealedL2MethodOptions {
+/// AnnealedL2Options base (gmm/gmm_l2.hpp), bound here with gmmreg's docs.
+struct GmmRegOptions : AnnealedL2Options {
     Compat compat = Compat::kNone;           ///< "none" or "probreg"
     GmmFeatures gmm = GmmFeatures::kPoints;  ///< "sklearn" or "points"
     int n_gmm_components = 800;              ///< GMM components
@@ -69,41 +69,31 @@ struct GmmRegOptions : AnnealedL2MethodOptions {
         f("outer_iterations", outer_iterations,
           "BFGS runs on a coarse-to-fine sigma schedule; probreg's gmmreg always runs 1");
         f("outer_tol", outer_tol, "stop the schedule when |f - f_prev| < outer_tol (probreg 1e-3)");
-        f("maxiter", maxiter, "BFGS iterations per run (probreg opt_maxiter 50)");
-        f("gtol", gtol, "BFGS stops when |grad|_inf <= gtol (probreg tol 1e-3, absolute)");
+        f("maxiter", bfgs.maxiter, "BFGS iterations per run (probreg opt_maxiter 50)");
+        f("gtol", bfgs.gtol, "BFGS stops when |grad|_inf <= gtol (probreg tol 1e-3, absolute)");
         f("gmm_max_iter", gmm_max_iter, "EM iterations of each GMM fit (sklearn 100)");
         f("gmm_tol", gmm_tol,
           "EM stops when the mean log-likelihood changes by < gmm_tol (sklearn 1e-3)");
         f("seed", seed, "seed of the k-means++ initialisation (sklearn's is unseeded in probreg)");
-        f("kernel_sums", kernel_sums,
+        f("kernel_sums", sums.kernel_sums,
           "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per cell of "
           "compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1 / cutoff_tolerance)) "
           "are skipped (docs/performance.md: accuracy cost); \"dense\": always exact");
-        f("approx_min_pairs", approx_min_pairs,
+        f("approx_min_pairs", sums.min_pairs,
           "component pairs K_s * K_t from which kernel_sums=auto approximates");
-        f("cutoff_tolerance", cutoff_tolerance,
+        f("cutoff_tolerance", sums.cutoff_tolerance,
           "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
-        f("compress_cell_sigmas", compress_cell_sigmas,
+        f("compress_cell_sigmas", sums.compress_cell_sigmas,
           "cell edge of the compression in sigmas, [0, 1]; 0 = none");
     }
     void Validate(ParamCheck& c) const {
+        AnnealedL2Options::Validate(c);
         c.AtLeast("n_gmm_components", n_gmm_components, 1);
         c.Above("sigma", sigma, 0.0);
         c.Finite("sigma", sigma);
-        c.Above("delta", delta, 0.0);
-        c.AtMost("delta", delta, 1.0);
-        c.AtLeast("outer_iterations", outer_iterations, 1);
-        c.AtLeast("outer_tol", outer_tol, 0.0);
-        c.AtLeast("maxiter", maxiter, 0);
-        c.AtLeast("gtol", gtol, 0.0);
         c.AtLeast("gmm_max_iter", gmm_max_iter, 1);
         c.AtLeast("gmm_tol", gmm_tol, 0.0);
         c.AtLeast("seed", seed, 0);
-        c.AtLeast("approx_min_pairs", approx_min_pairs, 0.0);
-        c.Above("cutoff_tolerance", cutoff_tolerance, 0.0);
-        c.Below("cutoff_tolerance", cutoff_tolerance, 1.0);
-        c.AtLeast("compress_cell_sigmas", compress_cell_sigmas, 0.0);
-        c.AtMost("compress_cell_sigmas", compress_cell_sigmas, 1.0);
     }
     /// compat "probreg": probreg 0.3.7's defaults for these keys.
     void ApplyCompat() {
@@ -111,8 +101,8 @@ struct GmmRegOptions : AnnealedL2MethodOptions {
         gmm = GmmFeatures::kSklearn;
         gradient = L2Gradient::kProbregHalf;
         normalize = false;
-        gtol = 0.001;
-        maxiter = 50;
+        bfgs.gtol = 0.001;
+        bfgs.maxiter = 50;
     }
 };
 
@@ -159,10 +149,9 @@ AlignResult AlignGmmReg(const GmmRegOptions& o,
     int em_iterations = 0;
     const int k =
         std::max(1, std::min(o.n_gmm_components, static_cast<int>(kComponentFraction * Y.rows())));
-    const AnnealedL2Options anneal = AnnealedL2OptionsFrom(o);
     MixtureFeatures fs = Features(o, Y, k, rng, em_iterations);
     MixtureFeatures ft = Features(o, X, k, rng, em_iterations);
-    AlignResult result = AnnealedL2AlignResult(frame, MinimizeAnnealedL2(fs, ft, sigma, anneal));
+    AlignResult result = AnnealedL2AlignResult(frame, MinimizeAnnealedL2(fs, ft, sigma, o));
     result.extra["components_source"] = fs.means.rows();
     result.extra["components_target"] = ft.means.rows();
     result.extra["gmm_em_iterations"] = em_iterations;

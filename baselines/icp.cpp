@@ -10,15 +10,10 @@
 namespace regbench {
 namespace {
 
-struct IcpOptions {
-    /// pairs farther apart are ignored [unit-sphere units], > 0
-    double max_correspondence_distance = 1.0;
-    int max_iterations = 30;                          ///< iteration cap, >= 1
+/// max_correspondence_distance, max_iterations, relative_fitness and relative_rmse are the
+/// Open3dIcpOptions base (baselines/open3d_adapter.hpp).
+struct IcpOptions : Open3dIcpOptions {
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
-    /// stop when the fitness change is below this (and the RMSE change too), >= 0
-    double relative_fitness = 1e-6;
-    /// stop when the inlier-RMSE change is below this (and the fitness change too), >= 0
-    double relative_rmse = 1e-6;
 
     template <class F>
     void Fields(F&& f) {
@@ -39,12 +34,6 @@ struct IcpOptions {
           "stop when the inlier-RMSE change is below this (and the fitness change too), >= 0; "
           "1e-6 = Open3D default");
     }
-    void Validate(ParamCheck& c) const {
-        c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
-        c.AtLeast("max_iterations", max_iterations, 1);
-        c.AtLeast("relative_fitness", relative_fitness, 0.0);
-        c.AtLeast("relative_rmse", relative_rmse, 0.0);
-    }
 };
 
 AlignResult AlignIcp(const IcpOptions& o,
@@ -52,14 +41,12 @@ AlignResult AlignIcp(const IcpOptions& o,
                      const PointCloud& target,
                      const AlignContext& /*context*/) {
     namespace o3r = open3d::pipelines::registration;
-    const o3r::ICPConvergenceCriteria criteria(o.relative_fitness, o.relative_rmse,
-                                               o.max_iterations);
     const ScaleRule rule = ResolveScaleRule(source, target);
     const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
     const double distance = o.max_correspondence_distance * unit;
-    AlignResult result =
-        RunOpen3dIcp(ToOpen3d(source), ToOpen3d(target), distance,
-                     o3r::TransformationEstimationPointToPoint(/*with_scaling=*/false), criteria);
+    AlignResult result = RunOpen3dIcp(
+        ToOpen3d(source), ToOpen3d(target), distance,
+        o3r::TransformationEstimationPointToPoint(/*with_scaling=*/false), o.Criteria());
     result.extra["resolved"] = {{"max_correspondence_distance", distance},
                                 {"scale_rule", rule.ToJson()}};
     return result;

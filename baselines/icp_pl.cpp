@@ -10,14 +10,11 @@
 namespace regbench {
 namespace {
 
-struct IcpPlOptions {
-    /// pairs farther apart are ignored [unit-sphere units], > 0
-    double max_correspondence_distance = 1.0;
-    int max_iterations = 30;         ///< iteration cap, >= 1
-    double relative_fitness = 1e-6;  ///< stop threshold on the fitness change, >= 0
-    double relative_rmse = 1e-6;     ///< stop threshold on the inlier-RMSE change, >= 0
-    double normal_radius = 0.1;      ///< target-normal neighbourhood radius, > 0
-    int normal_max_nn = 30;          ///< neighbour cap per normal, >= 3
+/// max_correspondence_distance, max_iterations, relative_fitness and relative_rmse are the
+/// Open3dIcpOptions base (baselines/open3d_adapter.hpp).
+struct IcpPlOptions : Open3dIcpOptions {
+    double normal_radius = 0.1;  ///< target-normal neighbourhood radius, > 0
+    int normal_max_nn = 30;      ///< neighbour cap per normal, >= 3
 
     template <class F>
     void Fields(F&& f) {
@@ -36,10 +33,7 @@ struct IcpPlOptions {
           "neighbour cap per normal, >= 3; 30 = Open3D tutorial recipe");
     }
     void Validate(ParamCheck& c) const {
-        c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
-        c.AtLeast("max_iterations", max_iterations, 1);
-        c.AtLeast("relative_fitness", relative_fitness, 0.0);
-        c.AtLeast("relative_rmse", relative_rmse, 0.0);
+        Open3dIcpOptions::Validate(c);
         c.Above("normal_radius", normal_radius, 0.0);
         c.AtLeast("normal_max_nn", normal_max_nn, 3);
     }
@@ -55,10 +49,8 @@ AlignResult AlignIcpPl(const IcpPlOptions& o,
     open3d::geometry::PointCloud target_o3d = ToOpen3d(target);
     target_o3d.EstimateNormals(
         open3d::geometry::KDTreeSearchParamHybrid(o.normal_radius, o.normal_max_nn));
-    const o3r::ICPConvergenceCriteria criteria(o.relative_fitness, o.relative_rmse,
-                                               o.max_iterations);
     return RunOpen3dIcp(ToOpen3d(source), target_o3d, o.max_correspondence_distance,
-                        o3r::TransformationEstimationPointToPlane(), criteria);
+                        o3r::TransformationEstimationPointToPlane(), o.Criteria());
 }
 
 }  // namespace

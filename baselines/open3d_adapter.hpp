@@ -5,6 +5,7 @@
 #include <open3d/pipelines/registration/Registration.h>
 #include <open3d/pipelines/registration/TransformationEstimation.h>
 
+#include "core/params.hpp"
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
 
@@ -12,6 +13,28 @@ namespace regbench {
 
 /// Copies a regbench cloud into an Open3D cloud (double precision, no normals).
 open3d::geometry::PointCloud ToOpen3d(const PointCloud& points);
+
+/// The options icp and icp-pl share: the correspondence radius and Open3D's
+/// ICPConvergenceCriteria. Both methods' options derive from it and bind these fields with
+/// their own docs.
+struct Open3dIcpOptions {
+    /// pairs farther apart are ignored [unit-sphere units], > 0
+    double max_correspondence_distance = 1.0;
+    int max_iterations = 30;         ///< iteration cap, >= 1
+    double relative_fitness = 1e-6;  ///< stop threshold on the fitness change, >= 0
+    double relative_rmse = 1e-6;     ///< stop threshold on the inlier-RMSE change, >= 0
+
+    /// The ranges above (core/params.hpp).
+    void Validate(ParamCheck& c) const {
+        c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
+        c.AtLeast("max_iterations", max_iterations, 1);
+        c.AtLeast("relative_fitness", relative_fitness, 0.0);
+        c.AtLeast("relative_rmse", relative_rmse, 0.0);
+    }
+    open3d::pipelines::registration::ICPConvergenceCriteria Criteria() const {
+        return {relative_fitness, relative_rmse, max_iterations};
+    }
+};
 
 /// Runs open3d::pipelines::registration::RegistrationICP from the identity and fills an
 /// AlignResult: the transform, the iteration count (Open3D does not report it, so the

@@ -29,8 +29,8 @@ constexpr double kLibsvmCacheMb = 200.0;  // sklearn's OneClassSVM cache_size
 void QuietLibsvm(const char*) {}
 
 /// Options of `svr`; the annealing, BFGS and kernel-sum fields are the shared
-/// AnnealedL2MethodOptions base (gmm/gmm_l2.hpp), bound here with svr's docs.
-struct SvrOptions : AnnealedL2MethodOptions {
+/// AnnealedL2Options base (gmm/gmm_l2.hpp), bound here with svr's docs.
+struct SvrOptions : AnnealedL2Options {
     Compat compat = Compat::kNone;  ///< "none" or "probreg"
     /// one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)
     double nu = 0.1;
@@ -71,52 +71,41 @@ struct SvrOptions : AnnealedL2MethodOptions {
           "outer loop steps, SVMs refitted each step (probreg maxiter 1)");
         f("outer_tol", outer_tol,
           "stop the outer loop when |f - f_prev| < outer_tol (probreg tol 1e-3)");
-        f("maxiter", maxiter, "BFGS iterations per outer step (probreg opt_maxiter 50)");
-        f("gtol", gtol, "BFGS stops when |grad|_inf <= gtol (probreg opt_tol 1e-3)");
+        f("maxiter", bfgs.maxiter, "BFGS iterations per outer step (probreg opt_maxiter 50)");
+        f("gtol", bfgs.gtol, "BFGS stops when |grad|_inf <= gtol (probreg opt_tol 1e-3)");
         f("svm_tol", svm_tol, "libsvm stopping tolerance eps (sklearn tol 1e-3)");
         f("svm_max_points", svm_max_points,
           "fit each one-class SVM on a seeded random subsample of this many points when the cloud "
           "is larger (alphas scaled by n / subsample); >= 10");
-        f("kernel_sums", kernel_sums,
+        f("kernel_sums", sums.kernel_sums,
           "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed mixtures and "
           "a kd-tree cutoff (as gmmreg); \"dense\": always exact");
-        f("approx_min_pairs", approx_min_pairs,
-          "S_s * S_t from which kernel_sums=auto approximates");
-        f("cutoff_tolerance", cutoff_tolerance,
+        f("approx_min_pairs", sums.min_pairs, "S_s * S_t from which kernel_sums=auto approximates");
+        f("cutoff_tolerance", sums.cutoff_tolerance,
           "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
-        f("compress_cell_sigmas", compress_cell_sigmas,
+        f("compress_cell_sigmas", sums.compress_cell_sigmas,
           "cell edge of the compression in sigmas, [0, 1]; 0 = none");
     }
     void Validate(ParamCheck& c) const {
+        AnnealedL2Options::Validate(c);
         c.Above("nu", nu, 0.0);
         c.AtMost("nu", nu, 1.0);
         c.Above("sigma", sigma, 0.0);
         c.Finite("sigma", sigma);
         c.Above("gamma", gamma, 0.0);
         c.Finite("gamma", gamma);
-        c.Above("delta", delta, 0.0);
-        c.AtMost("delta", delta, 1.0);
         c.Above("gamma_delta", gamma_delta, 0.0);
         c.Finite("gamma_delta", gamma_delta);
-        c.AtLeast("outer_iterations", outer_iterations, 1);
-        c.AtLeast("outer_tol", outer_tol, 0.0);
-        c.AtLeast("maxiter", maxiter, 0);
-        c.AtLeast("gtol", gtol, 0.0);
         c.Above("svm_tol", svm_tol, 0.0);
         c.AtLeast("svm_max_points", svm_max_points, 10);
-        c.AtLeast("approx_min_pairs", approx_min_pairs, 0.0);
-        c.Above("cutoff_tolerance", cutoff_tolerance, 0.0);
-        c.Below("cutoff_tolerance", cutoff_tolerance, 1.0);
-        c.AtLeast("compress_cell_sigmas", compress_cell_sigmas, 0.0);
-        c.AtMost("compress_cell_sigmas", compress_cell_sigmas, 1.0);
     }
     /// compat "probreg": probreg 0.3.7's defaults for these keys.
     void ApplyCompat() {
         if (compat != Compat::kProbreg) return;
         gradient = L2Gradient::kProbregHalf;
         normalize = false;
-        gtol = 0.001;
-        maxiter = 50;
+        bfgs.gtol = 0.001;
+        bfgs.maxiter = 50;
     }
 };
 
@@ -187,7 +176,6 @@ AlignResult AlignSvr(const SvrOptions& o,
     const double phi_sigma = sigma;  // probreg's feature sigma is never annealed
     const bool probreg = o.compat == Compat::kProbreg;
 
-    const AnnealedL2Options anneal = AnnealedL2OptionsFrom(o);
     Eigen::Index sv_source = 0, sv_target = 0;
     bool first_step = true;
     // probreg refits both SVMs each outer step with gamma *= 10 while phi keeps the first
@@ -205,8 +193,7 @@ AlignResult AlignSvr(const SvrOptions& o,
         sv_target = ft.means.rows();
     };
     MixtureFeatures fs, ft;
-    AlignResult result =
-        AnnealedL2AlignResult(frame, MinimizeAnnealedL2(fs, ft, sigma, anneal, refit));
+    AlignResult result = AnnealedL2AlignResult(frame, MinimizeAnnealedL2(fs, ft, sigma, o, refit));
     result.extra["support_vectors_source"] = sv_source;
     result.extra["support_vectors_target"] = sv_target;
     result.extra["svm_subsampled"] =

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/params.hpp"
 #include "core/point_cloud.hpp"
 
 namespace regbench {
@@ -13,6 +14,26 @@ double SquaredDistanceMean(const PointCloud& Y, const PointCloud& X);
 
 /// probreg's sigma_est(Y) = det(cov(Y))^(1 / 2D), unbiased covariance of Y only.
 double EstimateSigmaFromCovariance(const PointCloud& Y);
+
+/// The EM options CPD and FilterReg share, under the same JSON keys in both; their options
+/// structs derive from it and bind these fields with their own docs.
+struct GmmEmOptions {
+    double w = 0.0;       ///< weight of the uniform outlier component, in [0, 1)
+    int maxiter = 50;     ///< maximum EM iterations (>= 1)
+    double tol = 0.001;   ///< stop when |q - q_prev| < tol, absolute on the objective q (>= 0)
+    double sigma2 = 0.0;  ///< initial sigma^2 (>= 0); 0: estimated from the clouds
+
+    /// The ranges above (core/params.hpp).
+    void Validate(ParamCheck& c) const {
+        c.AtLeast("w", w, 0.0);
+        c.Below("w", w, 1.0);
+        c.AtLeast("maxiter", maxiter, 1);
+        c.AtLeast("tol", tol, 0.0);
+        c.Finite("tol", tol);
+        c.AtLeast("sigma2", sigma2, 0.0);
+        c.Finite("sigma2", sigma2);
+    }
+};
 
 /// Iteration bookkeeping every iterative method reports in its result row.
 struct Convergence {

@@ -240,7 +240,7 @@ L2SumsPlan PlanL2Sums(const MixtureFeatures& source,
     L2SumsPlan plan{source, target};
     const double pairs =
         static_cast<double>(source.means.rows()) * static_cast<double>(target.means.rows());
-    if (!sums.approximate || pairs < sums.min_pairs) return plan;
+    if (sums.kernel_sums == L2KernelSums::kDense || pairs < sums.min_pairs) return plan;
     if (sums.compress_cell_sigmas > 0.0) {
         // The source is compressed in its own frame: it moves rigidly, cells stay cells.
         const double cell = sums.compress_cell_sigmas * sigma;

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/enum_names.hpp"
+#include "core/params.hpp"
 #include "core/point_cloud.hpp"
 #include "core/registration.hpp"
 #include "gmm/bfgs.hpp"
@@ -60,10 +61,10 @@ enum class L2KernelSums {
 REGBENCH_CHOICES(L2KernelSums, {{L2KernelSums::kAuto, "auto"}, {L2KernelSums::kDense, "dense"}})
 
 struct L2SumOptions {
-    bool approximate = true;            ///< false: always dense and exact
-    double min_pairs = 1e8;             ///< K_s * K_t at which approximation starts
-    double cutoff_tolerance = 1e-4;     ///< relative kernel value at the cutoff radius (4.29 sigma)
-    double compress_cell_sigmas = 0.1;  ///< cell edge in sigmas; 0 = no compression
+    L2KernelSums kernel_sums = L2KernelSums::kAuto;  ///< kDense: always dense and exact
+    double min_pairs = 1e8;             ///< K_s * K_t at which approximation starts, >= 0
+    double cutoff_tolerance = 1e-4;     ///< relative kernel value at the cutoff radius, in (0, 1)
+    double compress_cell_sigmas = 0.1;  ///< cell edge in sigmas, in [0, 1]; 0 = no compression
 };
 
 /// Cutoff radius, in sigmas, at which exp(-r^2 / 2) = tolerance: sqrt(2 ln(1 / tolerance)).
@@ -161,49 +162,35 @@ BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
 /// to O((cell / sigma)^2).
 MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell);
 
-/// Schedule of the annealed outer loop shared by GMMReg and SVR (probreg's
+/// The annealed L2 registration GMMReg and SVR share (probreg's
 /// L2DistRegistration.registration): BFGS at bandwidth sigma, then sigma *= delta, until
 /// outer_iterations steps or |f_k - f_{k-1}| < outer_tol (checked from the second step on).
+/// Both methods' options structs derive from it and bind its fields under the same JSON keys
+/// (gradient, delta, outer_iterations, outer_tol, maxiter, gtol, kernel_sums,
+/// approx_min_pairs, cutoff_tolerance, compress_cell_sigmas) with their own docs.
 struct AnnealedL2Options {
-    int outer_iterations = 1;  ///< outer (annealing) steps, >= 1
-    double delta = 1.0;        ///< sigma multiplier after each step
-    double outer_tol = 0.0;    ///< stop when the objective changes by less than this
-    L2Gradient gradient = L2Gradient::kExact;
-    BfgsOptions bfgs;   ///< options of every inner BFGS run
-    L2SumOptions sums;  ///< dense or approximated Gaussian sums in every inner run
-};
-
-/// The options GMMReg and SVR share, under the same JSON keys in both: the annealing schedule,
-/// the inner BFGS and the kernel sums. Both methods' options structs derive from it and bind
-/// these fields with their own docs (their Fields).
-struct AnnealedL2MethodOptions {
     L2Gradient gradient = L2Gradient::kExact;  ///< "probreg_half" (probreg's) or "exact"
     double delta = 0.9;                        ///< sigma *= delta per outer step, in (0, 1]
     int outer_iterations = 1;                  ///< outer (annealing) steps, >= 1
-    double outer_tol = 0.001;  ///< stop the schedule when |f - f_prev| < outer_tol, >= 0
-    int maxiter = 200;         ///< BFGS iterations per outer step, >= 0
-    double gtol = 1e-6;        ///< BFGS stops when |grad|_inf <= gtol, >= 0
-    L2KernelSums kernel_sums = L2KernelSums::kAuto;  ///< "auto" or "dense"
-    double approx_min_pairs = 1e8;      ///< pairs from which kernel_sums=auto approximates, >= 0
-    double cutoff_tolerance = 1e-4;     ///< kernel value at the cutoff radius, in (0, 1)
-    double compress_cell_sigmas = 0.1;  ///< compression cell edge [sigma], in [0, 1]
-};
+    double outer_tol = 0.001;        ///< stop the schedule when |f - f_prev| < outer_tol, >= 0
+    BfgsOptions bfgs = {200, 1e-6};  ///< every inner BFGS run: maxiter >= 0, gtol >= 0
+    L2SumOptions sums;               ///< dense or approximated Gaussian sums in every inner run
 
-/// The schedule from the shared options.
-inline AnnealedL2Options AnnealedL2OptionsFrom(const AnnealedL2MethodOptions& o) {
-    AnnealedL2Options anneal;
-    anneal.outer_iterations = o.outer_iterations;
-    anneal.delta = o.delta;
-    anneal.outer_tol = o.outer_tol;
-    anneal.gradient = o.gradient;
-    anneal.bfgs.maxiter = o.maxiter;
-    anneal.bfgs.gtol = o.gtol;
-    anneal.sums.approximate = o.kernel_sums == L2KernelSums::kAuto;
-    anneal.sums.min_pairs = o.approx_min_pairs;
-    anneal.sums.cutoff_tolerance = o.cutoff_tolerance;
-    anneal.sums.compress_cell_sigmas = o.compress_cell_sigmas;
-    return anneal;
-}
+    /// The ranges above, under the methods' JSON keys (core/params.hpp).
+    void Validate(ParamCheck& c) const {
+        c.Above("delta", delta, 0.0);
+        c.AtMost("delta", delta, 1.0);
+        c.AtLeast("outer_iterations", outer_iterations, 1);
+        c.AtLeast("outer_tol", outer_tol, 0.0);
+        c.AtLeast("maxiter", bfgs.maxiter, 0);
+        c.AtLeast("gtol", bfgs.gtol, 0.0);
+        c.AtLeast("approx_min_pairs", sums.min_pairs, 0.0);
+        c.Above("cutoff_tolerance", sums.cutoff_tolerance, 0.0);
+        c.Below("cutoff_tolerance", sums.cutoff_tolerance, 1.0);
+        c.AtLeast("compress_cell_sigmas", sums.compress_cell_sigmas, 0.0);
+        c.AtMost("compress_cell_sigmas", sums.compress_cell_sigmas, 1.0);
+    }
+};
 
 /// Outcome of MinimizeAnnealedL2.
 struct AnnealedL2Result {

@@ -59,10 +59,11 @@ Table DistributionTable(const std::vector<nlohmann::json>& rows, const Breakdown
         o.bootstrap_samples, o.seed);
     t.columns.push_back({"pairs", "pairs", CellSource::kMeasured, Better::kNone, 0});
     for (const auto& m : o.metrics) {
-        t.columns.push_back({m + ".mean", m + " mean", CellSource::kMeasured, Better::kLower, 4});
+        const int d = FindMetric(m).decimals;
+        t.columns.push_back({m + ".mean", m + " mean", CellSource::kMeasured, Better::kLower, d});
         t.columns.push_back(
-            {m + ".median", m + " median", CellSource::kMeasured, Better::kLower, 4});
-        t.columns.push_back({m + ".std", m + " std", CellSource::kMeasured, Better::kNone, 4});
+            {m + ".median", m + " median", CellSource::kMeasured, Better::kLower, d});
+        t.columns.push_back({m + ".std", m + " std", CellSource::kMeasured, Better::kNone, d});
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
@@ -75,7 +76,10 @@ Table DistributionTable(const std::vector<nlohmann::json>& rows, const Breakdown
             const BootstrapCi ci =
                 BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
             Cell mean = Value(ci.mean, v.size());
-            if (v.size() >= 2) mean.half_width = 0.5 * (ci.hi - ci.lo);
+            if (v.size() >= 2) {
+                mean.ci_lo = ci.lo;
+                mean.ci_hi = ci.hi;
+            }
             row.cells.push_back(mean);
             row.cells.push_back(Value(SampleMedian(v), v.size()));
             row.cells.push_back(Value(SampleStd(v), v.size()));
@@ -128,7 +132,7 @@ Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOption
     for (const auto& [r, tt] : o.recall) {
         t.columns.push_back({fmt::format("recall@({:g},{:g})", r, tt),
                              fmt::format("@({:g}°, {:g})", r, tt), CellSource::kMeasured,
-                             Better::kHigher, 3});
+                             Better::kHigher, kFractionDecimals});
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
@@ -192,7 +196,8 @@ Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOpti
     std::set<std::string> categories;
     for (const auto& r : rows) categories.insert(r.value("category", std::string("?")));
     for (const auto& c : categories) {
-        t.columns.push_back({c, c, CellSource::kMeasured, Better::kLower, 3});
+        t.columns.push_back(
+            {c, c, CellSource::kMeasured, Better::kLower, FindMetric(o.key_metric).decimals});
     }
     AddMeanRows(t, rows, o, [&](const nlohmann::json& r) -> std::optional<std::size_t> {
         const auto it = categories.find(r.value("category", std::string("?")));
@@ -215,7 +220,8 @@ Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptio
         t.columns.push_back({fmt::format("overlap[{:g},{:g})", lo, hi),
                              fmt::format("[{:.0f}%, {:.0f}%{}", 100 * lo, 100 * hi,
                                          b + 2 == o.overlap_edges.size() ? "]" : ")"),
-                             CellSource::kMeasured, Better::kLower, 3});
+                             CellSource::kMeasured, Better::kLower,
+                             FindMetric(o.key_metric).decimals});
     }
     std::size_t missing = 0;
     AddMeanRows(t, rows, o, [&](const nlohmann::json& r) -> std::optional<std::size_t> {

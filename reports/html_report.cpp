@@ -139,8 +139,8 @@ struct Plot {
                 s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>",
                                  w - right + 10, y - 8, Colour(i));
             }
-            s += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>",
-                             w - right + 24, y + 1, Escape(names[i]));
+            s += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>", w - right + 24,
+                             y + 1, Escape(names[i]));
         }
         return s;
     }
@@ -173,11 +173,12 @@ Transform RowTransform(const nlohmann::json& row) {
 }  // namespace
 
 std::string TableToHtml(const Table& t) {
-    std::string s = "<h3>" + Escape(t.title) + "</h3>\n";
+    std::string s = t.title.empty() ? "" : "<h3>" + Escape(t.title) + "</h3>\n";
     if (!t.caption.empty()) s += "<p class=\"cap\">" + Escape(t.caption) + "</p>\n";
     // Wide tables scroll inside their own box instead of widening the page.
     s += "<div class=\"tw\"><table><tr><th>" + Escape(t.row_header) + "</th>";
     for (const auto& c : t.columns) {
+        if (!c.shown) continue;
         s += std::string(c.source == CellSource::kPaper ? "<th class=\"paper\">" : "<th>") +
              Escape(c.header) + "</th>";
     }
@@ -187,15 +188,8 @@ std::string TableToHtml(const Table& t) {
     for (std::size_t r = 0; r < t.rows.size(); ++r) {
         s += "<tr><td>" + Escape(t.rows[r].label) + "</td>";
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
-            const Cell& cell = t.rows[r].cells[c];
-            std::string text = cell.text;
-            if (text.empty()) {
-                text = cell.HasValue() ? fmt::format("{:.{}f}", cell.value, t.columns[c].decimals)
-                                       : "-";
-                if (cell.HasValue() && std::isfinite(cell.half_width)) {
-                    text += fmt::format(" ± {:.{}f}", cell.half_width, t.columns[c].decimals);
-                }
-            }
+            if (!t.columns[c].shown) continue;
+            std::string text = CellText(t.rows[r].cells[c], t.columns[c], " ± ");
             text = Escape(text);
             if (best[c] == static_cast<int>(r)) text = "<b>" + text + "</b>";
             s += std::string(t.columns[c].source == CellSource::kPaper ? "<td class=\"paper\">"

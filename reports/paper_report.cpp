@@ -76,14 +76,15 @@ void AddColumns(const PaperTableSpec& spec, bool published, Table* t) {
         for (const auto& m : spec.metrics) {
             const std::string key = g.empty() ? m : g + "." + m;
             const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
-            t->columns.push_back({key, head, CellSource::kMeasured, Better::kLower, 4});
+            const int d = FindMetric(m).decimals;
+            t->columns.push_back({key, head, CellSource::kMeasured, Better::kLower, d});
             if (!published) continue;
             // A regbench-only group's paper column names the paper group it shows.
             const std::string pg = PaperGroupOf(spec, g);
             const std::string paper_head =
                 pg.empty() ? MetricHeader(m) : MetricHeader(m) + " " + pg;
             t->columns.push_back(
-                {"paper:" + key, "paper " + paper_head, CellSource::kPaper, Better::kNone, 4});
+                {"paper:" + key, "paper " + paper_head, CellSource::kPaper, Better::kNone, d});
         }
     }
 }
@@ -270,13 +271,17 @@ Table BuildPaperTable(const PaperTableSpec& spec,
                     }
                     // The stream of the breakdowns (reports/breakdown.cpp): one CI per
                     // (method, metric) on the same pairs, so a report never shows two.
-                    const BootstrapCi ci = BootstrapMean(v, o.bootstrap_samples, o.seed,
-                                                         StreamId(method + "/" + m));
+                    const BootstrapCi ci =
+                        BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
                     measured.value = ci.mean;
-                    if (v.size() >= 2) measured.half_width = 0.5 * (ci.hi - ci.lo);
+                    if (v.size() >= 2) {
+                        measured.ci_lo = ci.lo;
+                        measured.ci_hi = ci.hi;
+                    }
                     measured.pairs = n;
                     if (v.size() < n) {
-                        measured.text = fmt::format("{:.4f} ({} null)", ci.mean, n - v.size());
+                        measured.text = fmt::format("{:.{}f} ({} null)", ci.mean,
+                                                    FindMetric(m).decimals, n - v.size());
                     }
                 } else if (reasons.count(label)) {
                     measured.text = reasons[label];
@@ -302,11 +307,12 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets,
     Table t;
     t.id = "table6_inference_time";
     t.title = "Tab. 6: time per pair";
-    t.columns = {{"mean_seconds", "mean s", CellSource::kMeasured, Better::kLower, 4},
-                 {"median_seconds", "median s", CellSource::kMeasured, Better::kLower, 4},
+    const int d = kSecondsDecimals;
+    t.columns = {{"mean_seconds", "mean s", CellSource::kMeasured, Better::kLower, d},
+                 {"median_seconds", "median s", CellSource::kMeasured, Better::kLower, d},
                  {"points", "points", CellSource::kMeasured, Better::kNone, 0},
                  {"threads", "threads", CellSource::kMeasured, Better::kNone, 0},
-                 {"paper:seconds", "paper s", CellSource::kPaper, Better::kNone, 3}};
+                 {"paper:seconds", "paper s", CellSource::kPaper, Better::kNone, d}};
     const auto& rows = paper.at("tables").at("table6_inference_time").at("rows");
     std::vector<std::string> order;
     std::map<std::string, std::vector<double>> secs;

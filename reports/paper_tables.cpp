@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/data_dir.hpp"
+#include "reports/row_access.hpp"
 
 namespace regbench {
 
@@ -43,18 +44,18 @@ std::optional<std::string> PaperRowName(const std::string& method) {
     return it->second;
 }
 
-PaperComparison BuildPaperComparison(const std::vector<MethodSummary>& ours,
-                                     const nlohmann::json& paper,
-                                     const std::string& table,
-                                     const std::string& group) {
+Table PaperComparisonTable(const ReportTable& ours,
+                           const nlohmann::json& paper,
+                           const std::string& table,
+                           const std::string& group) {
     const auto& tables = paper.at("tables");
     if (!tables.contains(table)) {
         std::string known;
         for (const auto& t : tables.items()) known += (known.empty() ? "" : ", ") + t.key();
         throw std::invalid_argument("unknown paper table '" + table + "' (known: " + known + ")");
     }
-    const auto& t = tables.at(table);
-    const auto& columns = t.at("columns");
+    const auto& pt = tables.at(table);
+    const auto& columns = pt.at("columns");
     const std::string prefix = group.empty() ? "" : group + ".";
     auto column_index = [&](const std::string& metric) -> int {
         for (std::size_t i = 0; i < columns.size(); ++i) {
@@ -68,135 +69,59 @@ PaperComparison BuildPaperComparison(const std::vector<MethodSummary>& ours,
         throw std::invalid_argument("paper table '" + table + "' has no column group '" + group +
                                     "' (columns: " + known + ")");
     }
-    const auto cell = [&](const std::optional<std::string>& row,
-                          const std::string& metric) -> std::optional<double> {
-        const int c = column_index(metric);
-        if (!row || c < 0 || !t.at("rows").contains(*row)) return std::nullopt;
-        return t.at("rows").at(*row).at(static_cast<std::size_t>(c)).get<double>();
+    const auto& time_rows = tables.value("table6_inference_time", nlohmann::json::object());
+    const auto paper_cell = [&](const std::optional<std::string>& row, const std::string& metric) {
+        Cell c;
+        c.source = CellSource::kPaper;
+        if (!row) return c;
+        if (metric == "seconds") {  // Tab. 6's one column
+            if (time_rows.contains("rows") && time_rows["rows"].contains(*row))
+                c.value = time_rows["rows"][*row].at(0).get<double>();
+            return c;
+        }
+        const int i = column_index(metric);
+        if (i >= 0 && pt.at("rows").contains(*row))
+            c.value = pt.at("rows").at(*row).at(static_cast<std::size_t>(i)).get<double>();
+        return c;
     };
-    PaperComparison out;
-    out.table = table;
-    out.group = group;
-    out.caption = t.value("caption", "");
-    const auto& time_rows =
-        paper.at("tables").value("table6_inference_time", nlohmann::json::object());
-    for (const auto& s : ours) {
-        PaperComparisonRow r;
-        r.method = s.method;
-        r.pairs = s.pairs;
-        r.mae_r = s.mae_r.mean;
-        r.mae_t = s.mae_t.mean;
-        r.ccd = s.ccd.mean;
-        r.median_seconds = s.median_seconds;
+    Table t;
+    t.id = "paper:" + table + (group.empty() ? "" : ":" + group);
+    t.caption = fmt::format("Paper: {} ({}){}", table, pt.value("caption", ""),
+                            group.empty() ? "" : ", columns " + group);
+    const auto measured = [](const std::string& key, int decimals) {
+        return Column{key, key, CellSource::kMeasured, Better::kNone, decimals};
+    };
+    const auto published = [](const std::string& key, int decimals) {
+        return Column{"paper:" + key, "paper " + key, CellSource::kPaper, Better::kNone, decimals};
+    };
+    t.columns = {measured("pairs", 0)};
+    for (const char* m : {"mae_r", "mae_t", "ccd"}) {
+        t.columns.push_back(measured(m, FindMetric(m).decimals));
+        t.columns.push_back(published(m, FindMetric(m).decimals));
+    }
+    t.columns.push_back(measured("median s", kSecondsDecimals));
+    t.columns.back().key = "median_seconds";
+    t.columns.push_back(published("s", kSecondsDecimals));
+    t.columns.back().key = "paper:seconds";
+    for (const auto& s : ours.methods) {
         const auto row = PaperRowName(s.method);
-        r.paper_row = row.value_or("");
-        r.paper_mae_r = cell(row, "mae_r");
-        r.paper_mae_t = cell(row, "mae_t");
-        r.paper_ccd = cell(row, "ccd");
-        if (row && time_rows.contains("rows") && time_rows["rows"].contains(*row)) {
-            r.paper_seconds = time_rows["rows"][*row].at(0).get<double>();
-        }
-        out.rows.push_back(std::move(r));
+        const auto mine = [&](double v) {
+            Cell c;
+            c.value = v;
+            c.pairs = s.pairs;
+            return c;
+        };
+        TableRow r{
+            s.method,
+            {mine(static_cast<double>(s.pairs)), mine(s.mae_r.mean), paper_cell(row, "mae_r"),
+             mine(s.mae_t.mean), paper_cell(row, "mae_t"), mine(s.ccd.mean), paper_cell(row, "ccd"),
+             mine(s.median_seconds), paper_cell(row, "seconds")}};
+        t.rows.push_back(std::move(r));
     }
-    return out;
-}
-
-namespace {
-std::string Cell(const std::optional<double>& v) {
-    return v ? fmt::format("{:g}", *v) : std::string("-");
-}
-/// An absent paper cell is an empty CSV field ("-" is no number).
-std::string CsvCell(const std::optional<double>& v) {
-    return v ? fmt::format("{:g}", *v) : std::string();
-}
-nlohmann::json JsonCell(const std::optional<double>& v) {
-    return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-}
-std::string CsvQuote(const std::string& s) {
-    if (s.find_first_of(",\"\n") == std::string::npos) return s;
-    std::string q = "\"";
-    for (const char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-}
-std::string LatexEscape(const std::string& s) {
-    std::string out;
-    for (const char c : s) {
-        if (c == '_' || c == '&' || c == '%' || c == '#' || c == '$') out += '\\';
-        out += c;
-    }
-    return out;
-}
-}  // namespace
-
-std::string FormatPaperComparison(const PaperComparison& c, const std::string& format) {
-    if (format == "csv") {
-        std::string out =
-            "paper_table,paper_group,method,pairs,mae_r,paper_mae_r,mae_t,paper_mae_t,ccd,"
-            "paper_ccd,median_seconds,paper_seconds\n";
-        for (const auto& r : c.rows) {
-            out += fmt::format("{},{},{},{},{:.6g},{},{:.6g},{},{:.6g},{},{:.6g},{}\n",
-                               CsvQuote(c.table), CsvQuote(c.group), CsvQuote(r.method), r.pairs,
-                               r.mae_r, CsvCell(r.paper_mae_r), r.mae_t, CsvCell(r.paper_mae_t),
-                               r.ccd, CsvCell(r.paper_ccd), r.median_seconds,
-                               CsvCell(r.paper_seconds));
-        }
-        return out;
-    }
-    if (format == "json") return ToJson(c).dump(2) + "\n";
-    if (format == "latex") {
-        std::string out = "\\begin{table}\n\\centering\n\\caption{" +
-                          LatexEscape("Ours beside the paper: " + c.table +
-                                      (c.group.empty() ? "" : ", columns " + c.group)) +
-                          "}\n\\begin{tabular}{lrrrrrrrrr}\n\\toprule\n"
-                          "method & pairs & MAE(R) & paper & MAE(t) & paper & CCD & paper & "
-                          "median s & paper s \\\\\n\\midrule\n";
-        for (const auto& r : c.rows) {
-            out += fmt::format("{} & {} & {:.4f} & {} & {:.4f} & {} & {:.4f} & {} & {:.5f} & {} "
-                               "\\\\\n",
-                               LatexEscape(r.method), r.pairs, r.mae_r, Cell(r.paper_mae_r),
-                               r.mae_t, Cell(r.paper_mae_t), r.ccd, Cell(r.paper_ccd),
-                               r.median_seconds, Cell(r.paper_seconds));
-        }
-        return out + "\\bottomrule\n\\end{tabular}\n\\end{table}\n";
-    }
-    std::string out = fmt::format("Paper: {} ({}){}\n\n", c.table, c.caption,
-                                  c.group.empty() ? "" : ", columns " + c.group);
-    out +=
-        "| method | pairs | mae_r | paper mae_r | mae_t | paper mae_t | ccd | paper ccd | "
-        "median s | paper s |\n";
-    out += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const auto& r : c.rows) {
-        out += fmt::format("| {} | {} | {:.4f} | {} | {:.4f} | {} | {:.4f} | {} | {:.5f} | {} |\n",
-                           r.method, r.pairs, r.mae_r, Cell(r.paper_mae_r), r.mae_t,
-                           Cell(r.paper_mae_t), r.ccd, Cell(r.paper_ccd), r.median_seconds,
-                           Cell(r.paper_seconds));
-    }
-    return out;
-}
-
-nlohmann::json ToJson(const PaperComparison& c) {
-    nlohmann::json rows = nlohmann::json::array();
-    for (const auto& r : c.rows) {
-        rows.push_back({{"method", r.method},
-                        {"paper_row", r.paper_row},
-                        {"pairs", r.pairs},
-                        {"mae_r", r.mae_r},
-                        {"paper_mae_r", JsonCell(r.paper_mae_r)},
-                        {"mae_t", r.mae_t},
-                        {"paper_mae_t", JsonCell(r.paper_mae_t)},
-                        {"ccd", r.ccd},
-                        {"paper_ccd", JsonCell(r.paper_ccd)},
-                        {"median_seconds", r.median_seconds},
-                        {"paper_seconds", JsonCell(r.paper_seconds)}});
-    }
-    return {{"table", c.table}, {"group", c.group}, {"caption", c.caption}, {"rows", rows}};
-}
-
-std::string FormatPaperComparison(const std::vector<MethodSummary>& ours,
-                                  const nlohmann::json& paper,
-                                  const std::string& table,
-                                  const std::string& group) {
-    return FormatPaperComparison(BuildPaperComparison(ours, paper, table, group), "md");
+    t.notes.push_back("Ours: " + DescribeTable(ours) +
+                      ". Paper: ModelNet40 / 7Scenes / ICL-NUIM as published (their machine, their "
+                      "pairs; mae_r with scipy as_euler('zyx')).");
+    return t;
 }
 
 }  // namespace regbench

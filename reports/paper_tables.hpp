@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "reports/report.hpp"
+#include "reports/table.hpp"
 
 namespace regbench {
 
@@ -19,38 +20,13 @@ std::string DefaultPaperTablesPath();
 /// The paper's row name for a regbench method name (icp -> ICP, cpd -> CPD, ...), if any.
 std::optional<std::string> PaperRowName(const std::string& method);
 
-/// One method's cells beside the paper's (absent paper cells are nullopt).
-struct PaperComparisonRow {
-    std::string method;
-    std::string paper_row;  ///< the paper's name for it, "" when the paper has none
-    std::size_t pairs = 0;  ///< pairs our means are over
-    double mae_r = 0.0, mae_t = 0.0, ccd = 0.0, median_seconds = 0.0;
-    std::optional<double> paper_mae_r, paper_mae_t, paper_ccd, paper_seconds;
-};
-
-struct PaperComparison {
-    std::string table, group, caption;
-    std::vector<PaperComparisonRow> rows;
-};
-
-/// Our summaries beside the paper's cells of `table`, column group `group`. Throws
-/// std::invalid_argument listing the valid tables / groups.
-PaperComparison BuildPaperComparison(const std::vector<MethodSummary>& ours,
-                                     const nlohmann::json& paper,
-                                     const std::string& table,
-                                     const std::string& group);
-
-/// The comparison as `format`: md (a Markdown table), csv (one header line, one record per
-/// method; absent paper cells empty), json, latex (booktabs tabular).
-std::string FormatPaperComparison(const PaperComparison& comparison, const std::string& format);
-nlohmann::json ToJson(const PaperComparison& comparison);
-
-/// Markdown table: our pairs, mae_r / mae_t / ccd / time next to the paper's cells of `table`
-/// restricted to the column group `group` (e.g. "same_category"; "" for tables without groups).
+/// `--paper TABLE[:GROUP]`: our means of `ours` (pairs, mae_r, mae_t, ccd, median seconds)
+/// beside the paper's cells of `table`, column group `group` ("" for tables without groups),
+/// and the paper's seconds (Tab. 6). The caption names the paper's table, a note our data.
 /// Throws std::invalid_argument listing the valid tables / groups.
-std::string FormatPaperComparison(const std::vector<MethodSummary>& ours,
-                                  const nlohmann::json& paper,
-                                  const std::string& table,
-                                  const std::string& group);
+Table PaperComparisonTable(const ReportTable& ours,
+                           const nlohmann::json& paper,
+                           const std::string& table,
+                           const std::string& group);
 
 }  // namespace regbench

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/metrics.hpp"
+#include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
 
 namespace regbench {
@@ -117,23 +118,24 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
         }
     }
     const std::string id = data_key + "\n" + s.method + "\n" + s.params.dump() + "\n";
-    const auto column = [&](double PairMetrics::*metric) {
+    const auto column = [&](const char* name) {
+        const auto field = FindMetric(name).field;
         std::vector<double> v;
         v.reserve(finite.size());
-        for (const PairMetrics& m : finite) v.push_back(m.*metric);
+        for (const PairMetrics& m : finite) v.push_back(m.*field);
         return v;
     };
-    const auto boot = [&](double PairMetrics::*metric, const char* name) {
-        return Bootstrap(column(metric), o.bootstrap_samples, StreamId(id + name));
+    const auto boot = [&](const char* name) {
+        return Bootstrap(column(name), o.bootstrap_samples, StreamId(id + name));
     };
-    s.mae_r = boot(&PairMetrics::mae_r, "mae_r");
-    s.mae_t = boot(&PairMetrics::mae_t, "mae_t");
-    s.ccd = boot(&PairMetrics::ccd, "ccd");
-    s.rre = boot(&PairMetrics::rre, "rre");
-    s.rte = boot(&PairMetrics::rte, "rte");
-    s.rmse_r = std::sqrt(SampleMean(column(&PairMetrics::mse_r)));
-    s.rmse_t = std::sqrt(SampleMean(column(&PairMetrics::mse_t)));
-    s.chamfer = SampleMean(column(&PairMetrics::chamfer));
+    s.mae_r = boot("mae_r");
+    s.mae_t = boot("mae_t");
+    s.ccd = boot("ccd");
+    s.rre = boot("rre");
+    s.rte = boot("rte");
+    s.rmse_r = std::sqrt(SampleMean(column("mse_r")));
+    s.rmse_t = std::sqrt(SampleMean(column("mse_t")));
+    s.chamfer = SampleMean(column("chamfer"));
     const double n = static_cast<double>(group.size());
     s.recall = static_cast<double>(recalled) / n;
     s.success = static_cast<double>(succeeded) / n;
@@ -178,12 +180,6 @@ std::vector<MethodSummary> SummarizeGroup(const std::vector<const ResultRow*>& r
     return out;
 }
 
-std::string Caption(const ReportTable& t) { return DescribeTable(t); }
-
-std::string Fmt(double x, const char* spec) {
-    return std::isfinite(x) ? fmt::format(fmt::runtime(spec), x) : "n/a";
-}
-
 }  // namespace
 
 /// The pairs each (method, params) of a table has; refuses different sets naming them, or
@@ -210,8 +206,8 @@ static std::string RestrictToCommonPairs(std::vector<const ResultRow*>* group, b
     const auto name = [](const std::string& label) { return label.substr(0, label.find(' ')); };
     std::string counts;
     for (const auto& label : order) {
-        counts += fmt::format("{}{}: {}", counts.empty() ? "" : ", ", name(label),
-                              pairs[label].size());
+        counts +=
+            fmt::format("{}{}: {}", counts.empty() ? "" : ", ", name(label), pairs[label].size());
         if (common && pairs[label].size() != shared.size()) {
             counts += fmt::format(" -> {}", shared.size());
         }
@@ -224,9 +220,9 @@ static std::string RestrictToCommonPairs(std::vector<const ResultRow*>* group, b
             group->front()->data.pairs_file, counts, shared.size()));
     }
     if (shared.empty()) {
-        throw std::runtime_error(fmt::format(
-            "methods of one table share no pair of {} ({} pairs): nothing to compare",
-            group->front()->data.pairs_file, counts));
+        throw std::runtime_error(
+            fmt::format("methods of one table share no pair of {} ({} pairs): nothing to compare",
+                        group->front()->data.pairs_file, counts));
     }
     group->erase(std::remove_if(group->begin(), group->end(),
                                 [&](const ResultRow* r) { return !shared.count(r->pair); }),
@@ -282,140 +278,110 @@ std::string DescribeTable(const ReportTable& t) {
     return out;
 }
 
-std::string FormatMarkdown(const std::vector<MethodSummary>& ss, const ReportOptions& o) {
-    std::string out = fmt::format(
-        "| method | pairs | failed | mae_r [deg] | mae_r 95% CI | mae_t | ccd | rre [deg] | rte | "
-        "rmse_r | rmse_t | recall@({:g},{:g}) | success(rre<{:g},rte<{:g}) |{} median s | mean s "
-        "|\n",
-        o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte,
-        o.recall_3dmatch ? " 3DMatch recall |" : "");
-    out += "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|";
-    out += o.recall_3dmatch ? "---:|" : "";
-    out += "---:|---:|\n";
-    for (const auto& s : ss) {
-        out += fmt::format(
-            "| {} | {} | {} | {} | [{}, {}] | {} | {} | {} | {} | {} | {} | {:.3f} | {:.3f} |{} "
-            "{:.5f} | {:.5f} |\n",
-            s.label, s.pairs, s.failed, Fmt(s.mae_r.mean, "{:.4f}"), Fmt(s.mae_r.lo, "{:.3f}"),
-            Fmt(s.mae_r.hi, "{:.3f}"), Fmt(s.mae_t.mean, "{:.4f}"), Fmt(s.ccd.mean, "{:.4f}"),
-            Fmt(s.rre.mean, "{:.4f}"), Fmt(s.rte.mean, "{:.4f}"), Fmt(s.rmse_r, "{:.4f}"),
-            Fmt(s.rmse_t, "{:.4f}"), s.recall, s.success,
-            o.recall_3dmatch ? fmt::format(" {:.3f} |", s.recall_3dmatch) : "", s.median_seconds,
-            s.mean_seconds);
-    }
-    return out;
+namespace {
+
+Cell Number(double v, std::size_t pairs) {
+    Cell c;
+    c.value = v;
+    c.pairs = pairs;
+    return c;
 }
 
-std::string FormatMarkdown(const std::vector<ReportTable>& tables, const ReportOptions& o) {
-    std::string out;
+Cell Mean(const Estimate& e, std::size_t pairs) {
+    Cell c = Number(e.mean, pairs);
+    c.ci_lo = e.lo;
+    c.ci_hi = e.hi;
+    return c;
+}
+
+Column Col(const std::string& key,
+           const std::string& header,
+           int decimals,
+           CiStyle ci = CiStyle::kHidden) {
+    return {key, header, CellSource::kMeasured, Better::kNone, decimals, ci};
+}
+
+/// A column of a mean over pairs of the metric `name` (rmse_r: of mse_r), in its format.
+Column MetricCol(const std::string& key, const std::string& name, const std::string& header) {
+    return Col(key, header, FindMetric(name).decimals);
+}
+
+}  // namespace
+
+Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
+    Table t;
+    t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
+    t.caption = "Data: " + DescribeTable(rt);
+    t.columns = {
+        Col("pairs", "pairs", 0),
+        Col("failed", "failed", 0),
+        MetricCol("mae_r", "mae_r", "mae_r [deg]"),
+        // The interval's bounds at 3 decimals, as the documented table has always shown them.
+        Col("mae_r.ci95", "mae_r 95% CI", 3, CiStyle::kInterval),
+        MetricCol("mae_t", "mae_t", "mae_t"),
+        MetricCol("ccd", "ccd", "ccd"),
+        MetricCol("rre", "rre", "rre [deg]"),
+        MetricCol("rte", "rte", "rte"),
+        MetricCol("rmse_r", "mse_r", "rmse_r"),
+        MetricCol("rmse_t", "mse_t", "rmse_t"),
+        Col("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t),
+            kFractionDecimals),
+        Col("success", fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte),
+            kFractionDecimals)};
+    if (o.recall_3dmatch) {
+        t.columns.push_back(Col("recall_3dmatch", "3DMatch recall", kFractionDecimals));
+    }
+    t.columns.push_back(Col("median_seconds", "median s", kSecondsDecimals));
+    t.columns.push_back(Col("mean_seconds", "mean s", kSecondsDecimals));
+    // Data columns, in CSV and JSON only.
+    t.columns.push_back(MetricCol("chamfer", "chamfer", "chamfer"));
+    t.columns.push_back(Col("threads", "threads", 0));
+    t.columns.push_back(Col("params", "params", 0));
+    for (std::size_t c = t.columns.size() - 3; c < t.columns.size(); ++c)
+        t.columns[c].shown = false;
+    for (const auto& s : rt.methods) {
+        const std::size_t n = s.pairs;
+        TableRow row{s.label,
+                     {Number(static_cast<double>(n), n), Number(static_cast<double>(s.failed), n),
+                      Mean(s.mae_r, n), Mean(s.mae_r, n), Mean(s.mae_t, n), Mean(s.ccd, n),
+                      Mean(s.rre, n), Mean(s.rte, n), Number(s.rmse_r, n), Number(s.rmse_t, n),
+                      Number(s.recall, n), Number(s.success, n)}};
+        if (o.recall_3dmatch) row.cells.push_back(Number(s.recall_3dmatch, n));
+        for (double v : {s.median_seconds, s.mean_seconds, s.chamfer, double(s.threads)}) {
+            row.cells.push_back(Number(v, n));
+        }
+        Cell params;
+        params.source = CellSource::kLabel;
+        params.text = s.params.dump();
+        row.cells.push_back(params);
+        t.rows.push_back(std::move(row));
+    }
+    Provenance p;
+    p.pairs_file = rt.data.pairs_file;
+    p.pairs_hash = rt.data.content_hash;
+    p.dataset = rt.data.dataset;
+    p.protocol = rt.data.protocol;
+    p.pairing = rt.data.pairing;
+    p.seed = rt.data.seed;
+    t.provenance = {p};
+    if (!rt.notes.empty()) {
+        std::string failed = "Rows counted as failed:";
+        for (const auto& n : rt.notes) failed += "\n- " + n;
+        t.notes.push_back(failed);
+    }
+    return t;
+}
+
+std::vector<Table> SummaryTables(const std::vector<ReportTable>& tables, const ReportOptions& o) {
+    std::vector<Table> out;
     for (std::size_t i = 0; i < tables.size(); ++i) {
-        const ReportTable& t = tables[i];
-        if (i > 0) out += "\n";
-        if (tables.size() > 1) out += fmt::format("Table {} of {}. ", i + 1, tables.size());
-        out += "Data: " + Caption(t) + "\n\n" + FormatMarkdown(t.methods, o);
-        if (!t.notes.empty()) {
-            out += "\nRows counted as failed:\n";
-            for (const auto& n : t.notes) out += "- " + n + "\n";
+        out.push_back(SummaryTable(tables[i], o));
+        if (tables.size() > 1) {
+            out.back().caption =
+                fmt::format("Table {} of {}. ", i + 1, tables.size()) + out.back().caption;
         }
     }
     return out;
-}
-
-std::string FormatCsv(const std::vector<MethodSummary>& ss) {
-    std::vector<ReportTable> one(1);
-    one[0].methods = ss;
-    return FormatCsv(one);
-}
-
-std::string FormatCsv(const std::vector<ReportTable>& tables) {
-    std::string out =
-        "method,pairs,failed,mae_r,mae_r_lo,mae_r_hi,mae_t,mae_t_lo,mae_t_hi,ccd,ccd_lo,ccd_hi,rre,"
-        "rte,rmse_r,rmse_t,chamfer,recall,success,median_seconds,mean_seconds,threads,params,"
-        "euler,pairs_file,content_hash,recall_3dmatch\n";
-    for (const auto& t : tables) {
-        for (const auto& s : t.methods) {
-            // params is JSON: quote it, doubling inner quotes (RFC 4180).
-            std::string params = s.params.dump();
-            std::string quoted = "\"";
-            for (char c : params) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-            quoted += "\"";
-            out += fmt::format(
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}"
-                "\n",
-                s.method, s.pairs, s.failed, s.mae_r.mean, s.mae_r.lo, s.mae_r.hi, s.mae_t.mean,
-                s.mae_t.lo, s.mae_t.hi, s.ccd.mean, s.ccd.lo, s.ccd.hi, s.rre.mean, s.rte.mean,
-                s.rmse_r, s.rmse_t, s.chamfer, s.recall, s.success, s.median_seconds,
-                s.mean_seconds, s.threads, quoted, ToString(t.euler), t.data.pairs_file,
-                t.data.content_hash, s.recall_3dmatch);
-        }
-    }
-    return out;
-}
-
-std::string FormatLatex(const std::vector<ReportTable>& tables, const ReportOptions& o) {
-    std::string out;
-    for (const auto& t : tables) {
-        out += "% Data: " + Caption(t) + "\n";
-        out += "\\begin{tabular}{lrrrrrr}\n\\toprule\n";
-        out += fmt::format(
-            "Method & MAE(R) & MAE(t) & CCD & RRE & Recall@({:g},{:g}) & Time (s) \\\\\n"
-            "\\midrule\n",
-            o.recall_r_deg, o.recall_t);
-        for (const auto& s : t.methods) {
-            out += fmt::format("{} & {} & {} & {} & {} & {:.3f} & {:.4f} \\\\\n", s.label,
-                               Fmt(s.mae_r.mean, "{:.4f}"), Fmt(s.mae_t.mean, "{:.4f}"),
-                               Fmt(s.ccd.mean, "{:.4f}"), Fmt(s.rre.mean, "{:.4f}"), s.recall,
-                               s.median_seconds);
-        }
-        out += "\\bottomrule\n\\end{tabular}\n";
-    }
-    return out;
-}
-
-nlohmann::json ToJson(const std::vector<MethodSummary>& ss, const ReportOptions& o) {
-    nlohmann::json arr = nlohmann::json::array();
-    const auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nullptr; };
-    const auto est = [&](const Estimate& e) {
-        return nlohmann::json{{"mean", num(e.mean)}, {"ci95", {num(e.lo), num(e.hi)}}};
-    };
-    for (const auto& s : ss) {
-        nlohmann::json j = {{"method", s.method},
-                            {"label", s.label},
-                            {"params", s.params},
-                            {"pairs", s.pairs},
-                            {"failed", s.failed},
-                            {"mae_r", est(s.mae_r)},
-                            {"mae_t", est(s.mae_t)},
-                            {"ccd", est(s.ccd)},
-                            {"rre", est(s.rre)},
-                            {"rte", est(s.rte)},
-                            {"rmse_r", num(s.rmse_r)},
-                            {"rmse_t", num(s.rmse_t)},
-                            {"chamfer", num(s.chamfer)},
-                            {"recall", s.recall},
-                            {"recall_thresholds", {o.recall_r_deg, o.recall_t}},
-                            {"success", s.success},
-                            {"success_thresholds", {o.success_rre_deg, o.success_rte}},
-                            {"median_seconds", s.median_seconds},
-                            {"mean_seconds", s.mean_seconds},
-                            {"threads", s.threads}};
-        if (o.recall_3dmatch) j["recall_3dmatch"] = s.recall_3dmatch;
-        arr.push_back(std::move(j));
-    }
-    return arr;
-}
-
-nlohmann::json ToJson(const std::vector<ReportTable>& tables, const ReportOptions& o) {
-    nlohmann::json arr = nlohmann::json::array();
-    for (const auto& t : tables) {
-        arr.push_back({{"data", t.data},
-                       {"description", DescribeTable(t)},
-                       {"euler", ToString(t.euler)},
-                       {"files", t.files},
-                       {"notes", t.notes},
-                       {"methods", ToJson(t.methods, o)}});
-    }
-    return arr;
 }
 
 }  // namespace regbench

@@ -1,12 +1,13 @@
 #pragma once
-// Aggregates result rows into per-method tables (Markdown, CSV, JSON, LaTeX). Tables are data
-// (ReportTable: a caption, rows of MethodSummary, notes); the Format* writers only render them.
+// Aggregates result rows into per-method summaries (ReportTable: rows of MethodSummary, notes)
+// and those into report tables (reports/table.hpp), which the table writers render.
 // Metrics, thresholds and success rules are defined in docs/metrics.md.
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "reports/table.hpp"
 #include "runners/result_row.hpp"
 
 namespace regbench {
@@ -85,12 +86,12 @@ std::vector<MethodSummary> Summarize(const std::vector<ResultRow>& rows,
 /// One line describing a table's data and convention, e.g. for captions.
 std::string DescribeTable(const ReportTable& table);
 
-std::string FormatMarkdown(const std::vector<MethodSummary>& s, const ReportOptions& o);
-std::string FormatMarkdown(const std::vector<ReportTable>& tables, const ReportOptions& o);
-std::string FormatCsv(const std::vector<MethodSummary>& s);
-std::string FormatCsv(const std::vector<ReportTable>& tables);
-std::string FormatLatex(const std::vector<ReportTable>& tables, const ReportOptions& o);
-nlohmann::json ToJson(const std::vector<MethodSummary>& s, const ReportOptions& o);
-nlohmann::json ToJson(const std::vector<ReportTable>& tables, const ReportOptions& o);
+/// A ReportTable as a report table (reports/table.hpp): caption "Data: " + DescribeTable, a row
+/// per (method, params), the means with their CIs, recall, success and seconds; chamfer, threads
+/// and params as data columns (CSV and JSON only); the rows counted as failed as a note.
+Table SummaryTable(const ReportTable& table, const ReportOptions& o);
+
+/// SummaryTable of each, captions numbered "Table i of n. " when there are several.
+std::vector<Table> SummaryTables(const std::vector<ReportTable>& tables, const ReportOptions& o);
 
 }  // namespace regbench

@@ -1,8 +1,36 @@
 #include "reports/row_access.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 namespace regbench {
+
+namespace {
+const MetricField kMetrics[] = {{"mae_r", &PairMetrics::mae_r, 4},
+                                {"mae_t", &PairMetrics::mae_t, 4},
+                                {"mse_r", &PairMetrics::mse_r, 4},
+                                {"mse_t", &PairMetrics::mse_t, 4},
+                                {"rre", &PairMetrics::rre, 4},
+                                {"rte", &PairMetrics::rte, 4},
+                                {"ccd", &PairMetrics::ccd, 4},
+                                {"chamfer", &PairMetrics::chamfer, 4},
+                                {"overlap_rmse", &PairMetrics::overlap_rmse, 4}};
+}  // namespace
+
+std::vector<std::string> MetricNames() {
+    std::vector<std::string> names;
+    for (const auto& m : kMetrics) names.push_back(m.name);
+    return names;
+}
+
+const MetricField& FindMetric(const std::string& name) {
+    std::string known;
+    for (const auto& m : kMetrics) {
+        if (name == m.name) return m;
+        known += (known.empty() ? "" : ", ") + std::string(m.name);
+    }
+    throw std::invalid_argument("unknown metric '" + name + "' (known: " + known + ")");
+}
 
 std::string RowPairFileName(const nlohmann::json& row) {
     if (!row.contains("data") || !row["data"].is_object()) return "?";
@@ -23,7 +51,7 @@ std::string RowPairFileId(const nlohmann::json& row) {
 std::optional<double> RowMetric(const nlohmann::json& row, const std::string& key) {
     const auto m = row.find("metrics");
     if (m == row.end() || !m->is_object()) return std::nullopt;
-    const auto v = m->find(key);
+    const auto v = m->find(FindMetric(key).name);
     if (v == m->end() || !v->is_number()) return std::nullopt;
     const double x = v->get<double>();
     if (!std::isfinite(x)) return std::nullopt;

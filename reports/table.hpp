@@ -16,12 +16,21 @@ enum class CellSource {
 };
 
 struct Cell {
-    double value = std::nan("");       ///< NaN: empty cell ("-") unless `text` is set
-    double half_width = std::nan("");  ///< 95% CI half-width, shown as value ± half_width
-    std::string text;                  ///< overrides the number (e.g. "not trained")
+    double value = std::nan("");  ///< NaN: empty cell ("-") unless `text` is set
+    double ci_lo = std::nan("");  ///< 95% CI of the value (NaN: none), shown per Column::ci
+    double ci_hi = std::nan("");
+    std::string text;  ///< overrides the number (e.g. "not trained")
     CellSource source = CellSource::kMeasured;
     std::size_t pairs = 0;  ///< rows the number was computed from (measured cells)
     bool HasValue() const { return std::isfinite(value); }
+    double HalfWidth() const { return 0.5 * (ci_hi - ci_lo); }  ///< NaN without a CI
+};
+
+/// How a column shows its cells' CIs in Markdown, LaTeX and HTML (CSV and JSON carry them all).
+enum class CiStyle {
+    kPlusMinus,  ///< "mean ± half-width"
+    kInterval,   ///< "[lo, hi]" instead of the value (a left-aligned column)
+    kHidden,     ///< the value only
 };
 
 /// Which way is better, for bolding the best cell of a column.
@@ -32,7 +41,9 @@ struct Column {
     std::string header;  ///< shown name, e.g. "MAE(R) same"
     CellSource source = CellSource::kMeasured;
     Better better = Better::kLower;
-    int decimals = 4;
+    int decimals = 4;  ///< one per quantity: reports/row_access.hpp
+    CiStyle ci = CiStyle::kPlusMinus;
+    bool shown = true;  ///< false: a data column, in CSV and JSON only (e.g. a method's params)
 };
 
 /// Where a table's measured numbers came from: one entry per result set used.
@@ -60,7 +71,7 @@ struct TableRow {
 
 struct Table {
     std::string id;       ///< e.g. "table1_modelnet_partial"
-    std::string title;    ///< e.g. "Tab. 1: partial-to-partial"
+    std::string title;    ///< e.g. "Tab. 1: partial-to-partial"; "" for no heading
     std::string caption;  ///< names the data each side came from and the pairing
     std::string row_header = "method";
     std::vector<Column> columns;
@@ -68,6 +79,10 @@ struct Table {
     std::vector<Provenance> provenance;
     std::vector<std::string> notes;  ///< extra lines printed under the table
 };
+
+/// A cell as the text writers show it: its text, else the number with `col.decimals` (and its
+/// CI as `col.ci` says, joined by `pm`), "-" when empty.
+std::string CellText(const Cell& cell, const Column& col, const char* pm);
 
 /// Markdown: title, caption, pipe table (measured ± half-width), notes.
 std::string TableToMarkdown(const Table& t);
@@ -78,6 +93,9 @@ std::string TableToLatex(const Table& t);
 
 /// CSV, one line per (table, row, column) with the provenance fields, header included.
 std::string TablesToCsv(const std::vector<Table>& tables);
+
+/// Each table's Markdown, one blank line between tables.
+std::string TablesToMarkdown(const std::vector<Table>& tables);
 
 /// JSON array with one object per (table, row, column) and structured provenance.
 nlohmann::json TablesToJson(const std::vector<Table>& tables);

@@ -16,21 +16,6 @@ constexpr EnumName<CellSource> kSourceNames[] = {
 
 const char* SourceName(CellSource s) { return EnumToString(kSourceNames, s); }
 
-/// A cell's number as text with `decimals`, "-" when empty.
-std::string Number(const Cell& c, int decimals) {
-    if (!c.text.empty()) return c.text;
-    if (!c.HasValue()) return "-";
-    return fmt::format("{:.{}f}", c.value, decimals);
-}
-
-std::string CellText(const Cell& c, int decimals, const char* pm) {
-    std::string s = Number(c, decimals);
-    if (c.text.empty() && c.HasValue() && std::isfinite(c.half_width)) {
-        s += fmt::format("{}{:.{}f}", pm, c.half_width, decimals);
-    }
-    return s;
-}
-
 /// The provenance entry a column's cells came from: the one whose group prefixes the key.
 const Provenance* ProvenanceFor(const Table& t, const Column& col) {
     if (col.source != CellSource::kMeasured) return nullptr;
@@ -64,6 +49,12 @@ std::string LatexEscape(const std::string& s) {
             case '\\':
                 out += "\\textbackslash{}";
                 break;
+            case '<':
+                out += "\\textless{}";
+                break;
+            case '>':
+                out += "\\textgreater{}";
+                break;
             default:
                 out += c;
         }
@@ -80,15 +71,31 @@ std::string CsvField(const std::string& s) {
 
 std::string Num(double v) { return std::isfinite(v) ? fmt::format("{:.10g}", v) : ""; }
 
+// clang-format off
 const std::vector<std::string> kCsvHeader = {
-    "table",        "row",        "column",           "header",
-    "source",       "value",      "ci95_half_width",  "text",
-    "pairs",        "pairs_file", "pairs_hash",       "dataset",
-    "split",        "protocol",   "pairing",          "seed",
-    "points",       "keep",       "regbench_version", "fallback",
-    "gt_ccd_floor", "selection",  "noise_sigma"};
+    "table",      "row",          "column",    "header",   "source",    "value",
+    "ci95_half_width", "ci95_lo", "ci95_hi",   "text",     "pairs",     "pairs_file",
+    "pairs_hash", "dataset",      "split",     "protocol", "pairing",   "seed",
+    "points",     "keep",         "regbench_version", "fallback", "gt_ccd_floor", "selection",
+    "noise_sigma"};
+// clang-format on
 
 }  // namespace
+
+std::string CellText(const Cell& c, const Column& col, const char* pm) {
+    if (!c.text.empty()) return c.text;
+    if (!c.HasValue()) return "-";
+    const bool ci = std::isfinite(c.ci_lo) && std::isfinite(c.ci_hi);
+    if (col.ci == CiStyle::kInterval) {
+        return ci ? fmt::format("[{:.{}f}, {:.{}f}]", c.ci_lo, col.decimals, c.ci_hi, col.decimals)
+                  : "-";
+    }
+    std::string s = fmt::format("{:.{}f}", c.value, col.decimals);
+    if (ci && col.ci == CiStyle::kPlusMinus) {
+        s += fmt::format("{}{:.{}f}", pm, c.HalfWidth(), col.decimals);
+    }
+    return s;
+}
 
 int BestRow(const Table& t, std::size_t c) {
     const Column& col = t.columns.at(c);
@@ -111,13 +118,14 @@ int BestRow(const Table& t, std::size_t c) {
 }
 
 std::string TableToMarkdown(const Table& t) {
-    std::string out = "### " + t.title + "\n\n";
+    std::string out = t.title.empty() ? "" : "### " + t.title + "\n\n";
     if (!t.caption.empty()) out += t.caption + "\n\n";
     out += "| " + t.row_header + " |";
     std::string rule = "|---|";
     for (const auto& c : t.columns) {
+        if (!c.shown) continue;
         out += " " + c.header + " |";
-        rule += "---:|";
+        rule += c.ci == CiStyle::kInterval ? "---|" : "---:|";
     }
     out += "\n" + rule + "\n";
     std::vector<int> best(t.columns.size());
@@ -125,7 +133,8 @@ std::string TableToMarkdown(const Table& t) {
     for (std::size_t r = 0; r < t.rows.size(); ++r) {
         out += "| " + t.rows[r].label + " |";
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
-            std::string s = CellText(t.rows[r].cells[c], t.columns[c].decimals, " ± ");
+            if (!t.columns[c].shown) continue;
+            std::string s = CellText(t.rows[r].cells[c], t.columns[c], " ± ");
             if (best[c] == static_cast<int>(r)) s = "**" + s + "**";
             out += " " + s + " |";
         }
@@ -137,17 +146,18 @@ std::string TableToMarkdown(const Table& t) {
 
 std::string TableToLatex(const Table& t) {
     std::string out = "\\begin{table}[t]\n\\centering\n\\small\n\\begin{tabular}{l";
-    for (std::size_t c = 0; c < t.columns.size(); ++c) out += "r";
+    for (const auto& c : t.columns) out += c.shown ? "r" : "";
     out += "}\n\\toprule\n" + LatexEscape(t.row_header);
-    for (const auto& c : t.columns) out += " & " + LatexEscape(c.header);
+    for (const auto& c : t.columns) out += c.shown ? " & " + LatexEscape(c.header) : "";
     out += " \\\\\n\\midrule\n";
     std::vector<int> best(t.columns.size());
     for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
     for (std::size_t r = 0; r < t.rows.size(); ++r) {
         out += LatexEscape(t.rows[r].label);
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
+            if (!t.columns[c].shown) continue;
             const Cell& cell = t.rows[r].cells[c];
-            std::string s = cell.text.empty() ? CellText(cell, t.columns[c].decimals, " $\\pm$ ")
+            std::string s = cell.text.empty() ? CellText(cell, t.columns[c], " $\\pm$ ")
                                               : LatexEscape(cell.text);
             if (best[c] == static_cast<int>(r)) s = "\\textbf{" + s + "}";
             out += " & " + s;
@@ -155,8 +165,17 @@ std::string TableToLatex(const Table& t) {
         out += " \\\\\n";
     }
     out += "\\bottomrule\n\\end{tabular}\n";
-    out += "\\caption{" + LatexEscape(t.title + ". " + t.caption) + "}\n";
+    const std::string caption =
+        t.title.empty() || t.caption.empty() ? t.title + t.caption : t.title + ". " + t.caption;
+    out += "\\caption{" + LatexEscape(caption) + "}\n";
     out += "\\label{tab:" + LatexEscape(t.id) + "}\n\\end{table}\n";
+    return out;
+}
+
+std::string TablesToMarkdown(const std::vector<Table>& tables) {
+    std::string out;
+    for (std::size_t i = 0; i < tables.size(); ++i)
+        out += (i ? "\n" : "") + TableToMarkdown(tables[i]);
     return out;
 }
 
@@ -200,7 +219,9 @@ nlohmann::json TablesToJson(const std::vector<Table>& tables) {
                                       {"header", col.header},
                                       {"source", SourceName(col.source)},
                                       {"value", num(cell.value)},
-                                      {"ci95_half_width", num(cell.half_width)},
+                                      {"ci95_half_width", num(cell.HalfWidth())},
+                                      {"ci95_lo", num(cell.ci_lo)},
+                                      {"ci95_hi", num(cell.ci_hi)},
                                       {"text", cell.text},
                                       {"pairs", cell.pairs},
                                       {"pairs_file", p ? p->pairs_file : ""},

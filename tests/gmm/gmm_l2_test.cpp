@@ -157,7 +157,7 @@ TEST(MinimizeRigidL2, ApproximatedSumsLandNearDenseOptimum) {
     bfgs.maxiter = 200;
     bfgs.gtol = 1e-6;
     L2SumOptions dense_sums, approx_sums;
-    dense_sums.approximate = false;
+    dense_sums.kernel_sums = L2KernelSums::kDense;
     approx_sums.min_pairs = 0;
     bool approximated = false;
     // sigma 0.1: the 4.29-sigma cutoff (0.43) is below a quarter of the blob's bounding-box

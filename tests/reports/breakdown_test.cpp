@@ -49,7 +49,7 @@ TEST(Breakdown, DistributionByHand) {
     EXPECT_DOUBLE_EQ(a[Col(t, "mae_r.mean")].value, 5.875);
     EXPECT_DOUBLE_EQ(a[Col(t, "mae_r.median")].value, 5.5);
     EXPECT_NEAR(a[Col(t, "mae_r.std")].value, 5.137687547266117, 1e-12);
-    EXPECT_GT(a[Col(t, "mae_r.mean")].half_width, 0.0);
+    EXPECT_GT(a[Col(t, "mae_r.mean")].HalfWidth(), 0.0);
 }
 
 TEST(Breakdown, StatusCountsAndNullMetrics) {
@@ -92,7 +92,7 @@ TEST(Breakdown, BinsByMeasuredOverlap) {
     EXPECT_DOUBLE_EQ(t.rows[0].cells[0].value, 0.5);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 5.5);
     EXPECT_EQ(t.rows[0].cells[1].pairs, 2u);
-    EXPECT_EQ(t.rows[0].cells[1].text, "5.500 (n=2)");  // the count is shown in the cell
+    EXPECT_EQ(t.rows[0].cells[1].text, "5.5000 (n=2)");  // the count is shown in the cell
     EXPECT_DOUBLE_EQ(t.rows[0].cells[2].value, 12.0);
     EXPECT_TRUE(t.notes.empty());
 }

@@ -119,8 +119,8 @@ TEST(PaperReport, CiIsTheBreakdownsCiForTheSameRows) {
     const Cell& ours = RowNamed(paper, "ICP").cells[Col(paper, "same_category.mae_r")];
     const Cell& breakdown = dist.rows[0].cells[Col(dist, "mae_r.mean")];
     EXPECT_DOUBLE_EQ(ours.value, breakdown.value);
-    EXPECT_GT(ours.half_width, 0.0);
-    EXPECT_DOUBLE_EQ(ours.half_width, breakdown.half_width);
+    EXPECT_GT(ours.HalfWidth(), 0.0);
+    EXPECT_DOUBLE_EQ(ours.HalfWidth(), breakdown.HalfWidth());
 }
 
 TEST(PaperReport, SweepTableReadsTransposedPaperCells) {

@@ -62,10 +62,18 @@ TEST(Report, AggregatesPerMethodByHand) {
     EXPECT_LE(s[0].mae_r.lo, s[0].mae_r.mean);
     EXPECT_GE(s[0].mae_r.hi, s[0].mae_r.mean);
     EXPECT_NEAR(s[1].recall, 0.0, 1e-12);
-    const std::string md = FormatMarkdown(s, ReportOptions{});
+    ReportTable rt;
+    rt.methods = s;
+    const Table t = SummaryTable(rt, ReportOptions{});
+    const std::string md = TableToMarkdown(t);
     EXPECT_NE(md.find("| a | 3 | 1 | 0.9000 |"), std::string::npos) << md;
     EXPECT_NE(md.find("| b |"), std::string::npos);
-    EXPECT_NE(FormatCsv(s).find("a,3,1,0.9"), std::string::npos);
+    EXPECT_NE(md.find("| mae_r [deg] | mae_r 95% CI |"), std::string::npos) << md;
+    EXPECT_NE(md.find("|---:|---|---:|"), std::string::npos) << md;  // the CI column: text
+    // CSV and JSON carry the data columns Markdown leaves out (chamfer, threads, params).
+    EXPECT_NE(TablesToCsv({t}).find(",a,mae_r,mae_r [deg],measured,0.9,"), std::string::npos);
+    EXPECT_NE(TablesToCsv({t}).find(",a,params,params,measured,,,,,{}"), std::string::npos)
+        << TablesToCsv({t});
 }
 
 TEST(Report, SuccessThresholdsAreOptions) {
@@ -109,7 +117,7 @@ TEST(Report, DifferentPairFilesGiveSeparateTables) {
     EXPECT_EQ(tables[1].data.pairs_file, "b.h5");
     EXPECT_NEAR(tables[0].methods[0].mae_r.mean, 1.0, 1e-12);
     EXPECT_NEAR(tables[1].methods[0].mae_r.mean, 3.0, 1e-12);
-    const std::string md = FormatMarkdown(tables, ReportOptions{});
+    const std::string md = TablesToMarkdown(SummaryTables(tables, ReportOptions{}));
     EXPECT_NE(md.find("Table 1 of 2"), std::string::npos) << md;
     EXPECT_NE(md.find("file `b.h5`"), std::string::npos) << md;
 }
@@ -154,9 +162,9 @@ TEST(Report, MethodsOnDifferentPairsOfOneFileAreRefusedNamingThem) {
     // Issue 26: ogmm on 10 pairs (--shard 0/3) and icp on 30 shared one table silently.
     std::vector<ResultRow> rows = OnPairs("icp", 0, 29);
     for (auto& r : OnPairs("ogmm", 0, 9)) rows.push_back(r);
-    testing::ExpectThrowsWith<std::runtime_error>(
-        [&] { BuildTables(rows, ReportOptions{}); }, "different pairs of a.h5", "icp: 30",
-        "ogmm: 10", "--common-pairs");
+    testing::ExpectThrowsWith<std::runtime_error>([&] { BuildTables(rows, ReportOptions{}); },
+                                                  "different pairs of a.h5", "icp: 30", "ogmm: 10",
+                                                  "--common-pairs");
 }
 
 TEST(Report, CommonPairsRestrictsEveryMethodAndSaysSoInTheCaption) {
@@ -176,7 +184,8 @@ TEST(Report, CommonPairsRestrictsEveryMethodAndSaysSoInTheCaption) {
     EXPECT_NE(caption.find("restricted to the 10 pairs every method has"), std::string::npos)
         << caption;
     EXPECT_NE(caption.find("icp: 30 -> 10"), std::string::npos) << caption;
-    EXPECT_NE(FormatMarkdown(tables, o).find("restricted to the 10 pairs"), std::string::npos);
+    EXPECT_NE(TablesToMarkdown(SummaryTables(tables, o)).find("restricted to the 10 pairs"),
+              std::string::npos);
     // Methods on the same pairs need no flag and get no note.
     const auto same = BuildTables(OnPairs("icp", 0, 4), ReportOptions{});
     EXPECT_TRUE(same[0].subset.empty());
