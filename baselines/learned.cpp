@@ -13,10 +13,13 @@
 #include <mutex>
 
 #include "baselines/icp.hpp"
+#include "core/cpu_time.hpp"
 #include "core/data_dir.hpp"
 #include "core/params.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/checkpoint_json.hpp"
+#include "ogmm/cost.hpp"
+#include "ogmm/gemm_floor.hpp"
 
 namespace regbench {
 
@@ -50,11 +53,14 @@ Transform IcpRefine(const PointCloud& source,
 namespace {
 
 /// The parameters of the learned methods. The variants with ICP refinement (`ogmm`, `deepgmr`;
-/// kIcp) have the icp_* keys, the network-alone ones (`-noicp`) the checkpoint only.
-template <bool kIcp>
+/// kIcp) have the icp_* keys, the network-alone ones (`-noicp`) the checkpoint only; OGMM's
+/// (kAttention) the attention of the network too.
+template <bool kIcp, bool kAttention>
 struct LearnedOptions {
     /// Checkpoint directory; "" = the shipped one (ShippedCheckpointDir of the method's model).
     std::string checkpoint;
+    /// "" = the checkpoint's; "clustered" or "full" runs its weights with that attention.
+    std::string attention;
     double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius, > 0
     int icp_max_iterations = 30;                    ///< ICP iterations, >= 1
 
@@ -63,6 +69,12 @@ struct LearnedOptions {
         // MakeInfo appends the shipped folder of the method's model to this doc.
         f("checkpoint", checkpoint,
           "checkpoint directory from `regbench train`; \"\" = the shipped one, ");
+        if constexpr (kAttention) {
+            f("attention", attention,
+              "\"\" = the checkpoint's; \"clustered\" (FPS anchors) or \"full\" (every point, "
+              "paper Tab. 6 \"f\") runs the checkpoint's weights with that attention (the two "
+              "have the same parameters)");
+        }
         if constexpr (kIcp) {
             f("icp_max_correspondence_distance", icp_max_correspondence_distance,
               "ICP refinement radius, > 0; 0.07 = 2 * overlap_radius of the OGMM code");
@@ -71,6 +83,11 @@ struct LearnedOptions {
         }
     }
     void Validate(ParamCheck& c) const {
+        if constexpr (kAttention) {
+            c.Require(attention.empty() || attention == "clustered" || attention == "full",
+                      "attention",
+                      "must be \"\", \"clustered\" or \"full\", got \"" + attention + "\"");
+        }
         if constexpr (kIcp) {
             c.Above("icp_max_correspondence_distance", icp_max_correspondence_distance, 0.0);
             c.AtLeast("icp_max_iterations", icp_max_iterations, 1);
@@ -104,15 +121,21 @@ Transform ToTransform(const torch::Tensor& T) {
 
 class LearnedMethod final : public RegistrationMethod {
 public:
-    template <bool kIcp>
-    LearnedMethod(std::string name, std::string model_dir, const LearnedOptions<kIcp>& options)
+    template <bool kIcp, bool kAttention>
+    LearnedMethod(std::string name,
+                  std::string model_dir,
+                  const LearnedOptions<kIcp, kAttention>& options)
         : name_(std::move(name)),
           icp_(kIcp),
           params_(ParamsToJson(options)),  // "" = shipped; the path used is in each row's extra
-          options_{options.checkpoint, options.icp_max_correspondence_distance,
+          options_{options.checkpoint, options.attention, options.icp_max_correspondence_distance,
                    options.icp_max_iterations} {
         checkpoint_ =
             options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
+        if (!options_.attention.empty()) inference_["attention"] = options_.attention;
+        // The GEMM rate of the floor, measured once per process, here in the process that
+        // creates the method: the runner's isolated calls are forked from it and inherit it.
+        (void)ogmm::ProcessGemmRate();
     }
     std::string Name() const override { return name_; }
     nlohmann::json Params() const override { return params_; }
@@ -125,6 +148,9 @@ protected:
         result.extra["checkpoint"] = checkpoint_;
         if (!Load(result)) return result;
         torch::set_num_threads(std::max(1, context.threads));
+        // torch's thread count does not reach an OpenBLAS built with pthreads, which would run
+        // the GEMMs on every core beside the calling thread's clock.
+        ogmm::SetBlasThreads(context.threads);
         torch::NoGradGuard no_grad;
         ogmm::PairBatch batch;
         batch.source = ToTensor(source);
@@ -133,10 +159,29 @@ protected:
         // runner's threads share this method (the global RNG made --jobs 2 runs differ).
         batch.generator = at::detail::createCPUGenerator(context.IntSeed());
         const auto t0 = std::chrono::steady_clock::now();
+        const CpuStopwatch cpu(context.threads);
         const ogmm::NetOutput out = net_->Forward(batch);
         const Transform T_net = ToTransform(out.T[0]);
+        result.extra["network_cpu_seconds"] = cpu.Elapsed();
         result.extra["network_seconds"] =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        // The network's multiply-accumulate floor on this machine (docs/performance.md,
+        // section 6): its MACs for this config and these point counts over the single-thread
+        // fp32 GEMM rate of this process.
+        // A config the cost model cannot read (a key it needs missing) leaves them out.
+        std::int64_t macs = 0;
+        try {
+            macs = ogmm::ComputeForwardCost(cost_config_, source.rows(), target.rows()).total;
+        } catch (const std::exception&) {
+            macs = 0;
+        }
+        if (macs > 0) {
+            const ogmm::GemmRate& gemm = ogmm::ProcessGemmRate();
+            result.extra["macs"] = macs;
+            result.extra["gemm_gmac_per_s"] = gemm.macs_per_second * 1e-9;
+            result.extra["floor_seconds"] = static_cast<double>(macs) / gemm.macs_per_second;
+            result.extra["blas"] = ogmm::BlasDescription();
+        }
         // Per-point outputs (overlap scores and the like) summarised by their mean.
         for (const auto& [key, value] : out.aux) {
             if (value.dim() == 2 && value.size(0) == 1 && value.size(1) == source.rows()) {
@@ -171,7 +216,8 @@ private:
                                              " does not exist (train one with `regbench train`, "
                                              "or set parameter checkpoint / $REGBENCH_MODELS)");
                 }
-                net_ = ogmm::LoadNetFromCheckpoint(checkpoint_);
+                net_ = ogmm::LoadNetFromCheckpoint(checkpoint_, inference_);
+                cost_config_ = ogmm::CheckpointNetConfig(checkpoint_, inference_);
             } catch (const std::exception& e) {
                 load_error_ = name_ + ": " + e.what();
             }
@@ -183,11 +229,21 @@ private:
         return false;
     }
 
+    /// The options of every learned method, resolved.
+    struct Resolved {
+        std::string checkpoint;
+        std::string attention;
+        double icp_max_correspondence_distance;
+        int icp_max_iterations;
+    };
+
     std::string name_;
     bool icp_;
     nlohmann::json params_;
-    LearnedOptions<true> options_;
+    Resolved options_;
     std::string checkpoint_;
+    nlohmann::json inference_ = nlohmann::json::object();  ///< {"attention": ...} when given
+    nlohmann::json cost_config_;  ///< the network's zoo config, what ComputeForwardCost counts
     std::mutex load_mutex_;
     std::shared_ptr<ogmm::RegistrationNet> net_;
     std::string load_error_;
@@ -218,11 +274,12 @@ void CheckCheckpoint(const std::string& name, const std::string& dir) {
     }
 }
 
-template <bool kIcp>
+template <bool kIcp, bool kAttention>
 MethodInfo MakeInfo(const std::string& name,
                     const std::string& model_dir,
                     const std::string& summary) {
-    MethodInfo info = DescribeMethod<LearnedOptions<kIcp>>(name, summary);
+    using Options = LearnedOptions<kIcp, kAttention>;
+    MethodInfo info = DescribeMethod<Options>(name, summary);
     const std::string shipped = ShippedCheckpointDir(model_dir) + " ($REGBENCH_MODELS overrides)";
     info.param_docs.at("checkpoint") += shipped;
     info.schema["properties"]["checkpoint"]["description"] = info.param_docs.at("checkpoint");
@@ -233,7 +290,7 @@ MethodInfo MakeInfo(const std::string& name,
             throw std::invalid_argument(name +
                                         ": no ICP in this variant; drop the icp_* parameters");
         }
-        const auto o = ParseParams<LearnedOptions<kIcp>>(name, j);
+        const auto o = ParseParams<Options>(name, j);
         CheckCheckpoint(name,
                         o.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : o.checkpoint);
         return std::make_unique<LearnedMethod>(name, model_dir, o);
@@ -244,19 +301,21 @@ MethodInfo MakeInfo(const std::string& name,
 }  // namespace
 
 MethodInfo OgmmMethodInfo() {
-    return MakeInfo<true>(
+    return MakeInfo<true, true>(
         "ogmm", "ogmm",
         "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement");
 }
 MethodInfo OgmmNoIcpMethodInfo() {
-    return MakeInfo<false>("ogmm-noicp", "ogmm", "OGMM network alone (LibTorch, CPU batch 1)");
+    return MakeInfo<false, true>("ogmm-noicp", "ogmm",
+                                 "OGMM network alone (LibTorch, CPU batch 1)");
 }
 MethodInfo DeepGmrMethodInfo() {
-    return MakeInfo<true>("deepgmr", "deepgmr",
-                          "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement");
+    return MakeInfo<true, false>(
+        "deepgmr", "deepgmr",
+        "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement");
 }
 MethodInfo DeepGmrNoIcpMethodInfo() {
-    return MakeInfo<false>("deepgmr-noicp", "deepgmr",
-                           "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
+    return MakeInfo<false, false>("deepgmr-noicp", "deepgmr",
+                                  "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
 }
 }  // namespace regbench

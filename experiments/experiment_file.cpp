@@ -34,6 +34,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentSpec,
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Variant, row, config)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
     VariantSpec, kind, method, model, pairs_of, rows, comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TimingVariant, row, method, params, comment)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile,
                                                 table,
                                                 title,
@@ -44,6 +45,7 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile,
                                                 experiments,
                                                 variants,
                                                 timing_of,
+                                                timing_variants,
                                                 comment)
 
 namespace {
@@ -124,6 +126,14 @@ VariantSpec ReadVariants(const nlohmann::json& j, const std::string& what) {
     return v;
 }
 
+TimingVariant ReadTimingVariant(const nlohmann::json& j, const std::string& what) {
+    auto v = ParseConfig<TimingVariant>(j, what);
+    Require(!v.row.empty(), what, "row", "is required");
+    Require(!v.method.empty(), what, "method", "is required");
+    Require(v.params.is_object(), what, "params", "expects object, got " + v.params.dump());
+    return v;
+}
+
 bool IsPaperTable(const std::string& id) {
     if (id == "table6_inference_time") return true;
     const auto& specs = PaperTableSpecs();
@@ -134,11 +144,15 @@ bool IsPaperTable(const std::string& id) {
 
 ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& file) {
     const std::string what = "experiment file " + file;
-    ExperimentFile f = ParseWithout<ExperimentFile>(j, what, {"experiments", "variants"});
+    ExperimentFile f =
+        ParseWithout<ExperimentFile>(j, what, {"experiments", "variants", "timing_variants"});
     f.file = file;
     Require(!f.table.empty(), what, "table", "is required");
     Require(!f.title.empty(), what, "title", "is required");
     f.experiments = ReadList<ExperimentSpec>(j, what, "experiments", ReadExperiment);
+    f.timing_variants = ReadList<TimingVariant>(j, what, "timing_variants", ReadTimingVariant);
+    Require(f.timing_variants.empty() || !f.timing_of.empty(), what, "timing_variants",
+            "needs timing_of (the experiment whose pairs they run on)");
     if (j.contains("variants")) f.variants = ReadVariants(j["variants"], what + ": variants");
     Require(!f.experiments.empty() || !f.variants.rows.empty() || !f.timing_of.empty() ||
                 IsPaperTable(f.table),

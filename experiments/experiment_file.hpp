@@ -59,6 +59,16 @@ struct VariantSpec {
     std::string comment;
 };
 
+/// One extra row of a timing table (Tab. 6): `method` with `params` (merged over its
+/// defaults) on the pairs of the file's `timing_of`, shown as row `row` (the paper's row name,
+/// e.g. "OGMM_full_attention": `ogmm` with {"attention": "full"}).
+struct TimingVariant {
+    std::string row;
+    std::string method;
+    nlohmann::json params = nlohmann::json::object();
+    std::string comment;
+};
+
 struct ExperimentFile {
     std::string file;   ///< where it came from, for messages
     std::string table;  ///< table id; a key of the paper's tables puts its numbers beside ours
@@ -70,6 +80,7 @@ struct ExperimentFile {
     std::vector<ExperimentSpec> experiments;
     VariantSpec variants;
     std::string timing_of;  ///< a timing table (Tab. 6) of this experiment's rows
+    std::vector<TimingVariant> timing_variants;  ///< its extra rows (needs timing_of)
     std::string comment;
 };
 

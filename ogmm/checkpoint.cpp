@@ -3,14 +3,15 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
-#include <system_error>
 #include <stdexcept>
+#include <system_error>
 
 #include "core/atomic_file.hpp"
 #include "core/version.hpp"
@@ -28,7 +29,8 @@ constexpr int kFormatVersion = 1;
 /// Creates `path` with `bytes`: every write, the fsync and the close checked (ENOSPC, EFBIG).
 void WriteFileChecked(const fs::path& path, const std::string& bytes) {
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-    if (fd < 0) throw std::runtime_error(path.string() + ": cannot create: " + std::strerror(errno));
+    if (fd < 0)
+        throw std::runtime_error(path.string() + ": cannot create: " + std::strerror(errno));
     try {
         WriteAllOrThrow(fd, bytes, path.string());
     } catch (...) {
@@ -116,15 +118,24 @@ nlohmann::json ReadCheckpointJson(const std::string& dir) {
     return ParseCheckpointJson(text, path.string());  // every check, torch-free (fuzzed)
 }
 
-nlohmann::json LoadCheckpoint(const std::string& dir,
-                              RegistrationNet& net,
-                              torch::optim::Optimizer* optimizer) {
+namespace {
+
+/// LoadCheckpoint with the model_config the net must have: the checkpoint's, with `inference`
+/// merged over it.
+nlohmann::json LoadCheckpointAs(const std::string& dir,
+                                RegistrationNet& net,
+                                torch::optim::Optimizer* optimizer,
+                                const nlohmann::json& inference) {
     const nlohmann::json j = ReadCheckpointJson(dir);
     const fs::path json_path = fs::path(dir) / kCheckpointJson;
-    if (j.at("model_config") != net.Config()) {
+    nlohmann::json expected = j.at("model_config");
+    if (expected.is_object()) {
+        for (const auto& [key, value] : inference.items()) expected[key] = value;
+    }
+    if (expected != net.Config()) {
         throw std::runtime_error("checkpoint file " + json_path.string() +
-                                 " was saved from another model config: " +
-                                 j.at("model_config").dump() + " vs " + net.Config().dump());
+                                 " was saved from another model config: " + expected.dump() +
+                                 " vs " + net.Config().dump());
     }
     const fs::path weights = fs::path(dir) / kWeightsFile;
     try {
@@ -148,17 +159,58 @@ nlohmann::json LoadCheckpoint(const std::string& dir,
     return j;
 }
 
-std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(const std::string& dir) {
+/// Refuses an `inference` that is not an object of InferenceOnlyConfigKeys.
+void CheckInferenceKeys(const nlohmann::json& inference) {
+    if (!inference.is_object()) {
+        throw std::invalid_argument("inference config overrides must be an object, got " +
+                                    inference.dump());
+    }
+    const auto& allowed = InferenceOnlyConfigKeys();
+    for (const auto& [key, value] : inference.items()) {
+        (void)value;
+        if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+            throw std::invalid_argument("config key '" + key +
+                                        "' changes the network's parameters; only "
+                                        "\"attention\" may differ from the checkpoint's");
+        }
+    }
+}
+
+}  // namespace
+
+nlohmann::json LoadCheckpoint(const std::string& dir,
+                              RegistrationNet& net,
+                              torch::optim::Optimizer* optimizer) {
+    return LoadCheckpointAs(dir, net, optimizer, nlohmann::json::object());
+}
+
+const std::vector<std::string>& InferenceOnlyConfigKeys() {
+    static const std::vector<std::string> kKeys = {"attention"};
+    return kKeys;
+}
+
+nlohmann::json CheckpointNetConfig(const std::string& dir, const nlohmann::json& inference) {
+    CheckInferenceKeys(inference);
     const nlohmann::json j = ReadCheckpointJson(dir);
+    // "config" (the zoo config, with "arch") builds it; model_config is what it must equal.
+    nlohmann::json config = j.contains("config") ? j.at("config") : j.at("model_config");
+    if (config.is_object()) {
+        for (const auto& [key, value] : inference.items()) config[key] = value;
+    }
+    return config;
+}
+
+std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(const std::string& dir,
+                                                       const nlohmann::json& inference) {
+    const nlohmann::json config = CheckpointNetConfig(dir, inference);
     std::shared_ptr<RegistrationNet> net;
     try {
-        // "config" (the zoo config, with "arch") builds it; model_config is what it must equal.
-        net = MakeNetFromConfig(j.contains("config") ? j.at("config") : j.at("model_config"));
+        net = MakeNetFromConfig(config);
     } catch (const std::exception& e) {
         throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
                                  ": cannot build its model: " + e.what());
     }
-    LoadCheckpoint(dir, *net);
+    LoadCheckpointAs(dir, *net, nullptr, inference);
     net->eval();
     return net;
 }

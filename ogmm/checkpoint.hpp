@@ -5,6 +5,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "ogmm/net.hpp"
 
@@ -37,7 +38,20 @@ nlohmann::json LoadCheckpoint(const std::string& dir,
                               RegistrationNet& net,
                               torch::optim::Optimizer* optimizer = nullptr);
 
+/// Config keys that change what a network computes at inference but none of its parameters, so
+/// a checkpoint's weights load under another value: OGMM's "attention" ("clustered" attends to
+/// FPS anchors, "full" to every point; the same modules either way, ogmm/ogmm_net.cpp Anchors).
+const std::vector<std::string>& InferenceOnlyConfigKeys();
+
 /// Builds the network the checkpoint describes (zoo) and loads its weights; eval mode.
-std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(const std::string& dir);
+/// `inference` (keys of InferenceOnlyConfigKeys only) is merged over the checkpoint's config
+/// first, e.g. {"attention": "full"}; another key is refused (std::invalid_argument naming it).
+std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(
+    const std::string& dir, const nlohmann::json& inference = nlohmann::json::object());
+
+/// The zoo config (with "arch") of the checkpoint in `dir` with `inference` merged over it, as
+/// LoadNetFromCheckpoint builds it: what ComputeForwardCost (ogmm/cost.hpp) counts.
+nlohmann::json CheckpointNetConfig(const std::string& dir,
+                                   const nlohmann::json& inference = nlohmann::json::object());
 
 }  // namespace regbench::ogmm

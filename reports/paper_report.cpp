@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -300,6 +301,31 @@ Table BuildPaperTable(const PaperTableSpec& spec,
     return t;
 }
 
+namespace {
+
+/// One row of Tab. 6: a method's (or a labelled set's) CPU times and, for a learned method,
+/// its network's CPU time, MACs and floor (the row keys the learned methods write, extra.*).
+struct TimingRow {
+    std::vector<double> cpu, network, gmac, floor;
+    int threads = 1;
+    int points = 0;
+    std::string blas;
+};
+
+double ExtraNumber(const nlohmann::json& row, const char* key) {
+    const auto extra = row.find("extra");
+    if (extra == row.end() || !extra->is_object()) return std::nan("");
+    const auto v = extra->find(key);
+    return v != extra->end() && v->is_number() ? v->get<double>() : std::nan("");
+}
+
+/// Mean of `v`, NaN (a blank cell) when empty.
+double MeanOrBlank(const std::vector<double>& v) {
+    return v.empty() ? std::nan("") : SampleMean(v);
+}
+
+}  // namespace
+
 Table BuildTimingTable(const std::vector<ResultSet>& sets,
                        const nlohmann::json& paper,
                        const std::string& cpu_model,
@@ -307,54 +333,93 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets,
     Table t;
     t.id = "table6_inference_time";
     t.title = "Tab. 6: time per pair";
-    const int d = kSecondsDecimals;
-    t.columns = {{"mean_seconds", "mean s", CellSource::kMeasured, Better::kLower, d},
-                 {"median_seconds", "median s", CellSource::kMeasured, Better::kLower, d},
+    t.columns = {{"cpu_ms_mean", "CPU ms", CellSource::kMeasured, Better::kLower, 1},
+                 {"cpu_ms_median", "median CPU ms", CellSource::kMeasured, Better::kLower, 1},
+                 {"network_ms", "network CPU ms", CellSource::kMeasured, Better::kLower, 1},
+                 {"gmac", "GMAC", CellSource::kMeasured, Better::kNone, 2},
+                 {"floor_ms", "floor ms", CellSource::kMeasured, Better::kNone, 1},
+                 {"x_floor", "x floor", CellSource::kMeasured, Better::kNone, 2},
                  {"points", "points", CellSource::kMeasured, Better::kNone, 0},
                  {"threads", "threads", CellSource::kMeasured, Better::kNone, 0},
-                 {"paper:seconds", "paper s", CellSource::kPaper, Better::kNone, d}};
+                 {"paper:ms", "paper ms", CellSource::kPaper, Better::kNone, 0}};
     const auto& rows = paper.at("tables").at("table6_inference_time").at("rows");
+    // Rows by method, or by the set's label (a variant such as OGMM_full_attention), in order.
     std::vector<std::string> order;
-    std::map<std::string, std::vector<double>> secs;
-    std::map<std::string, int> threads;
-    std::map<std::string, const ResultSet*> set_of;
+    std::map<std::string, TimingRow> by_label;
+    std::set<std::string> learned_blas;
     for (const auto& s : sets) {
         for (const auto& r : s.rows) {
-            const std::string m = r.value("method", std::string("?"));
-            if (!secs.count(m)) order.push_back(m);
-            if (RowStatus(r) == "ok")
-                secs[m].push_back(r.value("seconds", 0.0));
-            else
-                secs[m];
-            threads[m] = r.value("threads", 1);
-            set_of[m] = &s;
+            const std::string label =
+                s.row_label.empty() ? r.value("method", std::string("?")) : s.row_label;
+            if (!by_label.count(label)) order.push_back(label);
+            TimingRow& row = by_label[label];
+            row.threads = r.value("threads", 1);
+            row.points = s.provenance.points;
+            if (RowStatus(r) != "ok") continue;
+            // Rows written before cpu_seconds existed have no CPU time to show.
+            if (r.contains("cpu_seconds")) row.cpu.push_back(1e3 * r.value("cpu_seconds", 0.0));
+            const double network = ExtraNumber(r, "network_cpu_seconds");
+            const double macs = ExtraNumber(r, "macs");
+            const double floor = ExtraNumber(r, "floor_seconds");
+            if (std::isfinite(network)) row.network.push_back(1e3 * network);
+            if (std::isfinite(macs)) row.gmac.push_back(1e-9 * macs);
+            if (std::isfinite(floor)) row.floor.push_back(1e3 * floor);
+            const auto extra = r.value("extra", nlohmann::json::object());
+            if (extra.is_object() && extra.contains("blas") && extra["blas"].is_string() &&
+                std::isfinite(floor)) {
+                learned_blas.insert(fmt::format(
+                    "{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
+                    extra["blas"].get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));
+            }
         }
     }
-    for (const auto& m : order) {
-        TableRow row{m, {}};
-        Cell mean, median, points, th, p;
-        mean.value = SampleMean(secs[m]);
-        median.value = SampleMedian(secs[m]);
-        mean.pairs = median.pairs = secs[m].size();
-        points.value = set_of[m]->provenance.points;
-        th.value = threads[m];
+    for (const auto& label : order) {
+        const TimingRow& m = by_label[label];
+        Cell mean, median, network, gmac, floor, ratio, points, th, p;
+        mean.value = MeanOrBlank(m.cpu);
+        median.value = m.cpu.empty() ? std::nan("") : SampleMedian(m.cpu);
+        mean.pairs = median.pairs = m.cpu.size();
+        network.value = MeanOrBlank(m.network);
+        gmac.value = MeanOrBlank(m.gmac);
+        floor.value = MeanOrBlank(m.floor);
+        // CPU time of the network over the time its MACs take at the GEMM rate: the mean of
+        // the network's CPU time over the mean floor (the same rows).
+        if (!m.network.empty() && m.network.size() == m.floor.size())
+            ratio.value = network.value / floor.value;
+        network.pairs = gmac.pairs = floor.pairs = ratio.pairs = m.network.size();
+        points.value = m.points;
+        th.value = m.threads;
         p.source = CellSource::kPaper;
-        const std::string name = PaperRowName(m).value_or(m);
+        const std::string name = PaperRowName(label).value_or(label);
         if (rows.contains(name)) {
-            p.value = rows[name].at(0).get<double>();
+            p.value = 1e3 * rows[name].at(0).get<double>();
         } else if (name == "OGMM" && rows.contains("OGMM_clustered_attention")) {
-            p.value = rows["OGMM_clustered_attention"].at(0).get<double>();
+            p.value = 1e3 * rows["OGMM_clustered_attention"].at(0).get<double>();
         }
-        row.cells = {mean, median, points, th, p};
-        t.rows.push_back(row);
+        t.rows.push_back({label, {mean, median, network, gmac, floor, ratio, points, th, p}});
     }
-    for (const auto& s : sets) t.provenance.push_back(s.provenance);
-    AddFloorNotes(sets, &t);
+    // One provenance and floor note per pair file (a variant runs on the pairs of the rows).
+    std::vector<ResultSet> files;
+    for (const auto& s : sets) {
+        const bool seen = std::any_of(files.begin(), files.end(), [&](const ResultSet& f) {
+            return f.provenance.pairs_file == s.provenance.pairs_file;
+        });
+        if (!seen) files.push_back({s.group, {}, s.provenance, ""});
+    }
+    for (const auto& s : files) t.provenance.push_back(s.provenance);
+    AddFloorNotes(files, &t);
+    std::string learned;
+    for (const auto& b : learned_blas) learned += (learned.empty() ? "" : "; ") + b;
     t.caption = fmt::format(
-        "Seconds of the method's own call per pair (successful calls; the harness's loading, "
-        "metrics and I/O excluded), one call at a time per core. Ours: CPU {}, BLAS {}, "
-        "CPU only (no GPU rows measured). Paper: {}",
-        cpu_model, blas,
+        "CPU milliseconds of the method's own call per pair (successful calls; the harness's "
+        "loading, metrics and I/O excluded; a learned method's call includes its ICP "
+        "refinement and, in an isolated call, loading its weights), one call at a time per core "
+        "with the threads shown. For the learned methods, network CPU ms is the forward alone, "
+        "GMAC its multiply-accumulates for this config and these point counts (ogmm/cost), "
+        "floor ms those MACs at the single-thread fp32 GEMM rate measured in the same process, "
+        "and x floor = network CPU ms / floor ms. Ours: CPU {}; BLAS of the learned methods: "
+        "{}; classical methods: {}; CPU only (no GPU rows measured). Paper (ms): {}",
+        cpu_model, learned.empty() ? "none measured" : learned, blas,
         paper.at("tables").at("table6_inference_time").value("caption", std::string()));
     return t;
 }

@@ -72,8 +72,12 @@ Table BuildPaperTable(const PaperTableSpec& spec,
                       const nlohmann::json& paper,
                       const PaperTableOptions& options);
 
-/// Tab. 6: mean / median seconds per pair measured (one thread per call), points per cloud,
-/// threads, CPU model and BLAS beside the paper's seconds (their GPU / CPU).
+/// Tab. 6: mean / median CPU ms per call measured (one thread per call), and for the learned
+/// methods the network's CPU ms, its GMAC, floor ms and x floor (from the rows' extra
+/// network_cpu_seconds, macs, floor_seconds; blank for the classical methods), points per
+/// cloud, threads, beside the paper's ms (their GPU / CPU). A set with a row_label fills a row
+/// of that name (e.g. "OGMM_full_attention", the paper's row). The caption names the CPU
+/// model, `blas` (the classical methods'), the learned rows' BLAS and GEMM rate.
 Table BuildTimingTable(const std::vector<ResultSet>& sets,
                        const nlohmann::json& paper,
                        const std::string& cpu_model,

@@ -28,13 +28,19 @@ TEST(Learned, MissingCheckpointIsRefusedWhenTheMethodIsCreated) {
     const std::string missing = regbench::testing::TempPath("no_such_ckpt").string();
     for (const char* name : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp"}) {
         testing::ExpectThrowsWith<std::invalid_argument>(
-            [&] { CreateMethod(name, {{"checkpoint", missing}}); }, missing, "does not exist");
+            [&] {
+                CreateMethod(name, {{"checkpoint", missing}});
+            },
+            missing, "does not exist");
     }
     // A folder without a checkpoint.json is refused too.
     const fs::path empty = regbench::testing::TempPath("empty_ckpt");
     fs::create_directories(empty);
     testing::ExpectThrowsWith<std::invalid_argument>(
-        [&] { CreateMethod("ogmm", {{"checkpoint", empty.string()}}); }, "checkpoint.json");
+        [&] {
+            CreateMethod("ogmm", {{"checkpoint", empty.string()}});
+        },
+        "checkpoint.json");
     fs::remove_all(empty);
 }
 
@@ -75,13 +81,18 @@ TEST(Learned, CheckpointOfTheOtherFamilyIsRefused) {
     const fs::path deepgmr = SaveUntrainedCheckpoint("deepgmr-small", 3);
     for (const char* name : {"ogmm", "ogmm-noicp"}) {
         testing::ExpectThrowsWith<std::invalid_argument>(
-            [&] { CreateMethod(name, {{"checkpoint", deepgmr.string()}}); }, deepgmr.string(),
-            "holds a deepgmr model");
+            [&] {
+                CreateMethod(name, {{"checkpoint", deepgmr.string()}});
+            },
+            deepgmr.string(), "holds a deepgmr model");
     }
     fs::remove_all(deepgmr);
     const fs::path ogmm = SaveUntrainedCheckpoint("ogmm-tiny", 5);
     testing::ExpectThrowsWith<std::invalid_argument>(
-        [&] { CreateMethod("deepgmr", {{"checkpoint", ogmm.string()}}); }, "holds a ogmm model");
+        [&] {
+            CreateMethod("deepgmr", {{"checkpoint", ogmm.string()}});
+        },
+        "holds a ogmm model");
     EXPECT_NO_THROW(CreateMethod("ogmm", {{"checkpoint", ogmm.string()}}));
     fs::remove_all(ogmm);
 }
@@ -109,8 +120,10 @@ TEST(Learned, CheckpointJsonWithMistypedKeysIsRefusedNamingFileAndKey) {
         j[nlohmann::json::json_pointer(c.pointer)] = c.value;
         std::ofstream(json, std::ios::trunc) << j.dump();
         testing::ExpectThrowsWith<std::invalid_argument>(
-            [&] { CreateMethod("ogmm", {{"checkpoint", dir.string()}}); }, json.string(),
-            c.expected);
+            [&] {
+                CreateMethod("ogmm", {{"checkpoint", dir.string()}});
+            },
+            json.string(), c.expected);
     }
     fs::remove_all(dir);
 }
@@ -164,6 +177,89 @@ TEST(Learned, ShippedCheckpointDirHonoursTheEnvironment) {
 TEST(Learned, RejectsUnknownParameters) {
     EXPECT_THROW(CreateMethod("ogmm", {{"chekpoint", "x"}}), std::invalid_argument);
     EXPECT_THROW(CreateMethod("deepgmr-noicp", {{"icp_max_iterations", 3}}), std::invalid_argument);
+    // Only OGMM has an attention to choose.
+    EXPECT_THROW(CreateMethod("deepgmr", {{"attention", "full"}}), std::invalid_argument);
+    testing::ExpectThrowsWith<std::invalid_argument>(
+        [] {
+            CreateMethod("ogmm", {{"attention", "sparse"}});
+        },
+        "attention", "\"clustered\" or \"full\"");
+}
+
+/// MACs of one forward of the tiny OGMM below (d = 4 channels, k = 2 neighbours, spe_k = 2,
+/// a = 2 anchors, J = 3 clusters (the least a rigid fit takes), one GMM round, 2 heads) on two
+/// clouds of n = 8 points, counted by hand from the layer shapes (in x out channels x the positions
+/// a layer runs on), independently of ogmm/cost.cpp. `full`: every point is a key of the attention.
+std::int64_t TinyOgmmMacsByHand(bool full) {
+    constexpr std::int64_t n = 8, d = 4, k = 2, spe_k = 2, a = 2, J = 3, rounds = 1;
+    // DGCNN: 1x1 convs 6->64->64->128->256 on the n k edges, 512->d on the n points, and the
+    // kNN Gram matrix of the xyz (3 n^2).
+    const std::int64_t dgcnn =
+        n * k * (6 * 64 + 64 * 64 + 64 * 128 + 128 * 256) + n * 512 * d + 3 * n * n;
+    // SPE: 1->64 distance and 1->64 angle per edge (spe_k edges), 64->d/2 twice per point; the
+    // angle branch's 64->d/2 runs on the spe_k edges' max (64 d per point in all), own Gram.
+    const std::int64_t spe = n * (64 + 64 * spe_k + 64 * d) + 3 * n * n;
+    // One attention block, n queries onto `keys` keys: Q (d x d) and merge (d x d) per query,
+    // the update MLP 2d->2d->d (4 d^2 + 2 d^2) per query, K and V (d x d each) per key, the
+    // scores and messages (n x keys x d each).
+    const std::int64_t keys = full ? n : a;
+    const std::int64_t block = (2 * d * d + 6 * d * d) * n + 2 * d * d * keys + 2 * n * keys * d;
+    const std::int64_t attention = 3 * block;  // two self-attentions and the cross-attention
+    const std::int64_t fps = full ? 0 : 3 * (3 * n * a);  // anchors of the three blocks
+    const std::int64_t conv3_a = (d * 2 * d + 2 * d * 2 * d + 2 * d * d) * n;  // d->2d->2d->d
+    // Overlap head per point: proj d->d/2->1, CONV3_b (d+2)->2d->2d->d, CONV3_o d->d/2->d/2->1.
+    const std::int64_t overlap =
+        n * ((d * d / 2 + d / 2) + ((d + 2) * 2 * d + 4 * d * d + 2 * d * d) +
+             (d * d / 2 + d / 2 * d / 2 + d / 2));
+    // GMM fit: the FPS of J means (3 n J), then per round distances and averages (2 x 3 n J);
+    // cluster features: the n x J responsibilities times the n x d features.
+    const std::int64_t gmm = 3 * n * J * (1 + 2 * rounds) + n * J * d;
+    const std::int64_t per_cloud = dgcnn + spe + attention + fps + conv3_a + overlap + gmm;
+    // Pair terms: the n x n feature cosines and the two pooled logits of the overlap head; the
+    // J x J cluster cosines, the matched means (J x J x 3) and Kabsch's covariance (9 J).
+    const std::int64_t pair = n * n * d + 2 * n * n + J * J * d + J * J * 3 + 9 * J;
+    return 2 * per_cloud + pair;
+}
+
+TEST(Learned, RowsCarryTheNetworksMacsAndFloor) {
+    // The sums, for the record: per cloud DGCNN 743,616, SPE 3,776, attention 3 x 1,216
+    // (clustered) or 3 x 1,792 (full), FPS 144 (clustered only), CONV3_a 1,024, overlap head
+    // 1,344, GMM 312; pair terms 474.
+    EXPECT_EQ(TinyOgmmMacsByHand(false), 1508202);
+    EXPECT_EQ(TinyOgmmMacsByHand(true), 1511370);
+    torch::set_num_threads(1);
+    nlohmann::json config = ogmm::NamedConfig("ogmm-tiny");
+    config.merge_patch({{"emb_dims", 4},
+                        {"k", 2},
+                        {"spe_k", 2},
+                        {"anchors", 2},
+                        {"clusters", 3},
+                        {"gmm_iterations", 1},
+                        {"heads", 2}});
+    const fs::path dir = regbench::testing::TempPath("learned_macs");
+    torch::manual_seed(4);
+    auto net = ogmm::MakeNetFromConfig(config);
+    ogmm::SaveCheckpoint(dir.string(), *net, {{"model", "ogmm-tiny"}, {"config", config}});
+    const auto full = testing::CleanCompletePair(20.0);
+    const PointCloud source = full.source.topRows(8), target = full.target.topRows(8);
+    AlignContext context;
+    context.seed = 3;
+    for (const char* attention : {"", "clustered", "full"}) {
+        auto method =
+            CreateMethod("ogmm-noicp", {{"checkpoint", dir.string()}, {"attention", attention}});
+        const AlignResult r = method->Align(source, target, context);
+        ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+        const bool is_full = std::string(attention) == "full";
+        EXPECT_EQ(r.extra.at("macs").get<std::int64_t>(), TinyOgmmMacsByHand(is_full)) << attention;
+        // floor = MACs at the process's GEMM rate (measured once, the same for every call).
+        const double rate = r.extra.at("gemm_gmac_per_s").get<double>() * 1e9;
+        EXPECT_GT(rate, 0.0);
+        EXPECT_NEAR(r.extra.at("floor_seconds").get<double>() * rate,
+                    static_cast<double>(TinyOgmmMacsByHand(is_full)), 1e-6);
+        EXPECT_GE(r.extra.at("network_cpu_seconds").get<double>(), 0.0);
+        EXPECT_FALSE(r.extra.at("blas").get<std::string>().empty());
+    }
+    fs::remove_all(dir);
 }
 
 }  // namespace

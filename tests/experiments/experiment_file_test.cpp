@@ -47,6 +47,23 @@ TEST(PaperPlan, VariantsAreThePapersAblationRows) {
     }
 }
 
+TEST(PaperPlan, Tab6TimesOgmmWithFullAttentionOnTab1sPairs) {
+    for (const auto& f : PaperPlan()) {
+        if (f.table != "table6_inference_time") continue;
+        EXPECT_EQ(f.timing_of, "tab1_same");
+        ASSERT_EQ(f.timing_variants.size(), 1u);
+        const TimingVariant& v = f.timing_variants[0];
+        // The paper's row name, so its 0.047 s sits beside it.
+        EXPECT_EQ(v.row, "OGMM_full_attention");
+        EXPECT_EQ(v.method, "ogmm");
+        EXPECT_EQ(v.params, (nlohmann::json{{"attention", "full"}}));
+        const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
+        EXPECT_TRUE(paper["tables"][f.table]["rows"].contains(v.row));
+        return;
+    }
+    FAIL() << "no table6_inference_time in the plan";
+}
+
 /// The variants `regbench train --ablation` trained before they were data (app/cmd_train.cpp).
 TEST(PaperPlan, VariantConfigsAreTheTrainedOnes) {
     std::map<std::string, std::vector<std::pair<std::string, nlohmann::json>>> kinds;
@@ -125,6 +142,15 @@ TEST_F(ExperimentFileTest, MalformedFilesAreRefusedNamingFileAndKey) {
              R"("rows": [{"row": "r", "config": 3}]}})",
          ": variants: rows[0]: parameter 'config' expects object, got 3"},
         {head + "\"caption\": \"c\"}", ": parameter 'experiments' is required"},
+        {head + R"("experiments": [{)" + good +
+             R"(}], "timing_variants": [{"row": "r", "method": "ogmm"}]})",
+         ": parameter 'timing_variants' needs timing_of"},
+        {head + R"("timing_of": "a", "experiments": [{)" + good +
+             R"(}], "timing_variants": [{"row": "r"}]})",
+         ": timing_variants[0]: parameter 'method' is required"},
+        {head + R"("timing_of": "a", "experiments": [{)" + good +
+             R"(}], "timing_variants": [{"row": "r", "method": "ogmm", "params": 3}]})",
+         ": timing_variants[0]: parameter 'params' expects object, got 3"},
     };
     for (const auto& [text, expected] : cases) {
         const std::string message = Refusal(path, text);

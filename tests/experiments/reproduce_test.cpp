@@ -177,6 +177,40 @@ TEST_F(UserExperiment, RunsEndToEndAndResumes) {
     EXPECT_EQ(again.rows_run, 0u);
 }
 
+TEST_F(UserExperiment, TimingVariantsRunOnTheTimedPairsAsTheirOwnRows) {
+    // As Tab. 6's OGMM_full_attention (ogmm with {"attention": "full"}), with a classical
+    // method: icp with one iteration is a row of its own; a variant whose method does not run
+    // in this invocation is left out.
+    std::ofstream(Path("timing.json")) << R"({
+      "table": "my_timing", "title": "My timing", "methods": ["identity", "icp"],
+      "experiments": [{"id": "timed", "protocol": "partial", "split": "test",
+                       "dataset": "procedural", "pairs": {"count": 2}}],
+      "timing_of": "timed",
+      "timing_variants": [{"row": "icp_one_step", "method": "icp",
+                           "params": {"max_iterations": 1}},
+                          {"row": "cpd_row", "method": "cpd"}]
+    })";
+    ReproduceOptions o;
+    o.experiment_files = {Path("timing.json")};
+    o.out_dir = Path("out");
+    o.timeout_seconds = 0.0;
+    o.progress = false;
+    std::ostringstream log;
+    const ReproduceSummary s = Reproduce(o, log);
+    EXPECT_EQ(s.rows_run, 2u * 2 + 2u) << log.str();
+    const auto rows = ReadJsonl(Path("out/results/timing_icp_one_step.jsonl"));
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_EQ(rows[0]["method"], "icp");
+    EXPECT_EQ(rows[0]["params"]["max_iterations"], 1);
+    EXPECT_NE(log.str().find("cpd does not run, so row cpd_row is not run"), std::string::npos)
+        << log.str();
+    std::ifstream in(s.markdown_path);
+    const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(md.find("| icp_one_step |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| icp |"), std::string::npos) << md;
+    EXPECT_EQ(md.find("cpd_row"), std::string::npos) << md;
+}
+
 TEST_F(UserExperiment, UnknownTableOfTheFilesIsRefused) {
     std::ofstream(Path("mine.json"))
         << R"({"table": "mine", "title": "t", "experiments": [{"id": "a", "protocol": "partial",

@@ -71,6 +71,32 @@ TEST(Checkpoint, RefusesAnotherConfigNamingTheFile) {
     fs::remove_all(saved.dir);
 }
 
+TEST(Checkpoint, LoadsAClusteredAttentionCheckpointWithFullAttention) {
+    // Full and clustered attention have the same modules (only the keys differ), so the
+    // weights of one load into the other, unchanged; a key that changes the parameters is
+    // refused.
+    torch::set_num_threads(1);
+    const fs::path dir = TempDir("attention");
+    torch::manual_seed(3);
+    auto clustered = MakeNet("ogmm-tiny");
+    const nlohmann::json config = NamedConfig("ogmm-tiny");
+    ASSERT_EQ(config.at("attention"), "clustered");
+    SaveCheckpoint((dir / "ck").string(), *clustered, {{"config", config}});
+    const auto full = LoadNetFromCheckpoint((dir / "ck").string(), {{"attention", "full"}});
+    EXPECT_EQ(full->Config().at("attention"), "full");
+    const auto pa = clustered->named_parameters();
+    for (const auto& item : full->named_parameters())
+        EXPECT_TRUE(torch::equal(item.value(), pa[item.key()])) << item.key();
+    EXPECT_EQ(CheckpointNetConfig((dir / "ck").string(), {{"attention", "full"}}).at("attention"),
+              "full");
+    EXPECT_EQ(CheckpointNetConfig((dir / "ck").string()).at("attention"), "clustered");
+    const std::string msg = ErrorOf([&] {
+        LoadNetFromCheckpoint((dir / "ck").string(), {{"emb_dims", 8}});
+    });
+    EXPECT_NE(msg.find("'emb_dims' changes the network's parameters"), std::string::npos) << msg;
+    fs::remove_all(dir);
+}
+
 TEST(Checkpoint, RefusesCorruptWeightsNamingTheFile) {
     const SavedCheckpoint saved = SaveDefault("corrupt");
     const fs::path weights = saved.ck / "weights.pt";

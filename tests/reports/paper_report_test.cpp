@@ -204,23 +204,107 @@ TEST(PaperReport, CsvAndJsonRoundTripWithProvenance) {
     EXPECT_TRUE(checked);
 }
 
+/// A result row of `method` with the CPU time of its call and, for a learned method
+/// (`network` > 0), the network's CPU time, MACs and floor as the learned methods write them.
+nlohmann::json TimedRow(int pair,
+                        const std::string& method,
+                        double cpu_seconds,
+                        double network = 0.0,
+                        double macs = 0.0,
+                        double floor = 0.0) {
+    nlohmann::json r = Row(pair, method, 1.0, 2 * cpu_seconds);  // wall: not what is shown
+    r["cpu_seconds"] = cpu_seconds;
+    if (network > 0.0) {
+        r["extra"] = {{"network_cpu_seconds", network},
+                      {"macs", macs},
+                      {"floor_seconds", floor},
+                      {"gemm_gmac_per_s", 1e-9 * macs / floor},
+                      {"blas", "TestBLAS 1.0 (pthreads)"}};
+    }
+    return r;
+}
+
 TEST(PaperReport, TimingTableMeanAndMedianByHand) {
     ResultSet s{"",
-                {Row(0, "cpd", 1, 0.1), Row(1, "cpd", 1, 0.2), Row(2, "cpd", 1, 0.6)},
+                {TimedRow(0, "cpd", 0.1), TimedRow(1, "cpd", 0.2), TimedRow(2, "cpd", 0.6)},
                 Prov("same.h5"),
                 ""};
     const Table t =
         BuildTimingTable({s}, LoadPaperTables(DefaultPaperTablesPath()), "Test CPU", "OpenBLAS");
     ASSERT_EQ(t.rows.size(), 1u);
-    EXPECT_NEAR(t.rows[0].cells[Col(t, "mean_seconds")].value, 0.3, 1e-15);
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "median_seconds")].value, 0.2);
+    // CPU milliseconds of the calls (not their wall seconds, twice as long here).
+    EXPECT_NEAR(t.rows[0].cells[Col(t, "cpu_ms_mean")].value, 300.0, 1e-12);
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "cpu_ms_median")].value, 200.0);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "points")].value, 1024);
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "paper:seconds")].value, 4.347);  // Tab. 6 CPD
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "paper:ms")].value, 4347.0);  // Tab. 6 CPD, 4.347 s
     EXPECT_NE(t.caption.find("Test CPU"), std::string::npos);
     EXPECT_NE(t.caption.find("OpenBLAS"), std::string::npos);
     // The timing table carries the CCD floor of its pairs too.
     ASSERT_EQ(t.notes.size(), 1u);
     EXPECT_NE(t.notes[0].find("0.1041"), std::string::npos) << t.notes[0];
+}
+
+TEST(PaperReport, TimingTableShowsTheLearnedRowsFloorAndTheFullAttentionRow) {
+    // ogmm (clustered) and deepgmr on the pairs, plus a set labelled OGMM_full_attention (ogmm
+    // with full attention, as reproduce's timing variant) on the same pair file.
+    ResultSet rows{
+        "",
+        {TimedRow(0, "cpd", 0.01), TimedRow(1, "cpd", 0.03),
+         TimedRow(0, "ogmm", 0.2, 0.12, 2.5e9, 0.05), TimedRow(1, "ogmm", 0.3, 0.18, 2.5e9, 0.05),
+         TimedRow(0, "deepgmr", 0.1, 0.06, 1.5e9, 0.03)},
+        Prov("same.h5"),
+        ""};
+    ResultSet full{
+        "",
+        {TimedRow(0, "ogmm", 0.3, 0.2, 3.4e9, 0.07), TimedRow(1, "ogmm", 0.3, 0.22, 3.4e9, 0.07)},
+        Prov("same.h5"),
+        "OGMM_full_attention"};
+    const Table t = BuildTimingTable({rows, full}, LoadPaperTables(DefaultPaperTablesPath()),
+                                     "Test CPU", "Eigen");
+    for (const char* key : {"gmac", "floor_ms", "x_floor", "network_ms"}) {
+        EXPECT_NO_THROW(Col(t, key)) << key;
+    }
+    std::vector<std::string> headers;
+    for (const auto& c : t.columns) headers.push_back(c.header);
+    for (const char* h : {"GMAC", "floor ms", "x floor"}) {
+        EXPECT_NE(std::find(headers.begin(), headers.end(), h), headers.end()) << h;
+    }
+    const auto cell = [&](const std::string& row, const std::string& col) {
+        return RowNamed(t, row).cells[Col(t, col)];
+    };
+    // ogmm: network 150 ms mean, 2.5 GMAC, floor 50 ms, x floor 3; the paper's clustered row.
+    EXPECT_NEAR(cell("ogmm", "cpu_ms_mean").value, 250.0, 1e-9);
+    EXPECT_NEAR(cell("ogmm", "network_ms").value, 150.0, 1e-9);
+    EXPECT_NEAR(cell("ogmm", "gmac").value, 2.5, 1e-12);
+    EXPECT_NEAR(cell("ogmm", "floor_ms").value, 50.0, 1e-9);
+    EXPECT_NEAR(cell("ogmm", "x_floor").value, 3.0, 1e-12);
+    EXPECT_DOUBLE_EQ(cell("ogmm", "paper:ms").value, 6.0);  // OGMM_clustered_attention
+    // The full-attention row: its own label, 210 / 70 = 3x its floor, beside the paper's 47 ms.
+    EXPECT_NEAR(cell("OGMM_full_attention", "gmac").value, 3.4, 1e-12);
+    EXPECT_NEAR(cell("OGMM_full_attention", "x_floor").value, 3.0, 1e-12);
+    EXPECT_DOUBLE_EQ(cell("OGMM_full_attention", "paper:ms").value, 47.0);
+    EXPECT_NEAR(cell("deepgmr", "x_floor").value, 2.0, 1e-12);
+    EXPECT_DOUBLE_EQ(cell("deepgmr", "paper:ms").value, 2.0);
+    // A classical row has its times and blank MAC cells.
+    EXPECT_NEAR(cell("cpd", "cpu_ms_mean").value, 20.0, 1e-9);
+    for (const char* key : {"network_ms", "gmac", "floor_ms", "x_floor"}) {
+        EXPECT_FALSE(cell("cpd", key).HasValue()) << key;
+    }
+    const std::string md = TableToMarkdown(t);
+    EXPECT_NE(md.find("| GMAC | floor ms | x floor |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| OGMM_full_attention |"), std::string::npos) << md;
+    const std::size_t at = md.find("| cpd |");
+    ASSERT_NE(at, std::string::npos) << md;
+    const std::string cpd_line = md.substr(at, md.find('\n', at) - at);
+    EXPECT_NE(cpd_line.find("| - | - | - | - |"), std::string::npos) << cpd_line;
+    // The machine: CPU model, the learned rows' BLAS and GEMM rate, the classical methods'.
+    EXPECT_NE(t.caption.find("Test CPU"), std::string::npos) << t.caption;
+    EXPECT_NE(t.caption.find("TestBLAS 1.0 (pthreads) at 50.0 GMAC/s"), std::string::npos)
+        << t.caption;
+    EXPECT_NE(t.caption.find("Eigen"), std::string::npos) << t.caption;
+    // One pair file: one provenance and one CCD floor note.
+    EXPECT_EQ(t.provenance.size(), 1u);
+    EXPECT_EQ(t.notes.size(), 1u);
 }
 
 TEST(PaperReport, CompleteTableOffersTheCleanSharedVariantBesideThePapersC2c) {
