@@ -57,15 +57,7 @@ std::string CommandLine(const CLI::App& cmd) {
 /// SIGSEGV) and a JSON object (an array or a string was silently ignored and the run trained
 /// on the named config alone). Throws naming the file.
 nlohmann::json ReadJsonFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("train: cannot open --config " + path);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    nlohmann::json j;
-    try {
-        j = ParseJsonBounded(text, "--config " + path);
-    } catch (const std::exception& e) {
-        throw std::runtime_error("train: --config " + path + " is not valid JSON: " + e.what());
-    }
+    const nlohmann::json j = ReadJsonFileBounded(path, "train: --config " + path);
     if (!j.is_object()) {
         throw std::runtime_error("train: --config " + path + " must hold a JSON object, got " +
                                  std::string(j.type_name()));

@@ -3,6 +3,8 @@
 // iterative, but copying, comparing and printing a value recurse, so a line nested a million
 // levels deep (a few MB of '[') overflowed the stack and `compare` died by SIGSEGV.
 #include <nlohmann/json.hpp>
+#include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -63,6 +65,19 @@ inline nlohmann::json ParseJsonBounded(std::string_view text, const std::string&
             return true;
         };
     return nlohmann::json::parse(text, limit);
+}
+
+/// The JSON file `path`, parsed as ParseJsonBounded does. Throws std::runtime_error
+/// "<what>: cannot open" or "<what>: not valid JSON: <why>", `what` naming the file's role.
+inline nlohmann::json ReadJsonFileBounded(const std::string& path, const std::string& what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error(what + ": cannot open");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    try {
+        return ParseJsonBounded(text, what);
+    } catch (const std::exception& e) {
+        throw std::runtime_error(what + ": not valid JSON: " + e.what());
+    }
 }
 
 }  // namespace regbench

@@ -163,16 +163,7 @@ ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& f
 }
 
 ExperimentFile ReadExperimentFile(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("experiment file " + path + ": cannot open");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    nlohmann::json j;
-    try {
-        j = ParseJsonBounded(text, "experiment file " + path);
-    } catch (const std::exception& e) {
-        throw std::invalid_argument("experiment file " + path + ": not valid JSON: " + e.what());
-    }
-    return ParseExperimentFile(j, path);
+    return ParseExperimentFile(ReadJsonFileBounded(path, "experiment file " + path), path);
 }
 
 void CheckExperimentFiles(const std::vector<ExperimentFile>& files) {
