@@ -18,7 +18,7 @@ PACKAGES=(
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev
   chromium zlib1g-dev
   python3-dev pybind11-dev python3-numpy python3-scipy python3-h5py python3-pandas
-  python3-pytest python3-open3d
+  python3-pytest python3-open3d python3-torch
   clang libclang-rt-14-dev ccache
   slurmctld slurmd slurm-client munge
 )
