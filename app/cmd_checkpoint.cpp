@@ -54,8 +54,7 @@ void SetupImport(CLI::App* cmd) {
         if (!std::filesystem::is_regular_file(a->file)) {
             throw std::runtime_error(a->file + ": no such file");
         }
-        const std::filesystem::path parent = std::filesystem::path(a->out).parent_path();
-        if (!parent.empty()) std::filesystem::create_directories(parent);
+        CreateParentFolders(a->out);
         const OutputLock lock(a->out);  // one writer per checkpoint folder
         const nlohmann::json j = ogmm::ImportAuthorsCheckpoint(a->file, a->out, a->options);
         std::cout << "import-checkpoint: wrote " << a->out << " ("

@@ -52,6 +52,7 @@ void SetupExportCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"xyz", "ply"}))
         ->capture_default_str();
     cmd->callback([file, dir, format] {
+        CreateParentFolders(*dir);
         const OutputLock lock(*dir);  // one export into a folder at a time
         const PairSet set = ReadPairFile(*file);
         if (*format == "ply") {

@@ -113,6 +113,7 @@ void Run(const TrainArgs& a, const std::string& command_line) {
     // One writer per run directory (OUT.lock beside it), taken before the data are built: a
     // second train (or any regbench writer) on the same --out is refused naming the pid.
     if (!a.config_file.empty()) (void)ReadJsonFile(a.config_file);  // refused before any work
+    CreateParentFolders(a.out);
     const OutputLock lock(a.out);
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;

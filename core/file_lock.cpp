@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -32,6 +33,12 @@ std::string WithoutTrailingSlashes(std::string path) {
 }
 
 }  // namespace
+
+void CreateParentFolders(const std::string& folder) {
+    const std::filesystem::path parent =
+        std::filesystem::path(WithoutTrailingSlashes(folder)).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent);
+}
 
 void RequireRegularOrAbsent(const std::string& path, const std::string& what) {
     struct stat st {};

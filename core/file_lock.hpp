@@ -16,6 +16,13 @@ namespace regbench {
 /// is refused, never followed.
 void RequireRegularOrAbsent(const std::string& path, const std::string& what);
 
+/// For the commands whose output is a folder they create (`reproduce`, `export`, `train`,
+/// `import-checkpoint`): creates the folder's missing parents, as `mkdir -p` would, so that the
+/// lock beside the folder can be taken (`reproduce --out out/reproduce` in a fresh clone, where
+/// `out/` does not exist yet, failed with "cannot create lock file"). The folder itself is left
+/// to the command. Commands that write one file keep refusing a missing directory.
+void CreateParentFolders(const std::string& folder);
+
 class OutputLock {
 public:
     explicit OutputLock(const std::string& path);

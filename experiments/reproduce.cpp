@@ -582,6 +582,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     // the same path, is refused naming the pid before anything is generated.
     fs::path folder = out.lexically_normal();
     if (folder.filename().empty() && folder.has_parent_path()) folder = folder.parent_path();
+    CreateParentFolders(folder.string());
     const OutputLock lock(folder.string());
     fs::create_directories(out / "pairs");
     fs::create_directories(out / "results");

@@ -120,6 +120,36 @@ TEST(CliContract, UsageErrorsExitTwoWithOneLine) {
               1);
 }
 
+// README command 1 failed in a fresh clone: `reproduce --out out/reproduce` stopped with
+// "out/reproduce.lock: cannot create lock file" because `out/` did not exist. A command whose
+// output is a folder creates the folder's missing parents (as `mkdir -p`); expected from that
+// rule: exit 0 and the folders exist. A one-file output keeps refusing a missing directory.
+TEST(CliContract, FolderOutputsCreateTheirMissingParents) {
+    const fs::path dir = Dir() / "parents";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path pairs = dir / "pairs.h5";
+    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 1 "
+                     "--seed 1 --out " + pairs.string())
+                  .exit_code,
+              0);
+    const CliResult exported =
+        RunCli("export " + pairs.string() + " --out " + (dir / "a/b/xyz").string());
+    EXPECT_EQ(exported.exit_code, 0) << exported.output;
+    EXPECT_TRUE(fs::is_directory(dir / "a/b/xyz")) << exported.output;
+    const CliResult reproduced =
+        RunCli("reproduce --tables table1 --pairs 1 --methods identity --timeout 0 --out " +
+               (dir / "c/d/rep").string());
+    EXPECT_EQ(reproduced.exit_code, 0) << reproduced.output;
+    EXPECT_TRUE(fs::exists(dir / "c/d/rep/tables.md")) << reproduced.output;
+    const CliResult one_file = RunCli("run --pairs " + pairs.string() +
+                                      " --methods identity -q --out " +
+                                      (dir / "e/f/run.jsonl").string());
+    EXPECT_EQ(one_file.exit_code, 1) << one_file.output;
+    EXPECT_NE(one_file.output.find("does not exist"), std::string::npos) << one_file.output;
+    EXPECT_FALSE(fs::exists(dir / "e")) << one_file.output;
+}
+
 TEST(CliContract, RunRefusesAnExistingOutUnlessResumeOrForce) {
     const fs::path pairs = Dir() / "pairs.h5", out = Dir() / "run.jsonl";
     fs::remove(pairs);
