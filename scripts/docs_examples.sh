@@ -13,6 +13,7 @@
 # Examples (fast: seconds; slow: minutes, run when asked for by name or without --fast):
 #   align       (fast) generate the embedded-corpus pairs, export pair 88 as PLY, align it
 #   score       (fast) transforms of Open3D's Python ICP scored and reported beside icp
+#   deepgmr_import (fast) DeepGMR stand-ins (scripts/deepgmr_standin.py): import, generate, run
 #   python_run  (slow) Open3D's Python ICP beside icp and cpd in one regbench.run
 #   quick_run   (slow) the main job: reproduce --quick, its Tab. 1 and where the report is
 set -euo pipefail
@@ -31,7 +32,7 @@ outdir="$(mkdir -p "$1" && cd "$1" && pwd)"
 shift
 wanted=("$@")
 if [ ${#wanted[@]} -eq 0 ]; then
-  wanted=(align score)
+  wanted=(align score deepgmr_import)
   [ "$fast" = 1 ] || wanted+=(python_run quick_run)
 fi
 bin="$build/app/regbench"
@@ -83,6 +84,16 @@ example_score() {
   show "regbench score --pairs out/partial_cgal_test.h5 --transforms out/py_icp.csv \\
       --method open3d-py-icp-csv --out out/py_icp_csv_scored.jsonl"
   show "regbench report out/partial_cgal_icp.jsonl out/py_icp_scored.jsonl out/py_icp_csv_scored.jsonl"
+}
+
+example_deepgmr_import() {
+  rm -rf ck/deepgmr-noisy noisy.h5 noisy.jsonl
+  quiet "/usr/bin/python3 scripts/deepgmr_standin.py ."
+  show "regbench import-checkpoint modelnet_noisy.pth --from deepgmr --out ck/deepgmr-noisy"
+  show "regbench generate --dataset modelnet_noisy.h5 --pairing stored --pairs all --out noisy.h5"
+  show "regbench run --pairs noisy.h5 --methods deepgmr-noicp --params '{\"deepgmr-noicp\": \
+{\"checkpoint\": \"ck/deepgmr-noisy\"}}' --out noisy.jsonl -q"
+  show "regbench report noisy.jsonl"
 }
 
 example_python_run() {
