@@ -12,68 +12,67 @@
 
 namespace regbench::app {
 
+namespace detail {
+
+/// A decimal number as the real-valued options take it: no leading '+' ("+1" refused), else
+/// what ParseNumber reads ("nan" and "inf" pass here; the validators refuse them).
+inline std::optional<double> PlainReal(const std::string& s) {
+    return s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
+}
+
+/// The validator `name` of every option below: the texts `ok` accepts pass, any other is
+/// refused with "expected <what>, got '<text>'".
+template <class Ok>
+CLI::Validator Expecting(const std::string& name, const std::string& what, Ok ok) {
+    return CLI::Validator(
+        [what, ok](std::string& s) -> std::string {
+            return ok(s) ? "" : "expected " + what + ", got '" + s + "'";
+        },
+        name);
+}
+
+}  // namespace detail
+
 /// Digits only, fitting in 64 bits: refuses "2.5", "-1", "1e23", "+3", "0x10", "".
 inline CLI::Validator WholeNumber() {
-    return CLI::Validator(
-        [](std::string& s) -> std::string {
-            if (!ParseNumber<std::uint64_t>(s)) {
-                return "expected a whole number >= 0 (digits only), got '" + s + "'";
-            }
-            return "";
-        },
-        "UINT");
+    return detail::Expecting("UINT", "a whole number >= 0 (digits only)", [](const std::string& s) {
+        return ParseNumber<std::uint64_t>(s).has_value();
+    });
 }
 
 /// Digits only, at least 1: refuses "0" as well as everything WholeNumber refuses.
 inline CLI::Validator PositiveWholeNumber() {
-    return CLI::Validator(
-        [](std::string& s) -> std::string {
-            const auto v = ParseNumber<std::uint64_t>(s);
-            if (!v || *v == 0) return "expected a whole number >= 1, got '" + s + "'";
-            return "";
-        },
-        "UINT>=1");
+    return detail::Expecting("UINT>=1", "a whole number >= 1", [](const std::string& s) {
+        const auto v = ParseNumber<std::uint64_t>(s);
+        return v && *v > 0;
+    });
 }
 
 /// A finite decimal number >= 0 ("-1", "nan", "inf", "1s" refused).
 inline CLI::Validator NonNegativeReal() {
-    return CLI::Validator(
-        [](std::string& s) -> std::string {
-            const auto v = s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
-            if (!v || !std::isfinite(*v) || *v < 0) {
-                return "expected a finite number >= 0, got '" + s + "'";
-            }
-            return "";
-        },
-        "REAL>=0");
+    return detail::Expecting("REAL>=0", "a finite number >= 0", [](const std::string& s) {
+        const auto v = detail::PlainReal(s);
+        return v && std::isfinite(*v) && *v >= 0;
+    });
 }
 
 /// A finite decimal number > 0 ("0", "-1", "nan", "inf" refused).
 inline CLI::Validator PositiveReal() {
-    return CLI::Validator(
-        [](std::string& s) -> std::string {
-            const auto v = s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
-            if (!v || !std::isfinite(*v) || *v <= 0) {
-                return "expected a finite number > 0, got '" + s + "'";
-            }
-            return "";
-        },
-        "REAL>0");
+    return detail::Expecting("REAL>0", "a finite number > 0", [](const std::string& s) {
+        const auto v = detail::PlainReal(s);
+        return v && std::isfinite(*v) && *v > 0;
+    });
 }
 
 /// A finite number strictly between `lo` and `hi` (a significance level, a fraction).
 inline CLI::Validator OpenInterval(double lo, double hi) {
-    return CLI::Validator(
-        [lo, hi](std::string& s) -> std::string {
-            const auto v = s.empty() || s[0] == '+' ? std::nullopt : ParseNumber<double>(s);
-            if (!v || !std::isfinite(*v) || !(*v > lo) || !(*v < hi)) {
-                char range[64];
-                std::snprintf(range, sizeof(range), "(%g, %g)", lo, hi);
-                return std::string("expected a number in ") + range + ", got '" + s + "'";
-            }
-            return "";
-        },
-        "REAL");
+    char range[64];
+    std::snprintf(range, sizeof(range), "(%g, %g)", lo, hi);
+    return detail::Expecting("REAL", std::string("a number in ") + range,
+                             [lo, hi](const std::string& s) {
+                                 const auto v = detail::PlainReal(s);
+                                 return v && std::isfinite(*v) && *v > lo && *v < hi;
+                             });
 }
 
 /// Parses "i/n" with 0 <= i < n, digits only ("1/2x", "-1/2", "1/0" refused).

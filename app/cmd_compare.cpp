@@ -10,7 +10,7 @@
 #include "core/file_lock.hpp"
 #include "reports/compare.hpp"
 #include "reports/row_access.hpp"
-#include "runners/runner.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench::app {
 
@@ -82,8 +82,8 @@ void SetupCompareCommand(CLI::App* cmd) {
         if (o->bootstrap_samples < 2) {
             throw CLI::ValidationError("--bootstrap must be at least 2");
         }
-        const auto result =
-            CompareResults(ReadJsonl(*base), ReadJsonl(*candidate), *o, *base, *candidate);
+        const auto result = CompareResults(ReadResultRows(*base), ReadResultRows(*candidate), *o,
+                                           *base, *candidate);
         std::cout << FormatCompareMarkdown(result, *o);
         if (!json_out->empty()) {
             WriteFileAtomic(*json_out,

@@ -203,13 +203,13 @@ bool EnsurePairs(const PlannedExperiment& e,
 
 /// Splits a sweep's rows into its levels (pair k has level k % levels).
 std::vector<ResultSet> SweepSets(const std::vector<std::string>& levels,
-                                 const std::vector<nlohmann::json>& rows,
+                                 const std::vector<ResultRow>& rows,
                                  const Provenance& p) {
     std::vector<ResultSet> sets;
     for (std::size_t l = 0; l < levels.size(); ++l) {
         ResultSet s{levels[l], {}, p, ""};
         for (const auto& r : rows) {
-            if (r.value("pair", 0UL) % levels.size() == l) s.rows.push_back(r);
+            if (r.pair % levels.size() == l) s.rows.push_back(r);
         }
         sets.push_back(s);
     }
@@ -301,7 +301,7 @@ void ValidateOptions(const ReproduceOptions& o, const std::vector<ExperimentFile
 
 /// Each experiment's result rows, pair-file provenance and pairs, by experiment id.
 struct ExperimentOutputs {
-    std::map<std::string, std::vector<nlohmann::json>> rows;
+    std::map<std::string, std::vector<ResultRow>> rows;
     std::map<std::string, Provenance> provenance;
     std::map<std::string, PairSet> pairs;
 };
@@ -323,7 +323,7 @@ ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experimen
         const RunOptions run = ExperimentRun(o, pairs, m, results);
         log << "reproduce: " << id << ": running " << m.size() << " methods\n";
         summary.rows_run += RunBenchmark(run).rows_written;
-        x.rows[id] = ReadJsonl(results.string());
+        x.rows[id] = ReadResultRows(results.string());
         x.provenance[id] = ProvenanceOfPairFile(pairs.string());
         x.provenance[id].fallback = e.fallback;
         x.pairs[id] = ReadPairFile(pairs.string());
@@ -372,7 +372,7 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
                 << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
             variant_sets[f.table].push_back(
-                {"", ReadJsonl(run.out_path), x.provenance.at(v.pairs_of), row.row});
+                {"", ReadResultRows(run.out_path), x.provenance.at(v.pairs_of), row.row});
         }
     }
 #endif
@@ -415,7 +415,7 @@ std::map<std::string, std::vector<ResultSet>> RunTimingVariants(
                 << v.params.dump() << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
             sets[f.table].push_back(
-                {"", ReadJsonl(run.out_path), x.provenance.at(f.timing_of), v.row});
+                {"", ReadResultRows(run.out_path), x.provenance.at(f.timing_of), v.row});
         }
     }
     return sets;
@@ -555,9 +555,8 @@ void WriteBreakdownsAndHtml(const fs::path& out,
         sec.tables = {DistributionTable(rows, bo), StatusTable(rows), RecallTable(rows, bo),
                       CategoryTable(rows, bo), OverlapTable(rows, bo)};
         const PairSet* set = &x.pairs[id];
-        sec.pair_lookup = [set](const nlohmann::json& row) -> const Pair* {
-            const auto k = row.value("pair", static_cast<std::size_t>(-1));
-            return k < set->pairs.size() ? &set->pairs[k] : nullptr;
+        sec.pair_lookup = [set](const ResultRow& row) -> const Pair* {
+            return row.pair < set->pairs.size() ? &set->pairs[row.pair] : nullptr;
         };
         breakdowns += "## " + sec.title + "\n\n" + sec.description + "\n\n" +
                       Join(sec.tables, TableToMarkdown);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <map>
 #include <optional>
@@ -12,44 +13,7 @@
 #include "reports/statistics.hpp"
 
 namespace regbench {
-namespace {
-
-std::vector<const nlohmann::json*> RowsOf(const std::vector<nlohmann::json>& rows,
-                                          const std::string& method) {
-    std::vector<const nlohmann::json*> out;
-    for (const auto& r : rows) {
-        if (r.value("method", std::string()) == method) out.push_back(&r);
-    }
-    return out;
-}
-
-Cell Value(double v, std::size_t pairs) {
-    Cell c;
-    c.value = v;
-    c.pairs = pairs;
-    return c;
-}
-
-std::optional<double> MinOverlap(const nlohmann::json& r) {
-    const auto s = RowOverlap(r, "source");
-    const auto t = RowOverlap(r, "target");
-    if (!s || !t) return std::nullopt;
-    return std::min(*s, *t);
-}
-
-}  // namespace
-
-std::vector<std::string> MethodOrder(const std::vector<nlohmann::json>& rows) {
-    std::vector<std::string> order;
-    std::set<std::string> seen;
-    for (const auto& r : rows) {
-        const std::string m = r.value("method", std::string("?"));
-        if (seen.insert(m).second) order.push_back(m);
-    }
-    return order;
-}
-
-Table DistributionTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
     Table t;
     t.id = "distribution";
     t.title = "Per-method distribution of every metric";
@@ -67,29 +31,30 @@ Table DistributionTable(const std::vector<nlohmann::json>& rows, const Breakdown
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
-        TableRow row{method, {Value(static_cast<double>(group.size()), group.size())}};
+        TableRow row{method, {MeasuredCell(static_cast<double>(group.size()), group.size())}};
         for (const auto& m : o.metrics) {
+            const MetricField& metric = FindMetric(m);
             std::vector<double> v;
-            for (const auto* r : group) {
-                if (const auto x = RowMetric(*r, m)) v.push_back(*x);
+            for (const ResultRow* r : group) {
+                if (const auto x = metric.Of(*r)) v.push_back(*x);
             }
             const BootstrapCi ci =
                 BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
-            Cell mean = Value(ci.mean, v.size());
+            Cell mean = MeasuredCell(ci.mean, v.size());
             if (v.size() >= 2) {
                 mean.ci_lo = ci.lo;
                 mean.ci_hi = ci.hi;
             }
             row.cells.push_back(mean);
-            row.cells.push_back(Value(SampleMedian(v), v.size()));
-            row.cells.push_back(Value(SampleStd(v), v.size()));
+            row.cells.push_back(MeasuredCell(SampleMedian(v), v.size()));
+            row.cells.push_back(MeasuredCell(SampleStd(v), v.size()));
         }
         t.rows.push_back(row);
     }
     return t;
 }
 
-Table StatusTable(const std::vector<nlohmann::json>& rows) {
+Table StatusTable(const std::vector<ResultRow>& rows) {
     Table t;
     t.id = "status";
     t.title = "Calls per status";
@@ -105,23 +70,25 @@ Table StatusTable(const std::vector<nlohmann::json>& rows) {
         const auto group = RowsOf(rows, method);
         std::map<std::string, std::size_t> count;
         std::size_t null_metrics = 0;
-        for (const auto* r : group) {
-            std::string s = RowStatus(*r);
+        for (const ResultRow* r : group) {
+            std::string s = ToString(r->status);
             if (std::find(statuses.begin(), statuses.end(), s) == statuses.end()) s = "other";
             ++count[s];
-            if (!RowMetric(*r, "mae_r") || !RowMetric(*r, "mae_t")) ++null_metrics;
+            if (!std::isfinite(r->metrics.mae_r) || !std::isfinite(r->metrics.mae_t)) {
+                ++null_metrics;
+            }
         }
         TableRow row{method, {}};
         for (const auto& s : statuses) {
-            row.cells.push_back(Value(static_cast<double>(count[s]), group.size()));
+            row.cells.push_back(MeasuredCell(static_cast<double>(count[s]), group.size()));
         }
-        row.cells.push_back(Value(static_cast<double>(null_metrics), group.size()));
+        row.cells.push_back(MeasuredCell(static_cast<double>(null_metrics), group.size()));
         t.rows.push_back(row);
     }
     return t;
 }
 
-Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+Table RecallTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
     Table t;
     t.id = "recall";
     t.title = "Recall at several thresholds";
@@ -136,17 +103,17 @@ Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOption
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
-        TableRow row{method, {Value(static_cast<double>(group.size()), group.size())}};
+        TableRow row{method, {MeasuredCell(static_cast<double>(group.size()), group.size())}};
         for (const auto& [r, tt] : o.recall) {
             std::size_t hit = 0;
-            for (const auto* x : group) {
-                const auto er = RowMetric(*x, "mae_r");
-                const auto et = RowMetric(*x, "mae_t");
-                if (er && et && *er < r && *et < tt) ++hit;
+            for (const ResultRow* x : group) {
+                // A NaN (null) metric compares false: a miss.
+                if (x->metrics.mae_r < r && x->metrics.mae_t < tt) ++hit;
             }
-            row.cells.push_back(
-                Value(group.empty() ? std::nan("") : static_cast<double>(hit) / group.size(),
-                      group.size()));
+            row.cells.push_back(MeasuredCell(
+                group.empty() ? std::nan("")
+                              : static_cast<double>(hit) / static_cast<double>(group.size()),
+                group.size()));
         }
         t.rows.push_back(row);
     }
@@ -160,19 +127,20 @@ namespace {
 /// in none; rows without the metric count in none either).
 template <class ColumnOf>
 void AddMeanRows(Table& t,
-                 const std::vector<nlohmann::json>& rows,
+                 const std::vector<ResultRow>& rows,
                  const BreakdownOptions& o,
                  const ColumnOf& column_of) {
+    const MetricField& metric = FindMetric(o.key_metric);
     for (const auto& method : MethodOrder(rows)) {
         std::vector<std::vector<double>> cells(t.columns.size());
-        for (const auto* r : RowsOf(rows, method)) {
+        for (const ResultRow* r : RowsOf(rows, method)) {
             const std::optional<std::size_t> column = column_of(*r);
             if (!column) continue;
-            if (const auto x = RowMetric(*r, o.key_metric)) cells[*column].push_back(*x);
+            if (const auto x = metric.Of(*r)) cells[*column].push_back(*x);
         }
         TableRow row{method, {}};
         for (std::size_t c = 0; c < cells.size(); ++c) {
-            Cell cell = Value(SampleMean(cells[c]), cells[c].size());
+            Cell cell = MeasuredCell(SampleMean(cells[c]), cells[c].size());
             // The pairs behind each mean, shown in the cell: bins and categories are uneven.
             if (!cells[c].empty()) {
                 cell.text = fmt::format("{:.{}f} (n={})", cell.value, t.columns[c].decimals,
@@ -186,7 +154,7 @@ void AddMeanRows(Table& t,
 
 }  // namespace
 
-Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+Table CategoryTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
     Table t;
     t.id = "category";
     t.title = "Mean " + o.key_metric + " per category";
@@ -194,19 +162,19 @@ Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOpti
         "shape categories of the pairs; each cell averages the pairs of that category (n: how "
         "many)";
     std::set<std::string> categories;
-    for (const auto& r : rows) categories.insert(r.value("category", std::string("?")));
+    for (const auto& r : rows) categories.insert(r.category);
     for (const auto& c : categories) {
         t.columns.push_back(
             {c, c, CellSource::kMeasured, Better::kLower, FindMetric(o.key_metric).decimals});
     }
-    AddMeanRows(t, rows, o, [&](const nlohmann::json& r) -> std::optional<std::size_t> {
-        const auto it = categories.find(r.value("category", std::string("?")));
+    AddMeanRows(t, rows, o, [&](const ResultRow& r) -> std::optional<std::size_t> {
+        const auto it = categories.find(r.category);
         return static_cast<std::size_t>(std::distance(categories.begin(), it));
     });
     return t;
 }
 
-Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o) {
+Table OverlapTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
     Table t;
     t.id = "overlap";
     t.title = "Mean " + o.key_metric + " by measured overlap";
@@ -224,8 +192,8 @@ Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptio
                              FindMetric(o.key_metric).decimals});
     }
     std::size_t missing = 0;
-    AddMeanRows(t, rows, o, [&](const nlohmann::json& r) -> std::optional<std::size_t> {
-        const auto ov = MinOverlap(r);
+    AddMeanRows(t, rows, o, [&](const ResultRow& r) -> std::optional<std::size_t> {
+        const auto ov = MeasuredOverlap(r);
         if (!ov) {
             ++missing;
             return std::nullopt;

@@ -1,12 +1,14 @@
 #pragma once
 // Beyond means: per-method distributions, failure counts, recall curves, per-category and
 // per-overlap tables of one result set, as report tables (reports/table.hpp).
-#include <nlohmann/json.hpp>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "reports/statistics.hpp"
 #include "reports/table.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench {
 
@@ -19,27 +21,24 @@ struct BreakdownOptions {
     /// Bin edges of the pair's measured overlap, min(source ratio, target ratio).
     std::vector<double> overlap_edges = {0.0, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0001};
     int bootstrap_samples = 1000;
-    std::uint64_t seed = 20230103;  ///< bootstrap seed; streams derive from method and metric
+    std::uint64_t seed = kDefaultBootstrapSeed;  ///< streams derive from method and metric
 };
 
-/// Methods in first-seen order.
-std::vector<std::string> MethodOrder(const std::vector<nlohmann::json>& rows);
-
 /// Mean ± 95% bootstrap half-width, median and std of every metric, per method.
-Table DistributionTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o);
 
-/// Calls per status (ok, failed, timeout, crashed, other) plus rows whose metrics are missing
-/// or not finite ("null metrics", counted as failures of the metric).
-Table StatusTable(const std::vector<nlohmann::json>& rows);
+/// Calls per status (ok, failed, timeout, crashed, other: `missing`) plus rows whose mae_r or
+/// mae_t is not finite ("null metrics", counted as failures of the metric).
+Table StatusTable(const std::vector<ResultRow>& rows);
 
 /// recall@(r, t) for every threshold pair of the options.
-Table RecallTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+Table RecallTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o);
 
 /// Mean key metric per method and shape category (columns sorted by name).
-Table CategoryTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+Table CategoryTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o);
 
 /// Mean key metric per method and bin of measured overlap (min of the two ratios); rows
 /// without overlap ratios are left out and a note says how many.
-Table OverlapTable(const std::vector<nlohmann::json>& rows, const BreakdownOptions& o);
+Table OverlapTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o);
 
 }  // namespace regbench

@@ -19,18 +19,15 @@
 namespace regbench {
 namespace {
 
-using RowKey = std::tuple<std::string, long long, std::string>;  // (pair file, pair, method)
+using RowKey = std::tuple<std::string, std::size_t, std::string>;  // (pair file, pair, method)
 
 /// Indexes rows by key; a repeated key is an error because the pairing would be ambiguous.
-std::map<RowKey, const nlohmann::json*> IndexRows(const std::vector<nlohmann::json>& rows,
-                                                  const std::string& name) {
-    std::map<RowKey, const nlohmann::json*> index;
+std::map<RowKey, const ResultRow*> IndexRows(const std::vector<ResultRow>& rows,
+                                             const std::string& name) {
+    std::map<RowKey, const ResultRow*> index;
     for (std::size_t i = 0; i < rows.size(); ++i) {
         const auto& r = rows[i];
-        if (!r.contains("pair") || !r.contains("method")) {
-            throw std::runtime_error(fmt::format("{}: row {} has no pair or method", name, i + 1));
-        }
-        RowKey key{RowPairFileId(r), r["pair"].get<long long>(), r["method"].get<std::string>()};
+        RowKey key{RowPairFileId(r), r.pair, r.method};
         if (!index.emplace(key, &r).second) {
             throw std::runtime_error(fmt::format(
                 "{}: row {} repeats pair {} of method {} (merge shards once, or compare the "
@@ -42,9 +39,9 @@ std::map<RowKey, const nlohmann::json*> IndexRows(const std::vector<nlohmann::js
 }
 
 /// Pair files a set was measured on, as "name (id)" for messages.
-std::map<std::string, std::string> PairFiles(const std::vector<nlohmann::json>& rows) {
+std::map<std::string, std::string> PairFiles(const std::vector<ResultRow>& rows) {
     std::map<std::string, std::string> files;
-    for (const auto& r : rows) files[RowPairFileId(r)] = RowPairFileName(r);
+    for (const auto& r : rows) files[RowPairFileId(r)] = r.data.pairs_file;
     return files;
 }
 
@@ -79,8 +76,6 @@ double DetectableWorsening(const std::vector<double>& d, double alpha, double po
     const double z = NormalQuantile(1.0 - alpha / 2.0) + NormalQuantile(power);
     return z * sd / std::sqrt(n * 3.0 / M_PI);
 }
-
-bool IsFailedStatus(const std::string& status) { return status != "ok"; }
 
 }  // namespace
 
@@ -123,8 +118,8 @@ CompareVerdict CompareResult::Verdict() const {
     return CompareVerdict::kPass;
 }
 
-CompareResult CompareResults(const std::vector<nlohmann::json>& base,
-                             const std::vector<nlohmann::json>& candidate,
+CompareResult CompareResults(const std::vector<ResultRow>& base,
+                             const std::vector<ResultRow>& candidate,
                              const CompareOptions& o,
                              const std::string& base_name,
                              const std::string& new_name) {
@@ -146,8 +141,7 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
     out.allow_new_failures = o.allow_new_failures;
     out.min_pairs = o.min_pairs;
     std::vector<std::string> methods;
-    std::map<std::string, std::vector<std::pair<const nlohmann::json*, const nlohmann::json*>>>
-        matched;
+    std::map<std::string, std::vector<std::pair<const ResultRow*, const ResultRow*>>> matched;
     for (const auto& [key, row] : base_index) {
         const std::string& method = std::get<2>(key);
         const auto it = new_index.find(key);
@@ -158,8 +152,8 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
         if (!matched.count(method)) methods.push_back(method);
         matched[method].emplace_back(row, it->second);
         ++out.matched_rows;
-        const bool failed_base = IsFailedStatus(RowStatus(*row));
-        const bool failed_new = IsFailedStatus(RowStatus(*it->second));
+        const bool failed_base = row->status != Status::kOk;
+        const bool failed_new = it->second->status != Status::kOk;
         out.failures_base += failed_base;
         out.failures_new += failed_new;
         auto calls = std::find_if(out.calls.begin(), out.calls.end(),
@@ -184,10 +178,11 @@ CompareResult CompareResults(const std::vector<nlohmann::json>& base,
             c.metric = metric;
             const auto tol = o.tolerance.find(metric);
             c.tolerance = tol == o.tolerance.end() ? o.default_tolerance : tol->second;
+            const MetricField& field = FindMetric(metric);
             std::vector<double> b, n, d;
             for (const auto& [rb, rn] : matched[method]) {
-                const auto vb = RowMetric(*rb, metric);
-                const auto vn = RowMetric(*rn, metric);
+                const auto vb = field.Of(*rb);
+                const auto vn = field.Of(*rn);
                 if (!vb || !vn) continue;
                 b.push_back(*vb);
                 n.push_back(*vn);

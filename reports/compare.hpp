@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "reports/statistics.hpp"
+#include "runners/result_row.hpp"
+
 namespace regbench {
 
 /// The documented default tolerance of each metric (docs/reports.md): 0.1 degree of MAE(R),
@@ -19,7 +22,7 @@ struct CompareOptions {
     std::vector<std::string> metrics = {"mae_r", "mae_t", "ccd", "rre", "rte"};
     double alpha = 0.05;  ///< a change is significant when Wilcoxon p < alpha and the CI excludes 0
     int bootstrap_samples = 2000;    ///< paired-bootstrap resamples of the mean difference
-    std::uint64_t seed = 20230103;   ///< bootstrap seed (streams derive from method/metric)
+    std::uint64_t seed = kDefaultBootstrapSeed;  ///< streams derive from method/metric
     double default_tolerance = 0.0;  ///< allowed mean increase for metrics not in `tolerance`
     /// Per-metric allowed mean increase (metric units); starts at DefaultTolerances().
     std::map<std::string, double> tolerance = DefaultTolerances();
@@ -96,8 +99,8 @@ struct CompareResult {
 /// Matches rows by (pair-file id, pair, method) and tests every method and metric.
 /// Throws std::runtime_error when the two sets were measured on different pair files (naming
 /// both), when a key repeats inside one set (naming the set), or when nothing matches.
-CompareResult CompareResults(const std::vector<nlohmann::json>& base,
-                             const std::vector<nlohmann::json>& candidate,
+CompareResult CompareResults(const std::vector<ResultRow>& base,
+                             const std::vector<ResultRow>& candidate,
                              const CompareOptions& options,
                              const std::string& base_name = "baseline",
                              const std::string& new_name = "candidate");

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 
-#include "reports/breakdown.hpp"
 #include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
 
@@ -146,28 +146,18 @@ struct Plot {
     }
 };
 
-std::vector<double> MetricOf(const std::vector<nlohmann::json>& rows,
-                             const std::string& method,
-                             const std::string& metric) {
-    std::vector<double> v;
-    for (const auto& r : rows) {
-        if (r.value("method", std::string()) != method) continue;
-        // Null metrics count as failures: an infinite error keeps them in the CDF's denominator.
-        v.push_back(RowMetric(r, metric).value_or(std::numeric_limits<double>::infinity()));
-    }
-    return v;
+/// The row's mae_r; a null (failed) one as +inf, so the error CDF keeps it in its denominator
+/// and the gallery ranks it worst.
+double MaeROrInf(const ResultRow& r) {
+    const double e = r.metrics.mae_r;
+    return std::isfinite(e) ? e : std::numeric_limits<double>::infinity();
 }
 
-Transform RowTransform(const nlohmann::json& row) {
-    Transform T = Transform::Identity();
-    if (!row.contains("transform") || !row["transform"].is_array()) return T;
-    const auto& m = row["transform"];
-    for (int i = 0; i < 4 && i < static_cast<int>(m.size()); ++i) {
-        for (int j = 0; j < 4 && j < static_cast<int>(m[i].size()); ++j) {
-            if (m[i][j].is_number()) T(i, j) = m[i][j].get<double>();
-        }
-    }
-    return T;
+/// MaeROrInf of every row of `method`.
+std::vector<double> MaeROf(const std::vector<ResultRow>& rows, const std::string& method) {
+    std::vector<double> v;
+    for (const ResultRow* r : RowsOf(rows, method)) v.push_back(MaeROrInf(*r));
+    return v;
 }
 
 }  // namespace
@@ -203,19 +193,19 @@ std::string TableToHtml(const Table& t) {
     return s;
 }
 
-std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg) {
+std::string ErrorCdfSvg(const std::vector<ResultRow>& rows, double max_deg) {
     Plot p{0.0, max_deg, 0.0, 1.0};
     const auto methods = MethodOrder(rows);
     std::string s = p.Open("MAE(R) threshold [deg]", "fraction of pairs below");
     for (std::size_t i = 0; i < methods.size(); ++i) {
-        std::vector<double> v = MetricOf(rows, methods[i], "mae_r");
+        std::vector<double> v = MaeROf(rows, methods[i]);
         std::sort(v.begin(), v.end());
         // A step curve: after the k-th smallest error the fraction is k / n.
         std::string pts = fmt::format("{:.1f},{:.1f}", p.X(0), p.Y(0));
         double frac = 0.0;
         for (std::size_t k = 0; k < v.size() && v[k] <= max_deg; ++k) {
             pts += fmt::format(" {:.1f},{:.1f}", p.X(v[k]), p.Y(frac));
-            frac = static_cast<double>(k + 1) / v.size();
+            frac = static_cast<double>(k + 1) / static_cast<double>(v.size());
             pts += fmt::format(" {:.1f},{:.1f}", p.X(v[k]), p.Y(frac));
         }
         pts += fmt::format(" {:.1f},{:.1f}", p.X(max_deg), p.Y(frac));
@@ -227,27 +217,24 @@ std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg)
     return s + p.Legend(methods, /*lines=*/true) + "</svg>";
 }
 
-std::string ErrorVsOverlapSvg(const std::vector<nlohmann::json>& rows) {
+std::string ErrorVsOverlapSvg(const std::vector<ResultRow>& rows) {
     const auto methods = MethodOrder(rows);
     double ymax = 1.0;
     for (const auto& r : rows) {
-        if (const auto e = RowMetric(r, "mae_r")) ymax = std::max(ymax, *e);
+        if (std::isfinite(r.metrics.mae_r)) ymax = std::max(ymax, r.metrics.mae_r);
     }
     Plot p{0.0, 1.0, 0.0, ymax * 1.05};
     std::string s = p.Open("measured overlap, min(source, target)", "MAE(R) [deg]");
     std::size_t drawn = 0;
     for (std::size_t i = 0; i < methods.size(); ++i) {
-        for (const auto& r : rows) {
-            if (r.value("method", std::string()) != methods[i]) continue;
-            const auto so = RowOverlap(r, "source");
-            const auto to = RowOverlap(r, "target");
-            const auto e = RowMetric(r, "mae_r");
-            if (!so || !to || !e) continue;
+        for (const ResultRow* r : RowsOf(rows, methods[i])) {
+            const auto overlap = MeasuredOverlap(*r);
+            if (!overlap || !std::isfinite(r->metrics.mae_r)) continue;
             ++drawn;
             s += fmt::format(
                 "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.2\" fill=\"{}\" "
                 "fill-opacity=\"0.6\"/>",
-                p.X(std::min(*so, *to)), p.Y(*e), Colour(i));
+                p.X(*overlap), p.Y(r->metrics.mae_r), Colour(i));
         }
     }
     if (drawn == 0) {
@@ -259,16 +246,15 @@ std::string ErrorVsOverlapSvg(const std::vector<nlohmann::json>& rows) {
     return s + p.Legend(methods) + "</svg>";
 }
 
-std::string TimeVsAccuracySvg(const std::vector<nlohmann::json>& rows) {
+std::string TimeVsAccuracySvg(const std::vector<ResultRow>& rows) {
     const auto methods = MethodOrder(rows);
     std::vector<double> t(methods.size()), e(methods.size());
     double tmin = 1e300, tmax = 0.0, emax = 1.0;
     for (std::size_t i = 0; i < methods.size(); ++i) {
         std::vector<double> secs, err;
-        for (const auto& r : rows) {
-            if (r.value("method", std::string()) != methods[i]) continue;
-            secs.push_back(std::max(r.value("seconds", 0.0), 1e-6));
-            if (const auto x = RowMetric(r, "mae_r")) err.push_back(*x);
+        for (const ResultRow* r : RowsOf(rows, methods[i])) {
+            secs.push_back(std::max(r->seconds, 1e-6));
+            if (std::isfinite(r->metrics.mae_r)) err.push_back(r->metrics.mae_r);
         }
         t[i] = SampleMedian(secs);
         e[i] = SampleMean(err);
@@ -369,26 +355,19 @@ std::string RenderHtmlReport(const HtmlReportOptions& o) {
         s += "<h3>Worst pairs per method</h3><p class=\"note\">x-y projection; grey target, "
              "red source (its own frame), green source under the method's estimate.</p>\n";
         for (const auto& method : MethodOrder(sec.rows)) {
-            std::vector<const nlohmann::json*> mine;
-            for (const auto& r : sec.rows) {
-                if (r.value("method", std::string()) == method) mine.push_back(&r);
-            }
-            const auto err = [](const nlohmann::json* r) {
-                return RowMetric(*r, "mae_r").value_or(std::numeric_limits<double>::infinity());
-            };
-            std::stable_sort(mine.begin(), mine.end(),
-                             [&](auto* a, auto* b) { return err(a) > err(b); });
+            std::vector<const ResultRow*> mine = RowsOf(sec.rows, method);
+            std::stable_sort(mine.begin(), mine.end(), [](const ResultRow* a, const ResultRow* b) {
+                return MaeROrInf(*a) > MaeROrInf(*b);
+            });
             s += "<h4>" + Escape(method) + "</h4><div class=\"gal\">";
             for (int k = 0; k < o.gallery_per_method && k < static_cast<int>(mine.size()); ++k) {
                 const Pair* pair = sec.pair_lookup(*mine[k]);
                 if (pair == nullptr) continue;
-                s += "<figure>" +
-                     PairProjectionSvg(*pair, RowTransform(*mine[k]), o.gallery_points) +
+                s += "<figure>" + PairProjectionSvg(*pair, mine[k]->transform, o.gallery_points) +
                      fmt::format(
                          "<figcaption>pair {} ({}), MAE(R) {:.2f}°, {}</figcaption></figure>",
-                         mine[k]->value("pair", -1),
-                         Escape(mine[k]->value("shape", std::string("?"))), err(mine[k]),
-                         Escape(RowStatus(*mine[k])));
+                         mine[k]->pair, Escape(mine[k]->shape), MaeROrInf(*mine[k]),
+                         Escape(ToString(mine[k]->status)));
             }
             s += "</div>\n";
         }

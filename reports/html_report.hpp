@@ -1,23 +1,23 @@
 #pragma once
 // One self-contained HTML report: tables, inline SVG plots, no script, no network.
 #include <functional>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "protocols/pair.hpp"
 #include "reports/table.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench {
 
 /// The pair a result row was measured on, or nullptr when its pair file is not at hand.
-using PairLookup = std::function<const Pair*(const nlohmann::json& row)>;
+using PairLookup = std::function<const Pair*(const ResultRow& row)>;
 
 /// One result set (one pair file): its plots and tables.
 struct HtmlSection {
     std::string title;  ///< e.g. "Tab. 1 same-category: partial, cgal test"
     std::string description;
-    std::vector<nlohmann::json> rows;
+    std::vector<ResultRow> rows;
     std::vector<Table> tables;
     PairLookup pair_lookup;  ///< for the gallery; empty: no gallery
 };
@@ -44,13 +44,13 @@ std::string TableToHtml(const Table& t);
 std::vector<double> NiceTicks(double lo, double hi, bool log);
 
 /// Error CDF: fraction of pairs with mae_r below x, one curve per method (inline <svg>).
-std::string ErrorCdfSvg(const std::vector<nlohmann::json>& rows, double max_deg);
+std::string ErrorCdfSvg(const std::vector<ResultRow>& rows, double max_deg);
 
 /// mae_r against the pair's measured overlap (min of both ratios), one colour per method.
-std::string ErrorVsOverlapSvg(const std::vector<nlohmann::json>& rows);
+std::string ErrorVsOverlapSvg(const std::vector<ResultRow>& rows);
 
 /// Mean mae_r against median seconds per pair (log axis), one labelled point per method.
-std::string TimeVsAccuracySvg(const std::vector<nlohmann::json>& rows);
+std::string TimeVsAccuracySvg(const std::vector<ResultRow>& rows);
 
 /// One pair drawn as an x-y projection: target (grey), source (red), aligned source (green).
 std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int max_points);

@@ -26,17 +26,16 @@ std::string MetricHeader(const std::string& m) {
 }
 
 /// The paper's row name of a result row: the set's label, else the paper's method name.
-std::string PaperRowOf(const nlohmann::json& row, const ResultSet& set) {
+std::string PaperRowOf(const ResultRow& row, const ResultSet& set) {
     if (!set.row_label.empty()) return set.row_label;
-    const std::string method = row.value("method", std::string("?"));
-    return PaperRowName(method).value_or(method);
+    return PaperRowName(row.method).value_or(row.method);
 }
 
 /// "dataset `cgal` (split test, protocol partial, pairing independent, 100 pairs, seed 1)".
 std::string DescribeSet(const ResultSet& s) {
     const Provenance& p = s.provenance;
-    std::set<long long> pairs;
-    for (const auto& r : s.rows) pairs.insert(r.value("pair", -1LL));
+    std::set<std::size_t> pairs;
+    for (const auto& r : s.rows) pairs.insert(r.pair);
     std::string d = fmt::format(
         "{}{}: dataset `{}` (split {}, protocol {}, pairing {}, {} pairs, "
         "seed {}, file {})",
@@ -259,16 +258,17 @@ Table BuildPaperTable(const PaperTableSpec& spec,
             for (const auto& m : spec.metrics) {
                 Cell measured;
                 if (set != nullptr) {
+                    const MetricField& metric = FindMetric(m);
                     std::vector<double> v;
                     std::size_t n = 0;
                     std::string method;  // the rows' own method name, as the breakdowns use
                     for (const auto& r : set->rows) {
                         if (PaperRowOf(r, *set) != label) continue;
                         ++n;
-                        if (method.empty()) method = r.value("method", label);
+                        if (method.empty()) method = r.method;
                         // Null metrics are failures: they keep the pair count honest but no
                         // number can stand in for them, so the cell says how many.
-                        if (const auto x = RowMetric(r, m)) v.push_back(*x);
+                        if (const auto x = metric.Of(r)) v.push_back(*x);
                     }
                     // The stream of the breakdowns (reports/breakdown.cpp): one CI per
                     // (method, metric) on the same pairs, so a report never shows two.
@@ -281,8 +281,8 @@ Table BuildPaperTable(const PaperTableSpec& spec,
                     }
                     measured.pairs = n;
                     if (v.size() < n) {
-                        measured.text = fmt::format("{:.{}f} ({} null)", ci.mean,
-                                                    FindMetric(m).decimals, n - v.size());
+                        measured.text = fmt::format("{:.{}f} ({} null)", ci.mean, metric.decimals,
+                                                    n - v.size());
                     }
                 } else if (reasons.count(label)) {
                     measured.text = reasons[label];
@@ -312,11 +312,10 @@ struct TimingRow {
     std::string blas;
 };
 
-double ExtraNumber(const nlohmann::json& row, const char* key) {
-    const auto extra = row.find("extra");
-    if (extra == row.end() || !extra->is_object()) return std::nan("");
-    const auto v = extra->find(key);
-    return v != extra->end() && v->is_number() ? v->get<double>() : std::nan("");
+double ExtraNumber(const ResultRow& row, const char* key) {
+    if (!row.extra.is_object()) return std::nan("");
+    const auto v = row.extra.find(key);
+    return v != row.extra.end() && v->is_number() ? v->get<double>() : std::nan("");
 }
 
 /// Mean of `v`, NaN (a blank cell) when empty.
@@ -349,27 +348,26 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets,
     std::set<std::string> learned_blas;
     for (const auto& s : sets) {
         for (const auto& r : s.rows) {
-            const std::string label =
-                s.row_label.empty() ? r.value("method", std::string("?")) : s.row_label;
+            const std::string label = s.row_label.empty() ? r.method : s.row_label;
             if (!by_label.count(label)) order.push_back(label);
             TimingRow& row = by_label[label];
-            row.threads = r.value("threads", 1);
+            row.threads = r.threads;
             row.points = s.provenance.points;
-            if (RowStatus(r) != "ok") continue;
-            // Rows written before cpu_seconds existed have no CPU time to show.
-            if (r.contains("cpu_seconds")) row.cpu.push_back(1e3 * r.value("cpu_seconds", 0.0));
+            if (r.status != Status::kOk) continue;
+            // Rows written before cpu_seconds existed read 0 s: no CPU time to show (as in
+            // runners/timing_summary).
+            if (r.cpu_seconds > 0.0) row.cpu.push_back(1e3 * r.cpu_seconds);
             const double network = ExtraNumber(r, "network_cpu_seconds");
             const double macs = ExtraNumber(r, "macs");
             const double floor = ExtraNumber(r, "floor_seconds");
             if (std::isfinite(network)) row.network.push_back(1e3 * network);
             if (std::isfinite(macs)) row.gmac.push_back(1e-9 * macs);
             if (std::isfinite(floor)) row.floor.push_back(1e3 * floor);
-            const auto extra = r.value("extra", nlohmann::json::object());
-            if (extra.is_object() && extra.contains("blas") && extra["blas"].is_string() &&
-                std::isfinite(floor)) {
-                learned_blas.insert(fmt::format(
-                    "{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
-                    extra["blas"].get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));
+            const auto blas = r.extra.is_object() ? r.extra.find("blas") : r.extra.end();
+            if (blas != r.extra.end() && blas->is_string() && std::isfinite(floor)) {
+                learned_blas.insert(
+                    fmt::format("{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
+                                blas->get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));
             }
         }
     }

@@ -6,14 +6,16 @@
 #include <string>
 #include <vector>
 
+#include "reports/statistics.hpp"
 #include "reports/table.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench {
 
 /// One column group of a paper table and the result rows measured for it.
 struct ResultSet {
     std::string group;  ///< e.g. "same_category", "jitter", "30%", "" for ungrouped tables
-    std::vector<nlohmann::json> rows;
+    std::vector<ResultRow> rows;
     Provenance provenance;
     /// For ablation / sweep tables: every row of this set fills the paper row of this name
     /// (e.g. "no_SPE"); empty = each row fills the row of its method.
@@ -57,7 +59,7 @@ double PaperCell(const nlohmann::json& paper,
 /// Options for building a paper table.
 struct PaperTableOptions {
     int bootstrap_samples = 1000;  ///< CIs of the measured means
-    std::uint64_t seed = 20230103;
+    std::uint64_t seed = kDefaultBootstrapSeed;
     /// Methods (regbench names) that could not run, with the reason shown in their cells
     /// (e.g. {"ogmm", "not trained"}).
     std::map<std::string, std::string> unavailable;

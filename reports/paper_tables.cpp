@@ -105,12 +105,7 @@ Table PaperComparisonTable(const ReportTable& ours,
     t.columns.back().key = "paper:seconds";
     for (const auto& s : ours.methods) {
         const auto row = PaperRowName(s.method);
-        const auto mine = [&](double v) {
-            Cell c;
-            c.value = v;
-            c.pairs = s.pairs;
-            return c;
-        };
+        const auto mine = [&](double v) { return MeasuredCell(v, s.pairs); };
         TableRow r{
             s.method,
             {mine(static_cast<double>(s.pairs)), mine(s.mae_r.mean), paper_cell(row, "mae_r"),

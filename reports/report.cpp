@@ -15,26 +15,6 @@
 namespace regbench {
 namespace {
 
-constexpr std::uint64_t kBootstrapSeed = 20230103;
-
-/// The report table's CI: percentile bootstrap of the mean over pairs, 2.5 / 97.5 percentiles
-/// taken at the floor index (the tables' convention since their first release, so published
-/// numbers do not move; BootstrapMean rounds to the nearest index). `v` is in pair order (rows
-/// are sorted by pair first), so the CI does not depend on row order.
-Estimate Bootstrap(const std::vector<double>& v, int samples, std::uint64_t stream) {
-    Estimate e;
-    e.mean = SampleMean(v);
-    e.lo = e.hi = e.mean;
-    const std::vector<double> means = SortedBootstrapMeans(v, samples, kBootstrapSeed, stream);
-    if (means.empty()) return e;
-    const auto at = [&](double q) {
-        return means[static_cast<std::size_t>(q * static_cast<double>(samples - 1))];
-    };
-    e.lo = at(0.025);
-    e.hi = at(0.975);
-    return e;
-}
-
 /// Which pair file a row was computed on: its content hash when the row has one, otherwise
 /// (rows written before hashes) the file name with the provenance that identifies it.
 std::string DataKey(const DataTag& d) {
@@ -117,6 +97,8 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
             }
         }
     }
+    // The stream names what is estimated (pair file, method, params, metric) and the values
+    // are in pair order, so a CI does not depend on row order or table position.
     const std::string id = data_key + "\n" + s.method + "\n" + s.params.dump() + "\n";
     const auto column = [&](const char* name) {
         const auto field = FindMetric(name).field;
@@ -126,7 +108,8 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
         return v;
     };
     const auto boot = [&](const char* name) {
-        return Bootstrap(column(name), o.bootstrap_samples, StreamId(id + name));
+        return BootstrapMean(column(name), o.bootstrap_samples, kDefaultBootstrapSeed,
+                             StreamId(id + name));
     };
     s.mae_r = boot("mae_r");
     s.mae_t = boot("mae_t");
@@ -280,15 +263,8 @@ std::string DescribeTable(const ReportTable& t) {
 
 namespace {
 
-Cell Number(double v, std::size_t pairs) {
-    Cell c;
-    c.value = v;
-    c.pairs = pairs;
-    return c;
-}
-
 Cell Mean(const Estimate& e, std::size_t pairs) {
-    Cell c = Number(e.mean, pairs);
+    Cell c = MeasuredCell(e.mean, pairs);
     c.ci_lo = e.lo;
     c.ci_hi = e.hi;
     return c;
@@ -342,13 +318,14 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     for (const auto& s : rt.methods) {
         const std::size_t n = s.pairs;
         TableRow row{s.label,
-                     {Number(static_cast<double>(n), n), Number(static_cast<double>(s.failed), n),
-                      Mean(s.mae_r, n), Mean(s.mae_r, n), Mean(s.mae_t, n), Mean(s.ccd, n),
-                      Mean(s.rre, n), Mean(s.rte, n), Number(s.rmse_r, n), Number(s.rmse_t, n),
-                      Number(s.recall, n), Number(s.success, n)}};
-        if (o.recall_3dmatch) row.cells.push_back(Number(s.recall_3dmatch, n));
+                     {MeasuredCell(static_cast<double>(n), n),
+                      MeasuredCell(static_cast<double>(s.failed), n), Mean(s.mae_r, n),
+                      Mean(s.mae_r, n), Mean(s.mae_t, n), Mean(s.ccd, n), Mean(s.rre, n),
+                      Mean(s.rte, n), MeasuredCell(s.rmse_r, n), MeasuredCell(s.rmse_t, n),
+                      MeasuredCell(s.recall, n), MeasuredCell(s.success, n)}};
+        if (o.recall_3dmatch) row.cells.push_back(MeasuredCell(s.recall_3dmatch, n));
         for (double v : {s.median_seconds, s.mean_seconds, s.chamfer, double(s.threads)}) {
-            row.cells.push_back(Number(v, n));
+            row.cells.push_back(MeasuredCell(v, n));
         }
         Cell params;
         params.source = CellSource::kLabel;

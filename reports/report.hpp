@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "reports/statistics.hpp"
 #include "reports/table.hpp"
 #include "runners/result_row.hpp"
 
@@ -24,7 +25,7 @@ struct ReportOptions {
     double recall_t = 0.1;         ///< recall@(r, t): mae_t threshold
     double success_rre_deg = 5.0;  ///< success: rre < this [deg] and rte < success_rte
     double success_rte = 0.1;      ///< success: rte threshold
-    int bootstrap_samples = 1000;  ///< 95% percentile-bootstrap CI of the means (seeded)
+    int bootstrap_samples = 1000;  ///< BootstrapMean resamples of the means' 95% CIs
     bool recall_3dmatch = false;   ///< add the 3DMatch-style recall column
     /// Convention of mae_r / rmse_r to report. Unset: each row's own (tables never mix two).
     /// Set: rows in another convention are recomputed from their stored ground truth, or
@@ -36,12 +37,8 @@ struct ReportOptions {
     bool common_pairs = false;
 };
 
-/// Mean with a 95% bootstrap confidence interval.
-struct Estimate {
-    double mean = 0.0;
-    double lo = 0.0;
-    double hi = 0.0;
-};
+/// Mean with its 95% bootstrap confidence interval (BootstrapMean, reports/statistics.hpp).
+using Estimate = BootstrapCi;
 
 /// One table row: one method with one parameter set over all its pairs.
 struct MethodSummary {

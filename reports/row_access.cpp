@@ -1,6 +1,8 @@
 #include "reports/row_access.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 namespace regbench {
@@ -17,6 +19,12 @@ const MetricField kMetrics[] = {{"mae_r", &PairMetrics::mae_r, 4},
                                 {"overlap_rmse", &PairMetrics::overlap_rmse, 4}};
 }  // namespace
 
+std::optional<double> MetricField::Of(const PairMetrics& m) const {
+    const double x = m.*field;
+    if (!std::isfinite(x)) return std::nullopt;
+    return x;
+}
+
 std::vector<std::string> MetricNames() {
     std::vector<std::string> names;
     for (const auto& m : kMetrics) names.push_back(m.name);
@@ -32,45 +40,32 @@ const MetricField& FindMetric(const std::string& name) {
     throw std::invalid_argument("unknown metric '" + name + "' (known: " + known + ")");
 }
 
-std::string RowPairFileName(const nlohmann::json& row) {
-    if (!row.contains("data") || !row["data"].is_object()) return "?";
-    return row["data"].value("pairs_file", std::string("?"));
+std::string RowPairFileId(const ResultRow& row) {
+    if (!row.data.content_hash.empty()) return row.data.content_hash;
+    return "file:" + row.data.pairs_file;
 }
 
-std::string RowPairFileId(const nlohmann::json& row) {
-    if (row.contains("data") && row["data"].is_object()) {
-        for (const char* key : {"content_hash", "pairs_hash", "hash"}) {
-            const auto it = row["data"].find(key);
-            if (it != row["data"].end() && it->is_string() && !it->get<std::string>().empty())
-                return it->get<std::string>();
-        }
+std::optional<double> MeasuredOverlap(const ResultRow& row) {
+    if (!row.source_overlap_ratio || !row.target_overlap_ratio) return std::nullopt;
+    return std::min(*row.source_overlap_ratio, *row.target_overlap_ratio);
+}
+
+std::vector<std::string> MethodOrder(const std::vector<ResultRow>& rows) {
+    std::vector<std::string> order;
+    std::set<std::string> seen;
+    for (const auto& r : rows) {
+        if (seen.insert(r.method).second) order.push_back(r.method);
     }
-    return "file:" + RowPairFileName(row);
+    return order;
 }
 
-std::optional<double> RowMetric(const nlohmann::json& row, const std::string& key) {
-    const auto m = row.find("metrics");
-    if (m == row.end() || !m->is_object()) return std::nullopt;
-    const auto v = m->find(FindMetric(key).name);
-    if (v == m->end() || !v->is_number()) return std::nullopt;
-    const double x = v->get<double>();
-    if (!std::isfinite(x)) return std::nullopt;
-    return x;
-}
-
-std::string RowStatus(const nlohmann::json& row) {
-    const auto s = row.find("status");
-    return s != row.end() && s->is_string() ? s->get<std::string>() : "failed";
-}
-
-std::optional<double> RowOverlap(const nlohmann::json& row, const char* which) {
-    const std::string key = std::string(which) + "_overlap_ratio";
-    for (const nlohmann::json* obj : {&row, row.contains("data") ? &row["data"] : nullptr}) {
-        if (obj == nullptr || !obj->is_object()) continue;
-        const auto v = obj->find(key);
-        if (v != obj->end() && v->is_number()) return v->get<double>();
+std::vector<const ResultRow*> RowsOf(const std::vector<ResultRow>& rows,
+                                     const std::string& method) {
+    std::vector<const ResultRow*> out;
+    for (const auto& r : rows) {
+        if (r.method == method) out.push_back(&r);
     }
-    return std::nullopt;
+    return out;
 }
 
 }  // namespace regbench

@@ -1,12 +1,13 @@
 #pragma once
-// Read-only accessors for JSONL result rows as `regbench run` writes them. The reports go
-// through these so a change of row schema is handled in one place.
-#include <nlohmann/json.hpp>
+// How reports read the typed result row (runners/result_row.hpp): a descriptor per per-pair
+// metric (its name, its field of PairMetrics, its number format), so a metric is named by
+// string once, where the options name it, and read through its field everywhere else.
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "core/metrics.hpp"
+#include "runners/result_row.hpp"
 
 namespace regbench {
 
@@ -16,6 +17,11 @@ struct MetricField {
     const char* name;
     double PairMetrics::*field;
     int decimals;
+
+    /// The metric's value in `m`, or nullopt when it is not finite (a null in the JSONL: the
+    /// row counts as a failure of this metric).
+    std::optional<double> Of(const PairMetrics& m) const;
+    std::optional<double> Of(const ResultRow& row) const { return Of(row.metrics); }
 };
 
 /// The metric called `name` (mae_r, mae_t, mse_r, mse_t, rre, rte, ccd, chamfer, overlap_rmse);
@@ -30,20 +36,18 @@ std::vector<std::string> MetricNames();
 constexpr int kFractionDecimals = 3;
 constexpr int kSecondsDecimals = 5;
 
-/// The pair file's name as recorded in the row's `data` ("?" when absent).
-std::string RowPairFileName(const nlohmann::json& row);
-
 /// Identity of the pair file a row was measured on: its content hash when the row records one
 /// (`data.content_hash`, written by `run` and `score`), else "file:<name>".
-std::string RowPairFileId(const nlohmann::json& row);
+std::string RowPairFileId(const ResultRow& row);
 
-/// A metric of the row (a name FindMetric knows), or nullopt when missing, null or not finite.
-std::optional<double> RowMetric(const nlohmann::json& row, const std::string& key);
+/// The pair's measured overlap, min(source ratio, target ratio); nullopt for rows written
+/// before rows recorded the ratios.
+std::optional<double> MeasuredOverlap(const ResultRow& row);
 
-/// The row's status string ("failed" when absent).
-std::string RowStatus(const nlohmann::json& row);
+/// Methods in first-seen order.
+std::vector<std::string> MethodOrder(const std::vector<ResultRow>& rows);
 
-/// Measured source / target overlap ratio of the row's pair (top-level or under `data`).
-std::optional<double> RowOverlap(const nlohmann::json& row, const char* which);
+/// The rows of `method`, in their order.
+std::vector<const ResultRow*> RowsOf(const std::vector<ResultRow>& rows, const std::string& method);
 
 }  // namespace regbench

@@ -44,6 +44,13 @@ std::vector<double> SortedBootstrapMeans(const std::vector<double>& v,
     return means;
 }
 
+double NearestRankQuantile(const std::vector<double>& sorted, double q) {
+    if (sorted.empty()) return std::nan("");
+    // nearbyint rounds halves to even (the default rounding mode), as numpy's "nearest" does.
+    const double at = std::nearbyint(q * static_cast<double>(sorted.size() - 1));
+    return sorted[static_cast<std::size_t>(std::clamp(at, 0.0, double(sorted.size() - 1)))];
+}
+
 BootstrapCi BootstrapMean(const std::vector<double>& v,
                           int samples,
                           std::uint64_t seed,
@@ -55,11 +62,8 @@ BootstrapCi BootstrapMean(const std::vector<double>& v,
     const std::vector<double> means = SortedBootstrapMeans(v, samples, seed, stream);
     if (means.empty()) return e;
     const double tail = 0.5 * (1.0 - level);
-    const auto at = [&](double q) {
-        return means[static_cast<std::size_t>(std::lround(q * static_cast<double>(samples - 1)))];
-    };
-    e.lo = at(tail);
-    e.hi = at(1.0 - tail);
+    e.lo = NearestRankQuantile(means, tail);
+    e.hi = NearestRankQuantile(means, 1.0 - tail);
     return e;
 }
 

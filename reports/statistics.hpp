@@ -16,6 +16,9 @@ double SampleMedian(std::vector<double> v);
 /// Sample standard deviation (n - 1 denominator, as numpy's std(ddof=1)); 0 below two values.
 double SampleStd(const std::vector<double>& v);
 
+/// The seed every report's bootstrap uses unless told otherwise (`compare --seed`).
+constexpr std::uint64_t kDefaultBootstrapSeed = 20230103;
+
 /// A mean with a two-sided percentile-bootstrap confidence interval.
 struct BootstrapCi {
     double mean = 0.0;
@@ -31,10 +34,16 @@ std::vector<double> SortedBootstrapMeans(const std::vector<double>& v,
                                          std::uint64_t seed,
                                          std::uint64_t stream);
 
-/// Percentile bootstrap (Efron) of the mean: `samples` resamples with replacement drawn from
-/// the stream (seed, stream); [lo, hi] holds the central `level` mass. The stream should be
-/// derived from what is being estimated (StreamId), not from the position in a table, so a CI
-/// does not change when rows are reordered.
+/// The q-quantile (q in [0, 1]) of ascending values: the value at index q (n - 1) rounded to
+/// the nearest, halves to even (numpy.percentile(v, 100 q, method="nearest")); NaN when empty.
+double NearestRankQuantile(const std::vector<double>& sorted, double q);
+
+/// The one CI of every report (`report`, the paper tables, the breakdowns, `compare`):
+/// percentile bootstrap (Efron) of the mean, `samples` resamples with replacement drawn from
+/// the stream (seed, stream), [lo, hi] the NearestRankQuantile of the sorted resampled means at
+/// q = (1 - level) / 2 and 1 - q. With fewer than two values lo = hi = mean. The stream
+/// should be derived from what is being estimated (StreamId), not from the position in a
+/// table, so a CI does not change when rows are reordered.
 BootstrapCi BootstrapMean(const std::vector<double>& v,
                           int samples,
                           std::uint64_t seed,

@@ -26,6 +26,14 @@ struct Cell {
     double HalfWidth() const { return 0.5 * (ci_hi - ci_lo); }  ///< NaN without a CI
 };
 
+/// A measured number computed from `pairs` result rows.
+inline Cell MeasuredCell(double value, std::size_t pairs) {
+    Cell c;
+    c.value = value;
+    c.pairs = pairs;
+    return c;
+}
+
 /// How a column shows its cells' CIs in Markdown, LaTeX and HTML (CSV and JSON carry them all).
 enum class CiStyle {
     kPlusMinus,  ///< "mean ± half-width"

@@ -33,6 +33,14 @@ double NumberOrNaN(const nlohmann::json& j, const char* key) {
     return it->get<double>();
 }
 
+/// A number that old rows may lack: nullopt when absent; a key of another type throws.
+std::optional<double> OptionalNumber(const nlohmann::json& j, const char* key) {
+    const auto it = j.find(key);
+    if (it == j.end()) return std::nullopt;
+    if (!it->is_number()) throw std::invalid_argument(std::string(key) + " is not a number");
+    return it->get<double>();
+}
+
 nlohmann::json MetricsToJson(const PairMetrics& m) {
     return {{"mae_r", FiniteOrNull(m.mae_r)},       {"mae_t", FiniteOrNull(m.mae_t)},
             {"mse_r", FiniteOrNull(m.mse_r)},       {"mse_t", FiniteOrNull(m.mse_t)},
@@ -171,8 +179,8 @@ void to_json(nlohmann::json& j, const ResultRow& row) {
     j["threads"] = row.threads;
     j["shape"] = row.shape;
     j["category"] = row.category;
-    j["source_overlap_ratio"] = row.source_overlap_ratio;
-    j["target_overlap_ratio"] = row.target_overlap_ratio;
+    if (row.source_overlap_ratio) j["source_overlap_ratio"] = *row.source_overlap_ratio;
+    if (row.target_overlap_ratio) j["target_overlap_ratio"] = *row.target_overlap_ratio;
     j["euler"] = ToString(row.euler);
     j["metrics"] = MetricsToJson(row.metrics);
     if (row.gt_transform) j["gt_transform"] = TransformToJson(*row.gt_transform);
@@ -203,8 +211,8 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     row.threads = j.value("threads", 1);
     row.shape = j.value("shape", "");
     row.category = j.value("category", "");
-    row.source_overlap_ratio = j.value("source_overlap_ratio", 0.0);
-    row.target_overlap_ratio = j.value("target_overlap_ratio", 0.0);
+    row.source_overlap_ratio = OptionalNumber(j, "source_overlap_ratio");
+    row.target_overlap_ratio = OptionalNumber(j, "target_overlap_ratio");
     // Rows from before the key existed were scored with the xyz decomposition.
     row.euler = j.contains("euler") ? ParseEulerConvention(j.at("euler").get<std::string>())
                                     : EulerConvention::kXyz;

@@ -63,8 +63,10 @@ struct ResultRow {
     int threads = 1;                                  ///< OpenMP threads of the call
     std::string shape;                                ///< the pair's mesh / scan name
     std::string category;
-    double source_overlap_ratio = 0.0;  ///< from the pair file (fraction labelled overlapping)
-    double target_overlap_ratio = 0.0;
+    /// From the pair file (fraction labelled overlapping); absent in rows written before rows
+    /// recorded them (and then not written back).
+    std::optional<double> source_overlap_ratio;
+    std::optional<double> target_overlap_ratio;
     /// Euler angles behind metrics.mae_r / mse_r. Rows written before this key existed were
     /// computed with today's `xyz` decomposition, so a missing key reads as kXyz.
     EulerConvention euler = EulerConvention::kZyx;

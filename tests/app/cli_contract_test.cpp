@@ -10,8 +10,10 @@
 #include <iterator>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "reports/compare.hpp"
+#include "runners/result_row.hpp"
 #include "tests/testing/cli.hpp"
 #include "tests/testing/files.hpp"
 
@@ -41,16 +43,20 @@ std::string Num(double v) {
     return s.str();
 }
 
-/// `n` JSONL rows of method icp on pairs 0..n-1, mae_r = 1 + k + shift (other metrics alike).
-void WriteRows(const fs::path& path, int n, double shift, const std::string& status) {
-    std::ofstream f(path);
-    for (int k = 0; k < n; ++k) {
-        const double v = 1.0 + k + shift;
-        f << "{\"pair\":" << k << ",\"method\":\"icp\",\"status\":\"" << status
-          << "\",\"data\":{\"pairs_file\":\"p.h5\"},\"metrics\":{\"mae_r\":" << v
-          << ",\"mae_t\":" << v << ",\"ccd\":" << v << ",\"rre\":" << v << ",\"rte\":" << v
-          << "}}\n";
+/// `n` rows of method icp on pairs 0..n-1 as `run` writes them (every key of the typed row),
+/// mae_r = 1 + k + shift (the compared metrics alike).
+void WriteRows(const fs::path& path, int n, double shift, Status status) {
+    std::vector<ResultRow> rows(static_cast<std::size_t>(n));
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        const double v = 1.0 + static_cast<double>(k) + shift;
+        rows[k].pair = k;
+        rows[k].method = "icp";
+        rows[k].status = status;
+        rows[k].data.pairs_file = "p.h5";
+        rows[k].metrics.mae_r = rows[k].metrics.mae_t = rows[k].metrics.ccd = v;
+        rows[k].metrics.rre = rows[k].metrics.rte = v;
     }
+    WriteResultRows(path.string(), rows);
 }
 
 /// A usage error: exit 2 and exactly one line of output that names `what`.
@@ -63,8 +69,8 @@ void ExpectUsageError(const CliResult& r, const std::string& what) {
 
 TEST(CliContract, CompareFailsWhenEveryCandidateCallFailed) {
     const fs::path base = Dir() / "base2.jsonl", bad = Dir() / "bad2.jsonl";
-    WriteRows(base, 2, 0.0, "ok");
-    WriteRows(bad, 2, 0.0, "failed");  // same metrics: only the status tells
+    WriteRows(base, 2, 0.0, Status::kOk);
+    WriteRows(bad, 2, 0.0, Status::kFailed);  // same metrics: only the status tells
     const CliResult r = RunCli("compare " + base.string() + " " + bad.string());
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("Verdict: FAIL"), std::string::npos) << r.output;
@@ -75,19 +81,19 @@ TEST(CliContract, CompareFailsWhenEveryCandidateCallFailed) {
 
 TEST(CliContract, CompareOnFivePairsIsInconclusive) {
     const fs::path base = Dir() / "base5.jsonl", worse = Dir() / "worse5.jsonl";
-    WriteRows(base, 5, 0.0, "ok");
-    WriteRows(worse, 5, 5.0, "ok");
+    WriteRows(base, 5, 0.0, Status::kOk);
+    WriteRows(worse, 5, 5.0, Status::kOk);
     const CliResult r = RunCli("compare " + base.string() + " " + worse.string());
     EXPECT_EQ(r.exit_code, 3) << r.output;
     EXPECT_NE(r.output.find("Verdict: INCONCLUSIVE"), std::string::npos) << r.output;
     // 50 identical pairs: every difference is zero, nothing changed: PASS.
-    WriteRows(base, 50, 0.0, "ok");
+    WriteRows(base, 50, 0.0, Status::kOk);
     EXPECT_EQ(RunCli("compare " + base.string() + " " + base.string()).exit_code, 0);
 }
 
 TEST(CliContract, UsageErrorsExitTwoWithOneLine) {
     const fs::path base = Dir() / "base_usage.jsonl";
-    WriteRows(base, 6, 0.0, "ok");
+    WriteRows(base, 6, 0.0, Status::kOk);
     ExpectUsageError(RunCli("compare " + base.string() + " " + base.string() +
                             " --tolerance mae_x=1"),
                      "mae_x");

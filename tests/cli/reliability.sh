@@ -37,6 +37,21 @@ fail() { echo "FAIL [$scenario]: $*" >&2; exit 1; }
 # CPD with many iterations and tol 0: slow enough (~1 s per call) to be interrupted reliably.
 slow='{"cpd": {"maxiter": 250, "tol": 0}}'
 
+# limited XFSZ NAME FINAL KB CMD...: CMD under a file-size limit of KB kilobytes must fail
+# cleanly: non-zero exit, no signal, nothing at FINAL, a message naming FINAL (in NAME.out).
+# XFSZ: ignore-xfsz (the caller ignores SIGXFSZ first) or keep-xfsz
+# (the default disposition: regbench ignores the signal itself).
+limited() {
+  local xfsz="$1" name="$2" final="$3" kb="$4"
+  shift 4
+  (if [ "$xfsz" = ignore-xfsz ]; then trap '' XFSZ; fi; ulimit -f "$kb"; "$@") >"$name.out" 2>&1
+  local rc=$?
+  [ "$rc" -ne 0 ] || fail "$name: exit 0 under a file-size limit"
+  [ "$rc" -lt 128 ] || fail "$name: died by signal $((rc - 128))"
+  [ ! -e "$final" ] || fail "$name: $final exists after a failed write"
+  grep -q "$final" "$name.out" || fail "$name: message does not name $final: $(cat "$name.out")"
+}
+
 wait_for_rows() {  # wait_for_rows FILE N: until FILE has N lines (max ~120 s)
   for _ in $(seq 1 1200); do
     [ -f "$1" ] && [ "$(wc -l <"$1")" -ge "$2" ] && return 0
@@ -64,22 +79,12 @@ concurrent)
   grep -c '"method":"cpd"' r.jsonl | grep -qx 8 || fail "result mixed with the second run"
   ;;
 fsize)
-  check_limited() {  # check_limited NAME FINAL_PATH KB CMD...: run CMD under a KB file limit
-    local name="$1" final="$2" kb="$3"
-    shift 3
-    (trap '' XFSZ; ulimit -f "$kb"; "$@") >"$name.out" 2>&1
-    local rc=$?
-    [ "$rc" -ne 0 ] || fail "$name: exit 0 under a file-size limit"
-    [ "$rc" -lt 128 ] || fail "$name: died by signal $((rc - 128))"
-    [ ! -e "$final" ] || fail "$name: $final exists after a failed write"
-    grep -q "$final" "$name.out" || fail "$name: message does not name $final: $(cat "$name.out")"
-  }
-  check_limited generate big.h5 64 "$bin" generate --protocol partial --dataset procedural \
+  limited ignore-xfsz generate big.h5 64 "$bin" generate --protocol partial --dataset procedural \
     --split test --pairs 40 --seed 1 --out big.h5
   "$bin" export pairs.h5 --out xyz >/dev/null 2>&1 || fail "export"
-  check_limited import imported.h5 64 "$bin" import --xyz-dir xyz --out imported.h5
-  check_limited run r.jsonl 4 "$bin" run --pairs pairs.h5 --methods identity,icp --out r.jsonl -q
-  check_limited export exported 16 "$bin" export pairs.h5 --out exported
+  limited ignore-xfsz import imported.h5 64 "$bin" import --xyz-dir xyz --out imported.h5
+  limited ignore-xfsz run r.jsonl 4 "$bin" run --pairs pairs.h5 --methods identity,icp --out r.jsonl -q
+  limited ignore-xfsz export exported 16 "$bin" export pairs.h5 --out exported
   if ls -a | grep -q '\.tmp\.'; then fail "temporary files left: $(ls -a)"; fi
   ;;
 sigint)
@@ -246,23 +251,13 @@ xfsz)
   for k in 0 1 2 3 4 5 6 7; do
     echo "{\"pair\": $k, \"transform\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"
   done >T.jsonl
-  limited() {  # limited NAME FINAL KB CMD...: no `trap '' XFSZ` here, regbench ignores it
-    local name="$1" final="$2" kb="$3"
-    shift 3
-    (ulimit -f "$kb"; "$@") >"$name.out" 2>&1
-    local rc=$?
-    [ "$rc" -ne 0 ] || fail "$name: exit 0 under a file-size limit"
-    [ "$rc" -lt 128 ] || fail "$name: died by signal $((rc - 128))"
-    [ ! -e "$final" ] || fail "$name: $final exists after a failed write"
-    grep -q "$final" "$name.out" || fail "$name: message does not name $final: $(cat "$name.out")"
-  }
-  limited generate big.h5 64 "$bin" generate --protocol partial --dataset procedural \
+  limited keep-xfsz generate big.h5 64 "$bin" generate --protocol partial --dataset procedural \
     --split test --pairs 40 --seed 1 --out big.h5
-  limited run r.jsonl 4 "$bin" run --pairs pairs.h5 --methods identity,icp --out r.jsonl -q
-  limited score s.jsonl 4 "$bin" score --pairs pairs.h5 --transforms T.jsonl --method ext \
+  limited keep-xfsz run r.jsonl 4 "$bin" run --pairs pairs.h5 --methods identity,icp --out r.jsonl -q
+  limited keep-xfsz score s.jsonl 4 "$bin" score --pairs pairs.h5 --transforms T.jsonl --method ext \
     --out s.jsonl
-  limited compare c.json 1 "$bin" compare base.jsonl base.jsonl --json c.json
-  limited merge m.jsonl 4 "$bin" merge base.jsonl --pairs pairs.h5 --methods identity --out m.jsonl
+  limited keep-xfsz compare c.json 1 "$bin" compare base.jsonl base.jsonl --json c.json
+  limited keep-xfsz merge m.jsonl 4 "$bin" merge base.jsonl --pairs pairs.h5 --methods identity --out m.jsonl
   if ls -a | grep -q '\.tmp\.'; then fail "temporary files left: $(ls -a)"; fi
   ;;
 usage)

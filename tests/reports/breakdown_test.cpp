@@ -3,33 +3,35 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 namespace regbench {
 namespace {
 
-nlohmann::json Row(const std::string& method,
-                   double mae_r,
-                   double mae_t,
-                   const std::string& category,
-                   double overlap,
-                   const std::string& status = "ok") {
-    return {{"method", method},
-            {"status", status},
-            {"category", category},
-            {"source_overlap_ratio", overlap},
-            {"target_overlap_ratio", overlap + 0.05},
-            {"metrics",
-             {{"mae_r", mae_r},
-              {"mae_t", mae_t},
-              {"ccd", 0.05},
-              {"rre", 2 * mae_r},
-              {"rte", 2 * mae_t}}}};
+ResultRow Row(const std::string& method,
+              double mae_r,
+              double mae_t,
+              const std::string& category,
+              std::optional<double> overlap,
+              Status status = Status::kOk) {
+    ResultRow r;
+    r.method = method;
+    r.status = status;
+    r.category = category;
+    r.source_overlap_ratio = overlap;
+    if (overlap) r.target_overlap_ratio = *overlap + 0.05;
+    r.metrics.mae_r = mae_r;
+    r.metrics.mae_t = mae_t;
+    r.metrics.ccd = 0.05;
+    r.metrics.rre = 2 * mae_r;
+    r.metrics.rte = 2 * mae_t;
+    return r;
 }
 
-std::vector<nlohmann::json> Rows() {
+std::vector<ResultRow> Rows() {
     return {Row("a", 0.5, 0.005, "chair", 0.55), Row("a", 3.0, 0.02, "chair", 0.75),
-            Row("a", 8.0, 0.5, "plane", 0.75, "failed"), Row("a", 12.0, 0.05, "plane", 0.95),
-            Row("b", 1.5, 0.2, "chair", 0.55, "timeout")};
+            Row("a", 8.0, 0.5, "plane", 0.75, Status::kFailed), Row("a", 12.0, 0.05, "plane", 0.95),
+            Row("b", 1.5, 0.2, "chair", 0.55, Status::kTimeout)};
 }
 
 std::size_t Col(const Table& t, const std::string& key) {
@@ -54,12 +56,15 @@ TEST(Breakdown, DistributionByHand) {
 
 TEST(Breakdown, StatusCountsAndNullMetrics) {
     auto rows = Rows();
-    rows.push_back({{"method", "b"}, {"status", "crashed"}, {"metrics", {{"mae_r", nullptr}}}});
+    // A crashed call whose mae_r is null in the JSONL (NaN in the row): a null metric.
+    rows.push_back(Row("b", std::nan(""), 0.1, "chair", 0.55, Status::kCrashed));
+    rows.push_back(Row("b", 1.0, 0.1, "chair", 0.55, Status::kMissing));  // `score`: other
     const Table t = StatusTable(rows);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "ok")].value, 3.0);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "failed")].value, 1.0);
     EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "timeout")].value, 1.0);
     EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "crashed")].value, 1.0);
+    EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "other")].value, 1.0);
     EXPECT_DOUBLE_EQ(t.rows[1].cells[Col(t, "null_metrics")].value, 1.0);
 }
 
@@ -95,6 +100,21 @@ TEST(Breakdown, BinsByMeasuredOverlap) {
     EXPECT_EQ(t.rows[0].cells[1].text, "5.5000 (n=2)");  // the count is shown in the cell
     EXPECT_DOUBLE_EQ(t.rows[0].cells[2].value, 12.0);
     EXPECT_TRUE(t.notes.empty());
+}
+
+TEST(Breakdown, RowsWithoutOverlapRatiosAreLeftOutAndCounted) {
+    // Rows written before rows recorded overlap ratios read none (not 0, which would fall in
+    // the first bin): a's first row leaves bin 0, which then has no pair.
+    auto rows = Rows();
+    rows[0].source_overlap_ratio.reset();
+    rows[0].target_overlap_ratio.reset();
+    BreakdownOptions o;
+    o.overlap_edges = {0.0, 0.6, 0.8, 1.0001};
+    const Table t = OverlapTable(rows, o);
+    EXPECT_FALSE(t.rows[0].cells[0].HasValue());
+    EXPECT_DOUBLE_EQ(t.rows[0].cells[1].value, 5.5);
+    ASSERT_EQ(t.notes.size(), 1u);
+    EXPECT_EQ(t.notes[0].rfind("1 rows carry no overlap ratios", 0), 0u) << t.notes[0];
 }
 
 }  // namespace

@@ -9,22 +9,30 @@
 namespace regbench {
 namespace {
 
-nlohmann::json Row(int pair, const std::string& method, double mae_r, const std::string& file) {
-    return {{"pair", pair},
-            {"method", method},
-            {"status", "ok"},
-            {"data", {{"pairs_file", file}}},
-            {"metrics",
-             {{"mae_r", mae_r},
-              {"mae_t", 0.01 * mae_r},
-              {"ccd", 0.05},
-              {"rre", 2 * mae_r},
-              {"rte", 0.02 * mae_r}}}};
+ResultRow Row(int pair, const std::string& method, double mae_r, const std::string& file) {
+    ResultRow r;
+    r.pair = static_cast<std::size_t>(pair);
+    r.method = method;
+    r.data.pairs_file = file;
+    r.metrics.mae_r = mae_r;
+    r.metrics.mae_t = 0.01 * mae_r;
+    r.metrics.ccd = 0.05;
+    r.metrics.rre = 2 * mae_r;
+    r.metrics.rte = 0.02 * mae_r;
+    return r;
+}
+
+/// Adds `x` to every compared metric of the row (mae_r, mae_t, ccd, rre, rte).
+void AddToEveryMetric(ResultRow& r, double x) {
+    for (double* m :
+         {&r.metrics.mae_r, &r.metrics.mae_t, &r.metrics.ccd, &r.metrics.rre, &r.metrics.rte}) {
+        *m += x;
+    }
 }
 
 /// 50 pairs of two methods with errors spread over 1-20 degrees (a fixed pseudo-random walk).
-std::vector<nlohmann::json> Baseline(const std::string& file = "p.h5") {
-    std::vector<nlohmann::json> rows;
+std::vector<ResultRow> Baseline(const std::string& file = "p.h5") {
+    std::vector<ResultRow> rows;
     for (int k = 0; k < 50; ++k) {
         rows.push_back(Row(k, "icp", 1.0 + std::fmod(k * 7.31, 19.0), file));
         rows.push_back(Row(k, "cpd", 2.0 + std::fmod(k * 3.77, 11.0), file));
@@ -35,10 +43,10 @@ std::vector<nlohmann::json> Baseline(const std::string& file = "p.h5") {
 TEST(Compare, FlagsATwoDegreeRegressionOnFiftyPairs) {
     auto candidate = Baseline();
     for (auto& r : candidate) {
-        if (r["method"] != "cpd") continue;
+        if (r.method != "cpd") continue;
         // +2 degrees with +-0.5 jitter, so not every difference is equal.
-        const double jitter = 0.5 * std::sin(r["pair"].get<int>() * 1.3);
-        r["metrics"]["mae_r"] = r["metrics"]["mae_r"].get<double>() + 2.0 + jitter;
+        const double jitter = 0.5 * std::sin(static_cast<double>(r.pair) * 1.3);
+        r.metrics.mae_r += 2.0 + jitter;
     }
     const CompareResult res = CompareResults(Baseline(), candidate, CompareOptions{});
     EXPECT_EQ(res.matched_rows, 100u);
@@ -76,7 +84,7 @@ TEST(Compare, UnchangedRunPasses) {
 
 TEST(Compare, ToleranceAbsorbsASmallWorsening) {
     auto candidate = Baseline();
-    for (auto& r : candidate) r["metrics"]["mae_r"] = r["metrics"]["mae_r"].get<double>() + 0.3;
+    for (auto& r : candidate) r.metrics.mae_r += 0.3;
     CompareOptions o;
     ParseTolerance("mae_r=0.5", &o);
     const CompareResult loose = CompareResults(Baseline(), candidate, o);
@@ -89,7 +97,7 @@ TEST(Compare, ToleranceAbsorbsASmallWorsening) {
 
 TEST(Compare, ImprovementIsNotARegression) {
     auto candidate = Baseline();
-    for (auto& r : candidate) r["metrics"]["rre"] = r["metrics"]["rre"].get<double>() * 0.5;
+    for (auto& r : candidate) r.metrics.rre *= 0.5;
     const CompareResult res = CompareResults(Baseline(), candidate, CompareOptions{});
     EXPECT_FALSE(res.Regressed());
     std::size_t better = 0;
@@ -125,8 +133,8 @@ TEST(Compare, ToleranceParsing) {
 // --- issue 26: a gate that can fail ---------------------------------------------------------
 
 /// `n` pairs of icp with mae_r 1 + k (other metrics proportional), as Row() writes them.
-std::vector<nlohmann::json> Pairs(int n, const std::string& method = "icp") {
-    std::vector<nlohmann::json> rows;
+std::vector<ResultRow> Pairs(int n, const std::string& method = "icp") {
+    std::vector<ResultRow> rows;
     for (int k = 0; k < n; ++k) rows.push_back(Row(k, method, 1.0 + k, "p.h5"));
     return rows;
 }
@@ -136,7 +144,7 @@ TEST(Compare, EveryCallFailingOnTwoPairsFailsTheGate) {
     // stores the identity fallback's metrics, here the baseline's own values, so no metric
     // changes at all and only the status says what happened.
     auto candidate = Pairs(2);
-    for (auto& r : candidate) r["status"] = "failed";
+    for (auto& r : candidate) r.status = Status::kFailed;
     const CompareResult res = CompareResults(Pairs(2), candidate, CompareOptions{});
     ASSERT_EQ(res.calls.size(), 1u);
     EXPECT_EQ(res.calls[0].new_failures, 2u);
@@ -152,8 +160,8 @@ TEST(Compare, NewTimeoutsAndCrashesFailPerMethodUnlessAllowed) {
     auto candidate = Baseline();
     int changed = 0;
     for (auto& r : candidate) {
-        if (r["method"] == "cpd" && r["pair"].get<int>() < 2) {
-            r["status"] = changed++ == 0 ? "timeout" : "crashed";
+        if (r.method == "cpd" && r.pair < 2) {
+            r.status = changed++ == 0 ? Status::kTimeout : Status::kCrashed;
         }
     }
     CompareOptions o;
@@ -168,7 +176,7 @@ TEST(Compare, NewTimeoutsAndCrashesFailPerMethodUnlessAllowed) {
     // A call that already failed in the baseline is not new.
     auto base = Baseline();
     for (auto& r : base) {
-        if (r["method"] == "cpd" && r["pair"].get<int>() < 2) r["status"] = "failed";
+        if (r.method == "cpd" && r.pair < 2) r.status = Status::kFailed;
     }
     EXPECT_EQ(CompareResults(base, candidate, CompareOptions{}).Verdict(), CompareVerdict::kPass);
 }
@@ -179,7 +187,7 @@ TEST(Compare, FivePairsAreInconclusiveEvenForAConsistentWorsening) {
     // differences of one sign), so no change can be significant: INCONCLUSIVE, exit 3.
     auto candidate = Pairs(5);
     for (auto& r : candidate) {
-        for (auto& [k, v] : r["metrics"].items()) v = v.get<double>() + 5.0;
+        AddToEveryMetric(r, 5.0);
     }
     const CompareResult res = CompareResults(Pairs(5), candidate, CompareOptions{});
     EXPECT_FALSE(res.Regressed());
@@ -200,8 +208,7 @@ TEST(Compare, SixPairsCanFail) {
     // 2 / 2^6 = 0.03125 < 0.05: six differences of one sign, untied, are significant.
     auto candidate = Pairs(6);
     for (auto& r : candidate) {
-        const double k = r["pair"].get<int>();
-        for (auto& [key, v] : r["metrics"].items()) v = v.get<double>() + 5.0 + 0.1 * k;
+        AddToEveryMetric(r, 5.0 + 0.1 * static_cast<double>(r.pair));
     }
     const CompareResult res = CompareResults(Pairs(6), candidate, CompareOptions{});
     EXPECT_EQ(res.Verdict(), CompareVerdict::kFail);
@@ -215,8 +222,7 @@ TEST(Compare, DetectableWorseningFollowsTheDocumentedFormula) {
     auto base = Pairs(50);
     auto candidate = Pairs(50);
     for (auto& r : candidate) {
-        const int k = r["pair"].get<int>();
-        r["metrics"]["mae_r"] = r["metrics"]["mae_r"].get<double>() + (k % 2 == 0 ? s : -s);
+        r.metrics.mae_r += r.pair % 2 == 0 ? s : -s;
     }
     CompareOptions o;
     o.metrics = {"mae_r"};
@@ -261,8 +267,8 @@ TEST(Compare, NamingSomeMetricsKeepsTheOthersDefaults) {
     // mae_r worsening (within 0.25): the old parser set mae_t's tolerance to 0 and FAILed.
     auto candidate = Baseline();
     for (auto& r : candidate) {
-        r["metrics"]["mae_t"] = r["metrics"]["mae_t"].get<double>() + 0.0005;
-        r["metrics"]["mae_r"] = r["metrics"]["mae_r"].get<double>() + 0.2;
+        r.metrics.mae_t += 0.0005;
+        r.metrics.mae_r += 0.2;
     }
     const CompareResult res = CompareResults(Baseline(), candidate, o);
     EXPECT_FALSE(res.Regressed());

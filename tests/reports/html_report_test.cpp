@@ -30,24 +30,26 @@ Pair RingPair() {
     return p;
 }
 
-std::vector<nlohmann::json> Rows() {
-    std::vector<nlohmann::json> rows;
+std::vector<ResultRow> Rows() {
+    std::vector<ResultRow> rows;
     for (int k = 0; k < 30; ++k) {
         for (const std::string m : {"icp", "cpd", "svr"}) {
             const double e = (m == "icp" ? 10.0 : m == "cpd" ? 3.0 : 6.0) + std::fmod(k * 1.7, 5.0);
-            rows.push_back(
-                {{"pair", k},
-                 {"method", m},
-                 {"status", "ok"},
-                 {"shape", "ring"},
-                 {"category", k % 2 ? "a" : "b"},
-                 {"seconds", m == "cpd" ? 0.05 : 0.005},
-                 {"source_overlap_ratio", 0.5 + 0.015 * k},
-                 {"target_overlap_ratio", 0.55 + 0.01 * k},
-                 {"transform",
-                  {{1, 0, 0, 0.1 * (k % 3)}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}},
-                 {"metrics",
-                  {{"mae_r", e}, {"mae_t", e / 100}, {"ccd", 0.05}, {"rre", e}, {"rte", e / 50}}}});
+            ResultRow r;
+            r.pair = static_cast<std::size_t>(k);
+            r.method = m;
+            r.shape = "ring";
+            r.category = k % 2 ? "a" : "b";
+            r.seconds = m == "cpd" ? 0.05 : 0.005;
+            r.source_overlap_ratio = 0.5 + 0.015 * k;
+            r.target_overlap_ratio = 0.55 + 0.01 * k;
+            r.transform(0, 3) = 0.1 * (k % 3);
+            r.metrics.mae_r = e;
+            r.metrics.mae_t = e / 100;
+            r.metrics.ccd = 0.05;
+            r.metrics.rre = e;
+            r.metrics.rte = e / 50;
+            rows.push_back(r);
         }
     }
     return rows;
@@ -63,7 +65,7 @@ std::string Render() {
     s.rows = Rows();
     s.tables = {DistributionTable(s.rows, BreakdownOptions{}),
                 RecallTable(s.rows, BreakdownOptions{})};
-    s.pair_lookup = [](const nlohmann::json&) { return &pair; };
+    s.pair_lookup = [](const ResultRow&) { return &pair; };
     o.sections = {s};
     return RenderHtmlReport(o);
 }

@@ -11,13 +11,15 @@
 namespace regbench {
 namespace {
 
-nlohmann::json Row(int pair, const std::string& method, double mae_r, double seconds = 0.1) {
-    return {{"pair", pair},
-            {"method", method},
-            {"status", "ok"},
-            {"seconds", seconds},
-            {"threads", 1},
-            {"metrics", {{"mae_r", mae_r}, {"mae_t", mae_r / 100}, {"ccd", 0.05 + mae_r / 1000}}}};
+ResultRow Row(int pair, const std::string& method, double mae_r, double seconds = 0.1) {
+    ResultRow r;
+    r.pair = static_cast<std::size_t>(pair);
+    r.method = method;
+    r.seconds = seconds;
+    r.metrics.mae_r = mae_r;
+    r.metrics.mae_t = mae_r / 100;
+    r.metrics.ccd = 0.05 + mae_r / 1000;
+    return r;
 }
 
 Provenance Prov(const std::string& file) {
@@ -105,9 +107,8 @@ TEST(PaperReport, CiIsTheBreakdownsCiForTheSameRows) {
     // "± 10.6347" (two bootstrap streams for one mean). Both now resample with the stream of
     // (method, metric), 1000 resamples, seed 20230103: the independent computation is the
     // breakdown's DistributionTable over the same rows.
-    const std::vector<nlohmann::json> rows = {Row(0, "icp", 4.0), Row(1, "icp", 5.0),
-                                              Row(2, "icp", 9.0), Row(3, "icp", 30.0),
-                                              Row(4, "icp", 1.5)};
+    const std::vector<ResultRow> rows = {Row(0, "icp", 4.0), Row(1, "icp", 5.0), Row(2, "icp", 9.0),
+                                         Row(3, "icp", 30.0), Row(4, "icp", 1.5)};
     PaperTableOptions o;
     const Table paper = BuildPaperTable(FindPaperTableSpec("table1_modelnet_partial"),
                                         {ResultSet{"same_category", rows, Prov("same.h5"), ""}},
@@ -206,27 +207,29 @@ TEST(PaperReport, CsvAndJsonRoundTripWithProvenance) {
 
 /// A result row of `method` with the CPU time of its call and, for a learned method
 /// (`network` > 0), the network's CPU time, MACs and floor as the learned methods write them.
-nlohmann::json TimedRow(int pair,
-                        const std::string& method,
-                        double cpu_seconds,
-                        double network = 0.0,
-                        double macs = 0.0,
-                        double floor = 0.0) {
-    nlohmann::json r = Row(pair, method, 1.0, 2 * cpu_seconds);  // wall: not what is shown
-    r["cpu_seconds"] = cpu_seconds;
+ResultRow TimedRow(int pair,
+                   const std::string& method,
+                   double cpu_seconds,
+                   double network = 0.0,
+                   double macs = 0.0,
+                   double floor = 0.0) {
+    ResultRow r = Row(pair, method, 1.0, 2 * cpu_seconds);  // wall: not what is shown
+    r.cpu_seconds = cpu_seconds;
     if (network > 0.0) {
-        r["extra"] = {{"network_cpu_seconds", network},
-                      {"macs", macs},
-                      {"floor_seconds", floor},
-                      {"gemm_gmac_per_s", 1e-9 * macs / floor},
-                      {"blas", "TestBLAS 1.0 (pthreads)"}};
+        r.extra = {{"network_cpu_seconds", network},
+                   {"macs", macs},
+                   {"floor_seconds", floor},
+                   {"gemm_gmac_per_s", 1e-9 * macs / floor},
+                   {"blas", "TestBLAS 1.0 (pthreads)"}};
     }
     return r;
 }
 
 TEST(PaperReport, TimingTableMeanAndMedianByHand) {
+    // Pair 3's row was written before rows had cpu_seconds (it reads 0): no CPU time to show.
     ResultSet s{"",
-                {TimedRow(0, "cpd", 0.1), TimedRow(1, "cpd", 0.2), TimedRow(2, "cpd", 0.6)},
+                {TimedRow(0, "cpd", 0.1), TimedRow(1, "cpd", 0.2), TimedRow(2, "cpd", 0.6),
+                 TimedRow(3, "cpd", 0.0)},
                 Prov("same.h5"),
                 ""};
     const Table t =
@@ -235,6 +238,7 @@ TEST(PaperReport, TimingTableMeanAndMedianByHand) {
     // CPU milliseconds of the calls (not their wall seconds, twice as long here).
     EXPECT_NEAR(t.rows[0].cells[Col(t, "cpu_ms_mean")].value, 300.0, 1e-12);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "cpu_ms_median")].value, 200.0);
+    EXPECT_EQ(t.rows[0].cells[Col(t, "cpu_ms_mean")].pairs, 3u);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "points")].value, 1024);
     EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "paper:ms")].value, 4347.0);  // Tab. 6 CPD, 4.347 s
     EXPECT_NE(t.caption.find("Test CPU"), std::string::npos);

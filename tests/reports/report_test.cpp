@@ -253,6 +253,26 @@ TEST(Report, BootstrapDoesNotDependOnRowOrderOrTablePosition) {
     EXPECT_LT(first[0].mae_r.lo, first[0].mae_r.hi);  // a real interval, not a constant
 }
 
+TEST(Report, CiIsTheOneBootstrapMeanOfThePairValues) {
+    // The table's CI is BootstrapMean (reports/statistics.hpp, checked against numpy there) of
+    // the method's values in pair order, seed 20230103, stream named by what is estimated:
+    // "hash:<content hash>\n<method>\n<params>\n<metric>" (docs/metrics.md).
+    std::vector<ResultRow> rows;
+    std::vector<double> values;
+    for (std::size_t k = 0; k < 30; ++k) {
+        values.push_back(0.5 + static_cast<double>(k * 7 % 11));
+        rows.push_back(Row("a", values.back(), 0, 1, Status::kOk, k));
+    }
+    std::reverse(rows.begin(), rows.end());  // read in any order: sorted by pair first
+    const MethodSummary s = BuildTables(rows, ReportOptions{})[0].methods[0];
+    const BootstrapCi expected = BootstrapMean(values, 1000, kDefaultBootstrapSeed,
+                                               StreamId("hash:fnv1a64:aaaa\na\n{}\nmae_r"));
+    EXPECT_DOUBLE_EQ(s.mae_r.mean, expected.mean);
+    EXPECT_EQ(s.mae_r.lo, expected.lo);
+    EXPECT_EQ(s.mae_r.hi, expected.hi);
+    EXPECT_LT(s.mae_r.lo, s.mae_r.hi);
+}
+
 TEST(Report, EulerOptionRecomputesFromStoredGroundTruth) {
     // R_gt = Rx(10) Ry(20) Rz(30), R_est = Rx(16) Ry(20) Rz(25): 'zyx' angles (30, 20, 10) and
     // (25, 20, 16) -> mae_r 11/3 (hand computation). The row says 0 under 'xyz' on purpose.
@@ -284,6 +304,10 @@ TEST(Report, OldRowsWithoutEulerKeyReadAsXyz) {
     EXPECT_EQ(r.pair, 3u);
     EXPECT_TRUE(r.data.content_hash.empty());
     EXPECT_TRUE(std::isnan(r.metrics.overlap_rmse));
+    // No overlap ratios either: none read (not 0, a ratio), and none written back.
+    EXPECT_FALSE(r.source_overlap_ratio.has_value());
+    EXPECT_FALSE(r.target_overlap_ratio.has_value());
+    EXPECT_FALSE(nlohmann::json(r).contains("source_overlap_ratio"));
 }
 
 TEST(Report, UnknownKeysSurviveARoundTrip) {

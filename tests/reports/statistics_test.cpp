@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace regbench {
@@ -98,6 +100,37 @@ TEST(Statistics, BootstrapIsSeededAndBracketsTheMean) {
     EXPECT_NE(a.lo, c.lo);
     // Standard error of the mean is std/sqrt(40) ~ 0.34: the 95% CI spans roughly +-0.66.
     EXPECT_NEAR(a.hi - a.lo, 2 * 1.96 * SampleStd(v) / std::sqrt(40.0), 0.3);
+}
+
+TEST(Statistics, NearestRankQuantileIsNumpysNearest) {
+    // /usr/bin/python3, numpy 1.24.2: np.percentile(np.arange(B), [2.5, 97.5], method="nearest")
+    //   B = 1000 -> [25, 974]; B = 2000 -> [50, 1949]; B = 21 -> [0, 20] (halves to even:
+    //   0.025 * 20 = 0.5 -> 0, 0.975 * 20 = 19.5 -> 20).
+    for (const auto& [n, lo, hi] :
+         {std::tuple<int, double, double>{1000, 25, 974}, {2000, 50, 1949}, {21, 0, 20}}) {
+        std::vector<double> v(static_cast<std::size_t>(n));
+        for (int i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] = i;
+        EXPECT_DOUBLE_EQ(NearestRankQuantile(v, 0.025), lo) << n;
+        EXPECT_DOUBLE_EQ(NearestRankQuantile(v, 0.975), hi) << n;
+    }
+    EXPECT_TRUE(std::isnan(NearestRankQuantile({}, 0.5)));
+}
+
+TEST(Statistics, BootstrapCiIsTheNearestRankOfTheResampledMeans) {
+    std::vector<double> v;
+    for (int i = 0; i < 25; ++i) v.push_back(std::cos(i) + 0.1 * i);
+    const std::vector<double> means = SortedBootstrapMeans(v, 1000, 3, StreamId("y"));
+    ASSERT_EQ(means.size(), 1000u);
+    ASSERT_TRUE(std::is_sorted(means.begin(), means.end()));
+    const BootstrapCi ci = BootstrapMean(v, 1000, 3, StreamId("y"));
+    // Index 25 and 974 of 0..999: 25 resampled means below lo's index, 25 above hi's.
+    EXPECT_EQ(ci.lo, means[25]);
+    EXPECT_EQ(ci.hi, means[974]);
+    EXPECT_DOUBLE_EQ(ci.mean, SampleMean(v));
+    // Fewer than two values: no interval.
+    const BootstrapCi one = BootstrapMean({2.5}, 1000, 3, StreamId("y"));
+    EXPECT_DOUBLE_EQ(one.lo, 2.5);
+    EXPECT_DOUBLE_EQ(one.hi, 2.5);
 }
 
 }  // namespace

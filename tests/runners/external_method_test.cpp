@@ -35,15 +35,9 @@ private:
     std::atomic<int>* calls_;
 };
 
-class ExternalMethodTest : public testing::TempDirTest {
+class ExternalMethodTest : public testing::PairFileTest {
 protected:
-    void SetUp() override {
-        TempDirTest::SetUp();
-        pairs_ = Path("pairs.h5");
-        testing::WriteSyntheticPairFile(pairs_, 4, 40, 10, 3, [](int k) {
-            return MakeTransform(RotationZyxProductDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0});
-        });
-    }
+    ExternalMethodTest() : PairFileTest(4, 40, 10, 3) {}
     RunOptions Options(const std::string& out) {
         RunOptions o;
         o.pairs_path = pairs_;
@@ -56,7 +50,6 @@ protected:
         o.progress = false;
         return o;
     }
-    std::string pairs_;
     std::atomic<int> calls_{0};
 };
 

@@ -17,15 +17,9 @@
 namespace regbench {
 namespace {
 
-class RunnerTest : public testing::TempDirTest {
+class RunnerTest : public testing::PairFileTest {
 protected:
-    void SetUp() override {
-        TempDirTest::SetUp();
-        pairs_ = Path("pairs.h5");
-        testing::WriteSyntheticPairFile(pairs_, 6, 50, 10, 3, [](int k) {
-            return MakeTransform(RotationZyxProductDeg(5.0 * k, 0, 0), {0.01 * k, 0, 0});
-        });
-    }
+    RunnerTest() : PairFileTest(6, 50, 10, 3) {}
 
     RunOptions Options(const std::string& out) const {
         RunOptions o;
@@ -51,7 +45,6 @@ protected:
         }
         return rb;
     }
-    std::string pairs_;
 };
 
 TEST_F(RunnerTest, WritesOneRowPerPairAndMethodWithRequiredKeys) {

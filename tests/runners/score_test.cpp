@@ -18,15 +18,12 @@
 namespace regbench {
 namespace {
 
-class ScoreTest : public testing::TempDirTest {
+class ScoreTest : public testing::PairFileTest {
 protected:
-    void SetUp() override {
-        TempDirTest::SetUp();
-        pairs_ = Path("pairs.h5");
-        testing::WriteSyntheticPairFile(pairs_, 4, 60, 20, 5, [](int k) {
-            return MakeTransform(RotationXyzProductDeg(4.0 * k, -3.0, 6.0), {0.02 * k, 0.01, 0});
-        });
-    }
+    ScoreTest()
+        : PairFileTest(4, 60, 20, 5, [](int k) {
+              return MakeTransform(RotationXyzProductDeg(4.0 * k, -3.0, 6.0), {0.02 * k, 0.01, 0});
+          }) {}
     void Write(const std::string& name, const std::string& text) const {
         std::ofstream(Path(name)) << text;
     }
@@ -48,8 +45,6 @@ protected:
         RunBenchmark(o);
         return ReadJsonl(o.out_path);
     }
-
-    std::string pairs_;
 };
 
 /// The CSV line a user's script would write for one row: pair, top 3 rows, seconds.
