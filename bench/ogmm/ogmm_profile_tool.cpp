@@ -16,6 +16,7 @@
 #include <torch/torch.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -26,6 +27,7 @@
 
 #include "core/cpu_time.hpp"
 #include "ogmm/cost.hpp"
+#include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace {
@@ -105,6 +107,12 @@ int main(int argc, char** argv) {
         return 2;
     }
     torch::set_num_threads(1);
+    // A training step runs with the allocator setting `regbench train` uses; REGBENCH_MALLOC=
+    // default keeps glibc's (for A/B runs).
+    const char* malloc_mode = std::getenv("REGBENCH_MALLOC");
+    const bool retain = mode == "train" &&
+                        !(malloc_mode != nullptr && std::string(malloc_mode) == "default");
+    if (retain) regbench::ogmm::RetainFreedMemoryForTraining();
     torch::manual_seed(0);
     const nlohmann::json config = regbench::ogmm::NamedConfig(name);
     const auto net = regbench::ogmm::MakeNetFromConfig(config);
@@ -159,9 +167,10 @@ int main(int argc, char** argv) {
             static_cast<double>(regbench::ogmm::ComputeForwardCost(config, points, points).total);
         const double macs = (mode == "train" ? 3.0 : 1.0) * forward_macs * static_cast<double>(batch);
         const double per = work / repetitions;
-        std::printf("%s %s: %lld points, batch %lld, 1 thread, %d repetitions\n", name.c_str(),
-                    full_mode.c_str(), static_cast<long long>(points),
-                    static_cast<long long>(batch), repetitions);
+        std::printf("%s %s: %lld points, batch %lld, 1 thread, %d repetitions%s\n",
+                    name.c_str(), full_mode.c_str(), static_cast<long long>(points),
+                    static_cast<long long>(batch), repetitions,
+                    retain ? ", freed memory retained (as regbench train)" : "");
         std::printf("cpu_s %.4f  GMAC %.3f  GMAC_per_s %.2f  floor_s %.4f  ratio %.3f  "
                     "pairs_per_cpu_s %.3f  minflt %.0f\n",
                     per, macs * 1e-9, rate * 1e-9, macs / rate, per / (macs / rate),
