@@ -216,6 +216,29 @@ TEST(EdgeStages, DgcnnTrainingForwardAndBackwardMatchTheReferencePath) {
     }
 }
 
+// The fused passes run in fixed chunks of points on LibTorch's threads and add the chunks' sums
+// in order, so the result does not depend on the thread count (bit for bit).
+TEST(EdgeStages, ResultsDoNotDependOnTheThreadCount) {
+    torch::manual_seed(6);
+    const int64_t points = 400, k = 10;
+    const torch::Tensor rows = torch::randn({points * k, 6});
+    const std::vector<EdgeStage> base = RandomStages({6, 16, 32}, torch::kFloat);
+    std::vector<torch::Tensor> results[2];
+    for (int threads = 1; threads <= 2; ++threads) {
+        torch::set_num_threads(threads);
+        const std::vector<EdgeStage> stages = Copy(base);
+        const torch::Tensor in = rows.clone().requires_grad_();
+        const torch::Tensor out = EdgeStagesFused(in, stages, k);
+        out.pow(2).sum().backward();
+        results[threads - 1] = {out, in.grad(), stages[0].weight.grad(), stages[1].bn_weight.grad(),
+                                stages[1].running_var};
+    }
+    torch::set_num_threads(1);
+    for (size_t i = 0; i < results[0].size(); ++i) {
+        EXPECT_TRUE(torch::equal(results[0][i], results[1][i])) << "tensor " << i;
+    }
+}
+
 TEST(EdgeStages, RefusesRowsThatAreNotWholePoints) {
     const std::vector<EdgeStage> stages = RandomStages({6, 8}, torch::kFloat);
     EXPECT_THROW(EdgeStagesFused(torch::randn({10, 6}), stages, 3), std::invalid_argument);
