@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/kd_tree.hpp"
+#include "ogmm/edge_stages.hpp"
 #include "ogmm/profile_scope.hpp"
 
 namespace regbench::ogmm {
@@ -241,14 +242,25 @@ torch::Tensor DgcnnImpl::forward(const torch::Tensor& xyz) {
     torch::Tensor x = EdgeFeatures(xyz, KnnIndices(xyz, k_))  // [B, 6, N, k]
                           .permute({0, 2, 3, 1})
                           .reshape({batch * points * k_, 6});
-    std::vector<torch::Tensor> pooled;
-    const std::pair<torch::nn::Conv2d*, torch::nn::BatchNorm2d*> stages[] = {
-        {&conv1_, &bn1_}, {&conv2_, &bn2_}, {&conv3_, &bn3_}, {&conv4_, &bn4_}};
-    for (const auto& [conv, bn] : stages) {
-        x = RowsConvBnRelu(x, *conv, *bn);
-        pooled.push_back(MaxOverNeighbours(x.view({batch, points, k_, x.size(1)})));
+    torch::Tensor cat;  // [BN, 512]
+    if (is_training() && x.device().is_cpu() &&
+        (x.scalar_type() == torch::kFloat || x.scalar_type() == torch::kDouble)) {
+        // Training: the four edge stages with batch statistics (ogmm/edge_stages.hpp), fused
+        // into one autograd Function unless a test asks for the LibTorch composition.
+        const std::vector<EdgeStage> stages = {EdgeStageOf(conv1_, bn1_), EdgeStageOf(conv2_, bn2_),
+                                               EdgeStageOf(conv3_, bn3_), EdgeStageOf(conv4_, bn4_)};
+        cat = FusedEdgeStages() ? EdgeStagesFused(x, stages, k_)
+                                : EdgeStagesReference(x, stages, k_);
+    } else {
+        std::vector<torch::Tensor> pooled;
+        const std::pair<torch::nn::Conv2d*, torch::nn::BatchNorm2d*> stages[] = {
+            {&conv1_, &bn1_}, {&conv2_, &bn2_}, {&conv3_, &bn3_}, {&conv4_, &bn4_}};
+        for (const auto& [conv, bn] : stages) {
+            x = RowsConvBnRelu(x, *conv, *bn);
+            pooled.push_back(MaxOverNeighbours(x.view({batch, points, k_, x.size(1)})));
+        }
+        cat = torch::cat(pooled, 2).view({batch * points, -1});
     }
-    const torch::Tensor cat = torch::cat(pooled, 2).view({batch * points, -1});  // [BN, 512]
     return RowsConvBnRelu(cat, conv5_, bn5_).view({batch, points, -1}).transpose(1, 2);
 }
 

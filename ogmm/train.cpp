@@ -2,6 +2,9 @@
 
 #include <fcntl.h>
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <cerrno>
 #include <chrono>
@@ -435,6 +438,7 @@ Trainer::Trainer(const nlohmann::json& config, const TrainData& data, const Trai
     if (!data.train_pair) throw std::invalid_argument("Train: no training data source");
     if (options.out_dir.empty()) throw std::invalid_argument("Train: no output directory");
     torch::set_num_threads(std::max(1, options.threads));
+    RetainFreedMemoryForTraining();
     torch::manual_seed(options.seed);  // deterministic initial weights
     net_ = MakeNetFromConfig(config);
     net_->to(device_);
@@ -716,6 +720,13 @@ std::vector<Transform> Predict(RegistrationNet& net,
         for (int64_t i = 0; i < o.T.size(0); ++i) out.push_back(ToTransform(o.T[i]));
     }
     return out;
+}
+
+void RetainFreedMemoryForTraining() {
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_MAX, 0);        // large blocks from the heap, where freed ones are reused
+    mallopt(M_TRIM_THRESHOLD, -1);  // and the heap's top is never given back (mallopt(3))
+#endif
 }
 
 TrainSummary Train(const nlohmann::json& config,

@@ -4,18 +4,30 @@
 // prints, per name, the calls and the self CPU time (time inside the op minus the ops it called)
 // and the inclusive time. Stages are the `ogmm::...` / `deepgmr::...` scopes the networks open
 // (ogmm/profile_scope.hpp); aten::... rows are LibTorch operators.
-// Usage: regbench_ogmm_profile CONFIG [forward|train] [repetitions] [points] [batch]
+// Usage: regbench_ogmm_profile CONFIG [forward|train|forward-time|train-time] [repetitions]
+//                              [points] [batch]
 //   e.g. OMP_WAIT_POLICY=PASSIVE build/bench/regbench_ogmm_profile ogmm-small train 3
+// The *-time modes run without the profiler (whose per-op cost favours graphs of fewer ops) and
+// print, like bench/ogmm's BM_*TrainStep, the CPU seconds of the calling thread per repetition,
+// the GEMM floor (ogmm/cost MACs, 3x the forward's for a training step, at the rate of a
+// 717x512x512 fp32 torch::mm timed interleaved with the work, about 1 GEMM second per 4 work
+// seconds), the ratio to it, pairs per CPU second and the minor page faults per repetition.
 #include <torch/csrc/autograd/profiler_legacy.h>
 #include <torch/torch.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <map>
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
+#include "core/cpu_time.hpp"
+#include "ogmm/cost.hpp"
+#include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace {
@@ -79,12 +91,14 @@ void Print(const std::map<std::string, Totals>& totals, int repetitions) {
 
 int main(int argc, char** argv) {
     if (argc < 2) {
-        std::cerr << "usage: regbench_ogmm_profile CONFIG [forward|train] [repetitions] [points]"
-                     " [batch]\n";
+        std::cerr << "usage: regbench_ogmm_profile CONFIG [forward|train|forward-time|train-time]"
+                     " [repetitions] [points] [batch]\n";
         return 2;
     }
     const std::string name = argv[1];
-    const std::string mode = argc > 2 ? argv[2] : "forward";
+    const std::string full_mode = argc > 2 ? argv[2] : "forward";
+    const bool timed = full_mode.size() > 5 && full_mode.substr(full_mode.size() - 5) == "-time";
+    const std::string mode = timed ? full_mode.substr(0, full_mode.size() - 5) : full_mode;
     const int repetitions = argc > 3 ? std::stoi(argv[3]) : 3;
     const int64_t points = argc > 4 ? std::stoll(argv[4]) : 717;
     const int64_t batch = argc > 5 ? std::stoll(argv[5]) : (mode == "train" ? 8 : 1);
@@ -93,6 +107,12 @@ int main(int argc, char** argv) {
         return 2;
     }
     torch::set_num_threads(1);
+    // A training step runs with the allocator setting `regbench train` uses; REGBENCH_MALLOC=
+    // default keeps glibc's (for A/B runs).
+    const char* malloc_mode = std::getenv("REGBENCH_MALLOC");
+    const bool retain = mode == "train" &&
+                        !(malloc_mode != nullptr && std::string(malloc_mode) == "default");
+    if (retain) regbench::ogmm::RetainFreedMemoryForTraining();
     torch::manual_seed(0);
     const nlohmann::json config = regbench::ogmm::NamedConfig(name);
     const auto net = regbench::ogmm::MakeNetFromConfig(config);
@@ -118,6 +138,46 @@ int main(int argc, char** argv) {
         opt.step();
     };
     run();  // warm-up, unprofiled
+    if (timed) {
+        const torch::Tensor a = torch::rand({717, 512}), b = torch::rand({512, 512});
+        torch::Tensor c = torch::empty({717, 512});
+        torch::mm_out(c, a, b);
+        double work = 0.0, gemm = 0.0;
+        int64_t gemms = 0;
+        rusage before{}, after{};
+        long faults = 0;
+        for (int i = 0; i < repetitions; ++i) {
+            getrusage(RUSAGE_THREAD, &before);
+            const double t0 = regbench::ThreadCpuSeconds();
+            run();
+            const double t1 = regbench::ThreadCpuSeconds();
+            getrusage(RUSAGE_THREAD, &after);
+            faults += after.ru_minflt - before.ru_minflt;
+            work += t1 - t0;
+            double spent = 0.0;
+            do {
+                torch::mm_out(c, a, b);
+                ++gemms;
+                spent = regbench::ThreadCpuSeconds() - t1;
+            } while (spent < 0.25 * (t1 - t0));
+            gemm += spent;
+        }
+        const double rate = static_cast<double>(gemms) * 717.0 * 512.0 * 512.0 / gemm;
+        const double forward_macs =
+            static_cast<double>(regbench::ogmm::ComputeForwardCost(config, points, points).total);
+        const double macs = (mode == "train" ? 3.0 : 1.0) * forward_macs * static_cast<double>(batch);
+        const double per = work / repetitions;
+        std::printf("%s %s: %lld points, batch %lld, 1 thread, %d repetitions%s\n",
+                    name.c_str(), full_mode.c_str(), static_cast<long long>(points),
+                    static_cast<long long>(batch), repetitions,
+                    retain ? ", freed memory retained (as regbench train)" : "");
+        std::printf("cpu_s %.4f  GMAC %.3f  GMAC_per_s %.2f  floor_s %.4f  ratio %.3f  "
+                    "pairs_per_cpu_s %.3f  minflt %.0f\n",
+                    per, macs * 1e-9, rate * 1e-9, macs / rate, per / (macs / rate),
+                    static_cast<double>(batch) / per,
+                    static_cast<double>(faults) / repetitions);
+        return 0;
+    }
     profiler::thread_event_lists events;
     {
         profiler::TLSLegacyProfilerGuard guard(
