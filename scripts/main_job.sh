@@ -10,7 +10,9 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="${REGBENCH_JOBS:-$(nproc)}"
 # The main job needs the `regbench` binary only; tests and benchmarks are built by
 # scripts/test.sh (about half of a cold build's compile time).
-REGBENCH_BUILD_TARGETS="${REGBENCH_BUILD_TARGETS:-regbench}" bash "$root/scripts/setup.sh"
+# Only the packages that build needs are installed (scripts/install_deps.sh --main).
+REGBENCH_MAIN_ONLY=1 REGBENCH_BUILD_TARGETS="${REGBENCH_BUILD_TARGETS:-regbench}" \
+  bash "$root/scripts/setup.sh"
 out="$root/out/reproduce"
 start=$(date +%s)
 # shellcheck disable=SC2086
