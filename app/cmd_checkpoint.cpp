@@ -10,6 +10,7 @@
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
+#include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "ogmm/authors_checkpoint.hpp"
 #endif
@@ -83,12 +84,12 @@ void SetupExport(CLI::App* cmd) {
     cmd->callback([a] {
         CheckOutputPath(a->out);
         const OutputLock lock(a->out);
-        const ogmm::StateDict sd = ogmm::ExportAuthorsStateDict(a->dir, a->to);
-        WriteFileAtomic(a->out, ogmm::WriteTorchSaveZip(sd),
+        const ogmm::AuthorsPth pth = ogmm::ExportAuthorsPth(a->dir, a->to);
+        WriteFileAtomic(a->out, pth.bytes,
                         {(std::filesystem::path(a->dir) / "weights.pt").string(),
                          (std::filesystem::path(a->dir) / "checkpoint.json").string()});
-        std::cout << "export-checkpoint: wrote " << a->out << " (" << sd.size()
-                  << " tensors, sha256 " << ogmm::Sha256File(a->out) << ")\n";
+        std::cout << "export-checkpoint: wrote " << a->out << " (" << pth.tensors
+                  << " tensors, sha256 " << Sha256File(a->out) << ")\n";
     });
 }
 #else

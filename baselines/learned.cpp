@@ -1,11 +1,7 @@
-// Torch-only translation unit: Open3D is reached through the `icp` method (baselines/icp.cpp), so
-// Torch and Open3D headers never meet in one file.
+// The learned methods. Neither LibTorch nor Open3D headers are included here: the networks are
+// reached through ogmm/ (ogmm/inference.hpp), ICP through the `icp` method (baselines/icp.cpp).
 #include "baselines/learned.hpp"
 
-#include <torch/torch.h>
-
-#include <Eigen/LU>
-#include <Eigen/SVD>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -20,6 +16,7 @@
 #include "ogmm/checkpoint_json.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/gemm_floor.hpp"
+#include "ogmm/inference.hpp"
 
 namespace regbench {
 
@@ -95,30 +92,6 @@ struct LearnedOptions {
     }
 };
 
-torch::Tensor ToTensor(const PointCloud& cloud) {
-    torch::Tensor t = torch::empty({1, cloud.rows(), 3}, torch::kDouble);
-    std::copy(cloud.data(), cloud.data() + cloud.size(), t.data_ptr<double>());
-    return t.to(torch::kFloat);
-}
-
-/// The network's [4, 4] estimate as a double transform. The networks compute in float32, so
-/// their R is orthonormal only to ~1e-7; it is replaced by the nearest rotation in double
-/// (R = U diag(1, 1, det(U V^T)) V^T from the SVD, a change of the same ~1e-7 order) so the
-/// method returns an exactly rigid transform like every other method.
-Transform ToTransform(const torch::Tensor& T) {
-    const torch::Tensor c = T.detach().to(torch::kCPU, torch::kDouble).contiguous();
-    Eigen::Matrix<double, 4, 4, Eigen::RowMajor> m;
-    std::copy(c.data_ptr<double>(), c.data_ptr<double>() + 16, m.data());
-    Transform out = m;
-    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(out.topLeftCorner<3, 3>(),
-                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-    D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
-    out.topLeftCorner<3, 3>() = svd.matrixU() * D * svd.matrixV().transpose();
-    out.row(3) << 0.0, 0.0, 0.0, 1.0;
-    return out;
-}
-
 class LearnedMethod final : public RegistrationMethod {
 public:
     template <bool kIcp, bool kAttention>
@@ -147,21 +120,12 @@ protected:
         AlignResult result;
         result.extra["checkpoint"] = checkpoint_;
         if (!Load(result)) return result;
-        torch::set_num_threads(std::max(1, context.threads));
-        // torch's thread count does not reach an OpenBLAS built with pthreads, which would run
-        // the GEMMs on every core beside the calling thread's clock.
-        ogmm::SetBlasThreads(context.threads);
-        torch::NoGradGuard no_grad;
-        ogmm::PairBatch batch;
-        batch.source = ToTensor(source);
-        batch.target = ToTensor(target);
-        // FPS starts etc. depend on the pair only: a generator of this call's own, since the
-        // runner's threads share this method (the global RNG made --jobs 2 runs differ).
-        batch.generator = at::detail::createCPUGenerator(context.IntSeed());
         const auto t0 = std::chrono::steady_clock::now();
         const CpuStopwatch cpu(context.threads);
-        const ogmm::NetOutput out = net_->Forward(batch);
-        const Transform T_net = ToTransform(out.T[0]);
+        // FPS starts etc. depend on the pair only (the seed), not on other runner threads.
+        const ogmm::PairEstimate estimate =
+            ogmm::EstimatePair(*net_, source, target, context.IntSeed(), context.threads);
+        const Transform& T_net = estimate.T;
         result.extra["network_cpu_seconds"] = cpu.Elapsed();
         result.extra["network_seconds"] =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -183,10 +147,8 @@ protected:
             result.extra["blas"] = ogmm::BlasDescription();
         }
         // Per-point outputs (overlap scores and the like) summarised by their mean.
-        for (const auto& [key, value] : out.aux) {
-            if (value.dim() == 2 && value.size(0) == 1 && value.size(1) == source.rows()) {
-                result.extra[key + "_mean"] = value.mean().item<double>();
-            }
+        for (const auto& [key, mean] : estimate.source_point_means) {
+            result.extra[key + "_mean"] = mean;
         }
         result.T_target_source = T_net;
         result.stop_reason = "network";

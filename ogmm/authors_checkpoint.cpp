@@ -1,5 +1,7 @@
 #include "ogmm/authors_checkpoint.hpp"
 
+#include "ogmm/authors_state_dict.hpp"
+
 #include <algorithm>
 #include <filesystem>
 #include <map>
@@ -8,6 +10,7 @@
 #include <stdexcept>
 
 #include "ogmm/checkpoint.hpp"
+#include "ogmm/net.hpp"
 #include "ogmm/rri.hpp"
 #include "ogmm/zoo.hpp"
 
@@ -292,6 +295,11 @@ StateDict ExportAuthorsStateDict(const std::string& dir, const std::string& to) 
     StateDict out;
     for (const auto& [au, r] : AuthorsKeyMapping(to, config)) out.emplace_back(au, rb.at(r).detach().clone());
     return out;
+}
+
+AuthorsPth ExportAuthorsPth(const std::string& dir, const std::string& to) {
+    const StateDict sd = ExportAuthorsStateDict(dir, to);
+    return {WriteTorchSaveZip(sd), sd.size()};
 }
 
 }  // namespace regbench::ogmm

@@ -6,12 +6,14 @@
 // / `ogmm` modules, refuses missing, unexpected or mis-shaped tensors by name, and writes a
 // regbench checkpoint folder whose checkpoint.json records the source's sha256 and the mapping.
 // Export writes the reverse: a zip-format .pth the authors' modules load strictly.
+// This header is free of LibTorch types (callers outside ogmm/ compile without its headers);
+// the state-dict level is in ogmm/authors_state_dict.hpp.
+#include <cstddef>
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include "ogmm/torch_save_reader.hpp"
 
 namespace regbench::ogmm {
 
@@ -31,12 +33,6 @@ struct ImportOptions {
 std::vector<std::pair<std::string, std::string>> AuthorsKeyMapping(const std::string& from,
                                                                     const nlohmann::json& config);
 
-/// The regbench model config (zoo form, with "arch", "name" and "train") the state dict
-/// `tensors` of file `file` describes. Throws std::runtime_error naming the file and tensor.
-nlohmann::json InferAuthorsConfig(const StateDict& tensors,
-                                  const std::string& file,
-                                  const ImportOptions& options);
-
 /// Reads `pth`, checks and maps it, writes the checkpoint folder `out_dir` (atomically).
 /// Returns the checkpoint.json written. Throws std::runtime_error naming the file and every
 /// missing, unexpected or mis-shaped tensor.
@@ -44,8 +40,15 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
                                        const std::string& out_dir,
                                        const ImportOptions& options);
 
-/// The state dict the authors' module `to` ("deepgmr" | "ogmm") would have for the checkpoint
-/// in `dir`, in their key order. Throws naming the folder when it is of another family.
-StateDict ExportAuthorsStateDict(const std::string& dir, const std::string& to);
+/// A .pth the authors' module `to` ("deepgmr" | "ogmm") loads strictly.
+struct AuthorsPth {
+    std::string bytes;        ///< zip-format torch.save of the state dict
+    std::size_t tensors = 0;  ///< how many tensors it holds
+};
+
+/// The checkpoint in `dir` as the authors' module `to` would hold it (ExportAuthorsStateDict
+/// in ogmm/authors_state_dict.hpp, serialised). Throws naming the folder when it is of another
+/// family.
+AuthorsPth ExportAuthorsPth(const std::string& dir, const std::string& to);
 
 }  // namespace regbench::ogmm

@@ -16,6 +16,7 @@
 #include "core/atomic_file.hpp"
 #include "core/version.hpp"
 #include "ogmm/checkpoint_json.hpp"
+#include "ogmm/net.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::ogmm {

@@ -7,9 +7,15 @@
 #include <string>
 #include <vector>
 
-#include "ogmm/net.hpp"
+// Declared, not included: this header is free of LibTorch's headers, so callers outside ogmm/
+// (the learned methods, the CLI) compile without them (about 20 s of CPU a file).
+namespace torch::optim {
+class Optimizer;
+}  // namespace torch::optim
 
 namespace regbench::ogmm {
+
+class RegistrationNet;  // ogmm/net.hpp
 
 constexpr char kCheckpointJson[] = "checkpoint.json";
 constexpr char kWeightsFile[] = "weights.pt";

@@ -1,5 +1,7 @@
 #include "ogmm/train.hpp"
 
+#include "ogmm/train_batch.hpp"
+
 #include <fcntl.h>
 #include <unistd.h>
 #if defined(__GLIBC__)
@@ -28,6 +30,7 @@
 #include "core/params.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/checkpoint_json.hpp"
+#include "ogmm/layers.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::ogmm {
@@ -387,6 +390,8 @@ private:
     double Step(const PairBatch& batch);
     void EndEpoch();
     void Checkpoint(const EpochMetrics& m);
+    /// The step this run ends at: the LR plan's last, or --max-steps when that comes first.
+    std::int64_t LastStep() const;
     bool ShouldStop() const;
     void PlanForBudget();
     double LearningRate() const;
@@ -574,27 +579,33 @@ double Trainer::Step(const PairBatch& batch) {
 void Trainer::LogProgress(const LossTerms& terms) {
     if (std::chrono::duration<double>(Clock::now() - last_progress_).count() <
             options_.progress_seconds &&
-        state_.step != state_.planned_steps) {
+        state_.step != LastStep()) {
         return;
     }
     last_progress_ = Clock::now();
     const double session = std::chrono::duration<double>(Clock::now() - session_start_).count();
     const double rate =
         static_cast<double>(steps_this_session_ * recipe_.batch) / std::max(session, 1e-9);
-    double eta = static_cast<double>((state_.planned_steps - state_.step) * recipe_.batch) /
-                 std::max(rate, 1e-9);
+    double eta =
+        static_cast<double>((LastStep() - state_.step) * recipe_.batch) / std::max(rate, 1e-9);
     if (budget_seconds_ > 0) eta = std::min(eta, std::max(0.0, budget_seconds_ - session));
     log_ << "train: epoch " << (state_.step - 1) / steps_per_epoch_ + 1 << " step " << state_.step
-         << "/" << state_.planned_steps << " lr " << state_.lr;
+         << "/" << state_.planned_steps;
+    if (LastStep() < state_.planned_steps) log_ << " (stops at " << LastStep() << ")";
+    log_ << " lr " << state_.lr;
     for (const auto& [name, value] : terms) log_ << " " << name << " " << value.item<double>();
     log_ << " | " << std::fixed << std::setprecision(2) << rate << " pairs/s, ETA "
          << FormatSeconds(eta) << std::defaultfloat << std::setprecision(6) << "\n";
     log_.flush();
 }
 
+std::int64_t Trainer::LastStep() const {
+    return options_.max_steps > 0 ? std::min(options_.max_steps, state_.planned_steps)
+                                  : state_.planned_steps;
+}
+
 bool Trainer::ShouldStop() const {
-    if (state_.step >= state_.planned_steps) return true;
-    if (options_.max_steps > 0 && state_.step >= options_.max_steps) return true;
+    if (state_.step >= LastStep()) return true;
     if (g_stop_requested != 0) return true;
     const double session = std::chrono::duration<double>(Clock::now() - session_start_).count();
     return budget_seconds_ > 0 && session + last_validation_seconds_ * kValidationTimeMargin +
@@ -689,8 +700,7 @@ TrainSummary Trainer::Run() {
     // checkpoint.
     if (state_.epoch_loss_steps > 0 || !fs::exists(dir_ / "last")) EndEpoch();
     summary_.steps = state_.step;
-    summary_.budget_exhausted = budget_seconds_ > 0 && state_.step < state_.planned_steps &&
-                                !(options_.max_steps > 0 && state_.step >= options_.max_steps);
+    summary_.budget_exhausted = budget_seconds_ > 0 && state_.step < LastStep();
     if (g_stop_requested != 0) {
         log_ << "train: stopped by a signal at step " << state_.step
              << " with a checkpoint; continue with --resume\n";
@@ -702,25 +712,6 @@ TrainSummary Trainer::Run() {
 }
 
 }  // namespace
-
-std::vector<Transform> Predict(RegistrationNet& net,
-                               const std::vector<TrainSample>& samples,
-                               int batch,
-                               const torch::Device& device) {
-    net.eval();
-    torch::NoGradGuard no_grad;
-    std::vector<Transform> out;
-    for (std::size_t start = 0; start < samples.size(); start += static_cast<std::size_t>(batch)) {
-        const std::size_t end = std::min(samples.size(), start + static_cast<std::size_t>(batch));
-        const PairBatch b =
-            Collate(std::vector<TrainSample>(samples.begin() + static_cast<std::ptrdiff_t>(start),
-                                             samples.begin() + static_cast<std::ptrdiff_t>(end)),
-                    device);
-        const NetOutput o = net.Forward(b);
-        for (int64_t i = 0; i < o.T.size(0); ++i) out.push_back(ToTransform(o.T[i]));
-    }
-    return out;
-}
 
 void RetainFreedMemoryForTraining() {
 #if defined(__GLIBC__)

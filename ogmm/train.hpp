@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "core/point_cloud.hpp"
-#include "ogmm/net.hpp"
 
 namespace regbench::ogmm {
 
@@ -122,14 +121,5 @@ TrainSummary Train(const nlohmann::json& config,
 /// docs/performance.md, section 6). The cost: the process's heap stays at its peak. No effect
 /// without glibc.
 void RetainFreedMemoryForTraining();
-
-/// Stacks samples into a batch (same point counts required; names the first mismatch).
-PairBatch Collate(const std::vector<TrainSample>& samples, const torch::Device& device);
-
-/// Runs `net` (eval mode, no gradient) on samples in batches; returns T_target_source per pair.
-std::vector<Transform> Predict(RegistrationNet& net,
-                               const std::vector<TrainSample>& samples,
-                               int batch,
-                               const torch::Device& device);
 
 }  // namespace regbench::ogmm

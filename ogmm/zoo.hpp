@@ -5,10 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "ogmm/layers.hpp"  // CountParameters
-#include "ogmm/net.hpp"
-
 namespace regbench::ogmm {
+
+class RegistrationNet;  // ogmm/net.hpp; declared only, so this header is free of LibTorch's
 
 /// Names MakeNet knows, in display order.
 std::vector<std::string> ModelNames();

@@ -27,6 +27,7 @@
 
 #include "core/cpu_time.hpp"
 #include "ogmm/cost.hpp"
+#include "ogmm/net.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
 

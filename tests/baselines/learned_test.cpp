@@ -12,6 +12,7 @@
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
 #include "ogmm/checkpoint.hpp"
+#include "ogmm/net.hpp"
 #include "ogmm/zoo.hpp"
 #include "runners/registry.hpp"
 #include "tests/baselines/registration_fixtures.hpp"

@@ -5,7 +5,7 @@
 // sha256 from Python's hashlib, and the round trip's equality from torch.load + torch.equal +
 // load_state_dict(strict=True) in the authors' layout. Skipped (with the reason) where
 // /usr/bin/python3 has no torch.
-#include "ogmm/authors_checkpoint.hpp"
+#include "ogmm/authors_state_dict.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,6 +16,7 @@
 
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/gmm_head.hpp"
+#include "ogmm/net.hpp"
 #include "ogmm/torch_save_reader.hpp"
 #include "tests/testing/files.hpp"
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "ogmm/net.hpp"
 #include "ogmm/zoo.hpp"
 #include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/files.hpp"

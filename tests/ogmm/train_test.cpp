@@ -1,4 +1,5 @@
 #include "ogmm/train.hpp"
+#include "ogmm/train_batch.hpp"
 
 #include <gtest/gtest.h>
 #include <time.h>
@@ -243,6 +244,24 @@ TEST(Train, ResumeDropsATornMetricsLine) {
     const auto columns = [](const std::string& l) { return std::count(l.begin(), l.end(), ','); };
     for (const auto& l : lines) EXPECT_EQ(columns(l), columns(lines[0])) << l;
     EXPECT_NE(log.str().find("dropped a torn last line"), std::string::npos);
+    fs::remove_all(dir);
+}
+
+// A run limited by --max-steps printed the LR plan's step count and an ETA to the plan's end
+// (found 2026-12-04: `--max-steps 576` of a 2,560-step plan showed "ETA 0h58m" with 3 steps
+// left). Expected, by hand: the line names the stop step and the last line's ETA is zero.
+TEST(Train, ProgressCountsDownToMaxSteps) {
+    torch::set_num_threads(1);
+    const TrainData data = testing::SyntheticData(4, 160, 2);
+    std::ostringstream log;
+    const fs::path dir = TempDir("progress");
+    TrainOptions o = Options(dir, log);
+    o.max_steps = 3;
+    o.progress_seconds = 0;
+    Train(SmallRecipe("deepgmr-orig-xyz"), data, o);  // a plan of 20 steps
+    EXPECT_NE(log.str().find("step 3/20 (stops at 3) lr"), std::string::npos) << log.str();
+    const std::string last = log.str().substr(log.str().rfind("step 3/20"));
+    EXPECT_NE(last.find("ETA 0h00m00s"), std::string::npos) << last;
     fs::remove_all(dir);
 }
 
