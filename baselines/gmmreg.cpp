@@ -75,16 +75,12 @@ struct GmmRegOptions : AnnealedL2Options {
         f("gmm_tol", gmm_tol,
           "EM stops when the mean log-likelihood changes by < gmm_tol (sklearn 1e-3)");
         f("seed", seed, "seed of the k-means++ initialisation (sklearn's is unseeded in probreg)");
-        f("kernel_sums", sums.kernel_sums,
-          "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per cell of "
-          "compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1 / cutoff_tolerance)) "
-          "are skipped (docs/performance.md: accuracy cost); \"dense\": always exact");
-        f("approx_min_pairs", sums.min_pairs,
-          "component pairs K_s * K_t from which kernel_sums=auto approximates");
-        f("cutoff_tolerance", sums.cutoff_tolerance,
-          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
-        f("compress_cell_sigmas", sums.compress_cell_sigmas,
-          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
+        sums.Fields(f,
+                    "\"auto\": from approx_min_pairs = K_s * K_t on, both mixtures are merged per "
+                    "cell of compress_cell_sigmas * sigma and pairs beyond sigma sqrt(2 ln(1 / "
+                    "cutoff_tolerance)) are skipped (docs/performance.md: accuracy cost); "
+                    "\"dense\": always exact",
+                    "component pairs K_s * K_t from which kernel_sums=auto approximates");
     }
     void Validate(ParamCheck& c) const {
         AnnealedL2Options::Validate(c);

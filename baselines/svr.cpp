@@ -77,14 +77,10 @@ struct SvrOptions : AnnealedL2Options {
         f("svm_max_points", svm_max_points,
           "fit each one-class SVM on a seeded random subsample of this many points when the cloud "
           "is larger (alphas scaled by n / subsample); >= 10");
-        f("kernel_sums", sums.kernel_sums,
-          "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed mixtures and "
-          "a kd-tree cutoff (as gmmreg); \"dense\": always exact");
-        f("approx_min_pairs", sums.min_pairs, "S_s * S_t from which kernel_sums=auto approximates");
-        f("cutoff_tolerance", sums.cutoff_tolerance,
-          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
-        f("compress_cell_sigmas", sums.compress_cell_sigmas,
-          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
+        sums.Fields(f,
+                    "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed "
+                    "mixtures and a kd-tree cutoff (as gmmreg); \"dense\": always exact",
+                    "S_s * S_t from which kernel_sums=auto approximates");
     }
     void Validate(ParamCheck& c) const {
         AnnealedL2Options::Validate(c);

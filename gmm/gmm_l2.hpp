@@ -65,6 +65,19 @@ struct L2SumOptions {
     double min_pairs = 1e8;             ///< K_s * K_t at which approximation starts, >= 0
     double cutoff_tolerance = 1e-4;     ///< relative kernel value at the cutoff radius, in (0, 1)
     double compress_cell_sigmas = 0.1;  ///< cell edge in sigmas, in [0, 1]; 0 = no compression
+
+    /// Binds these fields under the JSON keys of GMMReg and SVR (core/params.hpp):
+    /// kernel_sums and approx_min_pairs with the method's docs (its mixtures count the pairs),
+    /// the cutoff and the compression with the meaning they have in both.
+    template <class F>
+    void Fields(F&& f, const char* kernel_sums_doc, const char* approx_min_pairs_doc) {
+        f("kernel_sums", kernel_sums, kernel_sums_doc);
+        f("approx_min_pairs", min_pairs, approx_min_pairs_doc);
+        f("cutoff_tolerance", cutoff_tolerance,
+          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
+        f("compress_cell_sigmas", compress_cell_sigmas,
+          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
+    }
 };
 
 /// Cutoff radius, in sigmas, at which exp(-r^2 / 2) = tolerance: sqrt(2 ln(1 / tolerance)).

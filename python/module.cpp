@@ -97,6 +97,30 @@ py::array LabelView(const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels
     return view;
 }
 
+/// Getter of a Pair property that is a no-copy view of one of the pair's arrays (`view`:
+/// CloudView or LabelView); the view keeps the Pair object, and with it the PairFile, alive.
+template <class Array>
+auto PairArrayView(Array Pair::*array, py::array (*view)(const Array&, py::handle)) {
+    return [array, view](py::object self) {
+        return view(self.cast<const PairRef&>().pair().*array, self);
+    };
+}
+
+/// The shortcuts to the file's DataTag that Pair and PairFile share; `tag(object)` is the
+/// object's DataTag.
+template <class T, class... Extra, class GetTag>
+void DefDataTagShortcuts(py::class_<T, Extra...>& cls, GetTag tag) {
+    cls.def_property_readonly(
+           "content_hash", [tag](const T& x) { return tag(x).content_hash; },
+           "Hash of the pairs' arrays (rows' data.content_hash).")
+        .def_property_readonly("dataset", [tag](const T& x) { return tag(x).dataset; })
+        .def_property_readonly("protocol", [tag](const T& x) { return tag(x).protocol; })
+        .def_property_readonly("pairing", [tag](const T& x) { return tag(x).pairing; })
+        .def_property_readonly(
+            "seed", [tag](const T& x) { return JsonToPy(tag(x).seed); },
+            "Generation seed (None when unknown); seeds methods' streams.");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Methods
 
@@ -401,41 +425,25 @@ PYBIND11_MODULE(regbench, m) {
           "param_docs (one line per parameter) and schema (JSON Schema, or None), as "
           "`regbench methods --json` prints them.");
 
-    py::class_<PairRef>(m, "Pair",
-                        "One pair of a pair file. `source` and `target` are (N, 3) float64 "
-                        "views of the PairFile's arrays (no copy; writing to them changes what "
-                        "this PairFile returns, never the file); `T_gt` maps source into the "
-                        "target frame.")
-        .def_property_readonly(
+    py::class_<PairRef> pair(m, "Pair",
+                             "One pair of a pair file. `source` and `target` are (N, 3) float64 "
+                             "views of the PairFile's arrays (no copy; writing to them changes "
+                             "what this PairFile returns, never the file); `T_gt` maps source "
+                             "into the target frame.");
+    pair.def_property_readonly(
             "index", [](const PairRef& p) { return p.index; },
             "Index of the pair in its file (the rows' `pair`).")
-        .def_property_readonly(
-            "source",
-            [](py::object self) {
-                return CloudView(self.cast<const PairRef&>().pair().source, self);
-            },
-            "Source cloud, (N, 3) float64 view.")
-        .def_property_readonly(
-            "target",
-            [](py::object self) {
-                return CloudView(self.cast<const PairRef&>().pair().target, self);
-            },
-            "Target cloud, (M, 3) float64 view.")
+        .def_property_readonly("source", PairArrayView(&Pair::source, CloudView),
+                               "Source cloud, (N, 3) float64 view.")
+        .def_property_readonly("target", PairArrayView(&Pair::target, CloudView),
+                               "Target cloud, (M, 3) float64 view.")
         .def_property_readonly(
             "T_gt", [](const PairRef& p) { return TransformToPy(p.pair().T_gt); },
             "Ground truth (4, 4): target ~ T_gt applied to source.")
-        .def_property_readonly(
-            "source_overlap",
-            [](py::object self) {
-                return LabelView(self.cast<const PairRef&>().pair().source_overlap, self);
-            },
-            "Per source point: 1 = overlaps the target (uint8).")
-        .def_property_readonly(
-            "target_overlap",
-            [](py::object self) {
-                return LabelView(self.cast<const PairRef&>().pair().target_overlap, self);
-            },
-            "Per target point: 1 = overlaps the source (uint8).")
+        .def_property_readonly("source_overlap", PairArrayView(&Pair::source_overlap, LabelView),
+                               "Per source point: 1 = overlaps the target (uint8).")
+        .def_property_readonly("target_overlap", PairArrayView(&Pair::target_overlap, LabelView),
+                               "Per target point: 1 = overlaps the source (uint8).")
         .def_property_readonly(
             "source_overlap_ratio", [](const PairRef& p) { return p.pair().source_overlap_ratio; },
             "Fraction of source points labelled overlapping.")
@@ -457,12 +465,6 @@ PYBIND11_MODULE(regbench, m) {
             "data", [](const PairRef& p) { return DataTagToPy(p.file->data); },
             "Provenance tag of the file, as result rows carry it: pairs_file, "
             "dataset, protocol, pairing, seed, content_hash.")
-        .def_property_readonly("content_hash",
-                               [](const PairRef& p) { return p.file->data.content_hash; })
-        .def_property_readonly("dataset", [](const PairRef& p) { return p.file->data.dataset; })
-        .def_property_readonly("protocol", [](const PairRef& p) { return p.file->data.protocol; })
-        .def_property_readonly("pairing", [](const PairRef& p) { return p.file->data.pairing; })
-        .def_property_readonly("seed", [](const PairRef& p) { return JsonToPy(p.file->data.seed); })
         .def("__repr__", [](const PairRef& p) {
             const Pair& q = p.pair();
             return "<regbench.Pair " + std::to_string(p.index) + " of " + p.file->data.pairs_file +
@@ -470,6 +472,7 @@ PYBIND11_MODULE(regbench, m) {
                    std::to_string(q.source.rows()) + " -> " + std::to_string(q.target.rows()) +
                    " points, overlap " + std::to_string(q.source_overlap_ratio) + ">";
         });
+    DefDataTagShortcuts(pair, [](const PairRef& p) -> const DataTag& { return p.file->data; });
 
     py::class_<PairIterator>(m, "_PairIterator")
         .def("__iter__", [](py::object self) { return self; })
@@ -478,12 +481,12 @@ PYBIND11_MODULE(regbench, m) {
             return PairRef{it.file, it.next++};
         });
 
-    py::class_<PairFile, std::shared_ptr<PairFile>>(
+    py::class_<PairFile, std::shared_ptr<PairFile>> pair_file(
         m, "PairFile",
         "PairFile(path): a frozen HDF5 pair file (regbench generate / import), read and "
         "validated by the C++ reader. Raises FileNotFoundError, or ValueError with the reader's "
-        "message (\"FILE: pair K: ...\") for a damaged or modified file.")
-        .def(py::init(&OpenPairFile), py::arg("path"))
+        "message (\"FILE: pair K: ...\") for a damaged or modified file.");
+    pair_file.def(py::init(&OpenPairFile), py::arg("path"))
         .def("__len__", [](const PairFile& f) { return f.set->pairs.size(); })
         .def("__getitem__", &PairAt, py::arg("index"))
         .def("__iter__",
@@ -497,20 +500,12 @@ PYBIND11_MODULE(regbench, m) {
         .def_property_readonly(
             "data", [](const PairFile& f) { return DataTagToPy(f.data); },
             "Provenance tag as result rows carry it.")
-        .def_property_readonly(
-            "content_hash", [](const PairFile& f) { return f.data.content_hash; },
-            "Hash of the pairs' arrays (rows' data.content_hash).")
-        .def_property_readonly("dataset", [](const PairFile& f) { return f.data.dataset; })
-        .def_property_readonly("protocol", [](const PairFile& f) { return f.data.protocol; })
-        .def_property_readonly("pairing", [](const PairFile& f) { return f.data.pairing; })
-        .def_property_readonly(
-            "seed", [](const PairFile& f) { return JsonToPy(f.data.seed); },
-            "Generation seed (None when unknown); seeds methods' streams.")
         .def("__repr__", [](const PairFile& f) {
             return "<regbench.PairFile " + f.path + ": " + std::to_string(f.set->pairs.size()) +
                    " pairs, dataset " + f.data.dataset + ", protocol " + f.data.protocol +
                    ", content " + f.data.content_hash + ">";
         });
+    DefDataTagShortcuts(pair_file, [](const PairFile& f) -> const DataTag& { return f.data; });
 
     py::class_<AlignOutcome>(m, "AlignResult", "What align() returns.")
         .def_property_readonly("method", [](const AlignOutcome& a) { return a.method; })

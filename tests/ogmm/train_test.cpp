@@ -37,14 +37,34 @@ nlohmann::json SmallRecipe(const std::string& model) {
     return c;
 }
 
-TrainOptions Options(const fs::path& dir, std::ostream& log) {
+/// Options of a test run into `dir`, logging to `log`; stopped after `max_steps` (0 = the
+/// recipe's epochs), continuing the run already in `dir` when `resume`.
+TrainOptions Options(const fs::path& dir,
+                     std::ostream& log,
+                     std::int64_t max_steps = 0,
+                     bool resume = false) {
     TrainOptions o;
     o.out_dir = dir.string();
     o.seed = 5;
     o.threads = 1;
     o.log = &log;
+    o.max_steps = max_steps;
+    o.resume = resume;
     return o;
 }
+
+constexpr bool kResume = true;  ///< Options' last argument, named at the call
+
+/// Runs of the small deepgmr-orig-xyz recipe (10 steps per epoch, 2 epochs) on 4 synthetic
+/// shapes, on one thread: the resume and metrics-file tests.
+class SmallTrain : public ::testing::Test {
+protected:
+    void SetUp() override { torch::set_num_threads(1); }
+
+    const TrainData data = testing::SyntheticData(4, 160, 2);
+    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");
+    std::ostringstream log;
+};
 
 TEST(Train, SameSeedGivesTheSameLossCurve) {
     torch::set_num_threads(1);
@@ -150,8 +170,8 @@ TEST(Train, FusedEdgeStagesGiveTheLossCurveOfTheLibTorchCompositionInFloat) {
             << model;
         double worst = 0.0, mean_ref = 0.0, mean_fused = 0.0;
         for (size_t i = 0; i < ref.step_losses.size(); ++i) {
-            const double rel = std::abs(fused.step_losses[i] - ref.step_losses[i]) /
-                               std::abs(ref.step_losses[i]);
+            const double rel =
+                std::abs(fused.step_losses[i] - ref.step_losses[i]) / std::abs(ref.step_losses[i]);
             worst = std::max(worst, rel);
             mean_ref += ref.step_losses[i] / 20.0;
             mean_fused += fused.step_losses[i] / 20.0;
@@ -168,20 +188,12 @@ TEST(Train, FusedEdgeStagesGiveTheLossCurveOfTheLibTorchCompositionInFloat) {
     }
 }
 
-TEST(Train, ResumeContinuesTheSameCurve) {
-    torch::set_num_threads(1);
-    const TrainData data = testing::SyntheticData(4, 160, 2);
-    std::ostringstream log;
-    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");
+TEST_F(SmallTrain, ResumeContinuesTheSameCurve) {
     const fs::path dir_full = TempDir("full");
     const fs::path dir_split = TempDir("split");
     const TrainSummary full = Train(config, data, Options(dir_full, log));
-    TrainOptions first = Options(dir_split, log);
-    first.max_steps = 10;
-    const TrainSummary part1 = Train(config, data, first);
-    TrainOptions second = Options(dir_split, log);
-    second.resume = true;
-    const TrainSummary part2 = Train(config, data, second);
+    const TrainSummary part1 = Train(config, data, Options(dir_split, log, 10));
+    const TrainSummary part2 = Train(config, data, Options(dir_split, log, 0, kResume));
     std::vector<double> joined = part1.step_losses;
     joined.insert(joined.end(), part2.step_losses.begin(), part2.step_losses.end());
     EXPECT_EQ(joined, full.step_losses);
@@ -194,25 +206,17 @@ TEST(Train, ResumeContinuesTheSameCurve) {
 // Issue 27: a checkpoint whose trainer.step is 1e30 was converted to -9.2e18 and the run then
 // ignored --max-steps. Expected: --resume refuses it naming checkpoint.json and the key, as
 // written (1e30 is not a whole number in [0, 2^53]).
-TEST(Train, ResumeRefusesACheckpointWithCountersOutOfRange) {
-    torch::set_num_threads(1);
-    const TrainData data = testing::SyntheticData(4, 160, 2);
-    std::ostringstream log;
-    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");
+TEST_F(SmallTrain, ResumeRefusesACheckpointWithCountersOutOfRange) {
     const fs::path dir = TempDir("counters");
-    TrainOptions first = Options(dir, log);
-    first.max_steps = 2;
-    Train(config, data, first);
+    Train(config, data, Options(dir, log, 2));
     const fs::path json = dir / "last" / "checkpoint.json";
     nlohmann::json j;
     std::ifstream(json) >> j;
     j["trainer"]["step"] = 1e30;
     std::ofstream(json) << j.dump();
-    TrainOptions second = Options(dir, log);
-    second.resume = true;
     std::string err;
     try {
-        Train(config, data, second);
+        Train(config, data, Options(dir, log, 0, kResume));
     } catch (const std::exception& e) {
         err = e.what();
     }
@@ -224,19 +228,11 @@ TEST(Train, ResumeRefusesACheckpointWithCountersOutOfRange) {
 // Issue 27: `train --resume` appended onto a torn metrics.csv line (a kill mid-append). The
 // expected file is what an uninterrupted run writes (SameSeedGivesTheSameLossCurve: a header
 // and one line per epoch, 2 epochs here), every line with the header's number of columns.
-TEST(Train, ResumeDropsATornMetricsLine) {
-    torch::set_num_threads(1);
-    const TrainData data = testing::SyntheticData(4, 160, 2);
-    std::ostringstream log;
-    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");  // 10 steps per epoch
+TEST_F(SmallTrain, ResumeDropsATornMetricsLine) {
     const fs::path dir = TempDir("torn");
-    TrainOptions first = Options(dir, log);
-    first.max_steps = 10;
-    Train(config, data, first);
+    Train(config, data, Options(dir, log, 10));
     std::ofstream(dir / "metrics.csv", std::ios::app) << "2,0.5,0.";  // no newline: torn
-    TrainOptions second = Options(dir, log);
-    second.resume = true;
-    Train(config, data, second);
+    Train(config, data, Options(dir, log, 0, kResume));
     std::ifstream csv(dir / "metrics.csv");
     std::vector<std::string> lines;
     for (std::string l; std::getline(csv, l);) lines.push_back(l);
@@ -269,28 +265,23 @@ TEST(Train, ProgressCountsDownToMaxSteps) {
 // truncate the file it pointed to (found by hand: `ln -s ../victim.txt t/metrics.csv`, then
 // `regbench train --out t` left victim.txt holding the CSV header). Expected: refused naming
 // metrics.csv before any step, and the target keeps the bytes written here.
-TEST(Train, RefusesALinkAtAMetricsFileAndLeavesItsTarget) {
-    torch::set_num_threads(1);
-    const TrainData data = testing::SyntheticData(4, 160, 2);
-    const nlohmann::json config = SmallRecipe("deepgmr-orig-xyz");
+TEST_F(SmallTrain, RefusesALinkAtAMetricsFileAndLeavesItsTarget) {
     for (const char* name : {"metrics.csv", "metrics.jsonl"}) {
-        std::ostringstream log;
         const fs::path dir = TempDir(std::string("link_") + name);
         fs::create_directories(dir);
         const fs::path victim = dir.string() + ".victim";
         std::ofstream(victim) << "victim bytes\n";
         fs::create_symlink(victim, dir / name);
-        TrainOptions o = Options(dir, log);
-        o.max_steps = 1;
         try {
-            Train(config, data, o);
+            Train(config, data, Options(dir, log, 1));
             ADD_FAILURE() << name << ": a link at the metrics file was accepted";
         } catch (const std::runtime_error& e) {
             EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
             EXPECT_NE(std::string(e.what()).find("symbolic link"), std::string::npos) << e.what();
         }
         std::ifstream in(victim);
-        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        const std::string bytes((std::istreambuf_iterator<char>(in)),
+                                std::istreambuf_iterator<char>());
         EXPECT_EQ(bytes, "victim bytes\n") << name;
         EXPECT_FALSE(fs::exists(dir / "last")) << name << ": trained through the link";
         fs::remove_all(dir);
@@ -348,9 +339,8 @@ TEST(TrainCi, ShortTrainingLowersValidationMaeRWellBelowTheIdentity) {
     }
     std::ostringstream log;
     const fs::path dir = TempDir("ci");
-    TrainOptions options = Options(dir, log);
+    TrainOptions options = Options(dir, log, steps);
     options.seed = seed;
-    options.max_steps = steps;
     const double cpu0 = ThreadCpuSeconds();
     const TrainSummary s = Train(config, data, options);
     const double cpu = ThreadCpuSeconds() - cpu0;
