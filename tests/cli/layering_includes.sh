@@ -36,5 +36,26 @@ for entry in "${allowed[@]}"; do
     status=1
   done < <(grep -rnE '^#include "[a-z_]+/' "$folder" --include='*.cpp' --include='*.hpp')
 done
+# LibTorch stays inside ogmm/ (docs/layout.md): other folders include only the ogmm/ headers
+# that name no LibTorch type, and those headers include no LibTorch header nor another of ogmm/.
+torch_free=" ogmm/authors_checkpoint.hpp ogmm/checkpoint.hpp ogmm/checkpoint_json.hpp ogmm/cost.hpp
+  ogmm/gemm_floor.hpp ogmm/inference.hpp ogmm/train.hpp ogmm/zoo.hpp "
+while IFS= read -r line; do
+  file="${line%%:*}"
+  target="${line#*#include [\"<]}"
+  target="${target%%[\">]*}"
+  case "$target" in
+    ogmm/*) case "$torch_free" in *" $target "*|*" $target"$'\n'*) continue ;; esac ;;
+  esac
+  echo "FAIL: $file includes $target (outside ogmm/ only its LibTorch-free headers)" >&2
+  status=1
+done < <(grep -rnE '^#include (<(torch|ATen|c10)/|"ogmm/)' app baselines experiments runners \
+           reports datasets protocols gmm core python --include='*.cpp' --include='*.hpp')
+for header in $torch_free; do
+  if grep -nE '^#include (<(torch|ATen|c10)/|"ogmm/)' "$header" >&2; then
+    echo "FAIL: $header (included outside ogmm/) includes LibTorch or another ogmm/ header" >&2
+    status=1
+  fi
+done
 [ "$status" -eq 0 ] && echo "ok: ${#allowed[@]} folders include only what docs/layout.md allows"
 exit "$status"
