@@ -31,16 +31,19 @@ std::string PaperRowOf(const ResultRow& row, const ResultSet& set) {
     return PaperRowName(row.method).value_or(row.method);
 }
 
+/// "ours / full" or the set's group: how the caption names a set.
+std::string SetName(const ResultSet& s) {
+    return (s.group.empty() ? "ours" : s.group) + (s.row_label.empty() ? "" : " / " + s.row_label);
+}
+
 /// "dataset `cgal` (split test, protocol partial, pairing independent, 100 pairs, seed 1)".
-std::string DescribeSet(const ResultSet& s) {
+std::string DescribeSetData(const ResultSet& s) {
     const Provenance& p = s.provenance;
     std::set<std::size_t> pairs;
     for (const auto& r : s.rows) pairs.insert(r.pair);
     std::string d = fmt::format(
-        "{}{}: dataset `{}` (split {}, protocol {}, pairing {}, {} pairs, "
-        "seed {}, file {})",
-        s.group.empty() ? "ours" : s.group, s.row_label.empty() ? "" : " / " + s.row_label,
-        p.dataset, p.split.empty() ? "-" : p.split, p.protocol, p.pairing.empty() ? "-" : p.pairing,
+        "dataset `{}` (split {}, protocol {}, pairing {}, {} pairs, seed {}, file {})", p.dataset,
+        p.split.empty() ? "-" : p.split, p.protocol, p.pairing.empty() ? "-" : p.pairing,
         pairs.size(), p.seed.is_null() ? std::string("-") : p.seed.dump(), p.pairs_file);
     if (!p.selection.empty()) d += ", " + p.selection + " selection";
     if (std::isfinite(p.noise_sigma)) {
@@ -59,10 +62,14 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
     for (const auto& s : sets) {
         if (!std::isfinite(s.provenance.gt_ccd_floor)) continue;
         any = true;
-        t->notes.push_back(
-            fmt::format("Ground-truth CCD floor{}: {:.4f} (CCD of the true "
-                        "transform on these pairs: what a perfect registration scores)",
-                        s.group.empty() ? "" : " (" + s.group + ")", s.provenance.gt_ccd_floor));
+        const std::string note = fmt::format(
+            "Ground-truth CCD floor{}: {:.4f} (CCD of the true "
+            "transform on these pairs: what a perfect registration scores)",
+            s.group.empty() ? "" : " (" + s.group + ")", s.provenance.gt_ccd_floor);
+        // Sets on the same pairs (an ablation's variants) share one note.
+        if (std::find(t->notes.begin(), t->notes.end(), note) == t->notes.end()) {
+            t->notes.push_back(note);
+        }
     }
     if (!any) {
         t->notes.push_back(
@@ -96,12 +103,26 @@ void DescribeSides(const PaperTableSpec& spec,
                    bool published,
                    const std::vector<ResultSet>& sets,
                    Table* t) {
-    std::string ours;
+    // Sets on the same data (an ablation's variants) are described once, naming them all.
+    struct Described {
+        std::string group, names, data;
+    };
+    std::vector<Described> described;  // in set order
     for (const auto& s : sets) {
-        ours += (ours.empty() ? "" : "; ") + DescribeSet(s);
+        const std::string data = DescribeSetData(s);
+        const auto same = std::find_if(described.begin(), described.end(),
+                                       [&](const Described& d) { return d.data == data; });
+        if (same == described.end()) {
+            described.push_back({s.group, SetName(s), data});
+        } else {  // "ours / full, no_SPE": a row label alone within its group
+            same->names +=
+                ", " + (s.group == same->group && !s.row_label.empty() ? s.row_label : SetName(s));
+        }
         t->provenance.push_back(s.provenance);
         t->provenance.back().group = s.group;
     }
+    std::string ours;
+    for (const auto& d : described) ours += (ours.empty() ? "" : "; ") + d.names + ": " + d.data;
     AddFloorNotes(sets, t);
     const std::string paper_side =
         published

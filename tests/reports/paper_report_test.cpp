@@ -367,5 +367,32 @@ TEST(PaperReport, TableWithoutPairsSaysItsFloorIsUnknown) {
     EXPECT_NE(t.notes[0].find("CCD floor: not known"), std::string::npos) << t.notes[0];
 }
 
+// An ablation's variants run on the same pairs. Its table described the same data once per
+// variant and printed one identical floor note per variant (found 2026-12-04 in
+// `reproduce --tables table4`: four copies of each). Expected, by hand: one description naming
+// every variant, one floor note; a variant on other pairs keeps its own description.
+TEST(PaperReport, AblationVariantsOnTheSamePairsAreDescribedOnce) {
+    const auto set = [](const std::string& label, const std::string& file) {
+        return ResultSet{"", {Row(0, "ogmm", 1.0), Row(1, "ogmm", 2.0)}, Prov(file), label};
+    };
+    const Table t = BuildPaperTable(
+        FindPaperTableSpec("table4_ablation_components"),
+        {set("full", "p.h5"), set("no_SPE", "p.h5"), set("no_CSA", "p.h5"), set("no_OSP", "q.h5")},
+        LoadPaperTables(DefaultPaperTablesPath()), {});
+    EXPECT_NE(t.caption.find("ours / full, no_SPE, no_CSA: dataset `cgal`"), std::string::npos)
+        << t.caption;
+    EXPECT_NE(t.caption.find("; ours / no_OSP: dataset `cgal`"), std::string::npos) << t.caption;
+    const auto count = [&](const std::string& what) {
+        std::size_t n = 0;
+        for (auto at = t.caption.find(what); at != std::string::npos;
+             at = t.caption.find(what, at + 1))
+            ++n;
+        return n;
+    };
+    EXPECT_EQ(count("dataset `cgal`"), 2u) << t.caption;
+    ASSERT_EQ(t.notes.size(), 1u);
+    EXPECT_NE(t.notes[0].find("Ground-truth CCD floor: 0.1041"), std::string::npos) << t.notes[0];
+}
+
 }  // namespace
 }  // namespace regbench
