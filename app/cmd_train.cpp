@@ -40,6 +40,7 @@ struct TrainArgs {
     ogmm::TrainOptions train;
     bool val_icp = true;
     std::string ablation;
+    std::string bundle;  ///< --write-bundle FILE: write the data and config, train nothing
 };
 
 /// The command as given, for checkpoints' provenance.
@@ -104,6 +105,24 @@ void RunOne(const TrainArgs& a,
               << "/best\n";
 }
 
+/// --write-bundle: the shapes, protocol, seed and resolved config of this command in one file,
+/// for regbench-train-portable on a machine with LibTorch alone (experiments/training_bundle.hpp).
+void WriteBundle(const TrainArgs& a, const std::string& command_line) {
+    if (!a.ablation.empty()) {
+        throw std::invalid_argument("train: --write-bundle takes one --model, not --ablation");
+    }
+    TrainingDataOptions data_options = a.data;
+    data_options.seed = a.train.seed;
+    TrainingBundle b = LoadTrainingBundle(data_options);
+    b.config = BuildConfig(a, a.model, nlohmann::json::object());
+    b.command = command_line;
+    b.length_given = a.epochs > 0;
+    WriteTrainingBundle(a.bundle, b);
+    std::cerr << "train: wrote " << a.bundle << " (" << b.train_shapes.size() << " training, "
+              << b.val_shapes.size() << " validation shapes); train from it with "
+              << "regbench-train-portable " << a.bundle << " --out DIR [--device cuda]\n";
+}
+
 void Run(const TrainArgs& a, const std::string& command_line) {
     if (a.ablation.empty() && a.model.empty()) {
         throw std::invalid_argument(
@@ -113,6 +132,11 @@ void Run(const TrainArgs& a, const std::string& command_line) {
     // One writer per run directory (OUT.lock beside it), taken before the data are built: a
     // second train (or any regbench writer) on the same --out is refused naming the pid.
     if (!a.config_file.empty()) (void)ReadJsonFile(a.config_file);  // refused before any work
+    if (!a.bundle.empty()) {
+        WriteBundle(a, command_line);
+        return;
+    }
+    if (a.out.empty()) throw std::invalid_argument("train: --out is required");
     CreateParentFolders(a.out);
     const OutputLock lock(a.out);
     TrainingDataOptions data_options = a.data;
@@ -137,8 +161,7 @@ void SetupTrainCommand(CLI::App* cmd) {
                     "Model: deepgmr, deepgmr-small, deepgmr-orig, deepgmr-orig-xyz, ogmm, "
                     "ogmm-small, ogmm-tiny (ablations: default ogmm-small)");
     cmd->add_option("--config", a->config_file, "JSON file merged over the named config");
-    cmd->add_option("--out", a->out, "Run directory (checkpoints last/ best/, metrics.csv)")
-        ->required();
+    cmd->add_option("--out", a->out, "Run directory (checkpoints last/ best/, metrics.csv)");
     cmd->add_option("--protocol", a->data.protocol, "Pair protocol")->capture_default_str();
     cmd->add_option("--dataset", a->data.dataset,
                     "Dataset(s), comma-separated: cgal, procedural, PATH")
@@ -182,6 +205,9 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--ablation", a->ablation,
                     "components | losses | clusters: train every variant into OUT/<variant>");
     cmd->add_option("--data-dir", a->data.data_dir, "Data directory for named datasets");
+    cmd->add_option("--write-bundle", a->bundle,
+                    "Write the training data and config to FILE for regbench-train-portable "
+                    "(a machine with LibTorch alone, e.g. a GPU node) instead of training");
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
 

@@ -21,16 +21,6 @@ std::vector<std::string> SplitList(const std::string& s) {
     return out;
 }
 
-ogmm::TrainSample ToSample(const Pair& p) {
-    ogmm::TrainSample s;
-    s.source = p.source;
-    s.target = p.target;
-    s.T_gt = p.T_gt;
-    s.source_overlap = p.source_overlap.cast<double>();
-    s.target_overlap = p.target_overlap.cast<double>();
-    return s;
-}
-
 /// Shapes of every dataset in the comma-separated list, for one split.
 std::vector<ShapeSource> LoadShapes(const TrainingDataOptions& a, const std::string& split) {
     DatasetOptions options;
@@ -61,8 +51,8 @@ ogmm::TrainData FromPairFile(const TrainingDataOptions& a) {
                                     " leaves no training or no validation pair");
     }
     const std::size_t n_train = n - n_val;  // the last n_val pairs validate
-    for (std::size_t i = n_train; i < n; ++i) data.validation.push_back(ToSample(set->pairs[i]));
-    data.train_pair = [set, n_train](std::uint64_t k) { return ToSample(set->pairs[k % n_train]); };
+    for (std::size_t i = n_train; i < n; ++i) data.validation.push_back(ToTrainSample(set->pairs[i]));
+    data.train_pair = [set, n_train](std::uint64_t k) { return ToTrainSample(set->pairs[k % n_train]); };
     data.provenance = {{"pairs_file", a.pairs_file},
                        {"pairs_file_provenance", set->provenance},
                        {"train_pairs", n_train},
@@ -72,35 +62,28 @@ ogmm::TrainData FromPairFile(const TrainingDataOptions& a) {
 
 }  // namespace
 
-ogmm::TrainData MakeTrainingData(const TrainingDataOptions& a) {
-    if (!a.pairs_file.empty()) return FromPairFile(a);
-    ogmm::TrainData data;
+TrainingBundle LoadTrainingBundle(const TrainingDataOptions& a) {
+    if (!a.pairs_file.empty()) {
+        throw std::invalid_argument("train: a training bundle is made from a protocol and "
+                                    "datasets, not from --pairs-file");
+    }
+    TrainingBundle b;
     Protocol protocol = ParseProtocol(a.protocol);
     if (a.jitter && protocol == Protocol::kPartial) protocol = Protocol::kJitter;
-    ProtocolOptions options = DefaultProtocolOptions(protocol);
-    options.pairing = ParsePairing(a.pairing);
-    ValidateProtocolOptions(options);
-    auto train_shapes = std::make_shared<std::vector<ShapeSource>>(LoadShapes(a, a.split));
-    const std::vector<ShapeSource> val_shapes = LoadShapes(a, a.val_split);
-    // Validation pairs come from another seed stream than training pairs.
-    const std::uint64_t val_seed = a.seed ^ 0x76616c6964ULL;
-    for (int i = 0; i < a.val_pairs; ++i) {
-        data.validation.push_back(ToSample(GeneratePair(val_shapes, options, val_seed, i)));
-    }
-    const std::uint64_t seed = a.seed;
-    data.train_pair = [train_shapes, options, seed](std::uint64_t k) {
-        return ToSample(GeneratePair(*train_shapes, options, seed, k));
-    };
-    data.provenance = {{"protocol", ProtocolProvenance(options)},
-                       {"dataset", a.dataset},
-                       {"split", a.split},
-                       {"val_split", a.val_split},
-                       {"train_shapes", train_shapes->size()},
-                       {"val_shapes", val_shapes.size()},
-                       {"val_pairs", a.val_pairs},
-                       {"seed", a.seed},
-                       {"val_seed", val_seed}};
-    return data;
+    b.protocol = DefaultProtocolOptions(protocol);
+    b.protocol.pairing = ParsePairing(a.pairing);
+    ValidateProtocolOptions(b.protocol);
+    b.train_shapes = LoadShapes(a, a.split);
+    b.val_shapes = LoadShapes(a, a.val_split);
+    b.val_pairs = a.val_pairs;
+    b.seed = a.seed;
+    b.provenance = {{"dataset", a.dataset}, {"split", a.split}, {"val_split", a.val_split}};
+    return b;
+}
+
+ogmm::TrainData MakeTrainingData(const TrainingDataOptions& a) {
+    if (!a.pairs_file.empty()) return FromPairFile(a);
+    return MakeTrainingData(LoadTrainingBundle(a));
 }
 
 LearnedVariants AblationVariants(const std::string& kind) {

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "experiments/training_bundle.hpp"
 #include "ogmm/train.hpp"
 
 namespace regbench {
@@ -31,6 +32,11 @@ struct TrainingDataOptions {
 /// The training stream and validation pairs; throws std::invalid_argument / runtime_error
 /// naming the option or input ("train: ...").
 ogmm::TrainData MakeTrainingData(const TrainingDataOptions& o);
+
+/// The shapes, protocol and seed protocol data (no --pairs-file) come from, for
+/// MakeTrainingData or a file (`train --write-bundle`). Its `config` and `command` are left
+/// for the caller.
+TrainingBundle LoadTrainingBundle(const TrainingDataOptions& o);
 
 /// The learned variants of `kind` ("components", "losses", "clusters": the `variants` of the
 /// paper's experiment files), each a paper row and its config overrides, and the model they

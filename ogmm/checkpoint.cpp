@@ -139,9 +139,13 @@ nlohmann::json LoadCheckpointAs(const std::string& dir,
                                  " vs " + net.Config().dump());
     }
     const fs::path weights = fs::path(dir) / kWeightsFile;
+    // Tensors load onto the device the net is on, whichever device saved them: a checkpoint
+    // trained on a GPU resumes and runs on a CPU-only build, and the other way round.
+    const auto params = net.parameters();
+    const torch::Device device = params.empty() ? torch::Device(torch::kCPU) : params[0].device();
     try {
         torch::serialize::InputArchive archive;
-        archive.load_from(weights.string());
+        archive.load_from(weights.string(), device);
         net.load(archive);
     } catch (const c10::Error& e) {
         throw std::runtime_error(
@@ -151,7 +155,7 @@ nlohmann::json LoadCheckpointAs(const std::string& dir,
     if (optimizer != nullptr) {
         const fs::path opt = fs::path(dir) / kOptimizerFile;
         try {
-            torch::load(*optimizer, opt.string());
+            torch::load(*optimizer, opt.string(), device);
         } catch (const c10::Error& e) {
             throw std::runtime_error("optimizer state " + opt.string() +
                                      " is missing or corrupt: " + e.what_without_backtrace());

@@ -47,6 +47,11 @@ public:
     const std::string& name() const { return name_; }
     const std::string& category() const { return category_; }
     bool is_mesh() const { return mesh_ != nullptr; }
+    /// The mesh of a mesh source, null otherwise; with name() and category() all FromMesh needs
+    /// to rebuild the source (training bundles, experiments/training_bundle.hpp).
+    const Mesh* mesh() const { return mesh_.get(); }
+    /// The points of a point or stored-pair source (its source cloud), null for a mesh source.
+    const PointCloud* points() const { return points_.get(); }
     /// Number of points (point source) or triangles (mesh source).
     Eigen::Index size() const;
     /// True for FromStoredPair sources.
