@@ -28,7 +28,7 @@ torch::Tensor GmmRegister(const torch::Tensor& pi_s,
     const torch::Tensor c_t = (w * mu_t).sum(1, true);
     const torch::Tensor weights = (pi_s / sigma_t).unsqueeze(2);  // [B, J, 1]
     const torch::Tensor M = torch::bmm(((mu_s - c_s) * weights).transpose(1, 2), mu_t - c_t);
-    const auto svd = torch::linalg::svd(M, /*full_matrices=*/true, /*driver=*/c10::nullopt);
+    const auto svd = torch::linalg_svd(M, /*full_matrices=*/true);
     const torch::Tensor U = std::get<0>(svd);
     const torch::Tensor V = std::get<2>(svd).transpose(1, 2);  // linalg::svd returns V^T
     const torch::Tensor det = torch::det(torch::bmm(V, U.transpose(1, 2)));

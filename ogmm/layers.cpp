@@ -43,6 +43,7 @@ torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
                                 const torch::Tensor& distance,
                                 const torch::Tensor& farthest,
                                 int64_t n) {
+    if (!xyz.device().is_cpu()) return FarthestPointTensorOps(xyz, distance, farthest, n);
     const int64_t batch = xyz.size(0), points = xyz.size(2);
     const torch::Tensor cloud = xyz.to(torch::kCPU, torch::kFloat).contiguous();  // [B, 3, N]
     torch::Tensor running = distance.to(torch::kCPU, torch::kFloat).contiguous();  // [B, N]
@@ -71,6 +72,32 @@ torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
     }
     return chosen.to(xyz.device());
 }
+
+}  // namespace
+
+// On a GPU the loop above would copy each cloud to the host and run on one core: a training
+// step of the full config on an H200 was bound by such host loops (docs/learned-methods.md,
+// "Training on a GPU machine"). There the same recurrence runs as n rounds of tensor ops.
+torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz,
+                                     const torch::Tensor& distance,
+                                     const torch::Tensor& farthest,
+                                     int64_t n) {
+    const int64_t batch = xyz.size(0);
+    const torch::Tensor cloud = xyz.to(torch::kFloat);  // [B, 3, N]
+    torch::Tensor running = distance.to(torch::kFloat).clone();
+    torch::Tensor next = farthest.to(xyz.device(), torch::kLong).view({batch});
+    std::vector<torch::Tensor> chosen;
+    chosen.reserve(static_cast<std::size_t>(n));
+    for (int64_t i = 0; i < n; ++i) {
+        chosen.push_back(next);
+        const torch::Tensor centre = cloud.gather(2, next.view({batch, 1, 1}).expand({batch, 3, 1}));
+        running = torch::minimum(running, (cloud - centre).pow(2).sum(1));
+        next = running.argmax(1);  // the first of equal maxima, as the loop's strict >
+    }
+    return torch::stack(chosen, 1);
+}
+
+namespace {
 
 void CheckSampleCount(const torch::Tensor& xyz, int64_t n, const char* who) {
     CheckChannelFirst(xyz, 3, who);
@@ -173,8 +200,9 @@ torch::Tensor FpsRandom(const torch::Tensor& xyz,
                         c10::optional<at::Generator> generator) {
     CheckSampleCount(xyz, n, "FpsRandom");
     torch::NoGradGuard no_grad;
-    const auto index_options = torch::TensorOptions().dtype(torch::kLong).device(xyz.device());
-    torch::Tensor start = torch::randint(xyz.size(2), {xyz.size(0)}, generator, index_options);
+    // The start indices are drawn on the CPU, where the loop runs, whatever device xyz is on:
+    // a CPU generator then serves a GPU forward too.
+    torch::Tensor start = torch::randint(xyz.size(2), {xyz.size(0)}, generator, torch::kLong);
     torch::Tensor distance = torch::full({xyz.size(0), xyz.size(2)}, 1e10, xyz.options());
     return FarthestPointLoop(xyz, distance, start, n);
 }
@@ -198,7 +226,8 @@ torch::Tensor KnnIndices(const torch::Tensor& x, int64_t k) {
                                  std::to_string(x.size(2)) + " points");
     }
     torch::NoGradGuard no_grad;
-    if (x.size(1) == 3) return KnnIndices3d(x, k);
+    // nanoflann on the host for 3-D points on the CPU; on a GPU the distance matrix below.
+    if (x.size(1) == 3 && x.device().is_cpu()) return KnnIndices3d(x, k);
     // -|xi - xj|^2 = -|xi|^2 + 2 xi.xj - |xj|^2, the largest k are the nearest.
     const torch::Tensor inner = -2 * torch::matmul(x.transpose(2, 1), x);
     const torch::Tensor xx = x.pow(2).sum(1, true);

@@ -46,6 +46,14 @@ torch::Tensor FpsRandom(const torch::Tensor& xyz,
 /// the cloud's mean, with the running distance initialised to the squared distance to the mean.
 torch::Tensor FpsCentroid(const torch::Tensor& xyz, int64_t n);
 
+/// The farthest-point recurrence of FpsRandom / FpsCentroid as tensor ops, which they use on a
+/// GPU (on the CPU a plain loop): `distance` [B, N] the running squared distance to the chosen
+/// set, `farthest` [B] the first index. Same arithmetic and ties (lowest index) as the loop.
+torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz,
+                                     const torch::Tensor& distance,
+                                     const torch::Tensor& farthest,
+                                     int64_t n);
+
 /// Gathers columns: x [B, C, N], idx [B, n] -> [B, C, n].
 torch::Tensor GatherColumns(const torch::Tensor& x, const torch::Tensor& idx);
 

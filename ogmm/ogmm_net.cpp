@@ -368,7 +368,7 @@ torch::Tensor KabschTransform(const torch::Tensor& src, const torch::Tensor& dst
     const torch::Tensor src_mean = src.mean(1, true), dst_mean = dst.mean(1, true);  // [B,1,3]
     const torch::Tensor H = torch::bmm((src - src_mean).transpose(1, 2), dst - dst_mean) +
                             kKabschRegulariser * torch::eye(3, src.options());
-    const auto [U, S, Vh] = torch::linalg::svd(H, /*full_matrices=*/false, c10::nullopt);
+    const auto [U, S, Vh] = torch::linalg_svd(H, /*full_matrices=*/false);
     torch::Tensor V = Vh.transpose(1, 2);
     const torch::Tensor reflection = torch::det(torch::bmm(V, U.transpose(1, 2))) < 0;
     const torch::Tensor sign = torch::where(reflection, -torch::ones_like(S.select(1, 0)),
@@ -519,11 +519,13 @@ torch::Tensor OgmmNet::ClusterLoss(const torch::Tensor& xyz,
     // NT-Xent over the 2J vectors: a_j's positive is b_j (and back), every other vector is a
     // negative, self-similarity excluded.
     const torch::Tensor z = torch::cat({a, b}, 1);  // [B, 2J, d]
-    const torch::Tensor self = torch::eye(2 * clusters, torch::kBool).unsqueeze(0);
+    const auto on = [&](torch::Dtype type) { return torch::TensorOptions(type).device(z.device()); };
+    const torch::Tensor self = torch::eye(2 * clusters, on(torch::kBool)).unsqueeze(0);
     const torch::Tensor logits = (torch::bmm(z, z.transpose(1, 2)) / config_.nt_xent_temperature)
                                      .masked_fill(self, -std::numeric_limits<double>::infinity());
     const torch::Tensor positive =
-        torch::cat({torch::arange(clusters, 2 * clusters), torch::arange(0, clusters)})
+        torch::cat({torch::arange(clusters, 2 * clusters, on(torch::kLong)),
+                    torch::arange(0, clusters, on(torch::kLong))})
             .repeat({batch});
     return F::cross_entropy(logits.reshape({batch * 2 * clusters, 2 * clusters}), positive);
 }

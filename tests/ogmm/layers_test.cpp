@@ -100,6 +100,23 @@ TEST_F(LayersTest, FpsCentroidMatchesBruteForceAndIsDeterministic) {
     EXPECT_TRUE(torch::equal(idx, FpsCentroid(xyz, 40)));
 }
 
+// The GPU path (tensor ops) against the independent brute force, run here on the CPU: from a
+// random start with an infinite running distance, as FpsRandom starts.
+TEST_F(LayersTest, FpsTensorOpsMatchBruteForce) {
+    const torch::Tensor xyz = RandomCloud(3, 180, 4);
+    const torch::Tensor starts = torch::tensor({7, 0, 179}, torch::kLong);
+    const torch::Tensor idx =
+        FarthestPointTensorOps(xyz, torch::full({3, 180}, 1e10, xyz.options()), starts, 36);
+    ASSERT_EQ(idx.sizes(), (std::vector<int64_t>{3, 36}));
+    for (int64_t b = 0; b < 3; ++b) {
+        const auto pts = CloudOf(xyz, b);
+        const auto expected =
+            BruteFps(pts, std::vector<double>(pts.size(), std::numeric_limits<double>::max()),
+                     starts[b].item<int64_t>(), 36);
+        for (int64_t i = 0; i < 36; ++i) EXPECT_EQ(idx[b][i].item<int64_t>(), expected[i]);
+    }
+}
+
 TEST_F(LayersTest, FpsRefusesMorePointsThanTheCloudHas) {
     const torch::Tensor xyz = RandomCloud(1, 10, 3);
     EXPECT_THROW(FpsRandom(xyz, 11), std::runtime_error);
