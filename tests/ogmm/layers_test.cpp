@@ -52,6 +52,20 @@ std::vector<int64_t> BruteFps(const std::vector<Point>& pts,
     return chosen;
 }
 
+// idx [B, n] is the brute-force FPS of each cloud of xyz from starts[b], with an infinite
+// running distance (as FpsRandom begins).
+void ExpectBruteFpsFromStarts(const torch::Tensor& idx,
+                              const torch::Tensor& xyz,
+                              const torch::Tensor& starts) {
+    for (int64_t b = 0; b < idx.size(0); ++b) {
+        const auto pts = CloudOf(xyz, b);
+        const auto expected =
+            BruteFps(pts, std::vector<double>(pts.size(), std::numeric_limits<double>::max()),
+                     starts[b].item<int64_t>(), idx.size(1));
+        for (int64_t i = 0; i < idx.size(1); ++i) EXPECT_EQ(idx[b][i].item<int64_t>(), expected[i]);
+    }
+}
+
 torch::Tensor RandomCloud(int64_t batch, int64_t n, uint64_t seed) {
     torch::manual_seed(seed);
     return torch::rand({batch, 3, n}) * 2 - 1;
@@ -70,13 +84,7 @@ TEST_F(LayersTest, FpsRandomMatchesBruteForceFromTheSameStart) {
     auto gen2 = at::make_generator<at::CPUGeneratorImpl>(42);
     const torch::Tensor starts = torch::randint(200, {3}, gen2, torch::kLong);
     ASSERT_EQ(idx.sizes(), (std::vector<int64_t>{3, 32}));
-    for (int64_t b = 0; b < 3; ++b) {
-        const auto pts = CloudOf(xyz, b);
-        const auto expected =
-            BruteFps(pts, std::vector<double>(pts.size(), std::numeric_limits<double>::max()),
-                     starts[b].item<int64_t>(), 32);
-        for (int64_t i = 0; i < 32; ++i) EXPECT_EQ(idx[b][i].item<int64_t>(), expected[i]);
-    }
+    ExpectBruteFpsFromStarts(idx, xyz, starts);
 }
 
 TEST_F(LayersTest, FpsCentroidMatchesBruteForceAndIsDeterministic) {
@@ -108,13 +116,7 @@ TEST_F(LayersTest, FpsTensorOpsMatchBruteForce) {
     const torch::Tensor idx =
         FarthestPointTensorOps(xyz, torch::full({3, 180}, 1e10, xyz.options()), starts, 36);
     ASSERT_EQ(idx.sizes(), (std::vector<int64_t>{3, 36}));
-    for (int64_t b = 0; b < 3; ++b) {
-        const auto pts = CloudOf(xyz, b);
-        const auto expected =
-            BruteFps(pts, std::vector<double>(pts.size(), std::numeric_limits<double>::max()),
-                     starts[b].item<int64_t>(), 36);
-        for (int64_t i = 0; i < 36; ++i) EXPECT_EQ(idx[b][i].item<int64_t>(), expected[i]);
-    }
+    ExpectBruteFpsFromStarts(idx, xyz, starts);
 }
 
 TEST_F(LayersTest, FpsRefusesMorePointsThanTheCloudHas) {
