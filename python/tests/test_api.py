@@ -10,16 +10,21 @@ STUB = pathlib.Path(__file__).resolve().parents[1] / "regbench.pyi"
 
 def stub_api():
     """{public name: set of public member names (classes) or None (functions, constants)}."""
-    api = {}
+    api, classes = {}, {}
     for node in ast.parse(STUB.read_text()).body:
-        if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and not node.name.startswith("_"):
-            members = None
-            if isinstance(node, ast.ClassDef):
-                members = {n.name for n in node.body if isinstance(n, ast.FunctionDef)
-                           and (not n.name.startswith("_") or n.name in ("__len__",
-                                                                          "__getitem__",
-                                                                          "__iter__"))}
-            api[node.name] = members
+        if isinstance(node, ast.ClassDef):
+            # A class's members are its own and those of its stub base classes (_DataTagged).
+            members = {n.name for n in node.body if isinstance(n, ast.FunctionDef)
+                       and (not n.name.startswith("_") or n.name in ("__len__", "__getitem__",
+                                                                      "__iter__"))}
+            for base in node.bases:
+                if isinstance(base, ast.Name) and base.id in classes:
+                    members |= classes[base.id]
+            classes[node.name] = members
+            if not node.name.startswith("_"):
+                api[node.name] = members
+        elif isinstance(node, ast.FunctionDef) and not node.name.startswith("_"):
+            api[node.name] = None
         elif isinstance(node, ast.AnnAssign) and (node.target.id == "__version__"
                                                   or not node.target.id.startswith("_")):
             api[node.target.id] = None
