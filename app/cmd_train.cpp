@@ -15,6 +15,7 @@
 #include "app/commands.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
+#include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
 #include "experiments/training.hpp"
@@ -88,9 +89,7 @@ void RunOne(const TrainArgs& a,
             const std::string& out) {
     ogmm::TrainOptions o = a.train;
     o.out_dir = out;
-    // A budget without an explicit length plans the LR schedule to what fits the budget.
-    o.plan_to_budget =
-        a.train.minutes > 0 && !a.train.resume && a.epochs == 0 && a.train.max_steps == 0;
+    o.plan_to_budget = o.PlansToBudget(a.epochs > 0);
     o.run_info = {{"command", command_line}};
     if (a.val_icp) {
         o.refine = [](const PointCloud& s, const PointCloud& t, const Transform& init) {
@@ -111,10 +110,15 @@ void WriteBundle(const TrainArgs& a, const std::string& command_line) {
     if (!a.ablation.empty()) {
         throw std::invalid_argument("train: --write-bundle takes one --model, not --ablation");
     }
+    // The file and the config are checked before the shapes are loaded (minutes on a real
+    // dataset); the lock keeps a second writer off the file until it is renamed into place.
+    CheckOutputPath(a.bundle, {a.config_file});
+    const OutputLock lock(a.bundle);
+    const nlohmann::json config = BuildConfig(a, a.model, nlohmann::json::object());
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;
     TrainingBundle b = LoadTrainingBundle(data_options);
-    b.config = BuildConfig(a, a.model, nlohmann::json::object());
+    b.config = config;
     b.command = command_line;
     b.length_given = a.epochs > 0;
     WriteTrainingBundle(a.bundle, b);

@@ -46,7 +46,9 @@ torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
     if (!xyz.device().is_cpu()) return FarthestPointTensorOps(xyz, distance, farthest, n);
     const int64_t batch = xyz.size(0), points = xyz.size(2);
     const torch::Tensor cloud = xyz.to(torch::kCPU, torch::kFloat).contiguous();  // [B, 3, N]
-    torch::Tensor running = distance.to(torch::kCPU, torch::kFloat).contiguous();  // [B, N]
+    // [B, N], updated in place: the caller's `distance` itself when already float on the CPU
+    // (both callers pass a temporary).
+    torch::Tensor running = distance.to(torch::kCPU, torch::kFloat).contiguous();
     const torch::Tensor start = farthest.to(torch::kCPU, torch::kLong).contiguous();
     torch::Tensor chosen = torch::empty({batch, n}, torch::kLong);
     for (int64_t b = 0; b < batch; ++b) {
@@ -84,7 +86,7 @@ torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz,
                                      int64_t n) {
     const int64_t batch = xyz.size(0);
     const torch::Tensor cloud = xyz.to(torch::kFloat);  // [B, 3, N]
-    torch::Tensor running = distance.to(torch::kFloat).clone();
+    torch::Tensor running = distance.to(torch::kFloat);  // replaced, never written in place
     torch::Tensor next = farthest.to(xyz.device(), torch::kLong).view({batch});
     std::vector<torch::Tensor> chosen;
     chosen.reserve(static_cast<std::size_t>(n));

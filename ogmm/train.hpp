@@ -76,6 +76,13 @@ struct TrainOptions {
     RefineFn refine;                 ///< optional refinement for "with ICP" metrics
     int val_batch = 0;               ///< validation batch (0: the training batch)
     nlohmann::json run_info = nlohmann::json::object();  ///< stored in checkpoints (command...)
+
+    /// The rule both front ends (`regbench train`, `regbench-train-portable`) set
+    /// `plan_to_budget` by: a fresh run with a budget and no explicit length (`epochs_given`:
+    /// --epochs; or max_steps) plans its LR schedule to what fits the budget.
+    bool PlansToBudget(bool epochs_given) const {
+        return minutes > 0 && !resume && !epochs_given && max_steps == 0;
+    }
 };
 
 struct EpochMetrics {

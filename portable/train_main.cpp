@@ -89,8 +89,7 @@ int main(int argc, char** argv) {
         const regbench::ogmm::TrainData data = regbench::MakeTrainingData(bundle);
         regbench::ogmm::TrainOptions& o = a.train;
         o.seed = bundle.seed;
-        // As `regbench train`: a budget without an explicit length plans the LR schedule to it.
-        o.plan_to_budget = o.minutes > 0 && !o.resume && !bundle.length_given && o.max_steps == 0;
+        o.plan_to_budget = o.PlansToBudget(bundle.length_given);
         o.run_info = {{"command", a.command}, {"bundle", a.bundle},
                       {"bundle_command", bundle.command}};
         std::cerr << "train: " << bundle.config.value("name", std::string("?")) << " -> "

@@ -44,4 +44,12 @@ expect_refused "--minutes needs a positive number, got '-1'" b.cbor --out x --mi
 "$regbench" train "${flags[@]}" --pairs-file p.h5 --write-bundle c.cbor 2> err.txt &&
     fail "--write-bundle with --pairs-file accepted"
 grep -q "not from --pairs-file" err.txt || fail "--pairs-file refusal unclear: $(cat err.txt)"
+# A bundle path that cannot be written is refused by name, and no bundle replaces the --config.
+"$regbench" train "${flags[@]}" --write-bundle nodir/c.cbor 2> err.txt &&
+    fail "--write-bundle into a missing folder accepted"
+grep -q "nodir/c.cbor" err.txt || fail "missing-folder refusal does not name the file: $(cat err.txt)"
+echo '{}' > cfg.json
+"$regbench" train "${flags[@]}" --config cfg.json --write-bundle cfg.json 2> err.txt &&
+    fail "--write-bundle onto its --config accepted"
+[ "$(cat cfg.json)" = "{}" ] || fail "--write-bundle replaced its --config"
 echo "ok: regbench-train-portable trains on the pairs regbench train trains on"
