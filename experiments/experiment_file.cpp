@@ -30,10 +30,11 @@ NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentSpec,
                                                 seed_offset,
                                                 pairs,
                                                 sweep,
+                                                protocol_options,
                                                 comment)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Variant, row, config)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
-    VariantSpec, kind, method, model, pairs_of, rows, comment)
+    VariantSpec, kind, method, model, pairs_of, rows, rows_are_groups, comment)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TimingVariant, row, method, params, comment)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile,
                                                 table,
@@ -106,6 +107,7 @@ ExperimentSpec ReadExperiment(const nlohmann::json& j, const std::string& what) 
             "must be in (0, 1e6], got " + nlohmann::json(s.pairs.scale).dump());
     Require(s.sweep.empty() || s.group.empty(), what, "group",
             "must be absent for a sweep (its groups are the sweep's levels)");
+    Check(what, "protocol_options", [&] { (void)ProtocolOptionsOf(s); });
     return s;
 }
 
@@ -160,6 +162,15 @@ ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& f
             "is required: table '" + f.table +
                 "' is not one of the paper's, so only this file's experiments can fill it");
     return f;
+}
+
+ProtocolOptions ProtocolOptionsOf(const ExperimentSpec& s) {
+    ProtocolOptions o = DefaultProtocolOptions(ParseProtocol(s.protocol));
+    from_json(s.protocol_options, o);
+    if (!s.pairing.empty()) o.pairing = ParsePairing(s.pairing);
+    if (s.noise_free) o.noise_sigma = 0.0;
+    ValidateProtocolOptions(o);
+    return o;
 }
 
 ExperimentFile ReadExperimentFile(const std::string& path) {

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "protocols/pair_protocols.hpp"
+
 namespace regbench {
 
 /// How many pairs an experiment gets from the run's count n (--pairs; else 10 with --quick,
@@ -38,6 +40,9 @@ struct ExperimentSpec {
     PairCount pairs;
     /// Non-empty: pair k belongs to group sweep[k % size] (the overlap-sweep protocol's levels).
     std::vector<std::string> sweep;
+    /// Protocol parameters over the protocol's defaults, as in a pair file's provenance
+    /// (e.g. {"sweep_keeps": [0.45]}: the overlap sweep's 50% level alone); checked on reading.
+    nlohmann::json protocol_options = nlohmann::json::object();
     std::string comment;  ///< free text, ignored
 };
 
@@ -56,6 +61,9 @@ struct VariantSpec {
     std::string model;
     std::string pairs_of;
     std::vector<Variant> rows;
+    /// true: each variant fills the column group named by its row, as `method`'s row (a sweep
+    /// over variants: the cluster-count table); false: each is a row of its own.
+    bool rows_are_groups = false;
     std::string comment;
 };
 
@@ -88,6 +96,11 @@ struct ExperimentFile {
 /// types are refused); throws std::invalid_argument "experiment file FILE[: experiments[i]]:
 /// parameter 'KEY' ..." naming the file and the key.
 ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& file);
+
+/// The protocol parameters experiment `s` generates its pairs with: the protocol's defaults,
+/// then `protocol_options`, `pairing` and `noise_free`. Throws std::invalid_argument on an
+/// unknown key or a bad value (ValidateProtocolOptions).
+ProtocolOptions ProtocolOptionsOf(const ExperimentSpec& s);
 
 /// Reads, parses and checks a file; throws naming the file.
 ExperimentFile ReadExperimentFile(const std::string& path);

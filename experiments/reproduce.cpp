@@ -183,9 +183,8 @@ bool EnsurePairs(const PlannedExperiment& e,
     request.split = s.split;
     request.num_pairs = e.pairs;
     request.seed = e.seed;
-    request.options = DefaultProtocolOptions(ParseProtocol(s.protocol));
-    if (!e.pairing.empty()) request.options.pairing = ParsePairing(e.pairing);
-    if (s.noise_free) request.options.noise_sigma = 0.0;
+    request.options = ProtocolOptionsOf(s);
+    if (!e.pairing.empty()) request.options.pairing = ParsePairing(e.pairing);  // root_pairing
     request.one_per_item = e.one_per_item;
     request.out = path.string();
     request.extra_provenance = {{"regbench_version", RegbenchVersion()},
@@ -371,8 +370,10 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
             log << "reproduce: " << f.table << ": variant " << row.row << " (checkpoint " << dir
                 << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
-            variant_sets[f.table].push_back(
-                {"", ReadResultRows(run.out_path), x.provenance.at(v.pairs_of), row.row});
+            variant_sets[f.table].push_back({v.rows_are_groups ? row.row : "",
+                                             ReadResultRows(run.out_path),
+                                             x.provenance.at(v.pairs_of),
+                                             v.rows_are_groups ? "" : row.row});
         }
     }
 #endif
@@ -464,9 +465,10 @@ std::vector<ResultSet> SetsOf(const ExperimentFile& f,
             sets.push_back({e.spec.group, x.rows[id], x.provenance[id], ""});
         }
     }
+    // Variants run only where a checkpoint of theirs is shipped: rows of their own (Tab. 4, 5)
+    // or columns of the method's row (the cluster-count table, `rows_are_groups`).
+    for (const auto& s : variant_sets[f.table]) sets.push_back(s);
     if (!spec.rows_are_methods) {
-        // Variants run only where a checkpoint of theirs is shipped.
-        for (const auto& s : variant_sets[f.table]) sets.push_back(s);
         for (const auto& [row, cells] : paper["tables"][f.table]["rows"].items()) {
             (void)cells;
             const bool measured =

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -251,6 +252,42 @@ TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
         EXPECT_TRUE(fs::exists(out / "results" / "ablation_components_no_SPE.jsonl"));
         EXPECT_FALSE(fs::exists(out / "results" / "ablation_components_full.jsonl"));
     }
+    fs::remove_all(dir);
+}
+
+TEST(CliTestSets, ReproduceFillsClusterCountColumnsFromVariantCheckpoints) {
+    // The cluster-count table's columns are J: 32 is the shipped ogmm (ogmm-small has J = 32),
+    // the others variants under $REGBENCH_MODELS/ablation/clusters/<J>. Here only J = 8 has one
+    // (any OGMM checkpoint will do), so OGMM's row has columns 32 and 8 measured on the sweep's
+    // 50% level and '-' in 16, 48 and 64. Without LibTorch nothing is measured.
+    const fs::path dir = FreshDir("reproduce_clusters");
+    const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
+    const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";
+    fs::create_directories(dir / "models" / "ablation" / "clusters");
+    fs::create_directory_symlink(shipped, dir / "models" / "ogmm");
+    fs::create_directory_symlink(shipped, dir / "models" / "ablation" / "clusters" / "8");
+    const bool learned = RunCli("methods").output.find("ogmm") != std::string::npos;
+    ::setenv("REGBENCH_MODELS", (dir / "models").c_str(), 1);
+    const fs::path out = dir / "report";
+    const CliResult r =
+        RunCli("reproduce --tables supp_cluster --pairs 2 --jobs 1 --out " + out.string());
+    ::unsetenv("REGBENCH_MODELS");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream f(out / "tables.json");
+    const nlohmann::json cells = nlohmann::json::parse(f);
+    std::set<std::string> measured;
+    for (const auto& c : cells) {
+        if (c.at("table") != "supp_cluster_count" || c.at("source") != "measured") continue;
+        if (!c.at("value").is_number()) continue;
+        EXPECT_EQ(c.at("row"), "OGMM") << c.dump();
+        EXPECT_EQ(c.at("pairs"), 2) << c.dump();
+        EXPECT_EQ(c.at("pairs_file"), "supp_clusters.h5") << c.dump();
+        const std::string column = c.at("column");  // "<J>.<metric>"
+        measured.insert(column.substr(0, column.find('.')));
+    }
+    EXPECT_EQ(measured, learned ? (std::set<std::string>{"32", "8"}) : std::set<std::string>{});
+    if (learned) EXPECT_TRUE(fs::exists(out / "results" / "ablation_clusters_8.jsonl"));
     fs::remove_all(dir);
 }
 

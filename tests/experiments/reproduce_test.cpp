@@ -67,6 +67,10 @@ TEST(PlanExperiments, QuickRunOnTheFallbacks) {
                   "supp_overlap supp_overlap_ratio - overlap-sweep cgal same_category/test 10 1 "
                   "- 0 0 " +
                       kLevels + kMn,
+                  // The sweep's 50% level alone, for the cluster-count variants.
+                  "supp_clusters supp_cluster_count 32 overlap-sweep cgal same_category/test 10 "
+                  "1 - 0 0 -" +
+                      kMn,
                   "supp_c2c supp_complete c2c complete cgal same_category/test 10 1 - 0 0 -" + kMn,
                   "supp_c2p supp_complete c2p complete-to-partial cgal same_category/test 10 1 - "
                   "0 0 -" +
@@ -127,8 +131,9 @@ TEST(PlanExperiments, TablesUseTab1sPairsWhereThePaperDoes) {
     EXPECT_EQ(ids({"table5"}), Ids{"tab1_same"});
     EXPECT_EQ(ids({"table6"}), Ids{"tab1_same"});
     EXPECT_EQ(ids({"table1"}), (Ids{"tab1_same", "tab1_cross"}));
-    EXPECT_EQ(ids({"supp_cluster"}), Ids{});
-    EXPECT_EQ(ids({"supp"}), (Ids{"supp_overlap", "supp_c2c", "supp_c2p", "supp_c2c_clean"}));
+    EXPECT_EQ(ids({"supp_cluster"}), Ids{"supp_clusters"});
+    EXPECT_EQ(ids({"supp"}),
+              (Ids{"supp_overlap", "supp_clusters", "supp_c2c", "supp_c2p", "supp_c2c_clean"}));
     EXPECT_EQ(ReproducibleTables().size(), 9u);
 }
 
