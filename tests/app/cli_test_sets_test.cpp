@@ -207,30 +207,45 @@ TEST(CliTestSets, DeepGmrTestFileByItselfGivesItsStoredPairsAndHash) {
     fs::remove_all(dir);
 }
 
+/// `regbench reproduce ARGS --jobs 1 --out DIR/report` with $REGBENCH_MODELS = DIR/models
+/// holding the shipped ogmm checkpoint as `ogmm` and as the one variant ablation/KIND/ROW (any
+/// OGMM checkpoint will do: a variant is named by its folder). Sets `cells` to tables.json and
+/// `learned` to whether this build has ogmm.
+void ReproduceWithOneVariant(const fs::path& dir,
+                             const std::string& kind,
+                             const std::string& row,
+                             const std::string& args,
+                             nlohmann::json* cells,
+                             bool* learned) {
+    const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
+    const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";
+    ASSERT_TRUE(fs::exists(shipped / "checkpoint.json")) << shipped;
+    fs::create_directories(dir / "models" / "ablation" / kind);
+    fs::create_directory_symlink(shipped, dir / "models" / "ogmm");
+    fs::create_directory_symlink(shipped, dir / "models" / "ablation" / kind / row);
+    *learned = RunCli("methods").output.find("ogmm") != std::string::npos;
+    ::setenv("REGBENCH_MODELS", (dir / "models").c_str(), 1);
+    const CliResult r =
+        RunCli("reproduce " + args + " --jobs 1 --out " + (dir / "report").string());
+    ::unsetenv("REGBENCH_MODELS");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream f(dir / "report" / "tables.json");
+    *cells = nlohmann::json::parse(f);
+}
+
 TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
     // Tab. 4 rows come from checkpoints under $REGBENCH_MODELS/ablation/components/<paper row>.
     // Here only no_SPE has one (any OGMM checkpoint will do: the row is named by its folder),
     // so no_SPE is measured on the Tab. 1 same-category pairs and the other rows say
     // "not trained". A build without LibTorch has no ogmm: every row says "not trained".
     const fs::path dir = FreshDir("reproduce_ablation");
-    const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
-    ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
-    const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";
-    ASSERT_TRUE(fs::exists(shipped / "checkpoint.json")) << shipped;
-    fs::create_directories(dir / "models" / "ablation" / "components");
-    fs::create_directory_symlink(shipped, dir / "models" / "ogmm");
-    fs::create_directory_symlink(shipped, dir / "models" / "ablation" / "components" / "no_SPE");
-    const bool learned = RunCli("methods").output.find("ogmm") != std::string::npos;
-    ::setenv("REGBENCH_MODELS", (dir / "models").c_str(), 1);
     const fs::path out = dir / "report";
-    const CliResult r = RunCli(
-        "reproduce --tables table4 --methods identity,ogmm --pairs 2 "
-        "--jobs 1 --out " +
-        out.string());
-    ::unsetenv("REGBENCH_MODELS");
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::ifstream f(out / "tables.json");
-    const nlohmann::json cells = nlohmann::json::parse(f);
+    nlohmann::json cells;
+    bool learned = false;
+    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant(
+        dir, "components", "no_SPE", "--tables table4 --methods identity,ogmm --pairs 2", &cells,
+        &learned));
     int measured_no_spe = 0, not_trained = 0;
     for (const auto& c : cells) {
         if (c.at("table") != "table4_ablation_components") continue;
@@ -261,21 +276,12 @@ TEST(CliTestSets, ReproduceFillsClusterCountColumnsFromVariantCheckpoints) {
     // (any OGMM checkpoint will do), so OGMM's row has columns 32 and 8 measured on the sweep's
     // 50% level and '-' in 16, 48 and 64. Without LibTorch nothing is measured.
     const fs::path dir = FreshDir("reproduce_clusters");
-    const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
-    ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
-    const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";
-    fs::create_directories(dir / "models" / "ablation" / "clusters");
-    fs::create_directory_symlink(shipped, dir / "models" / "ogmm");
-    fs::create_directory_symlink(shipped, dir / "models" / "ablation" / "clusters" / "8");
-    const bool learned = RunCli("methods").output.find("ogmm") != std::string::npos;
-    ::setenv("REGBENCH_MODELS", (dir / "models").c_str(), 1);
     const fs::path out = dir / "report";
-    const CliResult r =
-        RunCli("reproduce --tables supp_cluster --pairs 2 --jobs 1 --out " + out.string());
-    ::unsetenv("REGBENCH_MODELS");
-    ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::ifstream f(out / "tables.json");
-    const nlohmann::json cells = nlohmann::json::parse(f);
+    nlohmann::json cells;
+    bool learned = false;
+    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant(dir, "clusters", "8",
+                                                    "--tables supp_cluster --pairs 2", &cells,
+                                                    &learned));
     std::set<std::string> measured;
     for (const auto& c : cells) {
         if (c.at("table") != "supp_cluster_count" || c.at("source") != "measured") continue;
