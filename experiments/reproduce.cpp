@@ -370,10 +370,9 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
             log << "reproduce: " << f.table << ": variant " << row.row << " (checkpoint " << dir
                 << ")\n";
             summary.rows_run += RunBenchmark(run).rows_written;
-            variant_sets[f.table].push_back({v.rows_are_groups ? row.row : "",
-                                             ReadResultRows(run.out_path),
-                                             x.provenance.at(v.pairs_of),
-                                             v.rows_are_groups ? "" : row.row});
+            variant_sets[f.table].push_back(
+                {v.rows_are_groups ? row.row : "", ReadResultRows(run.out_path),
+                 x.provenance.at(v.pairs_of), v.rows_are_groups ? "" : row.row});
         }
     }
 #endif

@@ -279,9 +279,8 @@ TEST(CliTestSets, ReproduceFillsClusterCountColumnsFromVariantCheckpoints) {
     const fs::path out = dir / "report";
     nlohmann::json cells;
     bool learned = false;
-    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant(dir, "clusters", "8",
-                                                    "--tables supp_cluster --pairs 2", &cells,
-                                                    &learned));
+    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant(
+        dir, "clusters", "8", "--tables supp_cluster --pairs 2", &cells, &learned));
     std::set<std::string> measured;
     for (const auto& c : cells) {
         if (c.at("table") != "supp_cluster_count" || c.at("source") != "measured") continue;
