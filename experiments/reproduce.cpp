@@ -108,10 +108,12 @@ void WriteText(const fs::path& path, const std::string& text) {
 
 /// Methods to run: `names` (a file's or --methods; empty: every registered one), and the
 /// reasons the wanted ones that cannot run are left out. Only methods in `learned` may be left
-/// out of a list that names them.
+/// out of a list that names them; a file's list (`from_file`) may end up empty (its table then
+/// says why), --methods may not.
 std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
                                       const std::set<std::string>& learned,
                                       const ReproduceOptions& o,
+                                      bool from_file,
                                       std::map<std::string, std::string>* unavailable,
                                       std::ostream& log) {
     const bool named = !names.empty();
@@ -139,7 +141,9 @@ std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
             log << "reproduce: " << name << " left out (not trained: " << e.what() << ")\n";
         }
     }
-    if (specs.empty()) throw std::runtime_error("reproduce: no method can run");
+    if (specs.empty() && !(named && from_file)) {
+        throw std::runtime_error("reproduce: no method can run");
+    }
     return specs;
 }
 
@@ -157,7 +161,7 @@ std::map<std::string, std::vector<MethodSpec>> ChooseAllMethods(
     for (const auto& f : files) {
         const auto& names = o.methods.empty() ? f.methods : o.methods;
         if (!by_list.count(names))
-            by_list[names] = ChooseMethods(names, learned, o, unavailable, log);
+            by_list[names] = ChooseMethods(names, learned, o, o.methods.empty(), unavailable, log);
         by_table[f.table] = by_list[names];
     }
     for (const auto& name : learned) {
@@ -317,8 +321,12 @@ ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experimen
         const std::string& id = e.spec.id;
         const fs::path pairs = out / "pairs" / (id + ".h5");
         const fs::path results = out / "results" / (id + ".jsonl");
-        summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
         const auto& m = methods.at(e.table);
+        if (m.empty()) {  // a file naming only learned methods, none trained in this build
+            log << "reproduce: " << id << ": none of its methods can run, skipped\n";
+            continue;
+        }
+        summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
         const RunOptions run = ExperimentRun(o, pairs, m, results);
         log << "reproduce: " << id << ": running " << m.size() << " methods\n";
         summary.rows_run += RunBenchmark(run).rows_written;
@@ -458,6 +466,7 @@ std::vector<ResultSet> SetsOf(const ExperimentFile& f,
     for (const auto& e : experiments) {
         if (e.table != f.table) continue;
         const std::string& id = e.spec.id;
+        if (!x.rows.count(id)) continue;  // skipped: none of its methods could run
         if (!e.spec.sweep.empty()) {
             for (auto& s : SweepSets(e.spec.sweep, x.rows[id], x.provenance[id])) sets.push_back(s);
         } else {
@@ -543,6 +552,7 @@ void WriteBreakdownsAndHtml(const fs::path& out,
     BreakdownOptions bo;
     for (const auto& e : experiments) {
         const std::string& id = e.spec.id;
+        if (!x.rows.count(id)) continue;  // skipped: none of its methods could run
         const auto& rows = x.rows[id];
         const Provenance& p = x.provenance[id];
         HtmlSection sec;
