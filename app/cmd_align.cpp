@@ -8,8 +8,8 @@
 #include <iostream>
 #include <optional>
 
-#include "app/cli_params.hpp"
 #include "app/cli_numbers.hpp"
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"

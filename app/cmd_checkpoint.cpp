@@ -59,9 +59,8 @@ void SetupImport(CLI::App* cmd) {
         const OutputLock lock(a->out);  // one writer per checkpoint folder
         const nlohmann::json j = ogmm::ImportAuthorsCheckpoint(a->file, a->out, a->options);
         std::cout << "import-checkpoint: wrote " << a->out << " ("
-                  << j.at("config").at("name").get<std::string>() << ", "
-                  << j.at("mapping").size() << " tensors from a "
-                  << j.at("imported_from").at("format").get<std::string>()
+                  << j.at("config").at("name").get<std::string>() << ", " << j.at("mapping").size()
+                  << " tensors from a " << j.at("imported_from").at("format").get<std::string>()
                   << " file, sha256 " << j.at("imported_from").at("sha256").get<std::string>()
                   << ")\n"
                   << "  config: " << j.at("model_config").dump() << "\n";
@@ -80,7 +79,8 @@ void SetupExport(CLI::App* cmd) {
     cmd->add_option("--to", a->to, "Whose module will load it: deepgmr | ogmm")
         ->required()
         ->check(CLI::IsMember({"deepgmr", "ogmm"}));
-    cmd->add_option("--out", a->out, ".pth file to write (zip format, torch.load-able)")->required();
+    cmd->add_option("--out", a->out, ".pth file to write (zip format, torch.load-able)")
+        ->required();
     cmd->callback([a] {
         CheckOutputPath(a->out);
         const OutputLock lock(a->out);
@@ -94,10 +94,12 @@ void SetupExport(CLI::App* cmd) {
 }
 #else
 void SetupImport(CLI::App* cmd) {
-    cmd->callback([] { throw std::runtime_error("import-checkpoint: this build has no LibTorch"); });
+    cmd->callback(
+        [] { throw std::runtime_error("import-checkpoint: this build has no LibTorch"); });
 }
 void SetupExport(CLI::App* cmd) {
-    cmd->callback([] { throw std::runtime_error("export-checkpoint: this build has no LibTorch"); });
+    cmd->callback(
+        [] { throw std::runtime_error("export-checkpoint: this build has no LibTorch"); });
 }
 #endif
 
@@ -107,8 +109,7 @@ void SetupExport(CLI::App* cmd) {
      SetupImport});
 [[maybe_unused]] const bool kExportRegistered = RegisterCommand(
     {"export-checkpoint",
-     "Export a checkpoint folder as a .pth the DeepGMR / OGMM authors' code loads",
-     SetupExport});
+     "Export a checkpoint folder as a .pth the DeepGMR / OGMM authors' code loads", SetupExport});
 }  // namespace
 
 }  // namespace regbench::app

@@ -2,7 +2,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <filesystem>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -113,8 +112,9 @@ void SetupGenerateCommand(CLI::App* cmd) {
         ->capture_default_str();
     cmd->add_option("--dataset", a->request.dataset, "Dataset name or path (see docs/datasets.md)")
         ->capture_default_str();
-    cmd->add_option("--split", a->request.split,
-                    "Dataset split (default: test; all for a single file or a folder of point files)");
+    cmd->add_option(
+        "--split", a->request.split,
+        "Dataset split (default: test; all for a single file or a folder of point files)");
     cmd->add_option("--data-dir", a->data_dir,
                     "Data directory for named datasets (default: ./data)");
     cmd->add_option("--pairs", a->pairs,

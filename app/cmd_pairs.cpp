@@ -1,10 +1,10 @@
 // `regbench inspect`, `regbench export`, `regbench import`: look into and convert pair files.
 #include <filesystem>
 #include <iostream>
-#include <system_error>
-#include <vector>
 #include <memory>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"

@@ -68,8 +68,7 @@ nlohmann::json ReadJsonFile(const std::string& path) {
 }
 
 /// Named config + --config file + the command-line recipe flags.
-nlohmann::json BuildConfig(const TrainArgs& a,
-                           const std::string& model,
+nlohmann::json BuildConfig(const TrainArgs& a, const std::string& model,
                            const nlohmann::json& extra) {
     nlohmann::json overrides =
         a.config_file.empty() ? nlohmann::json::object() : ReadJsonFile(a.config_file);
@@ -82,11 +81,8 @@ nlohmann::json BuildConfig(const TrainArgs& a,
     return config;
 }
 
-void RunOne(const TrainArgs& a,
-            const std::string& command_line,
-            const nlohmann::json& config,
-            const ogmm::TrainData& data,
-            const std::string& out) {
+void RunOne(const TrainArgs& a, const std::string& command_line, const nlohmann::json& config,
+            const ogmm::TrainData& data, const std::string& out) {
     ogmm::TrainOptions o = a.train;
     o.out_dir = out;
     o.plan_to_budget = o.PlansToBudget(a.epochs > 0);

@@ -265,11 +265,8 @@ struct MStep {
 
 /// CPD M-step on the original source Y (Myronenko & Song 2010, Fig. 2, rigid), with probreg's
 /// sigma^2 variants.
-MStep MaximizationStep(const PointCloud& Y,
-                       const PointCloud& X,
-                       const CpdPosteriors& post,
-                       bool update_scale,
-                       bool probreg_sigma2) {
+MStep MaximizationStep(const PointCloud& Y, const PointCloud& X, const CpdPosteriors& post,
+                       bool update_scale, bool probreg_sigma2) {
     const double np = post.np;
     const Eigen::Vector3d mu_x = post.px.colwise().sum().transpose() / np;
     const Eigen::Vector3d mu_y = (Y.transpose() * post.p1) / np;
@@ -309,8 +306,7 @@ public:
 protected:
     bool AllowsScale() const override { return options().update_scale; }
 
-    AlignResult DoAlign(const PointCloud& Y,
-                        const PointCloud& X,
+    AlignResult DoAlign(const PointCloud& Y, const PointCloud& X,
                         const AlignContext& /*context*/) override {
         const double m = static_cast<double>(Y.rows());
         const double n = static_cast<double>(X.rows());

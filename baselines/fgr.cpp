@@ -100,10 +100,8 @@ struct FgrOptions {
 };
 
 /// Optional voxel downsampling, then normals (FPFH needs them).
-std::shared_ptr<open3d::geometry::PointCloud> Prepare(const FgrOptions& o,
-                                                      const PointCloud& points,
-                                                      double voxel,
-                                                      bool downsample) {
+std::shared_ptr<open3d::geometry::PointCloud> Prepare(const FgrOptions& o, const PointCloud& points,
+                                                      double voxel, bool downsample) {
     auto cloud = std::make_shared<open3d::geometry::PointCloud>(ToOpen3d(points));
     if (downsample) cloud = cloud->VoxelDownSample(voxel);
     cloud->EstimateNormals(
@@ -118,9 +116,7 @@ std::shared_ptr<open3d::pipelines::registration::Feature> Fpfh(
         open3d::geometry::KDTreeSearchParamHybrid(o.fpfh_radius_voxels * voxel, o.fpfh_max_nn));
 }
 
-AlignResult AlignFgr(const FgrOptions& o,
-                     const PointCloud& source,
-                     const PointCloud& target,
+AlignResult AlignFgr(const FgrOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& context) {
     namespace o3r = open3d::pipelines::registration;
     const ScaleRule rule = ResolveScaleRule(source, target);

@@ -58,11 +58,8 @@ Channels MakeChannels(bool with_m2, bool with_normals) {
 /// are built once.
 class MomentEstimator {
 public:
-    MomentEstimator(const PointCloud& target,
-                    const Normals* normals,
-                    bool with_m2,
-                    FilterRegEstimator estimator,
-                    LatticeBlur blur)
+    MomentEstimator(const PointCloud& target, const Normals* normals, bool with_m2,
+                    FilterRegEstimator estimator, LatticeBlur blur)
         : target_(target),
           normals_(normals),
           channels_(MakeChannels(with_m2, normals != nullptr)),
@@ -364,10 +361,8 @@ MStep PointToPlane(const Selection& s, const FilterRegMoments& mom, bool probreg
 // ---------------------------------------------------------------------------------------------
 // The method
 
-AlignResult AlignFilterReg(const FilterRegOptions& o,
-                           const PointCloud& source,
-                           const PointCloud& target,
-                           const AlignContext& /*context*/) {
+AlignResult AlignFilterReg(const FilterRegOptions& o, const PointCloud& source,
+                           const PointCloud& target, const AlignContext& /*context*/) {
     const bool pt2pl = o.objective == FilterRegObjective::kPt2Pl;
     const bool probreg_weights = o.compat == Compat::kProbreg;
     Normals normals;
@@ -434,13 +429,9 @@ AlignResult AlignFilterReg(const FilterRegOptions& o,
 
 }  // namespace
 
-FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
-                                const PointCloud& target,
-                                const Normals* target_normals,
-                                double sigma2,
-                                bool with_m2,
-                                FilterRegEstimator estimator,
-                                LatticeBlur blur) {
+FilterRegMoments FilterRegEStep(const PointCloud& moved_source, const PointCloud& target,
+                                const Normals* target_normals, double sigma2, bool with_m2,
+                                FilterRegEstimator estimator, LatticeBlur blur) {
     if (!(sigma2 > 0.0) || !std::isfinite(sigma2)) {
         throw std::invalid_argument("FilterRegEStep: sigma2 must be positive and finite");
     }

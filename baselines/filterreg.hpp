@@ -111,11 +111,8 @@ struct FilterRegMoments {
 /// One E-step on its own (tests, diagnostics). `target_normals` may be null. The lattice
 /// estimator builds over [moved_source/sigma; target/sigma] as probreg; "exact" sums
 /// k_ij = exp(-|y_i - x_j|^2 / 2 sigma2) over |y_i - x_j| <= 3 sigma.
-FilterRegMoments FilterRegEStep(const PointCloud& moved_source,
-                                const PointCloud& target,
-                                const Normals* target_normals,
-                                double sigma2,
-                                bool with_m2,
+FilterRegMoments FilterRegEStep(const PointCloud& moved_source, const PointCloud& target,
+                                const Normals* target_normals, double sigma2, bool with_m2,
                                 FilterRegEstimator estimator = FilterRegEstimator::kLattice,
                                 LatticeBlur blur = LatticeBlur::kAuto);
 

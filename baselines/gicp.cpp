@@ -71,9 +71,7 @@ public:
     int Iterations() const { return nr_iterations_; }
 };
 
-AlignResult AlignGicp(const GicpOptions& o,
-                      const PointCloud& source,
-                      const PointCloud& target,
+AlignResult AlignGicp(const GicpOptions& o, const PointCloud& source, const PointCloud& target,
                       const AlignContext& /*context*/) {
     // PCL indexes an empty covariance vector (undefined behaviour) when a cloud has
     // fewer points than k, so refuse that here.

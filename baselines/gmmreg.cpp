@@ -103,11 +103,8 @@ struct GmmRegOptions : AnnealedL2Options {
 };
 
 /// (mu, phi) of one cloud: sklearn-style spherical GMM or the points themselves.
-MixtureFeatures Features(const GmmRegOptions& options,
-                         const PointCloud& P,
-                         int k,
-                         std::mt19937_64& rng,
-                         int& em_iterations) {
+MixtureFeatures Features(const GmmRegOptions& options, const PointCloud& P, int k,
+                         std::mt19937_64& rng, int& em_iterations) {
     MixtureFeatures f;
     if (options.gmm == GmmFeatures::kPoints) {
         f.means = P;
@@ -126,9 +123,7 @@ MixtureFeatures Features(const GmmRegOptions& options,
     return f;
 }
 
-AlignResult AlignGmmReg(const GmmRegOptions& o,
-                        const PointCloud& source,
-                        const PointCloud& target,
+AlignResult AlignGmmReg(const GmmRegOptions& o, const PointCloud& source, const PointCloud& target,
                         const AlignContext& context) {
     // Bandwidth from the source only (probreg's _estimate_sigma).
     double sigma = o.use_estimated_sigma ? EstimateSigmaFromCovariance(source) : o.sigma;

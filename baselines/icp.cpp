@@ -36,9 +36,7 @@ struct IcpOptions : Open3dIcpOptions {
     }
 };
 
-AlignResult AlignIcp(const IcpOptions& o,
-                     const PointCloud& source,
-                     const PointCloud& target,
+AlignResult AlignIcp(const IcpOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& /*context*/) {
     namespace o3r = open3d::pipelines::registration;
     const ScaleRule rule = ResolveScaleRule(source, target);

@@ -39,9 +39,7 @@ struct IcpPlOptions : Open3dIcpOptions {
     }
 };
 
-AlignResult AlignIcpPl(const IcpPlOptions& o,
-                       const PointCloud& source,
-                       const PointCloud& target,
+AlignResult AlignIcpPl(const IcpPlOptions& o, const PointCloud& source, const PointCloud& target,
                        const AlignContext& /*context*/) {
     namespace o3r = open3d::pipelines::registration;
     // Point-to-plane (Chen & Medioni 1992) minimises distances along the target's normals,

@@ -5,9 +5,7 @@
 namespace regbench {
 namespace {
 
-AlignResult AlignIdentity(const NoOptions&,
-                          const PointCloud&,
-                          const PointCloud&,
+AlignResult AlignIdentity(const NoOptions&, const PointCloud&, const PointCloud&,
                           const AlignContext&) {
     AlignResult r;
     r.stop_reason = "no_op";

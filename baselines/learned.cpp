@@ -27,11 +27,8 @@ std::string ShippedCheckpointDir(const std::string& name) {
     return (std::filesystem::path(DataDir()) / "models" / name).string();
 }
 
-Transform IcpRefine(const PointCloud& source,
-                    const PointCloud& target,
-                    const Transform& initial,
-                    const IcpRefineOptions& options,
-                    AlignResult* details) {
+Transform IcpRefine(const PointCloud& source, const PointCloud& target, const Transform& initial,
+                    const IcpRefineOptions& options, AlignResult* details) {
     const auto icp = IcpMethodInfo().create(
         {{"max_correspondence_distance", options.max_correspondence_distance},
          {"max_iterations", options.max_iterations},
@@ -95,8 +92,7 @@ struct LearnedOptions {
 class LearnedMethod final : public RegistrationMethod {
 public:
     template <bool kIcp, bool kAttention>
-    LearnedMethod(std::string name,
-                  std::string model_dir,
+    LearnedMethod(std::string name, std::string model_dir,
                   const LearnedOptions<kIcp, kAttention>& options)
         : name_(std::move(name)),
           icp_(kIcp),
@@ -114,8 +110,7 @@ public:
     nlohmann::json Params() const override { return params_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source,
-                        const PointCloud& target,
+    AlignResult DoAlign(const PointCloud& source, const PointCloud& target,
                         const AlignContext& context) override {
         AlignResult result;
         result.extra["checkpoint"] = checkpoint_;
@@ -237,8 +232,7 @@ void CheckCheckpoint(const std::string& name, const std::string& dir) {
 }
 
 template <bool kIcp, bool kAttention>
-MethodInfo MakeInfo(const std::string& name,
-                    const std::string& model_dir,
+MethodInfo MakeInfo(const std::string& name, const std::string& model_dir,
                     const std::string& summary) {
     using Options = LearnedOptions<kIcp, kAttention>;
     MethodInfo info = DescribeMethod<Options>(name, summary);

@@ -31,10 +31,7 @@ struct IcpRefineOptions {
 
 /// Open3D ICP from `initial` (the source moved by `initial`, ICP from the identity, composed).
 /// `details`, when given, receives ICP's AlignResult (iterations, fitness, inlier_rmse).
-Transform IcpRefine(const PointCloud& source,
-                    const PointCloud& target,
-                    const Transform& initial,
-                    const IcpRefineOptions& options = {},
-                    AlignResult* details = nullptr);
+Transform IcpRefine(const PointCloud& source, const PointCloud& target, const Transform& initial,
+                    const IcpRefineOptions& options = {}, AlignResult* details = nullptr);
 
 }  // namespace regbench

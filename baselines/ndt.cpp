@@ -70,9 +70,7 @@ public:
     std::size_t TargetCells() { return target_cells_.getCentroids()->size(); }
 };
 
-AlignResult AlignNdt(const NdtOptions& o,
-                     const PointCloud& source,
-                     const PointCloud& target,
+AlignResult AlignNdt(const NdtOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& /*context*/) {
     const ScaleRule rule = ResolveScaleRule(source, target);
     const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;

@@ -41,8 +41,7 @@ struct Open3dIcpOptions {
 /// estimation is wrapped and its ComputeTransformation calls are counted), the stop reason
 /// and extra = {fitness, inlier_rmse, correspondences}.
 AlignResult RunOpen3dIcp(
-    const open3d::geometry::PointCloud& source,
-    const open3d::geometry::PointCloud& target,
+    const open3d::geometry::PointCloud& source, const open3d::geometry::PointCloud& target,
     double max_correspondence_distance,
     const open3d::pipelines::registration::TransformationEstimation& estimation,
     const open3d::pipelines::registration::ICPConvergenceCriteria& criteria);

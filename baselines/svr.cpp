@@ -129,13 +129,8 @@ PointCloud SubsampleRows(const PointCloud& P, Eigen::Index max_points, std::mt19
 /// features.OneClassSVM.compute; the weights are not normalised). Above svm_max_points the SVM
 /// is fitted on a random subsample and alpha scaled by n / subsample, so sum(alpha) = nu n as
 /// for a full fit and the two clouds' weights stay comparable.
-MixtureFeatures SvmFeatures(const PointCloud& full,
-                            double nu,
-                            double gamma,
-                            double phi_sigma,
-                            double tol,
-                            Eigen::Index max_points,
-                            std::mt19937_64& rng) {
+MixtureFeatures SvmFeatures(const PointCloud& full, double nu, double gamma, double phi_sigma,
+                            double tol, Eigen::Index max_points, std::mt19937_64& rng) {
     const PointCloud P = SubsampleRows(full, max_points, rng);
     const OneClassSvm svm = FitOneClassSvm(P, nu, gamma, tol);
     MixtureFeatures f;
@@ -148,9 +143,7 @@ MixtureFeatures SvmFeatures(const PointCloud& full,
     return f;
 }
 
-AlignResult AlignSvr(const SvrOptions& o,
-                     const PointCloud& source,
-                     const PointCloud& target,
+AlignResult AlignSvr(const SvrOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& context) {
     std::mt19937_64 rng = context.MakeRng();  // the SVM subsample, when one is drawn
     double sigma = o.sigma;

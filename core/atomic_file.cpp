@@ -127,8 +127,7 @@ void AtomicFile::Abort() noexcept {
     done_ = true;
 }
 
-void WriteFileAtomic(const std::string& path,
-                     std::string_view content,
+void WriteFileAtomic(const std::string& path, std::string_view content,
                      const std::vector<std::string>& inputs) {
     AtomicFile file(path, inputs);
     file.Write(content);

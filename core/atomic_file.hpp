@@ -47,8 +47,7 @@ private:
 };
 
 /// Writes `content` to `path` atomically (AtomicFile in one call).
-void WriteFileAtomic(const std::string& path,
-                     std::string_view content,
+void WriteFileAtomic(const std::string& path, std::string_view content,
                      const std::vector<std::string>& inputs = {});
 
 /// Writes all of `data` to `fd`, retrying short writes and EINTR. Throws naming `what`.

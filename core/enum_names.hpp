@@ -42,8 +42,7 @@ std::optional<Enum> FindEnum(const EnumName<Enum> (&table)[N], const std::string
 
 /// The table's names in order, joined by `separator`, the last two by `last_separator`.
 template <class Enum, std::size_t N>
-std::string EnumNameList(const EnumName<Enum> (&table)[N],
-                         const std::string& separator = ", ",
+std::string EnumNameList(const EnumName<Enum> (&table)[N], const std::string& separator = ", ",
                          const std::string& last_separator = ", ") {
     std::string list;
     for (std::size_t i = 0; i < N; ++i) {
@@ -56,9 +55,7 @@ std::string EnumNameList(const EnumName<Enum> (&table)[N],
 /// The value named `name`; otherwise throws std::invalid_argument
 /// "<prefix>unknown <what> '<name>' (known: <names>)".
 template <class Enum, std::size_t N>
-Enum ParseEnum(const EnumName<Enum> (&table)[N],
-               const std::string& what,
-               const std::string& name,
+Enum ParseEnum(const EnumName<Enum> (&table)[N], const std::string& what, const std::string& name,
                const std::string& prefix = "") {
     if (const auto value = FindEnum(table, name)) return *value;
     throw std::invalid_argument(prefix + "unknown " + what + " '" + name +

@@ -69,8 +69,8 @@ OutputLock::OutputLock(const std::string& path)
         // Never through a link: a symlink (or a FIFO, a device) pre-placed at the lock path
         // would make the pid write below truncate whatever it points to.
         RequireRegularOrAbsent(lock_path_, "lock file");
-        const int fd =
-            ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
+        const int fd = ::open(lock_path_.c_str(),
+                              O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK, 0644);
         if (fd < 0) {
             const int err = errno;
             if (err == ELOOP) RequireRegularOrAbsent(lock_path_, "lock file");  // names the link

@@ -2,13 +2,13 @@
 // JSON from files and the command line is parsed with a nesting limit: nlohmann's parser is
 // iterative, but copying, comparing and printing a value recurse, so a line nested a million
 // levels deep (a few MB of '[') overflowed the stack and `compare` died by SIGSEGV.
-#include <nlohmann/json.hpp>
+#include <cstddef>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <cstddef>
 
 namespace regbench {
 

@@ -10,8 +10,7 @@ Transform ProcrustesResult::ToTransform() const { return MakeTransform(scale * R
 
 ProcrustesResult ProcrustesFromMoments(const Eigen::Vector3d& mu_source,
                                        const Eigen::Vector3d& mu_target,
-                                       const Eigen::Matrix3d& H_target_source,
-                                       double var_source,
+                                       const Eigen::Matrix3d& H_target_source, double var_source,
                                        bool estimate_scale) {
     ProcrustesResult out;
     if (!H_target_source.allFinite() || !mu_source.allFinite() || !mu_target.allFinite()) {
@@ -31,10 +30,8 @@ ProcrustesResult ProcrustesFromMoments(const Eigen::Vector3d& mu_source,
     return out;
 }
 
-ProcrustesResult WeightedProcrustes(const PointCloud& source,
-                                    const PointCloud& target,
-                                    const Eigen::VectorXd& weights,
-                                    bool estimate_scale) {
+ProcrustesResult WeightedProcrustes(const PointCloud& source, const PointCloud& target,
+                                    const Eigen::VectorXd& weights, bool estimate_scale) {
     const Eigen::Index n = source.rows();
     if (n == 0 || target.rows() != n || (weights.size() != 0 && weights.size() != n)) {
         return {};

@@ -18,8 +18,7 @@ struct ProcrustesResult {
 
 /// Minimises sum_i w_i |target_i - (s R source_i + t)|^2 over R in SO(3) (det +1 enforced,
 /// Umeyama 1991 eq. (39)-(43)), t, and s when estimate_scale. Empty weights = all ones.
-ProcrustesResult WeightedProcrustes(const PointCloud& source,
-                                    const PointCloud& target,
+ProcrustesResult WeightedProcrustes(const PointCloud& source, const PointCloud& target,
                                     const Eigen::VectorXd& weights = Eigen::VectorXd(),
                                     bool estimate_scale = false);
 
@@ -28,8 +27,7 @@ ProcrustesResult WeightedProcrustes(const PointCloud& source,
 /// (used only for the scale). Lets E-step based methods skip building correspondences.
 ProcrustesResult ProcrustesFromMoments(const Eigen::Vector3d& mu_source,
                                        const Eigen::Vector3d& mu_target,
-                                       const Eigen::Matrix3d& H_target_source,
-                                       double var_source,
+                                       const Eigen::Matrix3d& H_target_source, double var_source,
                                        bool estimate_scale);
 
 }  // namespace regbench

@@ -31,9 +31,7 @@ std::pair<Eigen::Index, double> KdTree::Nearest(const Eigen::Vector3d& query) co
     return {static_cast<Eigen::Index>(index), sq};
 }
 
-void KdTree::Knn(const Eigen::Vector3d& query,
-                 int k,
-                 std::vector<Eigen::Index>& indices,
+void KdTree::Knn(const Eigen::Vector3d& query, int k, std::vector<Eigen::Index>& indices,
                  std::vector<double>& sq_distances) const {
     indices.clear();
     sq_distances.clear();
@@ -51,8 +49,7 @@ void KdTree::Knn(const Eigen::Vector3d& query,
     indices.assign(idx.begin(), idx.end());
 }
 
-void KdTree::Radius(const Eigen::Vector3d& query,
-                    double radius,
+void KdTree::Radius(const Eigen::Vector3d& query, double radius,
                     std::vector<std::pair<Eigen::Index, double>>& index_sq_distance) const {
     index_sq_distance.clear();
     if (points_.rows() == 0) return;

@@ -21,13 +21,10 @@ public:
     /// Index of and squared distance to the nearest point; (-1, inf) for an empty cloud.
     std::pair<Eigen::Index, double> Nearest(const Eigen::Vector3d& query) const;
     /// k nearest neighbours, closest first (fewer if the cloud is smaller).
-    void Knn(const Eigen::Vector3d& query,
-             int k,
-             std::vector<Eigen::Index>& indices,
+    void Knn(const Eigen::Vector3d& query, int k, std::vector<Eigen::Index>& indices,
              std::vector<double>& sq_distances) const;
     /// All points within `radius` (not squared), sorted by distance.
-    void Radius(const Eigen::Vector3d& query,
-                double radius,
+    void Radius(const Eigen::Vector3d& query, double radius,
                 std::vector<std::pair<Eigen::Index, double>>& index_sq_distance) const;
     Eigen::Index size() const { return points_.rows(); }
     const PointCloud& points() const { return points_; }

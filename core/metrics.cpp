@@ -49,9 +49,7 @@ ChamferResult ChamferDistances(const PointCloud& a, const PointCloud& b, double 
     return r;
 }
 
-double OverlapRmse(const Transform& T_gt,
-                   const Transform& T_est,
-                   const PointCloud& source,
+double OverlapRmse(const Transform& T_gt, const Transform& T_est, const PointCloud& source,
                    const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& overlap) {
     const bool use_mask = overlap.size() == source.rows() && (overlap.array() != 0).any();
     const PointCloud diff = Apply(T_est, source) - Apply(T_gt, source);
@@ -66,11 +64,8 @@ double OverlapRmse(const Transform& T_gt,
                   : std::sqrt(sum / static_cast<double>(n));
 }
 
-PairMetrics ComputeMetrics(const Transform& T_gt,
-                           const Transform& T_est,
-                           const PointCloud& source,
-                           const PointCloud& target,
-                           EulerConvention euler) {
+PairMetrics ComputeMetrics(const Transform& T_gt, const Transform& T_est, const PointCloud& source,
+                           const PointCloud& target, EulerConvention euler) {
     PairMetrics m = MotionMetrics(T_gt, T_est, euler);
     const ChamferResult c = ChamferDistances(Apply(T_est, source), target);
     m.ccd = c.ccd;

@@ -32,22 +32,16 @@ struct PairMetrics {
 
 /// Rotation/translation metrics only (no clouds needed). `euler` picks the Euler angles of
 /// mae_r / mse_r: scipy's extrinsic 'zyx' (the paper's evaluation code) unless asked otherwise.
-PairMetrics MotionMetrics(const Transform& T_gt,
-                          const Transform& T_est,
+PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est,
                           EulerConvention euler = EulerConvention::kZyx);
 
 /// All metrics; source/target are the pair's clouds (source in its own frame).
-PairMetrics ComputeMetrics(const Transform& T_gt,
-                           const Transform& T_est,
-                           const PointCloud& source,
-                           const PointCloud& target,
-                           EulerConvention euler = EulerConvention::kZyx);
+PairMetrics ComputeMetrics(const Transform& T_gt, const Transform& T_est, const PointCloud& source,
+                           const PointCloud& target, EulerConvention euler = EulerConvention::kZyx);
 
 /// RMSE of ||T_est p - T_gt p|| over the points p of `source` whose `overlap` label is 1 (over
 /// all points when `overlap` is empty or labels none); NaN for an empty cloud.
-double OverlapRmse(const Transform& T_gt,
-                   const Transform& T_est,
-                   const PointCloud& source,
+double OverlapRmse(const Transform& T_gt, const Transform& T_est, const PointCloud& source,
                    const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& overlap);
 
 struct ChamferResult {

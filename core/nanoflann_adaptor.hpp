@@ -24,8 +24,6 @@ struct CloudAdaptor {
 /// Static 3-D L2 kd-tree over a CloudAdaptor.
 using CloudKdTree =
     nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
-                                        CloudAdaptor,
-                                        3,
-                                        std::size_t>;
+                                        CloudAdaptor, 3, std::size_t>;
 
 }  // namespace regbench

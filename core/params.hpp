@@ -45,9 +45,7 @@ struct NoOptions {
 };
 
 /// Throws std::invalid_argument "<method>: parameter '<name>' <why>" unless `ok`.
-inline void Require(bool ok,
-                    const std::string& method,
-                    const std::string& name,
+inline void Require(bool ok, const std::string& method, const std::string& name,
                     const std::string& why) {
     if (!ok) throw std::invalid_argument(method + ": parameter '" + name + "' " + why);
 }
@@ -55,10 +53,8 @@ inline void Require(bool ok,
 /// The one rule for integer keys, of every method and config: a JSON number that is whole
 /// (2 or 2.0; JSON Schema counts both as integers) and within [lo, hi]; 2.5, inf and NaN are
 /// refused, as are floats beyond 2^53, which name no whole number exactly.
-inline void RequireWholeNumber(const nlohmann::json& value,
-                               const std::string& method,
-                               const std::string& name,
-                               double lo = -9007199254740992.0,
+inline void RequireWholeNumber(const nlohmann::json& value, const std::string& method,
+                               const std::string& name, double lo = -9007199254740992.0,
                                double hi = 9007199254740992.0) {
     if (value.is_number_integer()) {
         const double v = value.is_number_unsigned()
@@ -346,10 +342,8 @@ private:
 /// The algorithm of a method without per-instance state: options, clouds and context in,
 /// result out (see RegistrationMethod::DoAlign for the contract).
 template <class Options>
-using AlignFunction = AlignResult (*)(const Options& options,
-                                      const PointCloud& source,
-                                      const PointCloud& target,
-                                      const AlignContext& context);
+using AlignFunction = AlignResult (*)(const Options& options, const PointCloud& source,
+                                      const PointCloud& target, const AlignContext& context);
 
 /// A ParamMethod whose DoAlign calls an AlignFunction.
 template <class Options>
@@ -359,8 +353,7 @@ public:
         : ParamMethod<Options>(std::move(name), std::move(options)), align_(align) {}
 
 protected:
-    AlignResult DoAlign(const PointCloud& source,
-                        const PointCloud& target,
+    AlignResult DoAlign(const PointCloud& source, const PointCloud& target,
                         const AlignContext& context) override {
         return align_(this->options(), source, target, context);
     }
@@ -383,8 +376,7 @@ MethodInfo DescribeMethod(const std::string& name, const std::string& summary) {
 
 /// The registry entry of a method given as a function.
 template <class Options>
-MethodInfo MakeMethodInfo(const std::string& name,
-                          const std::string& summary,
+MethodInfo MakeMethodInfo(const std::string& name, const std::string& summary,
                           AlignFunction<Options> align) {
     MethodInfo info = DescribeMethod<Options>(name, summary);
     info.create = [name, align](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {

@@ -53,8 +53,7 @@ AlignResult Failed(std::string message, double seconds = 0.0, double cpu_seconds
 }
 }  // namespace
 
-AlignResult RegistrationMethod::Align(const PointCloud& source,
-                                      const PointCloud& target,
+AlignResult RegistrationMethod::Align(const PointCloud& source, const PointCloud& target,
                                       const AlignContext& context) {
     for (const auto& problem : {ValidateCloud(source, "source"), ValidateCloud(target, "target")}) {
         if (!problem.empty()) return Failed(Name() + ": " + problem);

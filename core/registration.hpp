@@ -66,13 +66,11 @@ public:
     virtual nlohmann::json Params() const = 0;
 
     /// Estimates T_target_source. Never throws.
-    AlignResult Align(const PointCloud& source,
-                      const PointCloud& target,
+    AlignResult Align(const PointCloud& source, const PointCloud& target,
                       const AlignContext& context = {});
 
 protected:
-    virtual AlignResult DoAlign(const PointCloud& source,
-                                const PointCloud& target,
+    virtual AlignResult DoAlign(const PointCloud& source, const PointCloud& target,
                                 const AlignContext& context) = 0;
     /// Methods that estimate a similarity transform on request return true here, so Align
     /// accepts s*R (it still requires R itself to be a rotation).

@@ -49,9 +49,7 @@ inline PointCloud BumpyEllipsoidSurface(std::mt19937_64& rng, Eigen::Index n) {
 }
 
 /// n points uniform in the axis-aligned box [lo, hi]^3.
-inline PointCloud UniformBox(std::mt19937_64& rng,
-                             Eigen::Index n,
-                             const Eigen::Vector3d& lo,
+inline PointCloud UniformBox(std::mt19937_64& rng, Eigen::Index n, const Eigen::Vector3d& lo,
                              const Eigen::Vector3d& hi) {
     PointCloud p(n, 3);
     for (Eigen::Index i = 0; i < n; ++i) {

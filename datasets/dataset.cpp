@@ -222,8 +222,7 @@ std::vector<std::string> ModelNetOffClasses(const fs::path& root) {
     return classes;
 }
 
-std::unique_ptr<Dataset> OpenModelNetOff(const fs::path& root,
-                                         const SplitSpec& split,
+std::unique_ptr<Dataset> OpenModelNetOff(const fs::path& root, const SplitSpec& split,
                                          const DatasetOptions& options) {
     const std::vector<std::string> classes = ModelNetOffClasses(root);
     const int num = static_cast<int>(classes.size());
@@ -301,8 +300,7 @@ const std::set<std::string>& PointExtensions() {
     return e;
 }
 
-std::unique_ptr<Dataset> OpenPointFiles(const fs::path& path,
-                                        const SplitSpec& split,
+std::unique_ptr<Dataset> OpenPointFiles(const fs::path& path, const SplitSpec& split,
                                         const DatasetOptions& options) {
     RequireSplit(split, path.string(), false);
     std::vector<fs::path> files;
@@ -404,8 +402,7 @@ std::optional<Layout> DetectLayout(const fs::path& path) {
 
 }  // namespace
 
-std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
-                                     const std::string& split,
+std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path, const std::string& split,
                                      const DatasetOptions& options) {
     const SplitSpec spec = detail::ParseSplit(split);
     const fs::path path(name_or_path);

@@ -88,8 +88,7 @@ public:
         }
         if (too_large || count > kMaxDatasetBytes / sizeof(T)) {
             throw std::runtime_error(where + " declares shape " + ShapeString(a.dims) +
-                                     ", more than the " +
-                                     std::to_string(kMaxDatasetBytes >> 30) +
+                                     ", more than the " + std::to_string(kMaxDatasetBytes >> 30) +
                                      " GiB a dataset may hold (a ModelNet40 file holds 50 MB)");
         }
         try {

@@ -28,8 +28,8 @@ SplitSpec ParseSplit(const std::string& split);
 /// held out as val; test = official test. cross_category: train/val as same_category, test =
 /// official test of the second half. `rank` counts the item within its category's official
 /// train items (file order).
-bool InOfficialSplit(
-    const SplitSpec& split, int label, int num_labels, bool official_test, std::size_t rank);
+bool InOfficialSplit(const SplitSpec& split, int label, int num_labels, bool official_test,
+                     std::size_t rank);
 
 /// One item before loading.
 struct Entry {
@@ -47,11 +47,9 @@ using EntryLoader = std::function<ShapeRecord(const Entry&)>;
 /// (core/data_dir.hpp).
 std::string DataDir(const DatasetOptions& options);
 
-std::unique_ptr<Dataset> MakeListDataset(std::string kind,
-                                         std::string split,
+std::unique_ptr<Dataset> MakeListDataset(std::string kind, std::string split,
                                          std::vector<std::string> categories,
-                                         std::vector<Entry> entries,
-                                         EntryLoader loader);
+                                         std::vector<Entry> entries, EntryLoader loader);
 
 /// HDF5-backed datasets (dataset_hdf5.cpp).
 bool LooksLikeModelNetH5Dir(const std::string& dir);

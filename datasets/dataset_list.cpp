@@ -48,8 +48,8 @@ SplitSpec ParseSplit(const std::string& split) {
     return s;
 }
 
-bool InOfficialSplit(
-    const SplitSpec& split, int label, int num_labels, bool official_test, std::size_t rank) {
+bool InOfficialSplit(const SplitSpec& split, int label, int num_labels, bool official_test,
+                     std::size_t rank) {
     constexpr std::size_t kValEvery = 5;  // 80/20 train/validation (docs/datasets.md)
     if (split.protocol == "all") return true;
     if (split.protocol == "official") return official_test == (split.part == "test");
@@ -66,11 +66,8 @@ namespace {
 
 class ListDataset : public Dataset {
 public:
-    ListDataset(std::string kind,
-                std::string split,
-                std::vector<std::string> categories,
-                std::vector<Entry> entries,
-                EntryLoader loader)
+    ListDataset(std::string kind, std::string split, std::vector<std::string> categories,
+                std::vector<Entry> entries, EntryLoader loader)
         : kind_(std::move(kind)),
           split_(std::move(split)),
           categories_(std::move(categories)),
@@ -103,11 +100,9 @@ private:
 
 }  // namespace
 
-std::unique_ptr<Dataset> MakeListDataset(std::string kind,
-                                         std::string split,
+std::unique_ptr<Dataset> MakeListDataset(std::string kind, std::string split,
                                          std::vector<std::string> categories,
-                                         std::vector<Entry> entries,
-                                         EntryLoader loader) {
+                                         std::vector<Entry> entries, EntryLoader loader) {
     return std::make_unique<ListDataset>(std::move(kind), std::move(split), std::move(categories),
                                          std::move(entries), std::move(loader));
 }

@@ -67,9 +67,7 @@ private:
 
 /// Axis-aligned box [lo, hi] turned by `yaw` about the vertical axis through its centre:
 /// 8 corners, 12 triangles.
-void AppendBox(const Eigen::Vector3d& lo,
-               const Eigen::Vector3d& hi,
-               double yaw,
+void AppendBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double yaw,
                MeshBuilder& builder) {
     const Eigen::Vector3d centre = 0.5 * (lo + hi);
     const Eigen::Matrix3d R = RotationFromAxisAngle(Eigen::Vector3d::UnitZ(), yaw);
@@ -92,11 +90,8 @@ int UniformCount(std::mt19937_64& rng, int lo, int hi) {
 
 /// A free footprint centre for an object of bounding radius `radius`, or false after
 /// `placement_attempts` tries (objects do not intersect each other or the walls).
-bool PlaceFootprint(const IndoorSimOptions& o,
-                    const IndoorRoom& room,
-                    double radius,
-                    std::mt19937_64& rng,
-                    Eigen::Vector2d& centre) {
+bool PlaceFootprint(const IndoorSimOptions& o, const IndoorRoom& room, double radius,
+                    std::mt19937_64& rng, Eigen::Vector2d& centre) {
     const double pad = o.object_wall_margin_m + radius;
     if (2.0 * pad >= room.size_m.x() || 2.0 * pad >= room.size_m.y()) return false;
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
@@ -115,9 +110,7 @@ bool PlaceFootprint(const IndoorSimOptions& o,
     return false;
 }
 
-void AddBoxes(const IndoorSimOptions& o,
-              std::mt19937_64& rng,
-              IndoorRoom& room,
+void AddBoxes(const IndoorSimOptions& o, std::mt19937_64& rng, IndoorRoom& room,
               MeshBuilder& builder) {
     const int count = UniformCount(rng, o.min_boxes, o.max_boxes);
     for (int i = 0; i < count; ++i) {
@@ -148,11 +141,8 @@ int PickSupport(const IndoorRoom& room, double radius, double height, std::mt199
     return candidates[UniformIndex(rng, candidates.size())];
 }
 
-void AddCorpusMeshes(const IndoorSimOptions& o,
-                     const FurnitureLibrary& library,
-                     std::mt19937_64& rng,
-                     IndoorRoom& room,
-                     MeshBuilder& builder) {
+void AddCorpusMeshes(const IndoorSimOptions& o, const FurnitureLibrary& library,
+                     std::mt19937_64& rng, IndoorRoom& room, MeshBuilder& builder) {
     if (library.meshes.empty()) return;
     const int count = UniformCount(rng, o.min_meshes, o.max_meshes);
     for (int i = 0; i < count; ++i) {
@@ -244,9 +234,7 @@ struct ViewProbe {
 /// seen share one normal direction (a plane) or two (planes meeting in a line, which leave a
 /// sliding direction unconstrained); a well-conditioned view has some of all three
 /// (Gelfand et al., "Geometrically stable sampling for the ICP algorithm", 3DIM 2003).
-ViewProbe ProbeView(const RayCaster& scene,
-                    const IndoorRoom& room,
-                    const IndoorSimOptions& o,
+ViewProbe ProbeView(const RayCaster& scene, const IndoorRoom& room, const IndoorSimOptions& o,
                     const Transform& T_world_camera) {
     const Eigen::Matrix3d R = T_world_camera.topLeftCorner<3, 3>();
     const Eigen::Vector3d eye = T_world_camera.topRightCorner<3, 1>();
@@ -279,9 +267,7 @@ ViewProbe ProbeView(const RayCaster& scene,
     return probe;
 }
 
-bool AcceptView(const RayCaster& scene,
-                const IndoorRoom& room,
-                const IndoorSimOptions& o,
+bool AcceptView(const RayCaster& scene, const IndoorRoom& room, const IndoorSimOptions& o,
                 const Transform& T_world_camera) {
     const ViewProbe probe = ProbeView(scene, room, o, T_world_camera);
     return probe.object_fraction >= o.min_object_fraction &&
@@ -291,11 +277,8 @@ bool AcceptView(const RayCaster& scene,
 /// Camera A: a free eye looking at a random height of a random object (a random point of the
 /// room when there is no furniture), with enough furniture in view. Returns false when
 /// `placement_attempts` draws gave no usable view.
-bool DrawViewA(const IndoorSimOptions& o,
-               const IndoorRoom& room,
-               const RayCaster& scene,
-               std::mt19937_64& rng,
-               Transform& T_world_camera) {
+bool DrawViewA(const IndoorSimOptions& o, const IndoorRoom& room, const RayCaster& scene,
+               std::mt19937_64& rng, Transform& T_world_camera) {
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
         const Eigen::Vector3d eye(UniformReal(rng, 0.0, room.size_m.x()),
                                   UniformReal(rng, 0.0, room.size_m.y()),
@@ -323,12 +306,8 @@ bool DrawViewA(const IndoorSimOptions& o,
 
 /// Camera B: camera A turned about a random axis (in A's frame) and moved along a random
 /// direction. Returns false when `placement_attempts` draws gave no free eye.
-bool DrawViewB(const IndoorSimOptions& o,
-               const IndoorRoom& room,
-               const RayCaster& scene,
-               const Transform& T_world_a,
-               std::mt19937_64& rng,
-               Transform& T_world_b) {
+bool DrawViewB(const IndoorSimOptions& o, const IndoorRoom& room, const RayCaster& scene,
+               const Transform& T_world_a, std::mt19937_64& rng, Transform& T_world_b) {
     for (int attempt = 0; attempt < o.placement_attempts; ++attempt) {
         const Eigen::Vector3d axis = RandomUnitVector(rng);
         const double angle = UniformReal(rng, o.min_rotation_deg, o.max_rotation_deg) * kDegToRad;
@@ -463,8 +442,7 @@ FurnitureLibrary LoadFurnitureMeshes(const std::string& dir, int min_faces, int 
     return library;
 }
 
-IndoorRoom AssembleRoom(const IndoorSimOptions& options,
-                        const FurnitureLibrary& library,
+IndoorRoom AssembleRoom(const IndoorSimOptions& options, const FurnitureLibrary& library,
                         std::mt19937_64& rng) {
     IndoorRoom room;
     room.size_m << UniformReal(rng, options.room_min_side_m, options.room_max_side_m),
@@ -494,8 +472,7 @@ Transform LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
     return MakeTransform(R, eye);
 }
 
-DepthRender RenderDepth(const RayCaster& scene,
-                        const IndoorSimOptions& o,
+DepthRender RenderDepth(const RayCaster& scene, const IndoorSimOptions& o,
                         const Transform& T_world_camera) {
     DepthRender render;
     render.width = o.image_width;
@@ -543,10 +520,8 @@ double QuantiseDepth(const IndoorSimOptions& o, double z_m) {
     return fb / (steps / o.disparity_subpixel);
 }
 
-IndoorScan ScanFromRender(const DepthRender& render,
-                          const IndoorSimOptions& o,
-                          const Transform& T_world_camera,
-                          std::mt19937_64& rng) {
+IndoorScan ScanFromRender(const DepthRender& render, const IndoorSimOptions& o,
+                          const Transform& T_world_camera, std::mt19937_64& rng) {
     const double max_incidence = o.max_incidence_deg * kDegToRad;
     std::vector<Eigen::Vector3d> points;
     std::vector<int> pixels;
@@ -587,10 +562,8 @@ IndoorScan ScanFromRender(const DepthRender& render,
     return scan;
 }
 
-IndoorScan SimulateScan(const RayCaster& scene,
-                        const IndoorSimOptions& options,
-                        const Transform& T_world_camera,
-                        std::mt19937_64& rng) {
+IndoorScan SimulateScan(const RayCaster& scene, const IndoorSimOptions& options,
+                        const Transform& T_world_camera, std::mt19937_64& rng) {
     return ScanFromRender(RenderDepth(scene, options, T_world_camera), options, T_world_camera,
                           rng);
 }
@@ -609,8 +582,7 @@ Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> OverlapLabels(const PointCloud& s
     return labels;
 }
 
-IndoorScanPair SimulateIndoorPair(const IndoorSimOptions& options,
-                                  const FurnitureLibrary& library,
+IndoorScanPair SimulateIndoorPair(const IndoorSimOptions& options, const FurnitureLibrary& library,
                                   std::mt19937_64& rng) {
     ValidateIndoorSimOptions(options);
     IndoorScanPair pair;
@@ -642,8 +614,7 @@ IndoorScanPair SimulateIndoorPair(const IndoorSimOptions& options,
                              RoomName(pair.room));
 }
 
-IndoorScan SimulateIndoorScan(const IndoorSimOptions& options,
-                              const FurnitureLibrary& library,
+IndoorScan SimulateIndoorScan(const IndoorSimOptions& options, const FurnitureLibrary& library,
                               std::mt19937_64& rng) {
     ValidateIndoorSimOptions(options);
     const IndoorRoom room = AssembleRoom(options, library, rng);

@@ -101,55 +101,17 @@ struct IndoorSimOptions {
     // Labels.
     double overlap_eta_m = 0.05;  ///< a point overlaps when the other scan has a point this close
 };
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(IndoorSimOptions,
-                                                room_min_side_m,
-                                                room_max_side_m,
-                                                room_min_height_m,
-                                                room_max_height_m,
-                                                min_boxes,
-                                                max_boxes,
-                                                box_min_side_m,
-                                                box_max_side_m,
-                                                box_min_height_m,
-                                                box_max_height_m,
-                                                min_meshes,
-                                                max_meshes,
-                                                mesh_min_size_m,
-                                                mesh_max_size_m,
-                                                on_box_probability,
-                                                object_wall_margin_m,
-                                                placement_attempts,
-                                                image_width,
-                                                image_height,
-                                                fx,
-                                                fy,
-                                                cx,
-                                                cy,
-                                                camera_min_height_m,
-                                                camera_max_height_m,
-                                                camera_wall_clearance_m,
-                                                min_baseline_m,
-                                                max_baseline_m,
-                                                min_rotation_deg,
-                                                max_rotation_deg,
-                                                view_attempts,
-                                                min_valid_points,
-                                                min_object_fraction,
-                                                min_normal_spread,
-                                                min_range_m,
-                                                max_range_m,
-                                                max_incidence_deg,
-                                                noise,
-                                                axial_sigma_const_m,
-                                                axial_sigma_quad,
-                                                axial_sigma_offset_m,
-                                                axial_sigma_angle,
-                                                lateral_sigma_px,
-                                                lateral_sigma_angle_px,
-                                                sensor_focal_px,
-                                                stereo_baseline_m,
-                                                disparity_subpixel,
-                                                overlap_eta_m)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
+    IndoorSimOptions, room_min_side_m, room_max_side_m, room_min_height_m, room_max_height_m,
+    min_boxes, max_boxes, box_min_side_m, box_max_side_m, box_min_height_m, box_max_height_m,
+    min_meshes, max_meshes, mesh_min_size_m, mesh_max_size_m, on_box_probability,
+    object_wall_margin_m, placement_attempts, image_width, image_height, fx, fy, cx, cy,
+    camera_min_height_m, camera_max_height_m, camera_wall_clearance_m, min_baseline_m,
+    max_baseline_m, min_rotation_deg, max_rotation_deg, view_attempts, min_valid_points,
+    min_object_fraction, min_normal_spread, min_range_m, max_range_m, max_incidence_deg, noise,
+    axial_sigma_const_m, axial_sigma_quad, axial_sigma_offset_m, axial_sigma_angle,
+    lateral_sigma_px, lateral_sigma_angle_px, sensor_focal_px, stereo_baseline_m,
+    disparity_subpixel, overlap_eta_m)
 
 /// Throws std::invalid_argument("indoor: parameter '<name>' ...") on an inconsistent option.
 void ValidateIndoorSimOptions(const IndoorSimOptions& options);
@@ -168,8 +130,7 @@ struct FurnitureLibrary {
 /// triangle count is in [min_faces, max_faces] and whose bounding box is not flat (every side
 /// > 1% of the largest). Others are listed in `skipped`. Throws std::runtime_error naming
 /// `dir` when it does not exist or yields no mesh.
-FurnitureLibrary LoadFurnitureMeshes(const std::string& dir,
-                                     int min_faces = 100,
+FurnitureLibrary LoadFurnitureMeshes(const std::string& dir, int min_faces = 100,
                                      int max_faces = 20000);
 
 /// One object standing in the room.
@@ -191,8 +152,7 @@ struct IndoorRoom {
 };
 
 /// Draws a room: size, boxes, then corpus meshes (random mesh, size, yaw, free spot).
-IndoorRoom AssembleRoom(const IndoorSimOptions& options,
-                        const FurnitureLibrary& library,
+IndoorRoom AssembleRoom(const IndoorSimOptions& options, const FurnitureLibrary& library,
                         std::mt19937_64& rng);
 
 /// Camera pose at `eye` looking at `target`, world z up (no roll): camera z = viewing
@@ -208,8 +168,7 @@ struct DepthRender {
     Eigen::VectorXd depth;      ///< z [m], 0 where the ray hit nothing
     Eigen::VectorXd incidence;  ///< [rad] in [0, pi/2]
 };
-DepthRender RenderDepth(const RayCaster& scene,
-                        const IndoorSimOptions& options,
+DepthRender RenderDepth(const RayCaster& scene, const IndoorSimOptions& options,
                         const Transform& T_world_camera);
 
 /// Nguyen et al. 2012 eq. 1: axial (depth) noise std [m] at depth z [m], incidence theta [rad].
@@ -230,16 +189,12 @@ struct IndoorScan {
 /// Turns a render into points: drops missing returns (no hit, z outside [min_range, max_range],
 /// incidence > max_incidence), then with options.noise adds axial noise, quantises disparity
 /// and adds lateral noise (pixels in row-major order, 3 normals each), then back-projects.
-IndoorScan ScanFromRender(const DepthRender& render,
-                          const IndoorSimOptions& options,
-                          const Transform& T_world_camera,
-                          std::mt19937_64& rng);
+IndoorScan ScanFromRender(const DepthRender& render, const IndoorSimOptions& options,
+                          const Transform& T_world_camera, std::mt19937_64& rng);
 
 /// RenderDepth + ScanFromRender.
-IndoorScan SimulateScan(const RayCaster& scene,
-                        const IndoorSimOptions& options,
-                        const Transform& T_world_camera,
-                        std::mt19937_64& rng);
+IndoorScan SimulateScan(const RayCaster& scene, const IndoorSimOptions& options,
+                        const Transform& T_world_camera, std::mt19937_64& rng);
 
 /// Two views of one room.
 struct IndoorScanPair {
@@ -266,14 +221,12 @@ Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> OverlapLabels(const PointCloud& s
 /// the baseline and rotation ranges), both scanned, labels at overlap_eta_m. Views with fewer
 /// than min_valid_points returns, or B outside the free space, are redrawn (view_attempts times,
 /// then std::runtime_error). Use MakePairRng(seed, pair_index) for pair `pair_index`.
-IndoorScanPair SimulateIndoorPair(const IndoorSimOptions& options,
-                                  const FurnitureLibrary& library,
+IndoorScanPair SimulateIndoorPair(const IndoorSimOptions& options, const FurnitureLibrary& library,
                                   std::mt19937_64& rng);
 
 /// One view only (the paper resamples both clouds of a Tab. 3 pair from one scan): the same
 /// room and camera-A draw as SimulateIndoorPair.
-IndoorScan SimulateIndoorScan(const IndoorSimOptions& options,
-                              const FurnitureLibrary& library,
+IndoorScan SimulateIndoorScan(const IndoorSimOptions& options, const FurnitureLibrary& library,
                               std::mt19937_64& rng);
 
 }  // namespace regbench

@@ -80,8 +80,8 @@ void ParseHeader(const std::string& line, const std::string& path, int line_no, 
 
 /// The `num_faces` face lines of an OFF file, fan-triangulated; indices checked against
 /// num_vertices. line_no tracks the current line for error messages.
-std::vector<Eigen::Vector3i> ReadOffFaces(
-    std::istream& in, const std::string& path, int& line_no, int num_vertices, int num_faces) {
+std::vector<Eigen::Vector3i> ReadOffFaces(std::istream& in, const std::string& path, int& line_no,
+                                          int num_vertices, int num_faces) {
     std::string line;
     std::vector<Eigen::Vector3i> triangles;
     triangles.reserve(static_cast<std::size_t>(num_faces));

@@ -18,8 +18,7 @@ enum class NonFinitePoints { kDrop, kRefuse };
 /// any other line is rejected with file:line. When `normals` is not null it receives the
 /// file's normals, or an empty matrix when it has none. Throws std::runtime_error naming the
 /// path on a missing, empty, truncated or corrupt file.
-PointCloud ReadPointFile(const std::string& path,
-                         Normals* normals = nullptr,
+PointCloud ReadPointFile(const std::string& path, Normals* normals = nullptr,
                          NonFinitePoints non_finite = NonFinitePoints::kDrop);
 
 /// Points of a PLY / PCD / XYZ file, or the vertices of an OFF mesh (extension decides; case-
@@ -28,8 +27,7 @@ PointCloud ReadCloudFile(const std::string& path,
                          NonFinitePoints non_finite = NonFinitePoints::kDrop);
 
 /// PLY / PCD through Open3D (point_file_open3d.cpp); used by ReadPointFile.
-PointCloud ReadPointFileOpen3D(const std::string& path,
-                               Normals* normals,
+PointCloud ReadPointFileOpen3D(const std::string& path, Normals* normals,
                                NonFinitePoints non_finite = NonFinitePoints::kDrop);
 
 }  // namespace regbench

@@ -10,8 +10,7 @@
 
 namespace regbench {
 
-PointCloud ReadPointFileOpen3D(const std::string& path,
-                               Normals* normals,
+PointCloud ReadPointFileOpen3D(const std::string& path, Normals* normals,
                                NonFinitePoints non_finite) {
     open3d::geometry::PointCloud cloud;
     open3d::io::ReadPointCloudOption option;

@@ -71,10 +71,8 @@ void AddSphereLike(MeshBuilder& out, const std::function<Vec3(double, double)>& 
 }
 
 /// Closed genus-1 surface f(u, v), both parameters periodic in [0, 2pi).
-void AddTorusLike(MeshBuilder& out,
-                  const std::function<Vec3(double, double)>& f,
-                  int u_steps = kSegments,
-                  int v_steps = kRings) {
+void AddTorusLike(MeshBuilder& out, const std::function<Vec3(double, double)>& f,
+                  int u_steps = kSegments, int v_steps = kRings) {
     const int base = out.AddVertex(f(0.0, 0.0));
     for (int k = 1; k < u_steps * v_steps; ++k) {
         out.AddVertex(f(2.0 * kPi * (k / v_steps) / u_steps, 2.0 * kPi * (k % v_steps) / v_steps));
@@ -91,10 +89,8 @@ double SignedPow(double x, double e) { return std::copysign(std::pow(std::abs(x)
 
 /// Surface of revolution about the axis through `origin` along `axis`: profile (radius,
 /// height) points in order; the two ends are closed by poles on the axis.
-void AddLathe(MeshBuilder& out,
-              const std::vector<Eigen::Vector2d>& profile,
-              const Vec3& origin = Vec3::Zero(),
-              const Vec3& axis = Vec3::UnitZ()) {
+void AddLathe(MeshBuilder& out, const std::vector<Eigen::Vector2d>& profile,
+              const Vec3& origin = Vec3::Zero(), const Vec3& axis = Vec3::UnitZ()) {
     const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), axis);
     const auto place = [&](double r, double z, double u) {
         return Vec3(origin + q * Vec3(r * std::cos(u), r * std::sin(u), z));
@@ -122,9 +118,7 @@ void AddCylinder(MeshBuilder& out, double radius, const Vec3& from, const Vec3& 
 }
 
 /// Axis-aligned box with half extents `h` centred at `c`, rotated by `R` about its centre.
-void AddBox(MeshBuilder& out,
-            const Vec3& c,
-            const Vec3& h,
+void AddBox(MeshBuilder& out, const Vec3& c, const Vec3& h,
             const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
     int corner[8];
     for (int k = 0; k < 8; ++k) {
@@ -140,8 +134,8 @@ void AddBox(MeshBuilder& out,
     out.AddQuad(corner[4], corner[5], corner[7], corner[6]);
 }
 
-void AddSuperellipsoid(
-    MeshBuilder& out, const Vec3& centre, const Vec3& axes, double e1, double e2) {
+void AddSuperellipsoid(MeshBuilder& out, const Vec3& centre, const Vec3& axes, double e1,
+                       double e2) {
     AddSphereLike(out, [&](double u, double v) {
         const double cv = SignedPow(std::cos(v), e1);
         return Vec3(centre + Vec3(axes.x() * cv * SignedPow(std::cos(u), e2),

@@ -16,38 +16,17 @@
 namespace regbench {
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(PairCount, scale, min, quick, count)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentSpec,
-                                                id,
-                                                group,
-                                                protocol,
-                                                split,
-                                                dataset,
-                                                root,
-                                                fallback_note,
-                                                pairing,
-                                                root_pairing,
-                                                noise_free,
-                                                seed_offset,
-                                                pairs,
-                                                sweep,
-                                                protocol_options,
-                                                comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentSpec, id, group, protocol, split, dataset,
+                                                root, fallback_note, pairing, root_pairing,
+                                                noise_free, seed_offset, pairs, sweep,
+                                                protocol_options, comment)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(Variant, row, config)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(
-    VariantSpec, kind, method, model, pairs_of, rows, rows_are_groups, comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(VariantSpec, kind, method, model, pairs_of, rows,
+                                                rows_are_groups, comment)
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TimingVariant, row, method, params, comment)
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile,
-                                                table,
-                                                title,
-                                                caption,
-                                                methods,
-                                                learned,
-                                                metrics,
-                                                experiments,
-                                                variants,
-                                                timing_of,
-                                                timing_variants,
-                                                comment)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(ExperimentFile, table, title, caption, methods,
+                                                learned, metrics, experiments, variants, timing_of,
+                                                timing_variants, comment)
 
 namespace {
 
@@ -74,9 +53,7 @@ T ParseWithout(const nlohmann::json& j, const std::string& what, std::vector<con
 
 /// Each item of list `key` of `j`, parsed by `read`.
 template <class Item, class F>
-std::vector<Item> ReadList(const nlohmann::json& j,
-                           const std::string& what,
-                           const char* key,
+std::vector<Item> ReadList(const nlohmann::json& j, const std::string& what, const char* key,
                            F read) {
     const nlohmann::json list = j.value(key, nlohmann::json::array());
     Require(list.is_array(), what, key, "expects array, got " + list.dump());

@@ -61,8 +61,7 @@ std::size_t PairsOf(const PairCount& c, const ReproduceOptions& o) {
     return std::max(c.min, static_cast<std::size_t>(std::floor(c.scale * static_cast<double>(n))));
 }
 
-PlannedExperiment Resolve(const ExperimentSpec& s,
-                          const std::string& table,
+PlannedExperiment Resolve(const ExperimentSpec& s, const std::string& table,
                           const ReproduceOptions& o) {
     PlannedExperiment e;
     e.spec = s;
@@ -112,8 +111,7 @@ void WriteText(const fs::path& path, const std::string& text) {
 /// says why), --methods may not.
 std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
                                       const std::set<std::string>& learned,
-                                      const ReproduceOptions& o,
-                                      bool from_file,
+                                      const ReproduceOptions& o, bool from_file,
                                       std::map<std::string, std::string>* unavailable,
                                       std::ostream& log) {
     const bool named = !names.empty();
@@ -150,10 +148,8 @@ std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
 /// Each file's methods (ChooseMethods once per distinct list), by table id; learned methods
 /// this build does not register are marked "not trained".
 std::map<std::string, std::vector<MethodSpec>> ChooseAllMethods(
-    const std::vector<ExperimentFile>& files,
-    const ReproduceOptions& o,
-    std::map<std::string, std::string>* unavailable,
-    std::ostream& log) {
+    const std::vector<ExperimentFile>& files, const ReproduceOptions& o,
+    std::map<std::string, std::string>* unavailable, std::ostream& log) {
     std::set<std::string> learned;
     for (const auto& f : files) learned.insert(f.learned.begin(), f.learned.end());
     std::map<std::vector<std::string>, std::vector<MethodSpec>> by_list;
@@ -176,9 +172,7 @@ std::map<std::string, std::vector<MethodSpec>> ChooseAllMethods(
 }
 
 /// Generates the pair file unless a previous invocation did.
-bool EnsurePairs(const PlannedExperiment& e,
-                 const fs::path& path,
-                 const ReproduceOptions& o,
+bool EnsurePairs(const PlannedExperiment& e, const fs::path& path, const ReproduceOptions& o,
                  std::ostream& log) {
     if (fs::exists(path)) return false;
     GenerateRequest request;
@@ -206,8 +200,7 @@ bool EnsurePairs(const PlannedExperiment& e,
 
 /// Splits a sweep's rows into its levels (pair k has level k % levels).
 std::vector<ResultSet> SweepSets(const std::vector<std::string>& levels,
-                                 const std::vector<ResultRow>& rows,
-                                 const Provenance& p) {
+                                 const std::vector<ResultRow>& rows, const Provenance& p) {
     std::vector<ResultSet> sets;
     for (std::size_t l = 0; l < levels.size(); ++l) {
         ResultSet s{levels[l], {}, p, ""};
@@ -221,10 +214,8 @@ std::vector<ResultSet> SweepSets(const std::vector<std::string>& levels,
 
 /// How `reproduce` runs methods on one pair file: its jobs, per-call timeout and progress,
 /// resuming the finished rows of a previous invocation.
-RunOptions ExperimentRun(const ReproduceOptions& o,
-                         const fs::path& pairs,
-                         std::vector<MethodSpec> methods,
-                         const fs::path& results) {
+RunOptions ExperimentRun(const ReproduceOptions& o, const fs::path& pairs,
+                         std::vector<MethodSpec> methods, const fs::path& results) {
     RunOptions run;
     run.pairs_path = pairs.string();
     run.methods = std::move(methods);
@@ -312,10 +303,8 @@ struct ExperimentOutputs {
 /// Generates and runs every experiment; each step is skipped or resumed when done before.
 ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experiments,
                                  const std::map<std::string, std::vector<MethodSpec>>& methods,
-                                 const ReproduceOptions& o,
-                                 const fs::path& out,
-                                 ReproduceSummary& summary,
-                                 std::ostream& log) {
+                                 const ReproduceOptions& o, const fs::path& out,
+                                 ReproduceSummary& summary, std::ostream& log) {
     ExperimentOutputs x;
     for (const auto& e : experiments) {
         const std::string& id = e.spec.id;
@@ -345,10 +334,8 @@ ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experimen
 std::map<std::string, std::vector<ResultSet>> RunVariants(
     [[maybe_unused]] const std::vector<ExperimentFile>& files,
     [[maybe_unused]] const std::map<std::string, std::vector<MethodSpec>>& methods,
-    [[maybe_unused]] const ExperimentOutputs& x,
-    [[maybe_unused]] const ReproduceOptions& o,
-    [[maybe_unused]] const fs::path& out,
-    [[maybe_unused]] ReproduceSummary& summary,
+    [[maybe_unused]] const ExperimentOutputs& x, [[maybe_unused]] const ReproduceOptions& o,
+    [[maybe_unused]] const fs::path& out, [[maybe_unused]] ReproduceSummary& summary,
     [[maybe_unused]] std::ostream& log) {
     std::map<std::string, std::vector<ResultSet>> variant_sets;
 #ifdef REGBENCH_HAVE_LEARNED
@@ -393,12 +380,8 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
 /// invocation. Returns the variants' result sets, labelled with their rows, by table id.
 std::map<std::string, std::vector<ResultSet>> RunTimingVariants(
     const std::vector<ExperimentFile>& files,
-    const std::map<std::string, std::vector<MethodSpec>>& methods,
-    const ExperimentOutputs& x,
-    const ReproduceOptions& o,
-    const fs::path& out,
-    ReproduceSummary& summary,
-    std::ostream& log) {
+    const std::map<std::string, std::vector<MethodSpec>>& methods, const ExperimentOutputs& x,
+    const ReproduceOptions& o, const fs::path& out, ReproduceSummary& summary, std::ostream& log) {
     std::map<std::string, std::vector<ResultSet>> sets;
     for (const auto& f : files) {
         if (!Wanted(o.tables, f.table) || !x.rows.count(f.timing_of)) continue;
@@ -455,13 +438,11 @@ PaperTableSpec SpecOf(const ExperimentFile& f) {
 
 /// The result sets of a file's table: its experiments' rows (a sweep's split into its
 /// levels), then its variants', with every unmeasured variant row of the paper marked.
-std::vector<ResultSet> SetsOf(const ExperimentFile& f,
-                              const PaperTableSpec& spec,
+std::vector<ResultSet> SetsOf(const ExperimentFile& f, const PaperTableSpec& spec,
                               const std::vector<PlannedExperiment>& experiments,
                               ExperimentOutputs& x,
                               std::map<std::string, std::vector<ResultSet>>& variant_sets,
-                              const nlohmann::json& paper,
-                              PaperTableOptions* to) {
+                              const nlohmann::json& paper, PaperTableOptions* to) {
     std::vector<ResultSet> sets;
     for (const auto& e : experiments) {
         if (e.table != f.table) continue;
@@ -495,8 +476,7 @@ std::vector<Table> BuildTables(const std::vector<ExperimentFile>& files,
                                std::map<std::string, std::vector<ResultSet>>& variant_sets,
                                std::map<std::string, std::vector<ResultSet>>& timing_sets,
                                const std::map<std::string, std::string>& unavailable,
-                               const nlohmann::json& paper,
-                               const ReproduceOptions& o) {
+                               const nlohmann::json& paper, const ReproduceOptions& o) {
     std::vector<Table> tables;
     for (const auto& f : files) {
         if (!Wanted(o.tables, f.table)) continue;
@@ -537,8 +517,7 @@ void WriteTables(const fs::path& out, const std::string& intro, const std::vecto
 }
 
 /// breakdowns.md and report.html: the tables, then one section per experiment.
-void WriteBreakdownsAndHtml(const fs::path& out,
-                            const std::string& intro,
+void WriteBreakdownsAndHtml(const fs::path& out, const std::string& intro,
                             const std::vector<Table>& tables,
                             const std::vector<PlannedExperiment>& experiments,
                             ExperimentOutputs& x) {

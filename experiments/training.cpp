@@ -51,8 +51,11 @@ ogmm::TrainData FromPairFile(const TrainingDataOptions& a) {
                                     " leaves no training or no validation pair");
     }
     const std::size_t n_train = n - n_val;  // the last n_val pairs validate
-    for (std::size_t i = n_train; i < n; ++i) data.validation.push_back(ToTrainSample(set->pairs[i]));
-    data.train_pair = [set, n_train](std::uint64_t k) { return ToTrainSample(set->pairs[k % n_train]); };
+    for (std::size_t i = n_train; i < n; ++i)
+        data.validation.push_back(ToTrainSample(set->pairs[i]));
+    data.train_pair = [set, n_train](std::uint64_t k) {
+        return ToTrainSample(set->pairs[k % n_train]);
+    };
     data.provenance = {{"pairs_file", a.pairs_file},
                        {"pairs_file_provenance", set->provenance},
                        {"train_pairs", n_train},
@@ -64,8 +67,9 @@ ogmm::TrainData FromPairFile(const TrainingDataOptions& a) {
 
 TrainingBundle LoadTrainingBundle(const TrainingDataOptions& a) {
     if (!a.pairs_file.empty()) {
-        throw std::invalid_argument("train: a training bundle is made from a protocol and "
-                                    "datasets, not from --pairs-file");
+        throw std::invalid_argument(
+            "train: a training bundle is made from a protocol and "
+            "datasets, not from --pairs-file");
     }
     TrainingBundle b;
     Protocol protocol = ParseProtocol(a.protocol);

@@ -91,7 +91,8 @@ ogmm::TrainData MakeTrainingData(const TrainingBundle& b) {
     // Validation pairs come from another seed stream than training pairs.
     const std::uint64_t val_seed = b.seed ^ 0x76616c6964ULL;
     for (int i = 0; i < b.val_pairs; ++i) {
-        data.validation.push_back(ToTrainSample(GeneratePair(b.val_shapes, b.protocol, val_seed, i)));
+        data.validation.push_back(
+            ToTrainSample(GeneratePair(b.val_shapes, b.protocol, val_seed, i)));
     }
     auto shapes = std::make_shared<std::vector<ShapeSource>>(b.train_shapes);
     data.train_pair = [shapes, options = b.protocol, seed = b.seed](std::uint64_t k) {
@@ -120,7 +121,8 @@ void WriteTrainingBundle(const std::string& path, const TrainingBundle& b) {
                               {"train_shapes", ShapesToJson(b.train_shapes)},
                               {"val_shapes", ShapesToJson(b.val_shapes)}};
     const std::vector<std::uint8_t> bytes = nlohmann::json::to_cbor(j);
-    WriteFileAtomic(path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    WriteFileAtomic(path,
+                    std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 TrainingBundle ReadTrainingBundle(const std::string& path) {

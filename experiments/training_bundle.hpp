@@ -21,8 +21,8 @@ struct TrainingBundle {
     ProtocolOptions protocol;               ///< valid (ValidateProtocolOptions)
     std::vector<ShapeSource> train_shapes;  ///< mesh or point sources, never stored pairs
     std::vector<ShapeSource> val_shapes;
-    int val_pairs = 200;      ///< validation pairs, drawn from val_shapes
-    std::uint64_t seed = 0;   ///< training pair k = GeneratePair(train_shapes, protocol, seed, k)
+    int val_pairs = 200;     ///< validation pairs, drawn from val_shapes
+    std::uint64_t seed = 0;  ///< training pair k = GeneratePair(train_shapes, protocol, seed, k)
     nlohmann::json provenance = nlohmann::json::object();  ///< dataset names and splits
     /// Written by `train --write-bundle` (null in a bundle made for a run here): the resolved
     /// model config with its "train" recipe, the command that wrote it, and whether that command

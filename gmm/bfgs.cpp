@@ -191,13 +191,9 @@ private:
 
 }  // namespace
 
-LineSearchResult MoreThuenteSearch(const BfgsObjective& fun,
-                                   const Eigen::VectorXd& x,
-                                   const Eigen::VectorXd& p,
-                                   double f0,
-                                   const Eigen::VectorXd& g0,
-                                   double step0,
-                                   const BfgsOptions& options) {
+LineSearchResult MoreThuenteSearch(const BfgsObjective& fun, const Eigen::VectorXd& x,
+                                   const Eigen::VectorXd& p, double f0, const Eigen::VectorXd& g0,
+                                   double step0, const BfgsOptions& options) {
     LineSearchResult out;
     Dcsrch search(options.c1, options.c2, options.xtol, kStepMin, kStepMax);
     double stp = step0;
@@ -222,8 +218,7 @@ LineSearchResult MoreThuenteSearch(const BfgsObjective& fun,
     return out;
 }
 
-BfgsResult MinimizeBfgs(const BfgsObjective& fun,
-                        const Eigen::VectorXd& x0,
+BfgsResult MinimizeBfgs(const BfgsObjective& fun, const Eigen::VectorXd& x0,
                         const BfgsOptions& options) {
     const Eigen::Index n = x0.size();
     BfgsResult r;

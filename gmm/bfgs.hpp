@@ -35,8 +35,7 @@ struct BfgsResult {
 /// stpmin 1e-100, stpmax 1e100; rho = 1000 when y's = 0; stops on |g|_inf <= gtol, maxiter, a
 /// failed line search (dcsrch error/warning, or 100 calls) or a non-finite f.
 /// Unlike scipy, a failed Moré-Thuente search does not fall back to line_search_wolfe2.
-BfgsResult MinimizeBfgs(const BfgsObjective& fun,
-                        const Eigen::VectorXd& x0,
+BfgsResult MinimizeBfgs(const BfgsObjective& fun, const Eigen::VectorXd& x0,
                         const BfgsOptions& options);
 
 /// Outcome of one Moré-Thuente search along p from x.
@@ -51,12 +50,8 @@ struct LineSearchResult {
 
 /// scipy's scalar_search_wolfe1 over phi(a) = f(x + a p): MINPACK-2 dcsrch with ftol = c1,
 /// gtol = c2, starting at `step0`.
-LineSearchResult MoreThuenteSearch(const BfgsObjective& fun,
-                                   const Eigen::VectorXd& x,
-                                   const Eigen::VectorXd& p,
-                                   double f0,
-                                   const Eigen::VectorXd& g0,
-                                   double step0,
-                                   const BfgsOptions& options);
+LineSearchResult MoreThuenteSearch(const BfgsObjective& fun, const Eigen::VectorXd& x,
+                                   const Eigen::VectorXd& p, double f0, const Eigen::VectorXd& g0,
+                                   double step0, const BfgsOptions& options);
 
 }  // namespace regbench

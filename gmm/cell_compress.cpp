@@ -9,8 +9,7 @@
 
 namespace regbench {
 
-CellCompressed CompressToCells(const PointCloud& points,
-                               const Eigen::VectorXd* weights,
+CellCompressed CompressToCells(const PointCloud& points, const Eigen::VectorXd* weights,
                                double cell) {
     const Eigen::Index n = points.rows();
     if (n == 0) throw std::invalid_argument("CompressToCells: cloud is empty");

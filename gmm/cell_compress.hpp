@@ -27,8 +27,7 @@ struct CellCompressed {
 /// weight 0 keeps its plain centroid and weight 0. Throws std::invalid_argument naming the
 /// problem for an empty cloud, a non-positive cell or a grid too fine to index (> 2^20 cells
 /// per axis).
-CellCompressed CompressToCells(const PointCloud& points,
-                               const Eigen::VectorXd* weights,
+CellCompressed CompressToCells(const PointCloud& points, const Eigen::VectorXd* weights,
                                double cell);
 
 }  // namespace regbench

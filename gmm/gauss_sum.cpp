@@ -53,11 +53,8 @@ struct Candidate {
 
 /// Point leaves whose spheres come within `cutoff` of the `query` node's sphere, in stored
 /// order (found by walking the point tree from the root).
-void CollectCandidates(const BlockedCloud::Node& query,
-                       const BlockedCloud& points,
-                       double cutoff,
-                       std::vector<int>& stack,
-                       std::vector<Candidate>& candidates) {
+void CollectCandidates(const BlockedCloud::Node& query, const BlockedCloud& points, double cutoff,
+                       std::vector<int>& stack, std::vector<Candidate>& candidates) {
     candidates.clear();
     stack.assign(1, 0);
     const auto& nodes = points.nodes();
@@ -102,16 +99,10 @@ struct ChunkSums {
 /// Float SIMD sums over one chunk of <= kChunk points: sum w k, sum w k p (p = x, y, z).
 /// Only locals and restrict pointers in the loop, so it vectorises.
 template <bool kWeighted, bool kMoment>
-__attribute__((always_inline)) inline ChunkSums SumChunk(const float* __restrict px,
-                                                         const float* __restrict py,
-                                                         const float* __restrict pz,
-                                                         const float* __restrict w,
-                                                         Eigen::Index count,
-                                                         float qx,
-                                                         float qy,
-                                                         float qz,
-                                                         float neg_inv_two_sigma2,
-                                                         float cutoff2) {
+__attribute__((always_inline)) inline ChunkSums SumChunk(
+    const float* __restrict px, const float* __restrict py, const float* __restrict pz,
+    const float* __restrict w, Eigen::Index count, float qx, float qy, float qz,
+    float neg_inv_two_sigma2, float cutoff2) {
     // Eight independent lanes (one AVX register) written as plain arrays: GCC vectorises
     // this without -ffast-math, and the lane order fixes the summation order.
     constexpr int kLanes = 8;
@@ -205,10 +196,10 @@ bool HasAvx2Fma() {
     return has;
 }
 bool HasAvx512() {
-    static const bool has =
-        SimdCap() >= SimdLevel::kAvx512 && __builtin_cpu_supports("avx512f") &&
-        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
-        __builtin_cpu_supports("avx512dq");
+    static const bool has = SimdCap() >= SimdLevel::kAvx512 && __builtin_cpu_supports("avx512f") &&
+                            __builtin_cpu_supports("avx512vl") &&
+                            __builtin_cpu_supports("avx512bw") &&
+                            __builtin_cpu_supports("avx512dq");
     return has;
 }
 
@@ -301,14 +292,9 @@ __attribute__((always_inline)) inline typename Lanes<kLanes>::Floats Exp2NonPosi
 /// and sum with the lanes in registers; `count` is a multiple of kKernelRowPad (callers pad),
 /// so no scalar or masked tail.
 template <int kLanes>
-__attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row,
-                                                           const float* __restrict px,
-                                                           const float* __restrict py,
-                                                           const float* __restrict pz,
-                                                           Eigen::Index count,
-                                                           float qx,
-                                                           float qy,
-                                                           float qz) {
+__attribute__((always_inline)) inline double KernelRowImpl(
+    float* __restrict row, const float* __restrict px, const float* __restrict py,
+    const float* __restrict pz, Eigen::Index count, float qx, float qy, float qz) {
     static_assert(kKernelRowPad % kLanes == 0, "the padding must fill whole vectors");
     using Floats = typename Lanes<kLanes>::Floats;
     static_assert(sizeof(Floats) == kLanes * sizeof(float), "a vector of kLanes floats");
@@ -337,12 +323,8 @@ __attribute__((always_inline)) inline double KernelRowImpl(float* __restrict row
 /// acc{0,1,2,3}[i] += row[i] * (w, wx, wy, wz) for i in [0, count): one target's share of
 /// p1 and PX, w = 1 / (den + c), from its kernel column while it is still in L1.
 __attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict row,
-                                                       Eigen::Index count,
-                                                       float w,
-                                                       float wx,
-                                                       float wy,
-                                                       float wz,
-                                                       float* __restrict acc0,
+                                                       Eigen::Index count, float w, float wx,
+                                                       float wy, float wz, float* __restrict acc0,
                                                        float* __restrict acc1,
                                                        float* __restrict acc2,
                                                        float* __restrict acc3) {
@@ -357,14 +339,10 @@ __attribute__((always_inline)) inline void AxpyRowImpl(const float* __restrict r
 
 /// Four AxpyRowImpl calls fused: each accumulator element is loaded and stored once and gets
 /// the four targets' terms in target order (the same operations, hence the same bits).
-__attribute__((always_inline)) inline void AxpyRows4Impl(const float* __restrict rows,
-                                                         Eigen::Index stride,
-                                                         Eigen::Index count,
-                                                         const float* __restrict w,
-                                                         float* __restrict acc0,
-                                                         float* __restrict acc1,
-                                                         float* __restrict acc2,
-                                                         float* __restrict acc3) {
+__attribute__((always_inline)) inline void AxpyRows4Impl(
+    const float* __restrict rows, Eigen::Index stride, Eigen::Index count,
+    const float* __restrict w, float* __restrict acc0, float* __restrict acc1,
+    float* __restrict acc2, float* __restrict acc3) {
     const float* __restrict r0 = rows;
     const float* __restrict r1 = rows + stride;
     const float* __restrict r2 = rows + 2 * stride;
@@ -424,20 +402,15 @@ double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float* row
     return KernelRowImpl<4>(row, points.x, points.y, points.z, points.count, q.x(), q.y(), q.z());
 }
 
-void AxpyRow(const float* row,
-             Eigen::Index count,
-             const std::array<float, 4>& w,
+void AxpyRow(const float* row, Eigen::Index count, const std::array<float, 4>& w,
              const std::array<float*, 4>& acc) {
     RunBestIsa([&]() __attribute__((always_inline)) {
         AxpyRowImpl(row, count, w[0], w[1], w[2], w[3], acc[0], acc[1], acc[2], acc[3]);
     });
 }
 
-void AxpyRows4(const float* rows,
-               Eigen::Index stride,
-               Eigen::Index count,
-               const std::array<std::array<float, 4>, 4>& w,
-               const std::array<float*, 4>& acc) {
+void AxpyRows4(const float* rows, Eigen::Index stride, Eigen::Index count,
+               const std::array<std::array<float, 4>, 4>& w, const std::array<float*, 4>& acc) {
     RunBestIsa([&]() __attribute__((always_inline)) {
         AxpyRows4Impl(rows, stride, count, w[0].data(), acc[0], acc[1], acc[2], acc[3]);
     });
@@ -447,9 +420,7 @@ namespace {
 
 /// Copies nanoflann's tree into BlockedCloud nodes (pre-order), returning the node index.
 template <class NodePtr>
-int FlattenTree(NodePtr node,
-                std::vector<BlockedCloud::Node>& nodes,
-                std::vector<int>& leaves,
+int FlattenTree(NodePtr node, std::vector<BlockedCloud::Node>& nodes, std::vector<int>& leaves,
                 Eigen::Index& next_begin) {
     const int id = static_cast<int>(nodes.size());
     nodes.emplace_back();
@@ -527,12 +498,8 @@ void BlockedCloud::SetTransform(const Transform& T) {
     }
 }
 
-void KernelSums(const BlockedCloud& queries,
-                const BlockedCloud& points,
-                double sigma2,
-                double cutoff_radius,
-                const float* weights,
-                bool want_first_moment,
+void KernelSums(const BlockedCloud& queries, const BlockedCloud& points, double sigma2,
+                double cutoff_radius, const float* weights, bool want_first_moment,
                 KernelSumResult& out) {
     if (!(sigma2 > 0.0) || !std::isfinite(sigma2)) {
         throw std::invalid_argument("KernelSums: sigma2 must be positive and finite");
@@ -587,8 +554,7 @@ void KernelSums(const BlockedCloud& queries,
 
 namespace {
 __attribute__((always_inline)) inline double FastExpPassImpl(const float* __restrict x,
-                                                             float* __restrict y,
-                                                             std::size_t n) {
+                                                             float* __restrict y, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i) y[i] = FastExp(x[i]);
     double s = 0.0;
     for (std::size_t i = 0; i < n; i += 4096) s += y[i];  // touch, do not re-add everything

@@ -139,12 +139,8 @@ struct KernelSumResult {
 /// m0 (and m1 when want_first_moment) for every query; see the file comment. `weights` is in
 /// the points' stored order (nullptr = all ones). Pairs farther apart than cutoff_radius
 /// contribute 0. Both clouds must share the same origin. sigma2 > 0.
-void KernelSums(const BlockedCloud& queries,
-                const BlockedCloud& points,
-                double sigma2,
-                double cutoff_radius,
-                const float* weights,
-                bool want_first_moment,
+void KernelSums(const BlockedCloud& queries, const BlockedCloud& points, double sigma2,
+                double cutoff_radius, const float* weights, bool want_first_moment,
                 KernelSumResult& out);
 
 /// The machine's exp floor: y[i] = FastExp(x[i]) for i < n, dispatched to the same ISA clones
@@ -190,19 +186,14 @@ double KernelRow(const FloatPoints& points, const Eigen::Vector3f& q, float* row
 
 /// acc[c][i] += w[c] row[i] for c = 0..3 and i < count: one target's share of CPD's p1 and PX
 /// with w = (1, x, y, z) / (den + c).
-void AxpyRow(const float* row,
-             Eigen::Index count,
-             const std::array<float, 4>& w,
+void AxpyRow(const float* row, Eigen::Index count, const std::array<float, 4>& w,
              const std::array<float*, 4>& acc);
 
 /// Four targets at once: acc[c][i] += w[t][c] rows[t * stride + i] for t = 0..3 in that
 /// order, so the result is bit-identical to four AxpyRow calls, with a quarter of their
 /// accumulator loads and stores (the E-step's main cost beside the exponentials).
-void AxpyRows4(const float* rows,
-               Eigen::Index stride,
-               Eigen::Index count,
-               const std::array<std::array<float, 4>, 4>& w,
-               const std::array<float*, 4>& acc);
+void AxpyRows4(const float* rows, Eigen::Index stride, Eigen::Index count,
+               const std::array<std::array<float, 4>, 4>& w, const std::array<float*, 4>& acc);
 
 /// Radius (in sigmas) beyond which FastExp(-d^2 / 2 sigma^2) is exactly 0: sqrt(2 * 87).
 double UnderflowRadiusSigmas();
@@ -213,10 +204,9 @@ enum class GaussSumMode {
     kDense,      ///< exact up to float underflow
     kTruncated,  ///< always truncate at truncation_sigmas * sigma
 };
-REGBENCH_CHOICES(GaussSumMode,
-                 {{GaussSumMode::kAuto, "auto"},
-                  {GaussSumMode::kDense, "dense"},
-                  {GaussSumMode::kTruncated, "truncated"}})
+REGBENCH_CHOICES(GaussSumMode, {{GaussSumMode::kAuto, "auto"},
+                                {GaussSumMode::kDense, "dense"},
+                                {GaussSumMode::kTruncated, "truncated"}})
 
 /// Switch rule for GaussSumMode::kAuto (docs/probabilistic-baselines.md, CPD cost): truncate
 /// when max(M, N) >= truncation_min_points and r = truncation_sigmas * sigma is below

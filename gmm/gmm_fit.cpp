@@ -37,15 +37,9 @@ struct Soa {
 };
 
 /// d[i] = min(d[i], |p_i - c|^2); returns sum_i d[i] (k-means++ potential with candidate c).
-REGBENCH_SIMD_CLONES double MinDistancesTo(const double* px,
-                                           const double* py,
-                                           const double* pz,
-                                           long n,
-                                           double cx,
-                                           double cy,
-                                           double cz,
-                                           const double* closest,
-                                           double* out) {
+REGBENCH_SIMD_CLONES double MinDistancesTo(const double* px, const double* py, const double* pz,
+                                           long n, double cx, double cy, double cz,
+                                           const double* closest, double* out) {
     double pot = 0.0;
 #pragma omp simd reduction(+ : pot)
     for (long i = 0; i < n; ++i) {
@@ -60,14 +54,8 @@ REGBENCH_SIMD_CLONES double MinDistancesTo(const double* px,
 
 /// Index of the nearest center (first on ties) and its squared distance: a vectorised pass
 /// for the distances and their minimum, then a scan for the first index that attains it.
-REGBENCH_SIMD_CLONES int NearestCenter(double x,
-                                       double y,
-                                       double z,
-                                       const double* cx,
-                                       const double* cy,
-                                       const double* cz,
-                                       long k,
-                                       double* scratch,
+REGBENCH_SIMD_CLONES int NearestCenter(double x, double y, double z, const double* cx,
+                                       const double* cy, const double* cz, long k, double* scratch,
                                        double* best_d2) {
     double best = std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(min : best)
@@ -88,17 +76,10 @@ REGBENCH_SIMD_CLONES int NearestCenter(double x,
 /// _estimate_weighted_log_prob). Writes exp(wlp_k - max_k wlp_k) into `row` and the inverse
 /// of its sum into `inv_sum` (resp = row * inv_sum, applied in AccumulateRow); returns the
 /// log-normaliser log sum_k exp(wlp_k).
-REGBENCH_SIMD_CLONES double ResponsibilityRow(double x,
-                                              double y,
-                                              double z,
-                                              const double* mx,
-                                              const double* my,
-                                              const double* mz,
-                                              const double* neg_half_prec,
-                                              const double* log_const,
-                                              long k,
-                                              double* row,
-                                              double* inv_sum) {
+REGBENCH_SIMD_CLONES double ResponsibilityRow(double x, double y, double z, const double* mx,
+                                              const double* my, const double* mz,
+                                              const double* neg_half_prec, const double* log_const,
+                                              long k, double* row, double* inv_sum) {
     double max_wlp = -std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(max : max_wlp)
     for (long j = 0; j < k; ++j) {
@@ -120,16 +101,8 @@ REGBENCH_SIMD_CLONES double ResponsibilityRow(double x,
 
 /// M-step accumulation of one row, r_k = row_k * scale: mass_k += r_k, sum_k += r_k x,
 /// sumsq_k += r_k |x|^2.
-REGBENCH_SIMD_CLONES void AccumulateRow(const double* row,
-                                        double scale,
-                                        long k,
-                                        double x,
-                                        double y,
-                                        double z,
-                                        double* mass,
-                                        double* sx,
-                                        double* sy,
-                                        double* sz,
+REGBENCH_SIMD_CLONES void AccumulateRow(const double* row, double scale, long k, double x, double y,
+                                        double z, double* mass, double* sx, double* sy, double* sz,
                                         double* sxx) {
     const double xx = x * x + y * y + z * z;
 #pragma omp simd
@@ -182,9 +155,7 @@ PointCloud KMeansPlusPlus(const PointCloud& X, const Soa& p, int k, std::mt19937
 
 }  // namespace
 
-KMeansResult KMeansPlusPlusLloyd(const PointCloud& X,
-                                 int k,
-                                 const KMeansOptions& options,
+KMeansResult KMeansPlusPlusLloyd(const PointCloud& X, int k, const KMeansOptions& options,
                                  std::mt19937_64& rng) {
     const long n = static_cast<long>(X.rows());
     if (k < 1 || k > n) {
@@ -265,8 +236,7 @@ KMeansResult KMeansPlusPlusLloyd(const PointCloud& X,
     return r;
 }
 
-SphericalGmm FitSphericalGmm(const PointCloud& X,
-                             const GmmFitOptions& options,
+SphericalGmm FitSphericalGmm(const PointCloud& X, const GmmFitOptions& options,
                              std::mt19937_64& rng) {
     const long n = static_cast<long>(X.rows());
     const int k = options.n_components;

@@ -25,9 +25,7 @@ struct KMeansResult {
 /// sklearn's KMeans(n_clusters=k, n_init=1): greedy k-means++ seeding (2 + floor(ln k)
 /// local trials, first center uniform) then Lloyd with empty clusters relocated to the
 /// points farthest from their centers. Requires 1 <= k <= rows of X.
-KMeansResult KMeansPlusPlusLloyd(const PointCloud& X,
-                                 int k,
-                                 const KMeansOptions& options,
+KMeansResult KMeansPlusPlusLloyd(const PointCloud& X, int k, const KMeansOptions& options,
                                  std::mt19937_64& rng);
 
 struct GmmFitOptions {
@@ -50,8 +48,7 @@ struct SphericalGmm {
 
 /// Fits a spherical GMM to X. The E-step is dense (distances by GEMM, vectorised exp,
 /// rows in parallel); results do not depend on the thread count.
-SphericalGmm FitSphericalGmm(const PointCloud& X,
-                             const GmmFitOptions& options,
+SphericalGmm FitSphericalGmm(const PointCloud& X, const GmmFitOptions& options,
                              std::mt19937_64& rng);
 
 }  // namespace regbench

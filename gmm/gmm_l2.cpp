@@ -25,15 +25,9 @@ struct RowSums {
 
 /// s0 = sum_j w_j e_j, s1 = sum_j w_j e_j mu_j with e_j = exp(-|x - mu_j|^2 / 2 sigma^2).
 /// Compiled twice (AVX2+FMA and baseline); the loop vectorises via `omp simd`.
-REGBENCH_SIMD_CLONES RowSums GaussRowSums(double x,
-                                          double y,
-                                          double z,
-                                          const double* tx,
-                                          const double* ty,
-                                          const double* tz,
-                                          const double* tw,
-                                          long n,
-                                          double neg_inv_two_sigma2) {
+REGBENCH_SIMD_CLONES RowSums GaussRowSums(double x, double y, double z, const double* tx,
+                                          const double* ty, const double* tz, const double* tw,
+                                          long n, double neg_inv_two_sigma2) {
     double s0 = 0.0, s1x = 0.0, s1y = 0.0, s1z = 0.0;
 #pragma omp simd reduction(+ : s0, s1x, s1y, s1z)
     for (long j = 0; j < n; ++j) {
@@ -51,13 +45,8 @@ REGBENCH_SIMD_CLONES RowSums GaussRowSums(double x,
 
 /// GaussRowSums over only the target components within `radius` of x (kd-tree radius search,
 /// gathered in distance order into per-thread SoA buffers so the sum still vectorises).
-RowSums CutoffRowSums(const KdTree& tree,
-                      double radius,
-                      const Eigen::Vector3d& x,
-                      const double* tx,
-                      const double* ty,
-                      const double* tz,
-                      const double* tw,
+RowSums CutoffRowSums(const KdTree& tree, double radius, const Eigen::Vector3d& x, const double* tx,
+                      const double* ty, const double* tz, const double* tw,
                       double neg_inv_two_sigma2) {
     thread_local std::vector<std::pair<Eigen::Index, double>> found;
     thread_local std::vector<double> gx, gy, gz, gw;
@@ -129,11 +118,8 @@ double CutoffRadiusSigmas(double tolerance) {
 
 RigidGmmL2Cost::~RigidGmmL2Cost() = default;
 
-RigidGmmL2Cost::RigidGmmL2Cost(const MixtureFeatures& source,
-                               const MixtureFeatures& target,
-                               double sigma,
-                               L2Gradient gradient,
-                               double cutoff_radius)
+RigidGmmL2Cost::RigidGmmL2Cost(const MixtureFeatures& source, const MixtureFeatures& target,
+                               double sigma, L2Gradient gradient, double cutoff_radius)
     : source_means_(source.means),
       source_weights_(source.weights),
       sigma_(sigma),
@@ -233,9 +219,7 @@ MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell) {
     return {c.centroids, c.weights};
 }
 
-L2SumsPlan PlanL2Sums(const MixtureFeatures& source,
-                      const MixtureFeatures& target,
-                      double sigma,
+L2SumsPlan PlanL2Sums(const MixtureFeatures& source, const MixtureFeatures& target, double sigma,
                       const L2SumOptions& sums) {
     L2SumsPlan plan{source, target};
     const double pairs =
@@ -262,13 +246,9 @@ L2SumsPlan PlanL2Sums(const MixtureFeatures& source,
     return plan;
 }
 
-BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
-                           const MixtureFeatures& target,
-                           double sigma,
-                           L2Gradient gradient,
-                           const Eigen::VectorXd& theta0,
-                           const BfgsOptions& options,
-                           const L2SumOptions& sums,
+BfgsResult MinimizeRigidL2(const MixtureFeatures& source, const MixtureFeatures& target,
+                           double sigma, L2Gradient gradient, const Eigen::VectorXd& theta0,
+                           const BfgsOptions& options, const L2SumOptions& sums,
                            bool* approximated) {
     const L2SumsPlan plan = PlanL2Sums(source, target, sigma, sums);
     if (approximated != nullptr) *approximated = plan.approximated();
@@ -278,11 +258,8 @@ BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
         theta0, options);
 }
 
-AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source,
-                                    MixtureFeatures& target,
-                                    double sigma,
-                                    const AnnealedL2Options& options,
-                                    const RefitMixtures& refit) {
+AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source, MixtureFeatures& target, double sigma,
+                                    const AnnealedL2Options& options, const RefitMixtures& refit) {
     AnnealedL2Result fit;
     fit.theta = RigidGmmL2Cost::InitialTheta();
     double f_prev = 0.0;
@@ -290,8 +267,8 @@ AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source,
     for (outer = 1; outer <= options.outer_iterations; ++outer) {
         if (refit) refit(sigma, source, target);
         bool approximated = false;
-        fit.last = MinimizeRigidL2(source, target, sigma, options.gradient, fit.theta,
-                                   options.bfgs, options.sums, &approximated);
+        fit.last = MinimizeRigidL2(source, target, sigma, options.gradient, fit.theta, options.bfgs,
+                                   options.sums, &approximated);
         fit.approximated = fit.approximated || approximated;
         fit.iterations += fit.last.iterations;
         fit.theta = fit.last.x;

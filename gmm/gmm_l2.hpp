@@ -90,9 +90,7 @@ double CutoffRadiusSigmas(double tolerance);
 class RigidGmmL2Cost {
 public:
     /// `cutoff_radius` (input units; infinity = dense): pairs farther apart are skipped.
-    RigidGmmL2Cost(const MixtureFeatures& source,
-                   const MixtureFeatures& target,
-                   double sigma,
+    RigidGmmL2Cost(const MixtureFeatures& source, const MixtureFeatures& target, double sigma,
                    L2Gradient gradient,
                    double cutoff_radius = std::numeric_limits<double>::infinity());
     ~RigidGmmL2Cost();
@@ -153,21 +151,15 @@ struct L2SumsPlan {
 ///    bounding-box diagonal (otherwise nearly every pair is inside it and the radius search
 ///    costs more per pair than the dense SIMD row).
 /// Either part alone keeps its stated accuracy bound; with neither the sums are exact.
-L2SumsPlan PlanL2Sums(const MixtureFeatures& source,
-                      const MixtureFeatures& target,
-                      double sigma,
+L2SumsPlan PlanL2Sums(const MixtureFeatures& source, const MixtureFeatures& target, double sigma,
                       const L2SumOptions& sums);
 
 /// One BFGS run of RigidGmmL2Cost from theta0 (probreg's minimize(..., method='BFGS')).
 /// With `sums` approximating (K_s K_t >= sums.min_pairs), PlanL2Sums decides compression and
 /// cutoff; `approximated` (optional) reports whether either was used.
-BfgsResult MinimizeRigidL2(const MixtureFeatures& source,
-                           const MixtureFeatures& target,
-                           double sigma,
-                           L2Gradient gradient,
-                           const Eigen::VectorXd& theta0,
-                           const BfgsOptions& options,
-                           const L2SumOptions& sums = {},
+BfgsResult MinimizeRigidL2(const MixtureFeatures& source, const MixtureFeatures& target,
+                           double sigma, L2Gradient gradient, const Eigen::VectorXd& theta0,
+                           const BfgsOptions& options, const L2SumOptions& sums = {},
                            bool* approximated = nullptr);
 
 /// The mixture with components merged per cell of edge `cell` (weights summed, means the
@@ -220,9 +212,7 @@ using RefitMixtures =
     std::function<void(double sigma, MixtureFeatures& source, MixtureFeatures& target)>;
 
 /// The annealed L2 loop from theta = InitialTheta(). `refit` may be empty (fixed mixtures).
-AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source,
-                                    MixtureFeatures& target,
-                                    double sigma,
+AnnealedL2Result MinimizeAnnealedL2(MixtureFeatures& source, MixtureFeatures& target, double sigma,
                                     const AnnealedL2Options& options,
                                     const RefitMixtures& refit = {});
 

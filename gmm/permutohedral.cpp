@@ -121,8 +121,7 @@ float PermutohedralLattice::SliceNormalisation() {
     return 1.0f / (1.0f + std::pow(2.0f, -static_cast<float>(kD)));
 }
 
-void PermutohedralLattice::Embed(const float feature[kDim],
-                                 const Elevation& elevation,
+void PermutohedralLattice::Embed(const float feature[kDim], const Elevation& elevation,
                                  SimplexEmbedding& out) {
     constexpr float kDown = 1.0f / (kD + 1);
     constexpr float kUp = static_cast<float>(kD + 1);
@@ -260,8 +259,7 @@ bool PermutohedralLattice::Insert(const LatticeFeatures& features, int max_verti
     return true;
 }
 
-LatticeValues PermutohedralLattice::Splat(const LatticeValues& point_values,
-                                          int begin,
+LatticeValues PermutohedralLattice::Splat(const LatticeValues& point_values, int begin,
                                           int end) const {
     if (point_values.rows() < end || begin < 0 || begin > end || end > NumPoints()) {
         throw std::invalid_argument("PermutohedralLattice::Splat: rows [" + std::to_string(begin) +
@@ -332,9 +330,7 @@ void PermutohedralLattice::Blur(LatticeValues& vertex_values) const {
     }
 }
 
-void PermutohedralLattice::Slice(const LatticeValues& vertex_values,
-                                 int begin,
-                                 int end,
+void PermutohedralLattice::Slice(const LatticeValues& vertex_values, int begin, int end,
                                  LatticeValues& out) const {
     RequireComplete("Slice");
     if (begin < 0 || begin > end || end > NumPoints() || vertex_values.rows() != NumVertices()) {
@@ -356,8 +352,7 @@ void PermutohedralLattice::Slice(const LatticeValues& vertex_values,
 }
 
 void PermutohedralLattice::SliceAt(const LatticeFeatures& queries,
-                                   const LatticeValues& vertex_values,
-                                   LatticeValues& out) const {
+                                   const LatticeValues& vertex_values, LatticeValues& out) const {
     if (blur_) {
         throw std::logic_error("PermutohedralLattice::SliceAt: needs a lattice built without blur");
     }

@@ -123,8 +123,7 @@ public:
     /// as 0, which is exactly what inserting the query points with zero values would give when
     /// there is no blur. Throws std::logic_error for a blurred lattice (queries would change
     /// how values spread).
-    void SliceAt(const LatticeFeatures& queries,
-                 const LatticeValues& vertex_values,
+    void SliceAt(const LatticeFeatures& queries, const LatticeValues& vertex_values,
                  LatticeValues& out) const;
     /// Krähenbühl's compute(): splat every row, blur when enabled, slice every row.
     LatticeValues Filter(const LatticeValues& point_values) const;

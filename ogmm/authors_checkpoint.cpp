@@ -1,7 +1,5 @@
 #include "ogmm/authors_checkpoint.hpp"
 
-#include "ogmm/authors_state_dict.hpp"
-
 #include <algorithm>
 #include <filesystem>
 #include <map>
@@ -9,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "ogmm/authors_state_dict.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/net.hpp"
 #include "ogmm/rri.hpp"
@@ -32,8 +31,10 @@ std::vector<std::pair<std::string, torch::Tensor>> RegbenchTensors(torch::nn::Mo
     std::vector<std::pair<std::string, torch::Tensor>> out;
     for (const auto& m : net.named_modules("", true)) {
         const std::string prefix = m.key().empty() ? "" : m.key() + ".";
-        for (const auto& p : m.value()->named_parameters(false)) out.emplace_back(prefix + p.key(), p.value());
-        for (const auto& b : m.value()->named_buffers(false)) out.emplace_back(prefix + b.key(), b.value());
+        for (const auto& p : m.value()->named_parameters(false))
+            out.emplace_back(prefix + p.key(), p.value());
+        for (const auto& b : m.value()->named_buffers(false))
+            out.emplace_back(prefix + b.key(), b.value());
     }
     return out;
 }
@@ -48,8 +49,10 @@ const std::vector<std::pair<std::string, std::string>>& OgmmPrefixes() {
             {"proj.bn1.", "proj.net.1."},
             {"proj.conv2.", "proj.net.3."},
         };
-        for (const auto& [rb, au] : std::vector<std::pair<std::string, std::string>>{
-                 {"conv3_o.", "overlap.net."}, {"conv3_a.", "conv1.net."}, {"conv3_b.", "conv2.net."}}) {
+        for (const auto& [rb, au] :
+             std::vector<std::pair<std::string, std::string>>{{"conv3_o.", "overlap.net."},
+                                                              {"conv3_a.", "conv1.net."},
+                                                              {"conv3_b.", "conv2.net."}}) {
             v.emplace_back(rb + "conv1.", au + "0.");
             v.emplace_back(rb + "bn1.", au + "1.");
             v.emplace_back(rb + "conv2.", au + "3.");
@@ -74,8 +77,8 @@ const std::vector<std::pair<std::string, std::string>>& OgmmPrefixes() {
 
 /// The authors' GMMReg registers its modules in this order (its state_dict order).
 int OgmmModuleRank(const std::string& authors_key) {
-    static const char* kOrder[] = {"emd.", "proj.", "overlap.", "conv1.", "conv2.",
-                                   "pos.", "sattn1.", "cattn.", "sattn2."};
+    static const char* kOrder[] = {"emd.", "proj.",   "overlap.", "conv1.", "conv2.",
+                                   "pos.", "sattn1.", "cattn.",   "sattn2."};
     for (int j = 0; j < 9; ++j) {
         if (authors_key.rfind(kOrder[j], 0) == 0) return j;
     }
@@ -100,11 +103,8 @@ const torch::Tensor* Find(const StateDict& sd, const std::string& key) {
     throw std::runtime_error(file + ": " + what);
 }
 
-const torch::Tensor& Require(const StateDict& sd,
-                             const std::string& key,
-                             int64_t dims,
-                             const std::string& file,
-                             const std::string& network) {
+const torch::Tensor& Require(const StateDict& sd, const std::string& key, int64_t dims,
+                             const std::string& file, const std::string& network) {
     const torch::Tensor* t = Find(sd, key);
     if (t == nullptr) {
         std::string first;
@@ -122,7 +122,7 @@ const torch::Tensor& Require(const StateDict& sd,
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> AuthorsKeyMapping(const std::string& from,
-                                                                    const nlohmann::json& config) {
+                                                                   const nlohmann::json& config) {
     const auto net = MakeNetFromConfig(config);
     std::vector<std::pair<std::string, std::string>> out;
     for (const auto& [rb, tensor] : RegbenchTensors(*net)) {
@@ -137,18 +137,19 @@ std::vector<std::pair<std::string, std::string>> AuthorsKeyMapping(const std::st
     return out;
 }
 
-nlohmann::json InferAuthorsConfig(const StateDict& sd,
-                                  const std::string& file,
+nlohmann::json InferAuthorsConfig(const StateDict& sd, const std::string& file,
                                   const ImportOptions& options) {
     if (options.from == "deepgmr") {
         for (const auto& [k, v] : sd) {
             (void)v;
             if (k.rfind("backbone.tnet.", 0) == 0) {
-                Refuse(file, "tensor " + k + " belongs to DeepGMR's T-Net (--use_tnet), which "
-                             "regbench's deepgmr-orig does not have");
+                Refuse(file, "tensor " + k +
+                                 " belongs to DeepGMR's T-Net (--use_tnet), which "
+                                 "regbench's deepgmr-orig does not have");
             }
         }
-        const torch::Tensor& first = Require(sd, "backbone.encoder.0.0.weight", 3, file, "a DeepGMR");
+        const torch::Tensor& first =
+            Require(sd, "backbone.encoder.0.0.weight", 3, file, "a DeepGMR");
         const int64_t d_in = first.size(1);
         nlohmann::json c;
         if (d_in == 3) {
@@ -188,8 +189,7 @@ nlohmann::json InferAuthorsConfig(const StateDict& sd,
     throw std::invalid_argument("--from must be deepgmr or ogmm, got '" + options.from + "'");
 }
 
-nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
-                                       const std::string& out_dir,
+nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string& out_dir,
                                        const ImportOptions& options) {
     if (options.from != "deepgmr" && options.from != "ogmm") {
         throw std::invalid_argument("--from must be deepgmr or ogmm, got '" + options.from + "'");
@@ -198,9 +198,8 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
     TorchSaveContents contents = ReadTorchSaveFile(pth);
     StateDict& sd = contents.tensors;
     // nn.DataParallel saves every key under "module.".
-    const bool data_parallel = std::all_of(sd.begin(), sd.end(), [](const auto& kv) {
-        return kv.first.rfind("module.", 0) == 0;
-    });
+    const bool data_parallel = std::all_of(
+        sd.begin(), sd.end(), [](const auto& kv) { return kv.first.rfind("module.", 0) == 0; });
     if (data_parallel) {
         for (auto& kv : sd) kv.first = kv.first.substr(7);
     }
@@ -228,18 +227,21 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
             problems.push_back("tensor " + au + " has shape " + ShapeString(t->sizes()) +
                                ", expected " + ShapeString(target.sizes()));
         } else if (target.is_floating_point() != t->is_floating_point()) {
-            problems.push_back("tensor " + au + " has type " + std::string(c10::toString(t->scalar_type())) +
-                               ", expected " + c10::toString(target.scalar_type()));
+            problems.push_back("tensor " + au + " has type " +
+                               std::string(c10::toString(t->scalar_type())) + ", expected " +
+                               c10::toString(target.scalar_type()));
         }
     }
     for (const auto& [k, v] : sd) {
-        if (expected.count(k) == 0) problems.push_back("unexpected tensor " + k + " " + ShapeString(v.sizes()));
+        if (expected.count(k) == 0)
+            problems.push_back("unexpected tensor " + k + " " + ShapeString(v.sizes()));
     }
     if (!problems.empty()) {
         std::string msg = "does not fit " + config.at("name").get<std::string>() + " " +
                           nlohmann::json(config).dump() + ":";
         for (size_t j = 0; j < problems.size() && j < 30; ++j) msg += "\n  " + problems[j];
-        if (problems.size() > 30) msg += "\n  ... and " + std::to_string(problems.size() - 30) + " more";
+        if (problems.size() > 30)
+            msg += "\n  ... and " + std::to_string(problems.size() - 30) + " more";
         Refuse(pth, msg);
     }
     nlohmann::json map_json = nlohmann::json::array();
@@ -248,8 +250,8 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
         for (const auto& [au, r] : mapping) {
             const torch::Tensor* t = Find(sd, au);
             if (t != nullptr) rb.at(r).copy_(t->to(rb.at(r).scalar_type()));
-            map_json.push_back({{"source", au}, {"regbench", r},
-                                {"shape", rb.at(r).sizes().vec()}});
+            map_json.push_back(
+                {{"source", au}, {"regbench", r}, {"shape", rb.at(r).sizes().vec()}});
         }
     }
     nlohmann::json meta;
@@ -281,19 +283,22 @@ StateDict ExportAuthorsStateDict(const std::string& dir, const std::string& to) 
     const std::string where = (fs::path(dir) / kCheckpointJson).string();
     if (arch != to) Refuse(where, "holds a " + arch + " model, not " + to);
     if (to == "deepgmr" && config.value("features", "") == "dgcnn") {
-        Refuse(where, "holds the OGMM paper's DeepGMR variant (DGCNN features), which the "
-                      "DeepGMR authors' module cannot hold; only deepgmr-orig / -xyz export");
+        Refuse(where,
+               "holds the OGMM paper's DeepGMR variant (DGCNN features), which the "
+               "DeepGMR authors' module cannot hold; only deepgmr-orig / -xyz export");
     }
-    if (to == "ogmm" && (!config.value("spe", true) || !config.value("csa", true) ||
-                         !config.value("osp", true))) {
-        Refuse(where, "holds an OGMM ablation (spe/csa/osp off) whose modules the authors' "
-                      "GMMReg does not match");
+    if (to == "ogmm" &&
+        (!config.value("spe", true) || !config.value("csa", true) || !config.value("osp", true))) {
+        Refuse(where,
+               "holds an OGMM ablation (spe/csa/osp off) whose modules the authors' "
+               "GMMReg does not match");
     }
     const auto net = LoadNetFromCheckpoint(dir);
     std::map<std::string, torch::Tensor> rb;
     for (const auto& [k, v] : RegbenchTensors(*net)) rb[k] = v;
     StateDict out;
-    for (const auto& [au, r] : AuthorsKeyMapping(to, config)) out.emplace_back(au, rb.at(r).detach().clone());
+    for (const auto& [au, r] : AuthorsKeyMapping(to, config))
+        out.emplace_back(au, rb.at(r).detach().clone());
     return out;
 }
 

@@ -18,7 +18,7 @@
 namespace regbench::ogmm {
 
 struct ImportOptions {
-    std::string from;                 ///< "deepgmr" or "ogmm"
+    std::string from;                  ///< "deepgmr" or "ogmm"
     std::string rri_variant = "cuda";  ///< DeepGMR RRI: "cuda" (released models) or "numpy"
     /// OGMM settings that no tensor shape fixes (the authors' mnet() defaults): GMM clusters J
     /// (n_clusters), attention anchors (km_clusters), heads (num_heads), DGCNN k (gnn_k).
@@ -31,13 +31,12 @@ struct ImportOptions {
 /// Pairs (authors' state-dict key, regbench parameter/buffer name) for a regbench config, in
 /// the authors' module order. `from`: "deepgmr" or "ogmm".
 std::vector<std::pair<std::string, std::string>> AuthorsKeyMapping(const std::string& from,
-                                                                    const nlohmann::json& config);
+                                                                   const nlohmann::json& config);
 
 /// Reads `pth`, checks and maps it, writes the checkpoint folder `out_dir` (atomically).
 /// Returns the checkpoint.json written. Throws std::runtime_error naming the file and every
 /// missing, unexpected or mis-shaped tensor.
-nlohmann::json ImportAuthorsCheckpoint(const std::string& pth,
-                                       const std::string& out_dir,
+nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string& out_dir,
                                        const ImportOptions& options);
 
 /// A .pth the authors' module `to` ("deepgmr" | "ogmm") loads strictly.

@@ -11,8 +11,7 @@ namespace regbench::ogmm {
 
 /// The regbench model config (zoo form, with "arch", "name" and "train") the state dict
 /// `tensors` of file `file` describes. Throws std::runtime_error naming the file and tensor.
-nlohmann::json InferAuthorsConfig(const StateDict& tensors,
-                                  const std::string& file,
+nlohmann::json InferAuthorsConfig(const StateDict& tensors, const std::string& file,
                                   const ImportOptions& options);
 
 /// The state dict the authors' module `to` ("deepgmr" | "ogmm") would have for the checkpoint

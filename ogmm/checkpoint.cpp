@@ -45,17 +45,13 @@ void WriteFileChecked(const fs::path& path, const std::string& bytes) {
 }
 
 /// Writes the weights, optimizer state and checkpoint.json into the folder `tmp`.
-void SaveCheckpointInto(const fs::path& tmp,
-                        RegistrationNet& net,
-                        const nlohmann::json& meta,
+void SaveCheckpointInto(const fs::path& tmp, RegistrationNet& net, const nlohmann::json& meta,
                         torch::optim::Optimizer* optimizer);
 
 std::string BuildVersion() { return RegbenchVersion(); }
 std::string BuildGitSha() { return RegbenchGitSha(); }
 
-void SaveCheckpoint(const std::string& dir,
-                    RegistrationNet& net,
-                    const nlohmann::json& meta,
+void SaveCheckpoint(const std::string& dir, RegistrationNet& net, const nlohmann::json& meta,
                     torch::optim::Optimizer* optimizer) {
     const fs::path final_dir(dir);
     const fs::path tmp = final_dir.string() + ".tmp";
@@ -78,9 +74,7 @@ void SaveCheckpoint(const std::string& dir,
     }
 }
 
-void SaveCheckpointInto(const fs::path& tmp,
-                        RegistrationNet& net,
-                        const nlohmann::json& meta,
+void SaveCheckpointInto(const fs::path& tmp, RegistrationNet& net, const nlohmann::json& meta,
                         torch::optim::Optimizer* optimizer) {
     fs::remove_all(tmp);
     fs::create_directories(tmp);
@@ -123,8 +117,7 @@ namespace {
 
 /// LoadCheckpoint with the model_config the net must have: the checkpoint's, with `inference`
 /// merged over it.
-nlohmann::json LoadCheckpointAs(const std::string& dir,
-                                RegistrationNet& net,
+nlohmann::json LoadCheckpointAs(const std::string& dir, RegistrationNet& net,
                                 torch::optim::Optimizer* optimizer,
                                 const nlohmann::json& inference) {
     const nlohmann::json j = ReadCheckpointJson(dir);
@@ -183,8 +176,7 @@ void CheckInferenceKeys(const nlohmann::json& inference) {
 
 }  // namespace
 
-nlohmann::json LoadCheckpoint(const std::string& dir,
-                              RegistrationNet& net,
+nlohmann::json LoadCheckpoint(const std::string& dir, RegistrationNet& net,
                               torch::optim::Optimizer* optimizer) {
     return LoadCheckpointAs(dir, net, optimizer, nlohmann::json::object());
 }

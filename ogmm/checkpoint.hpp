@@ -28,9 +28,7 @@ std::string BuildGitSha();
 /// Writes `dir` atomically (into dir + ".tmp", then renamed over any old `dir`). `meta` is stored
 /// in checkpoint.json together with "format", "model_config" (net.Config()), "regbench_version"
 /// and "git_sha". `optimizer` may be null.
-void SaveCheckpoint(const std::string& dir,
-                    RegistrationNet& net,
-                    const nlohmann::json& meta,
+void SaveCheckpoint(const std::string& dir, RegistrationNet& net, const nlohmann::json& meta,
                     torch::optim::Optimizer* optimizer = nullptr);
 
 /// Reads and checks dir/checkpoint.json. Throws std::runtime_error naming the file when it is
@@ -40,8 +38,7 @@ nlohmann::json ReadCheckpointJson(const std::string& dir);
 /// Loads weights (and the optimizer state when `optimizer` is given) into `net`. Refuses, with a
 /// std::runtime_error naming the file, a checkpoint whose model_config differs from
 /// net.Config() or whose weights file is missing, corrupt or of other shapes. Returns the JSON.
-nlohmann::json LoadCheckpoint(const std::string& dir,
-                              RegistrationNet& net,
+nlohmann::json LoadCheckpoint(const std::string& dir, RegistrationNet& net,
                               torch::optim::Optimizer* optimizer = nullptr);
 
 /// Config keys that change what a network computes at inference but none of its parameters, so

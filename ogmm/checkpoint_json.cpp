@@ -29,8 +29,9 @@ void CheckTrainerStateJson(const nlohmann::json& j) {
          {"step", "planned_steps", "pairs_seen", "plateau_bad", "epoch_loss_steps"}) {
         if (!given(key)) continue;
         const nlohmann::json& v = j.at(key);
-        if (!v.is_number_integer() || (v.is_number_unsigned() ? v.get<std::uint64_t>() > (1ULL << 53)
-                                                              : v.get<std::int64_t>() < 0)) {
+        if (!v.is_number_integer() ||
+            (v.is_number_unsigned() ? v.get<std::uint64_t>() > (1ULL << 53)
+                                    : v.get<std::int64_t>() < 0)) {
             bad(key, "a whole number in [0, 2^53]");
         }
     }

@@ -96,8 +96,7 @@ ForwardCost DeepGmrCost(const nlohmann::json& c, Int n, Int m) {
 
 }  // namespace
 
-ForwardCost ComputeForwardCost(const nlohmann::json& config,
-                               std::int64_t source_points,
+ForwardCost ComputeForwardCost(const nlohmann::json& config, std::int64_t source_points,
                                std::int64_t target_points) {
     if (source_points < 1 || target_points < 1) {
         throw std::invalid_argument("forward cost: point counts must be positive, got " +

@@ -22,8 +22,7 @@ struct ForwardCost {
 /// of the GMM fit); element-wise work (BatchNorm, activations, softmax, Sinkhorn's exp/log,
 /// RRI's trigonometry, kd-tree searches) is not counted. Throws std::invalid_argument naming a
 /// missing key or a non-positive point count.
-ForwardCost ComputeForwardCost(const nlohmann::json& config,
-                               std::int64_t source_points,
+ForwardCost ComputeForwardCost(const nlohmann::json& config, std::int64_t source_points,
                                std::int64_t target_points);
 
 }  // namespace regbench::ogmm

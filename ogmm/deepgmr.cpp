@@ -79,17 +79,9 @@ torch::Tensor Translation(const torch::Tensor& T) { return T.index({Slice(), Sli
 
 }  // namespace
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DeepGmrConfig,
-                                                name,
-                                                features,
-                                                clusters,
-                                                rri_k,
-                                                d_model,
-                                                rri_variant,
-                                                emb_dims,
-                                                dgcnn_k,
-                                                head_hidden,
-                                                loss)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DeepGmrConfig, name, features, clusters, rri_k,
+                                                d_model, rri_variant, emb_dims, dgcnn_k,
+                                                head_hidden, loss)
 
 nlohmann::json ToJson(const DeepGmrConfig& c) {
     nlohmann::json j = c;

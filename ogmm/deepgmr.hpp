@@ -34,11 +34,11 @@ struct DeepGmrConfig {
     int rri_k = 20;                                    ///< RRI neighbours (kRri)
     int d_model = 1024;  ///< PointNet feature width (kRri, kXyz; the original's --d_model);
                          ///< written to JSON only when not 1024, so older configs stay equal
-    RriVariant rri_variant = RriVariant::kCuda;        ///< phi orientation (kRri)
-    int emb_dims = 512;                                ///< DGCNN feature width (kDgcnn)
-    int dgcnn_k = 20;                                  ///< DGCNN neighbours, self included (kDgcnn)
-    int head_hidden = 256;                             ///< CONV3 head hidden width (kDgcnn)
-    DeepGmrLoss loss = DeepGmrLoss::kTransform;        ///< training loss
+    RriVariant rri_variant = RriVariant::kCuda;  ///< phi orientation (kRri)
+    int emb_dims = 512;                          ///< DGCNN feature width (kDgcnn)
+    int dgcnn_k = 20;                            ///< DGCNN neighbours, self included (kDgcnn)
+    int head_hidden = 256;                       ///< CONV3 head hidden width (kDgcnn)
+    DeepGmrLoss loss = DeepGmrLoss::kTransform;  ///< training loss
 };
 
 /// {"arch": "deepgmr", "name", "features", "clusters", ...}; every field always present.

@@ -35,9 +35,8 @@ std::atomic<bool> g_fused_edge_stages{true};
 // (the map's first row) keeps the variance free of the cancellation of E[y^2] - E[y]^2.
 template <typename T>
 REGBENCH_INLINE void ShiftedSumsBody(const T* __restrict y, int64_t points, int64_t k, int64_t C,
-                                     const T* __restrict shift, T* __restrict f1,
-                                     T* __restrict f2, double* __restrict s1,
-                                     double* __restrict s2) {
+                                     const T* __restrict shift, T* __restrict f1, T* __restrict f2,
+                                     double* __restrict s1, double* __restrict s2) {
     for (int64_t p = 0; p < points; ++p) {
         std::fill(f1, f1 + C, T(0));
         std::fill(f2, f2 + C, T(0));
@@ -171,11 +170,11 @@ REGBENCH_INLINE void GradApplyRowsBody(T* __restrict io, const T* __restrict z,
 // The last stage's input gradient, in place over y (which it reads first).
 template <typename T>
 REGBENCH_INLINE void GradApplyPooledBody(T* __restrict io, const T* __restrict mean,
-                                         const int32_t* __restrict arg,
-                                         const T* __restrict dpool, const T* __restrict pooled,
-                                         int64_t ld, int64_t points, int64_t k, int64_t C,
-                                         const T* __restrict grad_mean, const T* __restrict kk,
-                                         const T* __restrict invstd, const T* __restrict w) {
+                                         const int32_t* __restrict arg, const T* __restrict dpool,
+                                         const T* __restrict pooled, int64_t ld, int64_t points,
+                                         int64_t k, int64_t C, const T* __restrict grad_mean,
+                                         const T* __restrict kk, const T* __restrict invstd,
+                                         const T* __restrict w) {
     for (int64_t p = 0; p < points; ++p) {
         const int32_t* __restrict at = arg + p * C;
         const T* __restrict dp = dpool + p * ld;
@@ -194,48 +193,44 @@ REGBENCH_INLINE void GradApplyPooledBody(T* __restrict io, const T* __restrict m
 }
 
 // One entry point per kernel and type, compiled for AVX-512, AVX2 and the baseline.
-#define REGBENCH_EDGE_KERNELS(T)                                                                 \
-    REGBENCH_SIMD_CLONES void ShiftedSums(const T* y, int64_t points, int64_t k, int64_t C,      \
-                                          const T* shift, T* f1, T* f2, double* s1,              \
-                                          double* s2) {                                          \
-        ShiftedSumsBody<T>(y, points, k, C, shift, f1, f2, s1, s2);                              \
-    }                                                                                            \
-    REGBENCH_SIMD_CLONES void NormReluMax(const T* y, int64_t points, int64_t k, int64_t C,      \
-                                          const T* alpha, const T* beta, T* z, T* pooled,        \
-                                          int64_t ld, int32_t* arg) {                            \
-        if (z != nullptr) {                                                                      \
-            NormReluMaxBody<T, true>(y, points, k, C, alpha, beta, z, pooled, ld, arg);          \
-        } else {                                                                                 \
-            NormReluMaxBody<T, false>(y, points, k, C, alpha, beta, z, pooled, ld, arg);         \
-        }                                                                                        \
-    }                                                                                            \
-    REGBENCH_SIMD_CLONES void GradSumsRows(const T* dz, const T* z, const T* y, const T* mean,   \
-                                           const int32_t* arg, const T* dpool, int64_t ld,       \
-                                           int64_t points, int64_t k, int64_t C, T* f1, T* f2,   \
-                                           double* sum, double* dot) {                           \
-        GradSumsRowsBody<T>(dz, z, y, mean, arg, dpool, ld, points, k, C, f1, f2, sum, dot);     \
-    }                                                                                            \
-    REGBENCH_SIMD_CLONES void GradSumsPooled(const T* y, const T* mean, const int32_t* arg,      \
-                                             const T* dpool, const T* pooled, int64_t ld,        \
-                                             int64_t points, int64_t k, int64_t C, double* sum,  \
-                                             double* dot) {                                      \
-        GradSumsPooledBody<T>(y, mean, arg, dpool, pooled, ld, points, k, C, sum, dot);          \
-    }                                                                                            \
-    REGBENCH_SIMD_CLONES void GradApplyRows(T* io, const T* z, const T* y, const T* mean,        \
-                                            const int32_t* arg, const T* dpool, int64_t ld,      \
-                                            int64_t points, int64_t k, int64_t C,                \
-                                            const T* grad_mean, const T* kk, const T* invstd,    \
-                                            const T* w) {                                        \
-        GradApplyRowsBody<T>(io, z, y, mean, arg, dpool, ld, points, k, C, grad_mean, kk,        \
-                             invstd, w);                                                         \
-    }                                                                                            \
-    REGBENCH_SIMD_CLONES void GradApplyPooled(T* io, const T* mean, const int32_t* arg,          \
-                                              const T* dpool, const T* pooled, int64_t ld,       \
-                                              int64_t points, int64_t k, int64_t C,              \
-                                              const T* grad_mean, const T* kk, const T* invstd,  \
-                                              const T* w) {                                      \
-        GradApplyPooledBody<T>(io, mean, arg, dpool, pooled, ld, points, k, C, grad_mean, kk,    \
-                               invstd, w);                                                       \
+#define REGBENCH_EDGE_KERNELS(T)                                                                  \
+    REGBENCH_SIMD_CLONES void ShiftedSums(const T* y, int64_t points, int64_t k, int64_t C,       \
+                                          const T* shift, T* f1, T* f2, double* s1, double* s2) { \
+        ShiftedSumsBody<T>(y, points, k, C, shift, f1, f2, s1, s2);                               \
+    }                                                                                             \
+    REGBENCH_SIMD_CLONES void NormReluMax(const T* y, int64_t points, int64_t k, int64_t C,       \
+                                          const T* alpha, const T* beta, T* z, T* pooled,         \
+                                          int64_t ld, int32_t* arg) {                             \
+        if (z != nullptr) {                                                                       \
+            NormReluMaxBody<T, true>(y, points, k, C, alpha, beta, z, pooled, ld, arg);           \
+        } else {                                                                                  \
+            NormReluMaxBody<T, false>(y, points, k, C, alpha, beta, z, pooled, ld, arg);          \
+        }                                                                                         \
+    }                                                                                             \
+    REGBENCH_SIMD_CLONES void GradSumsRows(const T* dz, const T* z, const T* y, const T* mean,    \
+                                           const int32_t* arg, const T* dpool, int64_t ld,        \
+                                           int64_t points, int64_t k, int64_t C, T* f1, T* f2,    \
+                                           double* sum, double* dot) {                            \
+        GradSumsRowsBody<T>(dz, z, y, mean, arg, dpool, ld, points, k, C, f1, f2, sum, dot);      \
+    }                                                                                             \
+    REGBENCH_SIMD_CLONES void GradSumsPooled(                                                     \
+        const T* y, const T* mean, const int32_t* arg, const T* dpool, const T* pooled,           \
+        int64_t ld, int64_t points, int64_t k, int64_t C, double* sum, double* dot) {             \
+        GradSumsPooledBody<T>(y, mean, arg, dpool, pooled, ld, points, k, C, sum, dot);           \
+    }                                                                                             \
+    REGBENCH_SIMD_CLONES void GradApplyRows(                                                      \
+        T* io, const T* z, const T* y, const T* mean, const int32_t* arg, const T* dpool,         \
+        int64_t ld, int64_t points, int64_t k, int64_t C, const T* grad_mean, const T* kk,        \
+        const T* invstd, const T* w) {                                                            \
+        GradApplyRowsBody<T>(io, z, y, mean, arg, dpool, ld, points, k, C, grad_mean, kk, invstd, \
+                             w);                                                                  \
+    }                                                                                             \
+    REGBENCH_SIMD_CLONES void GradApplyPooled(                                                    \
+        T* io, const T* mean, const int32_t* arg, const T* dpool, const T* pooled, int64_t ld,    \
+        int64_t points, int64_t k, int64_t C, const T* grad_mean, const T* kk, const T* invstd,   \
+        const T* w) {                                                                             \
+        GradApplyPooledBody<T>(io, mean, arg, dpool, pooled, ld, points, k, C, grad_mean, kk,     \
+                               invstd, w);                                                        \
     }
 
 REGBENCH_EDGE_KERNELS(float)
@@ -261,8 +256,7 @@ void ForChunks(int64_t points, const Body& body) {
 
 // Per-chunk partial sums [chunks, 2, C] (double) added in chunk order into two C-vectors.
 std::pair<std::vector<double>, std::vector<double>> AddChunks(const std::vector<double>& parts,
-                                                              int64_t chunks,
-                                                              int64_t C) {
+                                                              int64_t chunks, int64_t C) {
     std::vector<double> a(static_cast<size_t>(C), 0.0), b(static_cast<size_t>(C), 0.0);
     for (int64_t i = 0; i < chunks; ++i) {
         const double* pa = parts.data() + i * 2 * C;
@@ -282,10 +276,8 @@ std::pair<std::vector<double>, std::vector<double>> AddChunks(const std::vector<
 
 struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
     template <typename T>
-    static torch::Tensor Forward(AutogradContext* ctx,
-                                 const torch::Tensor& rows,
-                                 const std::vector<EdgeStage>& stages,
-                                 int64_t k) {
+    static torch::Tensor Forward(AutogradContext* ctx, const torch::Tensor& rows,
+                                 const std::vector<EdgeStage>& stages, int64_t k) {
         const int64_t M = rows.size(0), P = M / k;
         int64_t total = 0;
         for (const EdgeStage& s : stages) total += s.weight.size(0);
@@ -348,8 +340,8 @@ struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
             const T* be = beta.data_ptr<T>();
             ForChunks(P, [&](int64_t, int64_t first, int64_t count) {
                 NormReluMax(yp + first * k * C, count, k, C, al, be,
-                            zp != nullptr ? zp + first * k * C : nullptr, op + first * total,
-                            total, ap + first * C);
+                            zp != nullptr ? zp + first * k * C : nullptr, op + first * total, total,
+                            ap + first * C);
             });
             ys.push_back(y);
             zs.push_back(z);
@@ -370,10 +362,8 @@ struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
         return out;
     }
 
-    static torch::Tensor forward(AutogradContext* ctx,
-                                 at::TensorList inputs,
-                                 const std::vector<EdgeStage>* stages,
-                                 int64_t k) {
+    static torch::Tensor forward(AutogradContext* ctx, at::TensorList inputs,
+                                 const std::vector<EdgeStage>* stages, int64_t k) {
         const torch::Tensor rows = inputs[0].contiguous();
         std::vector<EdgeStage> contiguous = *stages;
         for (EdgeStage& s : contiguous) s.weight = s.weight.contiguous();
@@ -445,8 +435,7 @@ struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
             for (int64_t c = 0; c < C; ++c) {
                 const auto cu = static_cast<size_t>(c);
                 grad_mean.data_ptr<T>()[c] = static_cast<T>(sum[cu] / static_cast<double>(M));
-                kk.data_ptr<T>()[c] =
-                    static_cast<T>(dot[cu]) * ip[c] * ip[c] / static_cast<T>(M);
+                kk.data_ptr<T>()[c] = static_cast<T>(dot[cu]) * ip[c] * ip[c] / static_cast<T>(M);
                 grad_gamma.data_ptr<T>()[c] = static_cast<T>(dot[cu] * static_cast<double>(ip[c]));
                 grad_beta.data_ptr<T>()[c] = static_cast<T>(sum[cu]);
             }
@@ -494,7 +483,7 @@ struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
             return variable_list(n - 2 + 1 + 2);
         }
         return dout.scalar_type() == torch::kDouble ? Backward<double>(ctx, dout.contiguous())
-                                                     : Backward<float>(ctx, dout.contiguous());
+                                                    : Backward<float>(ctx, dout.contiguous());
     }
 };
 
@@ -514,8 +503,7 @@ EdgeStage EdgeStageOf(const torch::nn::Conv2d& conv, const torch::nn::BatchNorm2
     return s;
 }
 
-torch::Tensor EdgeStagesReference(const torch::Tensor& rows,
-                                  const std::vector<EdgeStage>& stages,
+torch::Tensor EdgeStagesReference(const torch::Tensor& rows, const std::vector<EdgeStage>& stages,
                                   int64_t k) {
     const int64_t points = rows.size(0) / k;
     torch::Tensor x = rows;
@@ -536,8 +524,7 @@ torch::Tensor EdgeStagesReference(const torch::Tensor& rows,
     return torch::cat(pooled, 1);
 }
 
-torch::Tensor EdgeStagesFused(const torch::Tensor& rows,
-                              const std::vector<EdgeStage>& stages,
+torch::Tensor EdgeStagesFused(const torch::Tensor& rows, const std::vector<EdgeStage>& stages,
                               int64_t k) {
     if (stages.empty()) throw std::invalid_argument("EdgeStagesFused: no stages");
     if (rows.dim() != 2 || k < 1 || rows.size(0) % k != 0 || rows.size(0) == 0) {

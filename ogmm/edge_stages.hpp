@@ -29,8 +29,8 @@ namespace regbench::ogmm {
 
 /// One stage's parameters and BatchNorm state (tensors share storage with the modules').
 struct EdgeStage {
-    torch::Tensor weight;                 ///< [C_out, C_in], the 1x1 convolution's weight
-    torch::Tensor bn_weight, bn_bias;     ///< [C_out]
+    torch::Tensor weight;              ///< [C_out, C_in], the 1x1 convolution's weight
+    torch::Tensor bn_weight, bn_bias;  ///< [C_out]
     torch::Tensor running_mean, running_var, num_batches_tracked;  ///< updated in place
     double momentum = 0.1;
     double eps = 1e-5;
@@ -42,13 +42,11 @@ EdgeStage EdgeStageOf(const torch::nn::Conv2d& conv, const torch::nn::BatchNorm2
 
 /// LibTorch composition: per stage mm -> batch_norm (training) -> relu_ -> max over k; cat.
 /// rows [P k, C0] -> [P, sum C_s].
-torch::Tensor EdgeStagesReference(const torch::Tensor& rows,
-                                  const std::vector<EdgeStage>& stages,
+torch::Tensor EdgeStagesReference(const torch::Tensor& rows, const std::vector<EdgeStage>& stages,
                                   int64_t k);
 
 /// The same as one custom autograd Function (CPU, float or double, contiguous rows).
-torch::Tensor EdgeStagesFused(const torch::Tensor& rows,
-                              const std::vector<EdgeStage>& stages,
+torch::Tensor EdgeStagesFused(const torch::Tensor& rows, const std::vector<EdgeStage>& stages,
                               int64_t k);
 
 /// Whether DgcnnImpl uses EdgeStagesFused in training (default) or the reference composition.

@@ -18,10 +18,8 @@ GmmParams ComputeGmmParams(const torch::Tensor& gamma, const torch::Tensor& xyz)
     return g;
 }
 
-torch::Tensor GmmRegister(const torch::Tensor& pi_s,
-                          const torch::Tensor& mu_s,
-                          const torch::Tensor& mu_t,
-                          const torch::Tensor& sigma_t) {
+torch::Tensor GmmRegister(const torch::Tensor& pi_s, const torch::Tensor& mu_s,
+                          const torch::Tensor& mu_t, const torch::Tensor& sigma_t) {
     TORCH_CHECK(mu_s.sizes() == mu_t.sizes(), "GmmRegister: mu_s and mu_t differ in shape");
     const torch::Tensor w = pi_s.unsqueeze(2);          // [B, J, 1]
     const torch::Tensor c_s = (w * mu_s).sum(1, true);  // [B, 1, 3]
@@ -44,12 +42,8 @@ torch::Tensor GmmRegister(const torch::Tensor& pi_s,
     return T;
 }
 
-torch::Tensor LogSinkhorn(const torch::Tensor& cost,
-                          const torch::Tensor& p,
-                          const torch::Tensor& q,
-                          double epsilon,
-                          double threshold,
-                          int max_iterations) {
+torch::Tensor LogSinkhorn(const torch::Tensor& cost, const torch::Tensor& p, const torch::Tensor& q,
+                          double epsilon, double threshold, int max_iterations) {
     constexpr double kLogFloor = 1e-8;  // the code's log(p + 1e-8)
     torch::Tensor u = torch::zeros_like(p);
     torch::Tensor v = torch::zeros_like(q);

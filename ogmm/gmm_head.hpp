@@ -20,20 +20,14 @@ GmmParams ComputeGmmParams(const torch::Tensor& gamma, const torch::Tensor& xyz)
 /// mixture: centroids weighted by the source pi, M = sum_j (pi_j / s_t,j)(mu_s,j - c_s)
 /// (mu_t,j - c_t)^T, R = V diag(1, 1, det(V U^T)) U^T, t = c_t - R c_s (not the exact weighted
 /// minimiser, replicated as the code runs it).
-torch::Tensor GmmRegister(const torch::Tensor& pi_s,
-                          const torch::Tensor& mu_s,
-                          const torch::Tensor& mu_t,
-                          const torch::Tensor& sigma_t);
+torch::Tensor GmmRegister(const torch::Tensor& pi_s, const torch::Tensor& mu_s,
+                          const torch::Tensor& mu_t, const torch::Tensor& sigma_t);
 
 /// Log-domain Sinkhorn (OGMM section 1): cost C [B, N, M], marginals p [B, N], q [B, M].
 /// u, v start at 0; each iteration updates u then v; stops when the batch mean of
 /// sum |du| + sum |dv| < threshold or after max_iterations. Returns Gamma = exp((-C + u + v) /
 /// eps).
-torch::Tensor LogSinkhorn(const torch::Tensor& cost,
-                          const torch::Tensor& p,
-                          const torch::Tensor& q,
-                          double epsilon = 0.01,
-                          double threshold = 0.01,
-                          int max_iterations = 10);
+torch::Tensor LogSinkhorn(const torch::Tensor& cost, const torch::Tensor& p, const torch::Tensor& q,
+                          double epsilon = 0.01, double threshold = 0.01, int max_iterations = 10);
 
 }  // namespace regbench::ogmm

@@ -34,11 +34,8 @@ Transform ToRigidTransform(const torch::Tensor& T) {
 
 }  // namespace
 
-PairEstimate EstimatePair(RegistrationNet& net,
-                          const PointCloud& source,
-                          const PointCloud& target,
-                          std::uint64_t seed,
-                          int threads) {
+PairEstimate EstimatePair(RegistrationNet& net, const PointCloud& source, const PointCloud& target,
+                          std::uint64_t seed, int threads) {
     torch::set_num_threads(std::max(1, threads));
     // torch's thread count does not reach an OpenBLAS built with pthreads, which would run
     // the GEMMs on every core beside the calling thread's clock.

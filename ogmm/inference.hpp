@@ -24,10 +24,7 @@ struct PairEstimate {
 /// Runs `net` (eval mode expected) on one pair without gradients, on `threads` LibTorch and
 /// BLAS threads. Random choices (FPS starts) draw from a generator seeded with `seed` that
 /// belongs to this call, so threads sharing `net` do not change each other's draws.
-PairEstimate EstimatePair(RegistrationNet& net,
-                          const PointCloud& source,
-                          const PointCloud& target,
-                          std::uint64_t seed,
-                          int threads);
+PairEstimate EstimatePair(RegistrationNet& net, const PointCloud& source, const PointCloud& target,
+                          std::uint64_t seed, int threads);
 
 }  // namespace regbench::ogmm

@@ -39,10 +39,8 @@ void CheckChannelFirst(const torch::Tensor& x, int64_t channels, const char* who
 // float data: as tensor ops it cost ~6 small ops per chosen point (LibTorch has no FPS op), which
 // dominated the small configs' forward. Arithmetic as the tensor form did it: float squared
 // differences summed over x, y, z in that order, ties to the lowest index.
-torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
-                                const torch::Tensor& distance,
-                                const torch::Tensor& farthest,
-                                int64_t n) {
+torch::Tensor FarthestPointLoop(const torch::Tensor& xyz, const torch::Tensor& distance,
+                                const torch::Tensor& farthest, int64_t n) {
     if (!xyz.device().is_cpu()) return FarthestPointTensorOps(xyz, distance, farthest, n);
     const int64_t batch = xyz.size(0), points = xyz.size(2);
     const torch::Tensor cloud = xyz.to(torch::kCPU, torch::kFloat).contiguous();  // [B, 3, N]
@@ -80,19 +78,18 @@ torch::Tensor FarthestPointLoop(const torch::Tensor& xyz,
 // On a GPU the loop above would copy each cloud to the host and run on one core: a training
 // step of the full config on an H200 was bound by such host loops (docs/learned-methods.md,
 // "Training on a GPU machine"). There the same recurrence runs as n rounds of tensor ops.
-torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz,
-                                     const torch::Tensor& distance,
-                                     const torch::Tensor& farthest,
-                                     int64_t n) {
+torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz, const torch::Tensor& distance,
+                                     const torch::Tensor& farthest, int64_t n) {
     const int64_t batch = xyz.size(0);
-    const torch::Tensor cloud = xyz.to(torch::kFloat);  // [B, 3, N]
+    const torch::Tensor cloud = xyz.to(torch::kFloat);   // [B, 3, N]
     torch::Tensor running = distance.to(torch::kFloat);  // replaced, never written in place
     torch::Tensor next = farthest.to(xyz.device(), torch::kLong).view({batch});
     std::vector<torch::Tensor> chosen;
     chosen.reserve(static_cast<std::size_t>(n));
     for (int64_t i = 0; i < n; ++i) {
         chosen.push_back(next);
-        const torch::Tensor centre = cloud.gather(2, next.view({batch, 1, 1}).expand({batch, 3, 1}));
+        const torch::Tensor centre =
+            cloud.gather(2, next.view({batch, 1, 1}).expand({batch, 3, 1}));
         running = torch::minimum(running, (cloud - centre).pow(2).sum(1));
         next = running.argmax(1);  // the first of equal maxima, as the loop's strict >
     }
@@ -137,8 +134,7 @@ torch::Tensor KnnIndices3d(const torch::Tensor& x, int64_t k) {
 // (W' = W g / sqrt(var + eps), b' = beta - mean g / sqrt(var + eps)), so one addmm and one
 // in-place ReLU touch the [M, out] map. In training mode the batch statistics over the M rows
 // are those BatchNorm2d takes over (B, N, k).
-torch::Tensor RowsConvBnRelu(const torch::Tensor& rows,
-                             const torch::nn::Conv2d& conv,
+torch::Tensor RowsConvBnRelu(const torch::Tensor& rows, const torch::nn::Conv2d& conv,
                              const torch::nn::BatchNorm2d& bn) {
     const torch::Tensor w = conv->weight.view({conv->weight.size(0), conv->weight.size(1)});
     const auto& o = bn->options;
@@ -197,8 +193,7 @@ torch::Tensor Conv2Impl::forward(const torch::Tensor& x) {
     return conv2_(torch::relu(bn1_(conv1_(x))));
 }
 
-torch::Tensor FpsRandom(const torch::Tensor& xyz,
-                        int64_t n,
+torch::Tensor FpsRandom(const torch::Tensor& xyz, int64_t n,
                         c10::optional<at::Generator> generator) {
     CheckSampleCount(xyz, n, "FpsRandom");
     torch::NoGradGuard no_grad;
@@ -279,9 +274,10 @@ torch::Tensor DgcnnImpl::forward(const torch::Tensor& xyz) {
         // Training: the four edge stages with batch statistics (ogmm/edge_stages.hpp), fused
         // into one autograd Function unless a test asks for the LibTorch composition.
         const std::vector<EdgeStage> stages = {EdgeStageOf(conv1_, bn1_), EdgeStageOf(conv2_, bn2_),
-                                               EdgeStageOf(conv3_, bn3_), EdgeStageOf(conv4_, bn4_)};
-        cat = FusedEdgeStages() ? EdgeStagesFused(x, stages, k_)
-                                : EdgeStagesReference(x, stages, k_);
+                                               EdgeStageOf(conv3_, bn3_),
+                                               EdgeStageOf(conv4_, bn4_)};
+        cat =
+            FusedEdgeStages() ? EdgeStagesFused(x, stages, k_) : EdgeStagesReference(x, stages, k_);
     } else {
         std::vector<torch::Tensor> pooled;
         const std::pair<torch::nn::Conv2d*, torch::nn::BatchNorm2d*> stages[] = {

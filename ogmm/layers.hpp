@@ -38,8 +38,7 @@ TORCH_MODULE(Conv2);
 /// start index of each cloud is drawn with torch::randint from `generator` (the torch global
 /// RNG when none is given), one draw of shape [B]. Each next point is the one farthest (squared
 /// distance) from the points chosen so far; ties go to the lowest index. Throws when n > N.
-torch::Tensor FpsRandom(const torch::Tensor& xyz,
-                        int64_t n,
+torch::Tensor FpsRandom(const torch::Tensor& xyz, int64_t n,
                         c10::optional<at::Generator> generator = c10::nullopt);
 
 /// Farthest point sampling from the centroid (deterministic): starts at the point farthest from
@@ -49,10 +48,8 @@ torch::Tensor FpsCentroid(const torch::Tensor& xyz, int64_t n);
 /// The farthest-point recurrence of FpsRandom / FpsCentroid as tensor ops, which they use on a
 /// GPU (on the CPU a plain loop): `distance` [B, N] the running squared distance to the chosen
 /// set, `farthest` [B] the first index. Same arithmetic and ties (lowest index) as the loop.
-torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz,
-                                     const torch::Tensor& distance,
-                                     const torch::Tensor& farthest,
-                                     int64_t n);
+torch::Tensor FarthestPointTensorOps(const torch::Tensor& xyz, const torch::Tensor& distance,
+                                     const torch::Tensor& farthest, int64_t n);
 
 /// Gathers columns: x [B, C, N], idx [B, n] -> [B, C, n].
 torch::Tensor GatherColumns(const torch::Tensor& x, const torch::Tensor& idx);

@@ -27,7 +27,7 @@ struct PairBatch {
 
 /// What a forward pass returns: the estimated transform plus whatever the network's loss needs.
 struct NetOutput {
-    torch::Tensor T;                            ///< [B, 4, 4] estimated T_target_source
+    torch::Tensor T;                           ///< [B, 4, 4] estimated T_target_source
     std::map<std::string, torch::Tensor> aux;  ///< network-specific intermediates
 };
 

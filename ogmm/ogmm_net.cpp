@@ -16,30 +16,12 @@
 
 namespace regbench::ogmm {
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(OgmmConfig,
-                                                emb_dims,
-                                                anchors,
-                                                clusters,
-                                                heads,
-                                                k,
-                                                spe_k,
-                                                spe,
-                                                csa,
-                                                attention,
-                                                osp,
-                                                fix_overlap_index,
-                                                gmm_iterations,
-                                                sinkhorn_epsilon,
-                                                sinkhorn_threshold,
-                                                sinkhorn_iterations,
-                                                match_temperature,
-                                                w_pose,
-                                                w_clu,
-                                                w_ovl,
-                                                w_welsch,
-                                                nt_xent_temperature,
-                                                welsch_alpha,
-                                                welsch_keypoints)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(OgmmConfig, emb_dims, anchors, clusters, heads, k,
+                                                spe_k, spe, csa, attention, osp, fix_overlap_index,
+                                                gmm_iterations, sinkhorn_epsilon,
+                                                sinkhorn_threshold, sinkhorn_iterations,
+                                                match_temperature, w_pose, w_clu, w_ovl, w_welsch,
+                                                nt_xent_temperature, welsch_alpha, welsch_keypoints)
 
 namespace {
 
@@ -105,11 +87,8 @@ torch::Tensor TranslationOf(const torch::Tensor& T) { return T.index({Slice(), S
 
 // Welsch terms sum_i (1 - exp(-z_i^2 / 2 alpha^2)) of the nearest-neighbour distances z_i from
 // the `count` points of `from` [B, n, 3] ranked highest by `labels` [B, n] to `to` [B, m, 3].
-torch::Tensor WelschOfTopLabelled(const torch::Tensor& from,
-                                  const torch::Tensor& labels,
-                                  const torch::Tensor& to,
-                                  int64_t count,
-                                  double alpha) {
+torch::Tensor WelschOfTopLabelled(const torch::Tensor& from, const torch::Tensor& labels,
+                                  const torch::Tensor& to, int64_t count, double alpha) {
     const int64_t keep = std::min<int64_t>(count, from.size(1));
     const torch::Tensor idx = std::get<1>(labels.topk(keep, 1));  // [B, keep]
     const torch::Tensor picked = torch::gather(from, 1, idx.unsqueeze(2).expand({-1, -1, 3}));
@@ -148,10 +127,8 @@ std::shared_ptr<RegistrationNet> MakeOgmmNet(const nlohmann::json& config) {
     return std::make_shared<OgmmNet>(ParseOgmmConfig(config));
 }
 
-OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz,
-                                  const torch::Tensor& overlap,
-                                  int64_t clusters,
-                                  const GmmFitOptions& options) {
+OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz, const torch::Tensor& overlap,
+                                  int64_t clusters, const GmmFitOptions& options) {
     torch::NoGradGuard no_grad;
     const int64_t batch = xyz.size(0);
     const torch::Tensor w = overlap / overlap.sum(1, true).clamp_min(kOverlapSumFloor);
@@ -185,14 +162,8 @@ OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz,
 namespace {
 
 // u_i = eps * (log_p_i - LSE_j((v_j - C_ij) / eps)) for every row i of cost [n, J].
-REGBENCH_SIMD_CLONES void SinkhornRows(const double* cost,
-                                       const double* v,
-                                       const double* log_p,
-                                       long n,
-                                       long J,
-                                       double epsilon,
-                                       double* scratch,
-                                       double* u) {
+REGBENCH_SIMD_CLONES void SinkhornRows(const double* cost, const double* v, const double* log_p,
+                                       long n, long J, double epsilon, double* scratch, double* u) {
     const double inv = 1.0 / epsilon;
     for (long i = 0; i < n; ++i) {
         const double* c = cost + i * J;
@@ -211,15 +182,9 @@ REGBENCH_SIMD_CLONES void SinkhornRows(const double* cost,
 }
 
 // v_j = eps * (log_q - LSE_i((u_i - C_ij) / eps)) for every column j of cost [n, J].
-REGBENCH_SIMD_CLONES void SinkhornColumns(const double* cost,
-                                          const double* u,
-                                          double log_q,
-                                          long n,
-                                          long J,
-                                          double epsilon,
-                                          double* column_max,
-                                          double* column_sum,
-                                          double* v) {
+REGBENCH_SIMD_CLONES void SinkhornColumns(const double* cost, const double* u, double log_q, long n,
+                                          long J, double epsilon, double* column_max,
+                                          double* column_sum, double* v) {
     const double inv = 1.0 / epsilon;
     for (long j = 0; j < J; ++j) {
         column_max[j] = -std::numeric_limits<double>::infinity();
@@ -246,13 +211,8 @@ REGBENCH_SIMD_CLONES void SinkhornColumns(const double* cost,
 // gamma_ij = Gamma_ij / max(sum_j Gamma_ij, 1e-3), Gamma_ij = exp((u_i + v_j - C_ij) / eps),
 // the exponent capped at 700 so that finite inputs give a finite plan (what the tensor path's
 // nan_to_num guards against cannot arise here).
-REGBENCH_SIMD_CLONES void SinkhornPlanRows(const double* cost,
-                                           const double* u,
-                                           const double* v,
-                                           long n,
-                                           long J,
-                                           double epsilon,
-                                           double* gamma) {
+REGBENCH_SIMD_CLONES void SinkhornPlanRows(const double* cost, const double* u, const double* v,
+                                           long n, long J, double epsilon, double* gamma) {
     const double inv = 1.0 / epsilon;
     for (long i = 0; i < n; ++i) {
         const double* c = cost + i * J;
@@ -272,14 +232,8 @@ REGBENCH_SIMD_CLONES void SinkhornPlanRows(const double* cost,
 
 // xyz [n, 3], w [n] (normalised masses), first [J] indices of the initial means; writes gamma
 // [n, J] and mu [J, 3].
-void FitOverlapGmmCloud(const double* xyz,
-                        const double* w,
-                        long n,
-                        long J,
-                        const int64_t* first,
-                        const GmmFitOptions& options,
-                        double* gamma,
-                        double* mu) {
+void FitOverlapGmmCloud(const double* xyz, const double* w, long n, long J, const int64_t* first,
+                        const GmmFitOptions& options, double* gamma, double* mu) {
     constexpr double kLogFloor = 1e-8;  // the code's log(p + 1e-8)
     const double eps = options.epsilon;
     std::vector<double> cost(static_cast<size_t>(n * J)), u(static_cast<size_t>(n)),
@@ -336,9 +290,7 @@ void FitOverlapGmmCloud(const double* xyz,
 
 }  // namespace
 
-OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
-                         const torch::Tensor& overlap,
-                         int64_t clusters,
+OverlapGmm FitOverlapGmm(const torch::Tensor& xyz, const torch::Tensor& overlap, int64_t clusters,
                          const GmmFitOptions& options) {
     if (!xyz.device().is_cpu() || options.iterations < 1) {
         return FitOverlapGmmTensorOps(xyz, overlap, clusters, options);
@@ -381,10 +333,8 @@ torch::Tensor KabschTransform(const torch::Tensor& src, const torch::Tensor& dst
     return torch::cat({torch::cat({R, t}, 2), bottom}, 1);
 }
 
-torch::Tensor SoftMatchTransform(const torch::Tensor& mu_p,
-                                 const torch::Tensor& nu_p,
-                                 const torch::Tensor& mu_q,
-                                 const torch::Tensor& nu_q,
+torch::Tensor SoftMatchTransform(const torch::Tensor& mu_p, const torch::Tensor& nu_p,
+                                 const torch::Tensor& mu_q, const torch::Tensor& nu_q,
                                  double temperature) {
     const auto unit = F::NormalizeFuncOptions().dim(2);
     const torch::Tensor cos =
@@ -410,8 +360,7 @@ OgmmNet::OgmmNet(const OgmmConfig& config) : config_(config) {
 
 nlohmann::json OgmmNet::Config() const { return OgmmConfigToJson(config_); }
 
-torch::Tensor OgmmNet::Anchors(const torch::Tensor& features,
-                               const torch::Tensor& xyz,
+torch::Tensor OgmmNet::Anchors(const torch::Tensor& features, const torch::Tensor& xyz,
                                const c10::optional<at::Generator>& generator) {
     if (config_.attention == "full") return features;
     // Clouds smaller than `anchors` use every point (an FPS of all N is a permutation).
@@ -419,10 +368,8 @@ torch::Tensor OgmmNet::Anchors(const torch::Tensor& features,
     return GatherColumns(features, FpsRandom(xyz, n, generator));
 }
 
-torch::Tensor OgmmNet::SelfAttention(AttentionalPropagation& block,
-                                     const torch::Tensor& x,
-                                     const torch::Tensor& keys,
-                                     const torch::Tensor& xyz,
+torch::Tensor OgmmNet::SelfAttention(AttentionalPropagation& block, const torch::Tensor& x,
+                                     const torch::Tensor& keys, const torch::Tensor& xyz,
                                      const c10::optional<at::Generator>& generator) {
     return block->forward(x, Anchors(keys, xyz, generator)) + x;
 }
@@ -503,10 +450,8 @@ NetOutput OgmmNet::Forward(const PairBatch& batch) {
     return out;
 }
 
-torch::Tensor OgmmNet::ClusterLoss(const torch::Tensor& xyz,
-                                   const torch::Tensor& mu,
-                                   const torch::Tensor& nu,
-                                   const torch::Tensor& features) const {
+torch::Tensor OgmmNet::ClusterLoss(const torch::Tensor& xyz, const torch::Tensor& mu,
+                                   const torch::Tensor& nu, const torch::Tensor& features) const {
     const int64_t batch = mu.size(0), clusters = mu.size(1);
     torch::Tensor nearest;  // [B, J] input point nearest each mean
     {
@@ -519,7 +464,9 @@ torch::Tensor OgmmNet::ClusterLoss(const torch::Tensor& xyz,
     // NT-Xent over the 2J vectors: a_j's positive is b_j (and back), every other vector is a
     // negative, self-similarity excluded.
     const torch::Tensor z = torch::cat({a, b}, 1);  // [B, 2J, d]
-    const auto on = [&](torch::Dtype type) { return torch::TensorOptions(type).device(z.device()); };
+    const auto on = [&](torch::Dtype type) {
+        return torch::TensorOptions(type).device(z.device());
+    };
     const torch::Tensor self = torch::eye(2 * clusters, on(torch::kBool)).unsqueeze(0);
     const torch::Tensor logits = (torch::bmm(z, z.transpose(1, 2)) / config_.nt_xent_temperature)
                                      .masked_fill(self, -std::numeric_limits<double>::infinity());

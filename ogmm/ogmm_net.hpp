@@ -75,17 +75,13 @@ struct GmmFitOptions {
 /// with marginals (w, 1/J) gives Gamma (NaN -> 0, per cloud so results do not depend on the
 /// batch), gamma_ij = Gamma_ij / max(sum_j Gamma_ij, 1e-3) and mu_j = sum_i gamma_ij p_i /
 /// (sum_i gamma_ij + 1e-5). Runs without gradient.
-OverlapGmm FitOverlapGmm(const torch::Tensor& xyz,
-                         const torch::Tensor& overlap,
-                         int64_t clusters,
+OverlapGmm FitOverlapGmm(const torch::Tensor& xyz, const torch::Tensor& overlap, int64_t clusters,
                          const GmmFitOptions& options = {});
 
 /// FitOverlapGmm written as LibTorch tensor ops: the path for CUDA tensors, and on the CPU the
 /// reference that tests hold the loop version (FitOverlapGmm on CPU tensors) to.
-OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz,
-                                  const torch::Tensor& overlap,
-                                  int64_t clusters,
-                                  const GmmFitOptions& options = {});
+OverlapGmm FitOverlapGmmTensorOps(const torch::Tensor& xyz, const torch::Tensor& overlap,
+                                  int64_t clusters, const GmmFitOptions& options = {});
 
 /// Unweighted Kabsch between matched point sets src, dst [B, J, 3] as the authors' code runs
 /// it: H = sum (s_i - s_mean)(d_i - d_mean)^T + 1e-5 I = U S V^T, R = V U^T (V's third column
@@ -95,10 +91,8 @@ torch::Tensor KabschTransform(const torch::Tensor& src, const torch::Tensor& dst
 /// Soft matching of cluster features and the closed-form transform (the code's step 10):
 /// Sm = softmax_j(cos(nu_p_i, nu_q_j) / temperature), y_i = sum_j Sm_ij mu_q_j, then
 /// KabschTransform(mu_p, y). mu [B, J, 3], nu [B, J, C]; returns T [B, 4, 4].
-torch::Tensor SoftMatchTransform(const torch::Tensor& mu_p,
-                                 const torch::Tensor& nu_p,
-                                 const torch::Tensor& mu_q,
-                                 const torch::Tensor& nu_q,
+torch::Tensor SoftMatchTransform(const torch::Tensor& mu_p, const torch::Tensor& nu_p,
+                                 const torch::Tensor& mu_q, const torch::Tensor& nu_q,
                                  double temperature);
 
 /// The OGMM network. Forward() stores in NetOutput.aux: overlap_source [B, N],
@@ -117,20 +111,15 @@ public:
     const OgmmConfig& config() const { return config_; }
 
 private:
-    torch::Tensor Anchors(const torch::Tensor& features,
-                          const torch::Tensor& xyz,
+    torch::Tensor Anchors(const torch::Tensor& features, const torch::Tensor& xyz,
                           const c10::optional<at::Generator>& generator);
-    torch::Tensor SelfAttention(AttentionalPropagation& block,
-                                const torch::Tensor& x,
-                                const torch::Tensor& keys,
-                                const torch::Tensor& xyz,
+    torch::Tensor SelfAttention(AttentionalPropagation& block, const torch::Tensor& x,
+                                const torch::Tensor& keys, const torch::Tensor& xyz,
                                 const c10::optional<at::Generator>& generator);
     std::pair<torch::Tensor, torch::Tensor> OverlapScores(const torch::Tensor& gp,
                                                           const torch::Tensor& gq);
-    torch::Tensor ClusterLoss(const torch::Tensor& xyz,
-                              const torch::Tensor& mu,
-                              const torch::Tensor& nu,
-                              const torch::Tensor& features) const;
+    torch::Tensor ClusterLoss(const torch::Tensor& xyz, const torch::Tensor& mu,
+                              const torch::Tensor& nu, const torch::Tensor& features) const;
 
     OgmmConfig config_;
     Dgcnn dgcnn_{nullptr};

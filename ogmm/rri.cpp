@@ -32,10 +32,8 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586;
 
 /// Features of one point p given its k neighbours (centred coordinates).
-void PointFeatures(const Eigen::Vector3d& p,
-                   const std::vector<Eigen::Vector3d>& nbrs,
-                   RriVariant variant,
-                   double* out) {
+void PointFeatures(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& nbrs,
+                   RriVariant variant, double* out) {
     const int k = static_cast<int>(nbrs.size());
     const double rp = p.norm();
     const Eigen::Vector3d p_hat = p / rp;

@@ -22,17 +22,29 @@ namespace {
 // ------------------------------------------------------------------------- pickle objects
 
 enum class Kind {
-    kNone, kBool, kInt, kBigInt, kFloat, kStr, kBytes, kTuple, kList, kDict, kGlobal,
-    kStorageType, kStorage, kTensor
+    kNone,
+    kBool,
+    kInt,
+    kBigInt,
+    kFloat,
+    kStr,
+    kBytes,
+    kTuple,
+    kList,
+    kDict,
+    kGlobal,
+    kStorageType,
+    kStorage,
+    kTensor
 };
 
 struct Obj {
     Kind kind = Kind::kNone;
-    int64_t i = 0;             // kInt, kBool; kStorage: numel; kTensor: storage offset
-    double f = 0.0;            // kFloat
-    std::string s;             // kStr, kBytes, kBigInt (little-endian bytes), kGlobal
-                               // ("module.name"), kStorage: key
-    std::vector<int> items;    // kTuple, kList; kDict: key, value, key, value...
+    int64_t i = 0;           // kInt, kBool; kStorage: numel; kTensor: storage offset
+    double f = 0.0;          // kFloat
+    std::string s;           // kStr, kBytes, kBigInt (little-endian bytes), kGlobal
+                             // ("module.name"), kStorage: key
+    std::vector<int> items;  // kTuple, kList; kDict: key, value, key, value...
     c10::ScalarType dtype = c10::ScalarType::Float;  // kStorageType, kStorage, kTensor
     int storage = -1;                                // kTensor: its kStorage object
     std::vector<int64_t> sizes, strides;             // kTensor
@@ -78,26 +90,45 @@ public:
         for (;;) {
             const uint8_t op = Byte();
             switch (op) {
-                case 0x80: Byte(); break;                     // PROTO
-                case 0x95: Take(8); break;                    // FRAME
-                case '(': marks_.push_back(stack_.size()); break;  // MARK
-                case '.': {                                   // STOP
+                case 0x80:
+                    Byte();
+                    break;  // PROTO
+                case 0x95:
+                    Take(8);
+                    break;  // FRAME
+                case '(':
+                    marks_.push_back(stack_.size());
+                    break;   // MARK
+                case '.': {  // STOP
                     if (stack_.size() != 1 || !marks_.empty()) Bad("malformed pickle (STOP)");
                     return stack_.back();
                 }
-                case 'N': Push(New(Kind::kNone)); break;
-                case 0x88: case 0x89: {                       // NEWTRUE, NEWFALSE
+                case 'N':
+                    Push(New(Kind::kNone));
+                    break;
+                case 0x88:
+                case 0x89: {  // NEWTRUE, NEWFALSE
                     const int o = New(Kind::kBool);
                     arena_[o].i = op == 0x88;
                     Push(o);
                     break;
                 }
-                case 'K': PushInt(Byte()); break;             // BININT1
-                case 'M': PushInt(static_cast<int64_t>(LittleUnsigned(2))); break;  // BININT2
-                case 'J': PushInt(static_cast<int32_t>(LittleUnsigned(4))); break;   // BININT
-                case 0x8a: Long(Byte()); break;               // LONG1
-                case 0x8b: Long(LittleUnsigned(4)); break;    // LONG4
-                case 'G': {                                   // BINFLOAT (big-endian)
+                case 'K':
+                    PushInt(Byte());
+                    break;  // BININT1
+                case 'M':
+                    PushInt(static_cast<int64_t>(LittleUnsigned(2)));
+                    break;  // BININT2
+                case 'J':
+                    PushInt(static_cast<int32_t>(LittleUnsigned(4)));
+                    break;  // BININT
+                case 0x8a:
+                    Long(Byte());
+                    break;  // LONG1
+                case 0x8b:
+                    Long(LittleUnsigned(4));
+                    break;   // LONG4
+                case 'G': {  // BINFLOAT (big-endian)
                     const std::string b = Take(8);
                     uint64_t bits = 0;
                     for (const char c : b) bits = (bits << 8) | static_cast<uint8_t>(c);
@@ -106,41 +137,72 @@ public:
                     Push(o);
                     break;
                 }
-                case 'X': case 'T': PushStr(Kind::kStr, LittleUnsigned(4)); break;
-                case 0x8c: case 'U': PushStr(Kind::kStr, Byte()); break;
-                case 'B': PushStr(Kind::kBytes, LittleUnsigned(4)); break;
-                case 'C': PushStr(Kind::kBytes, Byte()); break;
-                case 0x8e: PushStr(Kind::kBytes, LittleUnsigned(8)); break;  // BINBYTES8
-                case ']': Push(New(Kind::kList)); break;
-                case '}': Push(New(Kind::kDict)); break;
-                case ')': Push(New(Kind::kTuple)); break;
-                case 't': {                                   // TUPLE
+                case 'X':
+                case 'T':
+                    PushStr(Kind::kStr, LittleUnsigned(4));
+                    break;
+                case 0x8c:
+                case 'U':
+                    PushStr(Kind::kStr, Byte());
+                    break;
+                case 'B':
+                    PushStr(Kind::kBytes, LittleUnsigned(4));
+                    break;
+                case 'C':
+                    PushStr(Kind::kBytes, Byte());
+                    break;
+                case 0x8e:
+                    PushStr(Kind::kBytes, LittleUnsigned(8));
+                    break;  // BINBYTES8
+                case ']':
+                    Push(New(Kind::kList));
+                    break;
+                case '}':
+                    Push(New(Kind::kDict));
+                    break;
+                case ')':
+                    Push(New(Kind::kTuple));
+                    break;
+                case 't': {  // TUPLE
                     const int o = New(Kind::kTuple);
                     arena_[o].items = PopToMark();
                     Push(o);
                     break;
                 }
-                case 0x85: case 0x86: case 0x87: {            // TUPLE1..3
+                case 0x85:
+                case 0x86:
+                case 0x87: {  // TUPLE1..3
                     const size_t n = op - 0x84;
                     if (stack_.size() < n + Floor()) Bad("malformed pickle (TUPLE)");
                     const int o = New(Kind::kTuple);
-                    arena_[o].items.assign(stack_.end() - static_cast<std::ptrdiff_t>(n), stack_.end());
+                    arena_[o].items.assign(stack_.end() - static_cast<std::ptrdiff_t>(n),
+                                           stack_.end());
                     stack_.resize(stack_.size() - n);
                     Push(o);
                     break;
                 }
-                case 'q': memo_[Byte()] = Top(); break;       // BINPUT
-                case 'r': memo_[LittleUnsigned(4)] = Top(); break;  // LONG_BINPUT
-                case 0x94: memo_[memo_.size()] = Top(); break;  // MEMOIZE
-                case 'h': Push(Memo(Byte())); break;          // BINGET
-                case 'j': Push(Memo(LittleUnsigned(4))); break;  // LONG_BINGET
-                case 'c': {                                   // GLOBAL
+                case 'q':
+                    memo_[Byte()] = Top();
+                    break;  // BINPUT
+                case 'r':
+                    memo_[LittleUnsigned(4)] = Top();
+                    break;  // LONG_BINPUT
+                case 0x94:
+                    memo_[memo_.size()] = Top();
+                    break;  // MEMOIZE
+                case 'h':
+                    Push(Memo(Byte()));
+                    break;  // BINGET
+                case 'j':
+                    Push(Memo(LittleUnsigned(4)));
+                    break;   // LONG_BINGET
+                case 'c': {  // GLOBAL
                     const std::string module = Line();
                     const std::string gname = Line();
                     Push(Global(module + "." + gname));
                     break;
                 }
-                case 0x93: {                                  // STACK_GLOBAL
+                case 0x93: {  // STACK_GLOBAL
                     const int gname = Pop();
                     const int module = Pop();
                     if (at(module).kind != Kind::kStr || at(gname).kind != Kind::kStr) {
@@ -149,45 +211,47 @@ public:
                     Push(Global(at(module).s + "." + at(gname).s));
                     break;
                 }
-                case 'a': {                                   // APPEND
+                case 'a': {  // APPEND
                     const int v = Pop();
                     List(Top()).items.push_back(v);
                     break;
                 }
-                case 'e': {                                   // APPENDS
+                case 'e': {  // APPENDS
                     std::vector<int> v = PopToMark();
                     auto& l = List(Top()).items;
                     l.insert(l.end(), v.begin(), v.end());
                     break;
                 }
-                case 's': {                                   // SETITEM
+                case 's': {  // SETITEM
                     const int v = Pop();
                     const int k = Pop();
                     SetItem(Top(), k, v);
                     break;
                 }
-                case 'u': {                                   // SETITEMS
+                case 'u': {  // SETITEMS
                     std::vector<int> kv = PopToMark();
                     if (kv.size() % 2 != 0) Bad("malformed pickle (SETITEMS)");
                     const int d = Top();
                     for (size_t j = 0; j < kv.size(); j += 2) SetItem(d, kv[j], kv[j + 1]);
                     break;
                 }
-                case 'R': {                                   // REDUCE
+                case 'R': {  // REDUCE
                     const int args = Pop();
                     const int fn = Pop();
                     Push(Reduce(fn, args));
                     break;
                 }
-                case 'b': {                                   // BUILD
-                    Pop();  // state: only OrderedDict's _metadata, which a state dict may carry
+                case 'b': {  // BUILD
+                    Pop();   // state: only OrderedDict's _metadata, which a state dict may carry
                     const int o = Top();
                     if (at(o).kind != Kind::kDict && at(o).kind != Kind::kTensor) {
                         Bad("pickle sets the state of an object other than a dict or tensor");
                     }
                     break;
                 }
-                case 'Q': Push(PersistentLoad(Pop())); break;  // BINPERSID
+                case 'Q':
+                    Push(PersistentLoad(Pop()));
+                    break;  // BINPERSID
                 default: {
                     std::ostringstream os;
                     os << "unsupported or corrupt pickle opcode 0x" << std::hex << int(op)
@@ -327,7 +391,8 @@ private:
             return New(Kind::kDict);
         }
         if (g == "torch._utils._rebuild_parameter") {
-            if (a.empty() || at(a[0]).kind != Kind::kTensor) Bad("_rebuild_parameter of a non-tensor");
+            if (a.empty() || at(a[0]).kind != Kind::kTensor)
+                Bad("_rebuild_parameter of a non-tensor");
             return a[0];
         }
         // _rebuild_tensor(storage, offset, size, stride) and _rebuild_tensor_v2(..., requires_grad,
@@ -419,8 +484,7 @@ int FindStateDict(const Unpickler& u, int top, const std::string& name, std::str
 }
 
 /// Tensors of the state dict `sd` from the storages' bytes.
-StateDict BuildTensors(const Unpickler& u,
-                       int sd,
+StateDict BuildTensors(const Unpickler& u, int sd,
                        const std::map<std::string, std::string>& storage_bytes,
                        const std::string& name) {
     StateDict out;
@@ -485,7 +549,8 @@ TorchSaveContents ReadZip(const std::string& bytes, const std::string& name) {
         if (reader.hasRecord("constants.pkl") || reader.hasRecord("code/__torch__.py")) {
             Fail(name, "is a TorchScript archive (torch.jit.save), not a torch.save state dict");
         }
-        if (!reader.hasRecord("data.pkl")) Fail(name, "zip archive without data.pkl: not a torch.save file");
+        if (!reader.hasRecord("data.pkl"))
+            Fail(name, "zip archive without data.pkl: not a torch.save file");
         const auto record = [&](const std::string& r) {
             auto [ptr, size] = reader.getRecord(r);
             return std::string(static_cast<const char*>(ptr.get()), size);
@@ -495,7 +560,8 @@ TorchSaveContents ReadZip(const std::string& bytes, const std::string& name) {
         const int top = u.Run();
         for (const auto& [key, obj] : u.storages()) {
             (void)obj;
-            if (!reader.hasRecord("data/" + key)) Fail(name, "storage record data/" + key + " is missing");
+            if (!reader.hasRecord("data/" + key))
+                Fail(name, "storage record data/" + key + " is missing");
             storage_bytes[key] = record("data/" + key);
         }
         TorchSaveContents out;
@@ -576,7 +642,8 @@ public:
         if (v >= 0 && v < 256) {
             Op('K');
             Le(static_cast<uint64_t>(v), 1);
-        } else if (v >= std::numeric_limits<int32_t>::min() && v <= std::numeric_limits<int32_t>::max()) {
+        } else if (v >= std::numeric_limits<int32_t>::min() &&
+                   v <= std::numeric_limits<int32_t>::max()) {
             Op('J');
             Le(static_cast<uint32_t>(static_cast<int32_t>(v)), 4);
         } else {
@@ -605,17 +672,29 @@ private:
 
 std::string StorageName(c10::ScalarType t) {
     switch (t) {
-        case c10::ScalarType::Float: return "FloatStorage";
-        case c10::ScalarType::Double: return "DoubleStorage";
-        case c10::ScalarType::Half: return "HalfStorage";
-        case c10::ScalarType::BFloat16: return "BFloat16Storage";
-        case c10::ScalarType::Long: return "LongStorage";
-        case c10::ScalarType::Int: return "IntStorage";
-        case c10::ScalarType::Short: return "ShortStorage";
-        case c10::ScalarType::Char: return "CharStorage";
-        case c10::ScalarType::Byte: return "ByteStorage";
-        case c10::ScalarType::Bool: return "BoolStorage";
-        default: throw std::runtime_error(std::string("cannot save tensors of type ") + c10::toString(t));
+        case c10::ScalarType::Float:
+            return "FloatStorage";
+        case c10::ScalarType::Double:
+            return "DoubleStorage";
+        case c10::ScalarType::Half:
+            return "HalfStorage";
+        case c10::ScalarType::BFloat16:
+            return "BFloat16Storage";
+        case c10::ScalarType::Long:
+            return "LongStorage";
+        case c10::ScalarType::Int:
+            return "IntStorage";
+        case c10::ScalarType::Short:
+            return "ShortStorage";
+        case c10::ScalarType::Char:
+            return "CharStorage";
+        case c10::ScalarType::Byte:
+            return "ByteStorage";
+        case c10::ScalarType::Bool:
+            return "BoolStorage";
+        default:
+            throw std::runtime_error(std::string("cannot save tensors of type ") +
+                                     c10::toString(t));
     }
 }
 
@@ -623,8 +702,10 @@ std::string StorageName(c10::ScalarType t) {
 
 TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string& name) {
     try {
-        if (bytes.size() >= 4 && bytes.compare(0, 4, "PK\x03\x04") == 0) return ReadZip(bytes, name);
-        if (!bytes.empty() && static_cast<uint8_t>(bytes[0]) == 0x80) return ReadLegacy(bytes, name);
+        if (bytes.size() >= 4 && bytes.compare(0, 4, "PK\x03\x04") == 0)
+            return ReadZip(bytes, name);
+        if (!bytes.empty() && static_cast<uint8_t>(bytes[0]) == 0x80)
+            return ReadLegacy(bytes, name);
     } catch (const std::bad_alloc&) {
         Fail(name, "declares more data than fits in memory (corrupt file)");
     } catch (const c10::Error& e) {
@@ -633,8 +714,7 @@ TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string
     if (bytes.size() >= 262 && bytes.compare(257, 5, "ustar") == 0) {
         Fail(name, "is a tar archive (torch.save of PyTorch < 0.4), which is not supported");
     }
-    Fail(name, bytes.empty() ? "is empty"
-                             : "is neither a zip-format nor a legacy torch.save file");
+    Fail(name, bytes.empty() ? "is empty" : "is neither a zip-format nor a legacy torch.save file");
 }
 
 TorchSaveContents ReadTorchSaveFile(const std::string& path) {

@@ -28,8 +28,8 @@ using StateDict = std::vector<std::pair<std::string, torch::Tensor>>;
 
 struct TorchSaveContents {
     StateDict tensors;
-    std::string format;    ///< "zip" or "legacy"
-    std::string wrapper;   ///< "" or the key ("state_dict", "model", ...) the dict was found under
+    std::string format;   ///< "zip" or "legacy"
+    std::string wrapper;  ///< "" or the key ("state_dict", "model", ...) the dict was found under
 };
 
 /// Reads `path`. `name` (default: path) is how errors name the file.

@@ -1,9 +1,9 @@
 #include "ogmm/train.hpp"
 
-#include "ogmm/train_batch.hpp"
-
 #include <fcntl.h>
 #include <unistd.h>
+
+#include "ogmm/train_batch.hpp"
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
@@ -11,8 +11,8 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -36,17 +36,9 @@
 namespace regbench::ogmm {
 namespace fs = std::filesystem;
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainConfig,
-                                                lr,
-                                                weight_decay,
-                                                batch,
-                                                epochs,
-                                                pairs_per_epoch,
-                                                schedule,
-                                                milestones,
-                                                lr_gamma,
-                                                plateau_patience,
-                                                min_lr)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainConfig, lr, weight_decay, batch, epochs,
+                                                pairs_per_epoch, schedule, milestones, lr_gamma,
+                                                plateau_patience, min_lr)
 
 nlohmann::json ToJson(const TrainConfig& c) { return c; }
 
@@ -189,12 +181,8 @@ struct MetricSums {
 };
 
 /// Validation pass: loss and metrics with and without refinement.
-EpochMetrics Validate(RegistrationNet& net,
-                      const std::vector<TrainSample>& val,
-                      int batch,
-                      const torch::Device& device,
-                      const RefineFn& refine,
-                      std::uint64_t seed) {
+EpochMetrics Validate(RegistrationNet& net, const std::vector<TrainSample>& val, int batch,
+                      const torch::Device& device, const RefineFn& refine, std::uint64_t seed) {
     EpochMetrics m;
     if (val.empty()) return m;
     net.eval();
@@ -255,19 +243,10 @@ struct TrainerState {
     std::int64_t epoch_loss_steps = 0;
 };
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState,
-                                                step,
-                                                planned_steps,
-                                                lr,
-                                                elapsed_seconds,
-                                                cpu_seconds,
-                                                pairs_seen,
-                                                best_mae_r,
-                                                plateau_best,
-                                                plateau_bad,
-                                                plateau_scale,
-                                                epoch_loss_sum,
-                                                epoch_loss_steps)
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(TrainerState, step, planned_steps, lr,
+                                                elapsed_seconds, cpu_seconds, pairs_seen,
+                                                best_mae_r, plateau_best, plateau_bad,
+                                                plateau_scale, epoch_loss_sum, epoch_loss_steps)
 
 /// Infinite bests (nothing validated yet) are written as null, JSON having no infinity.
 nlohmann::json ToJson(const TrainerState& s) { return s; }
@@ -277,13 +256,12 @@ nlohmann::json ToJson(const TrainerState& s) { return s; }
 /// run truncate the file it pointed to. Throws naming the file (ENOSPC, EFBIG, a link).
 void WriteMetricsFile(const fs::path& path, const std::string& text, bool truncate) {
     RequireRegularOrAbsent(path.string(), "metrics file");
-    const int fd = ::open(path.c_str(),
-                          O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC |
-                              (truncate ? O_TRUNC : 0),
-                          0644);
+    const int fd = ::open(
+        path.c_str(),
+        O_WRONLY | O_CREAT | O_APPEND | O_NOFOLLOW | O_CLOEXEC | (truncate ? O_TRUNC : 0), 0644);
     if (fd < 0) {
-        throw std::runtime_error(path.string() + ": cannot open metrics file: " +
-                                 std::strerror(errno));
+        throw std::runtime_error(path.string() +
+                                 ": cannot open metrics file: " + std::strerror(errno));
     }
     try {
         WriteAllOrThrow(fd, text, path.string());
@@ -715,13 +693,12 @@ TrainSummary Trainer::Run() {
 
 void RetainFreedMemoryForTraining() {
 #if defined(__GLIBC__)
-    mallopt(M_MMAP_MAX, 0);        // large blocks from the heap, where freed ones are reused
+    mallopt(M_MMAP_MAX, 0);         // large blocks from the heap, where freed ones are reused
     mallopt(M_TRIM_THRESHOLD, -1);  // and the heap's top is never given back (mallopt(3))
 #endif
 }
 
-TrainSummary Train(const nlohmann::json& config,
-                   const TrainData& data,
+TrainSummary Train(const nlohmann::json& config, const TrainData& data,
                    const TrainOptions& options) {
     return Trainer(config, data, options).Run();
 }

@@ -36,8 +36,8 @@ struct TrainData {
 
 /// Refinement applied to a network estimate in validation (e.g. Open3D ICP): returns the refined
 /// T_target_source.
-using RefineFn = std::function<Transform(
-    const PointCloud& source, const PointCloud& target, const Transform& initial)>;
+using RefineFn = std::function<Transform(const PointCloud& source, const PointCloud& target,
+                                         const Transform& initial)>;
 
 /// The "train" object of a model config.
 struct TrainConfig {
@@ -59,8 +59,8 @@ nlohmann::json ToJson(const TrainConfig& c);
 TrainConfig TrainConfigFromJson(const nlohmann::json& j);
 
 struct TrainOptions {
-    std::string out_dir;             ///< run directory: last/, best/, metrics.csv, metrics.jsonl
-    bool resume = false;             ///< continue from out_dir/last
+    std::string out_dir;  ///< run directory: last/, best/, metrics.csv, metrics.jsonl
+    bool resume = false;  ///< continue from out_dir/last
     /// Wall-clock budget of this invocation (0: none); the run ends with a validated checkpoint.
     double minutes = 0.0;
     /// With `minutes` on a fresh run: plan the LR schedule over the steps that fit the budget
@@ -115,8 +115,7 @@ struct TrainSummary {
 /// Trains the network `config` describes (zoo config with a "train" object) from scratch, or
 /// from out_dir/last when options.resume. Writes out_dir/{last,best}/ checkpoints,
 /// metrics.csv and metrics.jsonl. Throws std::runtime_error naming the file or input at fault.
-TrainSummary Train(const nlohmann::json& config,
-                   const TrainData& data,
+TrainSummary Train(const nlohmann::json& config, const TrainData& data,
                    const TrainOptions& options);
 
 /// Makes the process keep the memory it frees for its next allocations (glibc: no mmap for

@@ -21,7 +21,8 @@ namespace {
 constexpr const char* kUsage =
     "usage: regbench-train-portable BUNDLE --out DIR [--device cpu|cuda] [--minutes M]\n"
     "                              [--max-steps S] [--resume] [--threads T]\n"
-    "Trains the model of BUNDLE (written by `regbench train ... --write-bundle BUNDLE`) into DIR.\n";
+    "Trains the model of BUNDLE (written by `regbench train ... --write-bundle BUNDLE`) into "
+    "DIR.\n";
 
 struct Args {
     std::string bundle;
@@ -90,14 +91,14 @@ int main(int argc, char** argv) {
         regbench::ogmm::TrainOptions& o = a.train;
         o.seed = bundle.seed;
         o.plan_to_budget = o.PlansToBudget(bundle.length_given);
-        o.run_info = {{"command", a.command}, {"bundle", a.bundle},
-                      {"bundle_command", bundle.command}};
+        o.run_info = {
+            {"command", a.command}, {"bundle", a.bundle}, {"bundle_command", bundle.command}};
         std::cerr << "train: " << bundle.config.value("name", std::string("?")) << " -> "
                   << o.out_dir << " (" << data.validation.size() << " validation pairs, "
                   << o.threads << " threads, " << o.device << ")\n";
         const regbench::ogmm::TrainSummary s = regbench::ogmm::Train(bundle.config, data, o);
-        std::cerr << "train: done, " << s.steps << " steps; checkpoints " << o.out_dir
-                  << "/last, " << o.out_dir << "/best\n";
+        std::cerr << "train: done, " << s.steps << " steps; checkpoints " << o.out_dir << "/last, "
+                  << o.out_dir << "/best\n";
         return 0;
     } catch (const std::exception& e) {
         std::cerr << "regbench-train-portable: " << e.what() << "\n";

@@ -11,8 +11,7 @@ namespace regbench {
 
 constexpr std::size_t kMaxGeneratedPairs = 10000000;
 
-void GenerateToFile(const GenerateRequest& request,
-                    const ShapeLoader& load_shapes,
+void GenerateToFile(const GenerateRequest& request, const ShapeLoader& load_shapes,
                     const ProgressCallback& progress) {
     ValidateProtocolOptions(request.options);
     if (!request.one_per_item && request.num_pairs < 1)

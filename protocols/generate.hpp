@@ -35,8 +35,7 @@ struct GenerateRequest {
 /// left at `out` (an existing file there is not replaced). Provenance: ProtocolProvenance plus
 /// seed, num_pairs, num_shapes, dataset, split, pair_selection ("one-per-item" for
 /// one_per_item, else "cycle": pair k uses item k mod items) and extra_provenance.
-void GenerateToFile(const GenerateRequest& request,
-                    const ShapeLoader& load_shapes,
+void GenerateToFile(const GenerateRequest& request, const ShapeLoader& load_shapes,
                     const ProgressCallback& progress = nullptr);
 
 }  // namespace regbench

@@ -89,8 +89,9 @@ void CheckProvenanceTypes(const std::string& path, const nlohmann::json& p) {
     if (!p.is_object()) Fail(path, "provenance is not a JSON object");
     for (const char* key : {"dataset", "protocol", "pairing", "content_hash", "format"}) {
         if (p.contains(key) && !p.at(key).is_string()) {
-            Fail(path, std::string("provenance key '") + key + "' must be a string, got " +
-                           p.at(key).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+            Fail(path,
+                 std::string("provenance key '") + key + "' must be a string, got " +
+                     p.at(key).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
         }
     }
     if (p.contains("params") && !p.at("params").is_object()) {
@@ -143,13 +144,8 @@ double ReadDoubleAttr(const std::string& where, hid_t obj, const char* name) {
 }
 
 template <class T>
-void WriteDataset(const std::string& path,
-                  hid_t group,
-                  const char* name,
-                  hid_t file_type,
-                  hid_t mem_type,
-                  const T* data,
-                  std::vector<hsize_t> dims) {
+void WriteDataset(const std::string& path, hid_t group, const char* name, hid_t file_type,
+                  hid_t mem_type, const T* data, std::vector<hsize_t> dims) {
     Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
     Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
     H5Pset_obj_track_times(dcpl.get(), false);
@@ -188,10 +184,7 @@ Handle OpenH5Dataset(const std::string& where, hid_t group, const char* name) {
 constexpr double kMaxExpansion = 64.0;
 
 /// Refuses a dataset whose declared size cannot be backed by the file, before allocating.
-void CheckBacked(const std::string& where,
-                 const char* name,
-                 hid_t ds,
-                 double decoded_bytes,
+void CheckBacked(const std::string& where, const char* name, hid_t ds, double decoded_bytes,
                  std::uintmax_t file_size) {
     const double stored = static_cast<double>(H5Dget_storage_size(ds));
     if (decoded_bytes > 0 && (stored > static_cast<double>(file_size) ||
@@ -219,9 +212,7 @@ void CheckValues(const std::string& where, const char* name, const double* v, st
     }
 }
 
-PointCloud ReadCloud(const std::string& where,
-                     hid_t group,
-                     const char* name,
+PointCloud ReadCloud(const std::string& where, hid_t group, const char* name,
                      std::uintmax_t file_size) {
     Handle ds = OpenH5Dataset(where, group, name);
     const auto dims = DatasetDims(where, ds.get(), 2, name);
@@ -237,10 +228,8 @@ PointCloud ReadCloud(const std::string& where,
     return cloud;
 }
 
-Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> ReadLabels(const std::string& where,
-                                                          hid_t group,
-                                                          const char* name,
-                                                          Eigen::Index expected) {
+Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1> ReadLabels(const std::string& where, hid_t group,
+                                                          const char* name, Eigen::Index expected) {
     Handle ds = OpenH5Dataset(where, group, name);
     const auto dims = DatasetDims(where, ds.get(), 1, name);
     if (static_cast<Eigen::Index>(dims[0]) != expected) {
@@ -436,8 +425,8 @@ PairSet ReadPairFileInProcess(const std::string& path) {
     const std::uintmax_t file_size = FileSize(path);
     PairSet set;
     try {
-        set.provenance = ParseJsonBounded(ReadStringAttr(path, file.get(), "provenance"),
-                                          path + " provenance");
+        set.provenance =
+            ParseJsonBounded(ReadStringAttr(path, file.get(), "provenance"), path + " provenance");
         CheckProvenanceTypes(path, set.provenance);
     } catch (const nlohmann::json::exception& e) {
         Fail(path, std::string("provenance is not valid JSON: ") + e.what());

@@ -72,11 +72,8 @@ void AddProtocolNoise(Pair& pair, const ProtocolOptions& o, std::mt19937_64& rng
 
 /// Paper pairing: two independent samples, each cropped; the motion moves the target.
 /// Draw order: source sample, target sample, source crop, target crop, density, motion, noise.
-Pair IndependentPair(const ShapeSource& shape,
-                     const ProtocolOptions& o,
-                     double keep_source,
-                     double keep_target,
-                     std::mt19937_64& rng) {
+Pair IndependentPair(const ShapeSource& shape, const ProtocolOptions& o, double keep_source,
+                     double keep_target, std::mt19937_64& rng) {
     const PointCloud source_full = shape.Sample(o.points, rng);
     const PointCloud target_full = shape.Sample(o.points, rng);
     Pair pair;
@@ -114,11 +111,8 @@ std::vector<char> Membership(const std::vector<Eigen::Index>& index, Eigen::Inde
 /// ground truth is its inverse; both are shuffled, then jittered.
 /// Draw order: sample, source crop, target crop, density, source shuffle, target shuffle,
 /// motion, noise.
-Pair SharedPair(const ShapeSource& shape,
-                const ProtocolOptions& o,
-                double keep_source,
-                double keep_target,
-                std::mt19937_64& rng) {
+Pair SharedPair(const ShapeSource& shape, const ProtocolOptions& o, double keep_source,
+                double keep_target, std::mt19937_64& rng) {
     const PointCloud full = shape.Sample(o.points, rng);
     const CropRounding rounding = CropRoundingFor(o.protocol);
     std::vector<Eigen::Index> source_index = CropIndices(full, keep_source, rng, rounding);
@@ -300,9 +294,7 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng) {
     return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
 }
 
-std::vector<Eigen::Index> CropIndices(const PointCloud& cloud,
-                                      double keep,
-                                      std::mt19937_64& rng,
+std::vector<Eigen::Index> CropIndices(const PointCloud& cloud, double keep, std::mt19937_64& rng,
                                       CropRounding rounding) {
     const Eigen::Index n = cloud.rows();
     std::vector<Eigen::Index> index(static_cast<std::size_t>(n));
@@ -326,9 +318,7 @@ std::vector<Eigen::Index> CropIndices(const PointCloud& cloud,
     return index;
 }
 
-Transform DrawMotion(MotionConvention convention,
-                     double max_rotation_deg,
-                     double max_translation,
+Transform DrawMotion(MotionConvention convention, double max_rotation_deg, double max_translation,
                      std::mt19937_64& rng) {
     if (convention == MotionConvention::kEuler) {
         // Paper: three angles U[0, max], R = Rx * Ry * Rz; t ~ U[-max_t, max_t]^3.
@@ -394,10 +384,8 @@ void LabelOverlapByRadius(Pair& pair, double eta) {
     pair.target_overlap_ratio = Fraction(pair.target_overlap);
 }
 
-Pair GeneratePair(const std::vector<ShapeSource>& shapes,
-                  const ProtocolOptions& options,
-                  std::uint64_t seed,
-                  std::uint64_t pair_index) {
+Pair GeneratePair(const std::vector<ShapeSource>& shapes, const ProtocolOptions& options,
+                  std::uint64_t seed, std::uint64_t pair_index) {
     if (shapes.empty()) throw std::invalid_argument("no shapes to generate pairs from");
     const std::size_t levels = ProtocolLevels(options);
     const auto level = static_cast<std::size_t>(pair_index % levels);
@@ -436,11 +424,8 @@ nlohmann::json ProtocolProvenance(const ProtocolOptions& options) {
     return j;
 }
 
-PairSet GeneratePairs(const std::vector<ShapeSource>& shapes,
-                      const ProtocolOptions& options,
-                      std::uint64_t seed,
-                      std::size_t num_pairs,
-                      const ProgressCallback& progress) {
+PairSet GeneratePairs(const std::vector<ShapeSource>& shapes, const ProtocolOptions& options,
+                      std::uint64_t seed, std::size_t num_pairs, const ProgressCallback& progress) {
     ValidateProtocolOptions(options);
     if (shapes.empty()) throw std::invalid_argument("no shapes to generate pairs from");
     PairSet set;

@@ -98,14 +98,10 @@ Eigen::Vector3d RandomUnitVector(std::mt19937_64& rng);
 /// Indices (ascending) of the CropCount(n, keep) points with the largest signed distance to the
 /// centroid along a uniformly random direction, i.e. those above the (1 - keep) quantile.
 /// Ties broken by index. keep = 1 returns every index and draws nothing.
-std::vector<Eigen::Index> CropIndices(const PointCloud& cloud,
-                                      double keep,
-                                      std::mt19937_64& rng,
+std::vector<Eigen::Index> CropIndices(const PointCloud& cloud, double keep, std::mt19937_64& rng,
                                       CropRounding rounding = CropRounding::kNearest);
 /// Rigid motion drawn with `convention` (see MotionConvention).
-Transform DrawMotion(MotionConvention convention,
-                     double max_rotation_deg,
-                     double max_translation,
+Transform DrawMotion(MotionConvention convention, double max_rotation_deg, double max_translation,
                      std::mt19937_64& rng);
 /// Adds clip(sigma * N(0, 1), -clip, clip) to every coordinate; sigma = 0 draws nothing.
 void AddClippedNoise(PointCloud& cloud, double sigma, double clip, std::mt19937_64& rng);
@@ -130,10 +126,8 @@ void LabelOverlapByRadius(Pair& pair, double eta);
 /// overlap-sweep level pair_index % L (L = number of sweep levels, 1 for other protocols), so pair
 /// k never depends on how many pairs are generated. `options` must be valid
 /// (ValidateProtocolOptions).
-Pair GeneratePair(const std::vector<ShapeSource>& shapes,
-                  const ProtocolOptions& options,
-                  std::uint64_t seed,
-                  std::uint64_t pair_index);
+Pair GeneratePair(const std::vector<ShapeSource>& shapes, const ProtocolOptions& options,
+                  std::uint64_t seed, std::uint64_t pair_index);
 
 /// Number of pair levels: the overlap-sweep's keep ratios, 1 for every other protocol. Pair k
 /// uses level k % levels and shape (k / levels) % shapes, so levels * shapes pairs use every
@@ -145,10 +139,8 @@ using ProgressCallback = std::function<void(std::size_t, std::size_t)>;
 
 /// Pairs 0 .. num_pairs-1 (validates first; throws std::invalid_argument before any work).
 /// provenance = ProtocolProvenance(options) plus {"seed", "num_pairs", "num_shapes"}.
-PairSet GeneratePairs(const std::vector<ShapeSource>& shapes,
-                      const ProtocolOptions& options,
-                      std::uint64_t seed,
-                      std::size_t num_pairs,
+PairSet GeneratePairs(const std::vector<ShapeSource>& shapes, const ProtocolOptions& options,
+                      std::uint64_t seed, std::size_t num_pairs,
                       const ProgressCallback& progress = nullptr);
 
 /// {"protocol", "params" (every option), "pairing", "noise_sigma" (0 when the protocol adds

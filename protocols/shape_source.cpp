@@ -79,10 +79,8 @@ Transform CheckedRigid(const Transform& T, const std::string& name) {
 
 }  // namespace
 
-ShapeSource ShapeSource::FromStoredPair(PointCloud source,
-                                        PointCloud target,
-                                        const Transform& target_from_source,
-                                        std::string name,
+ShapeSource ShapeSource::FromStoredPair(PointCloud source, PointCloud target,
+                                        const Transform& target_from_source, std::string name,
                                         std::string category) {
     if (target.rows() == 0) throw std::invalid_argument("shape '" + name + "': empty target");
     if (!target.allFinite()) {

@@ -31,10 +31,8 @@ public:
     /// stored. The rotation block is re-orthonormalised (float32 files store it to ~1e-7).
     /// Throws std::invalid_argument naming `name` when a cloud is empty or non-finite or the
     /// transform is not rigid within 1e-4 (last row, R^T R = I, det R = +1).
-    static ShapeSource FromStoredPair(PointCloud source,
-                                      PointCloud target,
-                                      const Transform& target_from_source,
-                                      std::string name,
+    static ShapeSource FromStoredPair(PointCloud source, PointCloud target,
+                                      const Transform& target_from_source, std::string name,
                                       std::string category);
 
     /// n points. Mesh: area-weighted triangle choice (binary search in the cumulative area

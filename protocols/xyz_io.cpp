@@ -37,8 +37,7 @@ constexpr std::size_t kMaxImportPairs = 100000000;
 }
 
 /// Parses the whitespace-separated numbers of one line (locale-independent from_chars).
-std::vector<double> ParseNumbers(const std::string& path,
-                                 std::size_t line_no,
+std::vector<double> ParseNumbers(const std::string& path, std::size_t line_no,
                                  const std::string& line) {
     std::vector<double> values;
     const char* p = line.data();
@@ -229,9 +228,7 @@ namespace {
 
 /// Writes pair k as <stem>_src.<ext> and <stem>_tgt.<ext> (the clouds as `cloud_text` writes
 /// them) and <stem>_gt.txt into `dir`, committed together at the end.
-void ExportPairs(const PairSet& set,
-                 const std::string& dir,
-                 const std::string& ext,
+void ExportPairs(const PairSet& set, const std::string& dir, const std::string& ext,
                  std::string (*cloud_text)(const PointCloud&)) {
     ExportDir out(dir);
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
@@ -277,9 +274,8 @@ PairSet ImportXyzDir(const std::string& dir, double eta) {
         const auto [it, fresh] = spelled.emplace(std::make_pair(number, m[2].str()), name);
         if (!fresh) {
             const auto [first, second] = std::minmax(it->second, name);
-            throw std::runtime_error(dir + ": " + first + " and " + second +
-                                     " both name pair " + std::to_string(number) +
-                                     " (ambiguous; keep one)");
+            throw std::runtime_error(dir + ": " + first + " and " + second + " both name pair " +
+                                     std::to_string(number) + " (ambiguous; keep one)");
         }
         seen[number] += 1;
     }

@@ -63,8 +63,7 @@ void ReadCallableResult(const py::object& out, AlignResult* r) {
 
 }  // namespace
 
-AlignResult CallableMethod::DoAlign(const PointCloud& source,
-                                    const PointCloud& target,
+AlignResult CallableMethod::DoAlign(const PointCloud& source, const PointCloud& target,
                                     const AlignContext& /*context*/) {
     const auto start = std::chrono::steady_clock::now();
     py::gil_scoped_acquire gil;

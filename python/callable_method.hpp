@@ -41,9 +41,7 @@ private:
 /// holds its arguments), so instances can be made and destroyed on threads without the lock.
 class CallableMethod final : public RegistrationMethod {
 public:
-    CallableMethod(std::string name,
-                   nlohmann::json params,
-                   py::handle fn,
+    CallableMethod(std::string name, nlohmann::json params, py::handle fn,
                    std::shared_ptr<PendingInterrupt> pending)
         : name_(std::move(name)),
           params_(std::move(params)),
@@ -53,8 +51,7 @@ public:
     nlohmann::json Params() const override { return params_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source,
-                        const PointCloud& target,
+    AlignResult DoAlign(const PointCloud& source, const PointCloud& target,
                         const AlignContext& context) override;
 
 private:

@@ -153,13 +153,8 @@ struct AlignOutcome {
     AlignResult result;
 };
 
-AlignOutcome Align(py::handle source,
-                   py::handle target,
-                   const std::string& method,
-                   py::handle params,
-                   std::uint64_t seed,
-                   int threads,
-                   std::uint64_t pair_index,
+AlignOutcome Align(py::handle source, py::handle target, const std::string& method,
+                   py::handle params, std::uint64_t seed, int threads, std::uint64_t pair_index,
                    bool normalize) {
     if (threads < 1) throw py::value_error("threads must be >= 1, got " + std::to_string(threads));
     const MethodSpec spec = BuiltinSpec(method, ParamsToJson(params, "params"));
@@ -182,12 +177,8 @@ AlignOutcome Align(py::handle source,
 // ---------------------------------------------------------------------------------------------
 // Metrics
 
-py::dict Metrics(py::handle T_est,
-                 py::handle T_gt,
-                 py::handle source,
-                 py::handle target,
-                 const std::string& euler,
-                 py::handle source_overlap) {
+py::dict Metrics(py::handle T_est, py::handle T_gt, py::handle source, py::handle target,
+                 const std::string& euler, py::handle source_overlap) {
     const EulerConvention convention = ParseEulerConvention(euler);
     const Transform est = TransformFromPy(T_est, "T_est");
     const Transform gt = TransformFromPy(T_gt, "T_gt");
@@ -248,18 +239,9 @@ std::string CallableName(py::handle item, py::handle* fn) {
     return name;
 }
 
-py::dict Run(py::handle pairs,
-             py::handle methods,
-             py::handle out,
-             py::handle params,
-             bool resume,
-             py::handle timeout,
-             int jobs,
-             int threads,
-             const std::string& euler,
-             std::size_t max_points,
-             bool downsample,
-             bool progress) {
+py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle params, bool resume,
+             py::handle timeout, int jobs, int threads, const std::string& euler,
+             std::size_t max_points, bool downsample, bool progress) {
     RunOptions o;
     try {
         o.pairs_path =

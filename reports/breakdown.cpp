@@ -126,9 +126,7 @@ namespace {
 /// o.key_metric over that method's rows which `column_of` puts in the cell's column (nullopt:
 /// in none; rows without the metric count in none either).
 template <class ColumnOf>
-void AddMeanRows(Table& t,
-                 const std::vector<ResultRow>& rows,
-                 const BreakdownOptions& o,
+void AddMeanRows(Table& t, const std::vector<ResultRow>& rows, const BreakdownOptions& o,
                  const ColumnOf& column_of) {
     const MetricField& metric = FindMetric(o.key_metric);
     for (const auto& method : MethodOrder(rows)) {

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -10,7 +11,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
-#include <algorithm>
 
 #include "core/parse_number.hpp"
 #include "reports/row_access.hpp"
@@ -119,10 +119,8 @@ CompareVerdict CompareResult::Verdict() const {
 }
 
 CompareResult CompareResults(const std::vector<ResultRow>& base,
-                             const std::vector<ResultRow>& candidate,
-                             const CompareOptions& o,
-                             const std::string& base_name,
-                             const std::string& new_name) {
+                             const std::vector<ResultRow>& candidate, const CompareOptions& o,
+                             const std::string& base_name, const std::string& new_name) {
     const auto base_files = PairFiles(base);
     const auto new_files = PairFiles(candidate);
     std::set<std::string> base_ids, new_ids;
@@ -213,8 +211,8 @@ CompareResult CompareResults(const std::vector<ResultRow>& base,
             // tolerance's size, or the CI already bounds the worsening by the tolerance; never
             // when the exact test cannot reach alpha at all.
             c.underpowered =
-                !c.regression && (std::isinf(c.detectable) ||
-                                  (c.detectable > c.tolerance && c.ci_hi > c.tolerance));
+                !c.regression &&
+                (std::isinf(c.detectable) || (c.detectable > c.tolerance && c.ci_hi > c.tolerance));
             out.changes.push_back(c);
         }
     }
@@ -291,14 +289,15 @@ std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& 
     for (const auto& c : r.changes) {
         if (!c.underpowered) continue;
         weak += std::isinf(c.detectable)
-                    ? fmt::format("- {} {}: {} pairs; the exact Wilcoxon test cannot reach "
-                                  "p < {:g} with so few pairs (smallest p: {:.3g})\n",
-                                  c.method, c.metric, c.pairs, o.alpha,
-                                  c.pairs == 0 ? 1.0 : std::ldexp(2.0, -int(c.pairs)))
-                    : fmt::format("- {} {}: {} pairs detect a worsening of {:.4g} (power {:g}), "
-                                  "not the tolerance {:g}\n",
-                                  c.method, c.metric, c.pairs, c.detectable, o.power,
-                                  c.tolerance);
+                    ? fmt::format(
+                          "- {} {}: {} pairs; the exact Wilcoxon test cannot reach "
+                          "p < {:g} with so few pairs (smallest p: {:.3g})\n",
+                          c.method, c.metric, c.pairs, o.alpha,
+                          c.pairs == 0 ? 1.0 : std::ldexp(2.0, -int(c.pairs)))
+                    : fmt::format(
+                          "- {} {}: {} pairs detect a worsening of {:.4g} (power {:g}), "
+                          "not the tolerance {:g}\n",
+                          c.method, c.metric, c.pairs, c.detectable, o.power, c.tolerance);
     }
     for (const auto& m : r.calls) {
         if (m.pairs < r.min_pairs) {
@@ -308,14 +307,15 @@ std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& 
     }
     switch (r.Verdict()) {
         case CompareVerdict::kFail:
-            out += "\nVerdict: FAIL (a method got significantly worse beyond tolerance, or "
-                   "calls failed that did not before)\n";
+            out +=
+                "\nVerdict: FAIL (a method got significantly worse beyond tolerance, or "
+                "calls failed that did not before)\n";
             break;
         case CompareVerdict::kInconclusive:
-            out += "\nUnderpowered (no regression found, but the test could not have found one "
-                   "as large as the tolerance):\n" +
-                   weak +
-                   "\nVerdict: INCONCLUSIVE (use more pairs or a larger --tolerance; exit 3)\n";
+            out +=
+                "\nUnderpowered (no regression found, but the test could not have found one "
+                "as large as the tolerance):\n" +
+                weak + "\nVerdict: INCONCLUSIVE (use more pairs or a larger --tolerance; exit 3)\n";
             break;
         case CompareVerdict::kPass:
             out += "\nVerdict: PASS\n";
@@ -338,9 +338,8 @@ nlohmann::json CompareToJson(const CompareResult& r, const CompareOptions& o) {
                            {"significant", c.significant},
                            {"worse", c.worse},
                            {"tolerance", c.tolerance},
-                           {"detectable", std::isinf(c.detectable)
-                                              ? nlohmann::json(nullptr)
-                                              : nlohmann::json(c.detectable)},
+                           {"detectable", std::isinf(c.detectable) ? nlohmann::json(nullptr)
+                                                                   : nlohmann::json(c.detectable)},
                            {"underpowered", c.underpowered},
                            {"regression", c.regression}});
     }

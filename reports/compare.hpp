@@ -21,7 +21,7 @@ struct CompareOptions {
     /// Error metrics compared (all lower-is-better).
     std::vector<std::string> metrics = {"mae_r", "mae_t", "ccd", "rre", "rte"};
     double alpha = 0.05;  ///< a change is significant when Wilcoxon p < alpha and the CI excludes 0
-    int bootstrap_samples = 2000;    ///< paired-bootstrap resamples of the mean difference
+    int bootstrap_samples = 2000;  ///< paired-bootstrap resamples of the mean difference
     std::uint64_t seed = kDefaultBootstrapSeed;  ///< streams derive from method/metric
     double default_tolerance = 0.0;  ///< allowed mean increase for metrics not in `tolerance`
     /// Per-metric allowed mean increase (metric units); starts at DefaultTolerances().
@@ -73,9 +73,9 @@ struct MetricChange {
 /// Calls of one method, over the matched pairs.
 struct MethodCalls {
     std::string method;
-    std::size_t pairs = 0;        ///< matched pairs
-    std::size_t failed_base = 0;  ///< status != ok in the baseline
-    std::size_t failed_new = 0;   ///< status != ok in the candidate
+    std::size_t pairs = 0;         ///< matched pairs
+    std::size_t failed_base = 0;   ///< status != ok in the baseline
+    std::size_t failed_new = 0;    ///< status != ok in the candidate
     std::size_t new_failures = 0;  ///< ok in the baseline, failed/timeout/crashed in the candidate
 };
 
@@ -86,7 +86,7 @@ struct CompareResult {
     std::size_t new_only = 0;
     std::size_t failures_base = 0;  ///< matched rows with status != ok
     std::size_t failures_new = 0;
-    std::vector<MethodCalls> calls;  ///< per method, baseline order
+    std::vector<MethodCalls> calls;   ///< per method, baseline order
     bool allow_new_failures = false;  ///< copied from the options
     std::size_t min_pairs = 0;        ///< copied from the options
     /// A regression beyond tolerance, or new failed calls while they are not allowed.
@@ -100,8 +100,7 @@ struct CompareResult {
 /// Throws std::runtime_error when the two sets were measured on different pair files (naming
 /// both), when a key repeats inside one set (naming the set), or when nothing matches.
 CompareResult CompareResults(const std::vector<ResultRow>& base,
-                             const std::vector<ResultRow>& candidate,
-                             const CompareOptions& options,
+                             const std::vector<ResultRow>& candidate, const CompareOptions& options,
                              const std::string& base_name = "baseline",
                              const std::string& new_name = "candidate");
 

@@ -98,11 +98,8 @@ void AddColumns(const PaperTableSpec& spec, bool published, Table* t) {
 
 /// The caption (its first sentence, then each side's data), provenance and floor notes of a
 /// paper table; a table the paper lacks (`published` false) has no paper side.
-void DescribeSides(const PaperTableSpec& spec,
-                   const nlohmann::json& pt,
-                   bool published,
-                   const std::vector<ResultSet>& sets,
-                   Table* t) {
+void DescribeSides(const PaperTableSpec& spec, const nlohmann::json& pt, bool published,
+                   const std::vector<ResultSet>& sets, Table* t) {
     // Sets on the same data (an ablation's variants) are described once, naming them all.
     struct Described {
         std::string group, names, data;
@@ -209,10 +206,8 @@ std::string PaperGroupOf(const PaperTableSpec& spec, const std::string& g) {
     return it == spec.paper_group_of.end() ? g : it->second;
 }
 
-double PaperCell(const nlohmann::json& paper,
-                 const std::string& table,
-                 const std::string& paper_row,
-                 const std::string& group,
+double PaperCell(const nlohmann::json& paper, const std::string& table,
+                 const std::string& paper_row, const std::string& group,
                  const std::string& metric) {
     const auto& tables = paper.at("tables");
     if (!tables.contains(table)) return std::nan("");
@@ -235,10 +230,8 @@ double PaperCell(const nlohmann::json& paper,
     return rows.at(paper_row).at(static_cast<std::size_t>(c)).get<double>();
 }
 
-Table BuildPaperTable(const PaperTableSpec& spec,
-                      const std::vector<ResultSet>& sets,
-                      const nlohmann::json& paper,
-                      const PaperTableOptions& o) {
+Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& sets,
+                      const nlohmann::json& paper, const PaperTableOptions& o) {
     Table t;
     t.id = spec.id;
     t.title = spec.title;
@@ -346,10 +339,8 @@ double MeanOrBlank(const std::vector<double>& v) {
 
 }  // namespace
 
-Table BuildTimingTable(const std::vector<ResultSet>& sets,
-                       const nlohmann::json& paper,
-                       const std::string& cpu_model,
-                       const std::string& blas) {
+Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json& paper,
+                       const std::string& cpu_model, const std::string& blas) {
     Table t;
     t.id = "table6_inference_time";
     t.title = "Tab. 6: time per pair";

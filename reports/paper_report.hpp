@@ -50,11 +50,8 @@ const PaperTableSpec& FindPaperTableSpec(const std::string& id);
 
 /// The paper's cell (row as the paper names it, e.g. "CPD"; group and metric as in the spec),
 /// handling the supplementary tables whose rows are metrics; NaN when the paper has none.
-double PaperCell(const nlohmann::json& paper,
-                 const std::string& table,
-                 const std::string& paper_row,
-                 const std::string& group,
-                 const std::string& metric);
+double PaperCell(const nlohmann::json& paper, const std::string& table,
+                 const std::string& paper_row, const std::string& group, const std::string& metric);
 
 /// Options for building a paper table.
 struct PaperTableOptions {
@@ -69,10 +66,8 @@ struct PaperTableOptions {
 /// for every group and metric a measured column (mean ± 95% CI half-width) and the paper's.
 /// The caption names each side's data and the pairing; the notes give each group's
 /// ground-truth CCD floor and any dataset fallback.
-Table BuildPaperTable(const PaperTableSpec& spec,
-                      const std::vector<ResultSet>& sets,
-                      const nlohmann::json& paper,
-                      const PaperTableOptions& options);
+Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& sets,
+                      const nlohmann::json& paper, const PaperTableOptions& options);
 
 /// Tab. 6: mean / median CPU ms per call measured (one thread per call), and for the learned
 /// methods the network's CPU ms, its GMAC, floor ms and x floor (from the rows' extra
@@ -80,10 +75,8 @@ Table BuildPaperTable(const PaperTableSpec& spec,
 /// cloud, threads, beside the paper's ms (their GPU / CPU). A set with a row_label fills a row
 /// of that name (e.g. "OGMM_full_attention", the paper's row). The caption names the CPU
 /// model, `blas` (the classical methods'), the learned rows' BLAS and GEMM rate.
-Table BuildTimingTable(const std::vector<ResultSet>& sets,
-                       const nlohmann::json& paper,
-                       const std::string& cpu_model,
-                       const std::string& blas);
+Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json& paper,
+                       const std::string& cpu_model, const std::string& blas);
 
 /// The CPU model from /proc/cpuinfo ("unknown CPU" when unreadable).
 std::string CpuModel();

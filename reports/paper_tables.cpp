@@ -44,10 +44,8 @@ std::optional<std::string> PaperRowName(const std::string& method) {
     return it->second;
 }
 
-Table PaperComparisonTable(const ReportTable& ours,
-                           const nlohmann::json& paper,
-                           const std::string& table,
-                           const std::string& group) {
+Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
+                           const std::string& table, const std::string& group) {
     const auto& tables = paper.at("tables");
     if (!tables.contains(table)) {
         std::string known;

@@ -24,9 +24,7 @@ std::optional<std::string> PaperRowName(const std::string& method);
 /// beside the paper's cells of `table`, column group `group` ("" for tables without groups),
 /// and the paper's seconds (Tab. 6). The caption names the paper's table, a note our data.
 /// Throws std::invalid_argument listing the valid tables / groups.
-Table PaperComparisonTable(const ReportTable& ours,
-                           const nlohmann::json& paper,
-                           const std::string& table,
-                           const std::string& group);
+Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
+                           const std::string& table, const std::string& group);
 
 }  // namespace regbench

@@ -51,10 +51,8 @@ bool AllFinite(const PairMetrics& m) {
 }
 
 /// Rows of one (method, params) set, sorted by pair.
-MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
-                           const ReportOptions& o,
-                           const std::string& data_key,
-                           std::vector<std::string>* notes) {
+MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOptions& o,
+                           const std::string& data_key, std::vector<std::string>* notes) {
     std::stable_sort(group.begin(), group.end(),
                      [](const ResultRow* a, const ResultRow* b) { return a->pair < b->pair; });
     MethodSummary s;
@@ -130,8 +128,7 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group,
 
 /// Splits one table's rows by (method, params); refuses a (pair, method, params) seen twice.
 std::vector<MethodSummary> SummarizeGroup(const std::vector<const ResultRow*>& rows,
-                                          const ReportOptions& o,
-                                          const std::string& data_key,
+                                          const ReportOptions& o, const std::string& data_key,
                                           std::vector<std::string>* notes) {
     std::vector<std::string> order;
     std::map<std::string, std::vector<const ResultRow*>> by_set;
@@ -270,9 +267,7 @@ Cell Mean(const Estimate& e, std::size_t pairs) {
     return c;
 }
 
-Column Col(const std::string& key,
-           const std::string& header,
-           int decimals,
+Column Col(const std::string& key, const std::string& header, int decimals,
            CiStyle ci = CiStyle::kHidden) {
     return {key, header, CellSource::kMeasured, Better::kNone, decimals, ci};
 }
@@ -289,17 +284,13 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
     t.caption = "Data: " + DescribeTable(rt);
     t.columns = {
-        Col("pairs", "pairs", 0),
-        Col("failed", "failed", 0),
+        Col("pairs", "pairs", 0), Col("failed", "failed", 0),
         MetricCol("mae_r", "mae_r", "mae_r [deg]"),
         // The interval's bounds at 3 decimals, as the documented table has always shown them.
         Col("mae_r.ci95", "mae_r 95% CI", 3, CiStyle::kInterval),
-        MetricCol("mae_t", "mae_t", "mae_t"),
-        MetricCol("ccd", "ccd", "ccd"),
-        MetricCol("rre", "rre", "rre [deg]"),
-        MetricCol("rte", "rte", "rte"),
-        MetricCol("rmse_r", "mse_r", "rmse_r"),
-        MetricCol("rmse_t", "mse_t", "rmse_t"),
+        MetricCol("mae_t", "mae_t", "mae_t"), MetricCol("ccd", "ccd", "ccd"),
+        MetricCol("rre", "rre", "rre [deg]"), MetricCol("rte", "rte", "rte"),
+        MetricCol("rmse_r", "mse_r", "rmse_r"), MetricCol("rmse_t", "mse_t", "rmse_t"),
         Col("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t),
             kFractionDecimals),
         Col("success", fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte),

@@ -28,10 +28,8 @@ double SampleStd(const std::vector<double>& v) {
     return std::sqrt(s / static_cast<double>(v.size() - 1));
 }
 
-std::vector<double> SortedBootstrapMeans(const std::vector<double>& v,
-                                         int samples,
-                                         std::uint64_t seed,
-                                         std::uint64_t stream) {
+std::vector<double> SortedBootstrapMeans(const std::vector<double>& v, int samples,
+                                         std::uint64_t seed, std::uint64_t stream) {
     if (v.size() < 2 || samples < 2) return {};
     auto rng = MakePairRng(seed, stream);
     std::vector<double> means(static_cast<std::size_t>(samples));
@@ -51,11 +49,8 @@ double NearestRankQuantile(const std::vector<double>& sorted, double q) {
     return sorted[static_cast<std::size_t>(std::clamp(at, 0.0, double(sorted.size() - 1)))];
 }
 
-BootstrapCi BootstrapMean(const std::vector<double>& v,
-                          int samples,
-                          std::uint64_t seed,
-                          std::uint64_t stream,
-                          double level) {
+BootstrapCi BootstrapMean(const std::vector<double>& v, int samples, std::uint64_t seed,
+                          std::uint64_t stream, double level) {
     BootstrapCi e;
     e.mean = SampleMean(v);
     e.lo = e.hi = e.mean;

@@ -29,10 +29,8 @@ struct BootstrapCi {
 /// The `samples` means of resamples of `v` drawn with replacement from the stream
 /// (seed, stream), sorted ascending: the bootstrap distribution every CI here is read from.
 /// Empty when `v` has fewer than two values or `samples` < 2.
-std::vector<double> SortedBootstrapMeans(const std::vector<double>& v,
-                                         int samples,
-                                         std::uint64_t seed,
-                                         std::uint64_t stream);
+std::vector<double> SortedBootstrapMeans(const std::vector<double>& v, int samples,
+                                         std::uint64_t seed, std::uint64_t stream);
 
 /// The q-quantile (q in [0, 1]) of ascending values: the value at index q (n - 1) rounded to
 /// the nearest, halves to even (numpy.percentile(v, 100 q, method="nearest")); NaN when empty.
@@ -44,11 +42,8 @@ double NearestRankQuantile(const std::vector<double>& sorted, double q);
 /// q = (1 - level) / 2 and 1 - q. With fewer than two values lo = hi = mean. The stream
 /// should be derived from what is being estimated (StreamId), not from the position in a
 /// table, so a CI does not change when rows are reordered.
-BootstrapCi BootstrapMean(const std::vector<double>& v,
-                          int samples,
-                          std::uint64_t seed,
-                          std::uint64_t stream,
-                          double level = 0.95);
+BootstrapCi BootstrapMean(const std::vector<double>& v, int samples, std::uint64_t seed,
+                          std::uint64_t stream, double level = 0.95);
 
 /// A stable 64-bit stream id for a label such as "cpd/mae_r" (FNV-1a), independent of order.
 std::uint64_t StreamId(const std::string& label);

@@ -4,7 +4,6 @@
 #include <cctype>
 #include <filesystem>
 
-
 namespace regbench {
 
 Normalization FitNormalization(const PointCloud& source, const PointCloud& target) {
@@ -28,11 +27,8 @@ Transform Denormalize(const Transform& T_normalized, const Normalization& n) {
     return T;
 }
 
-AlignResult AlignClouds(RegistrationMethod& method,
-                        const PointCloud& source,
-                        const PointCloud& target,
-                        bool normalize,
-                        const AlignContext& context) {
+AlignResult AlignClouds(RegistrationMethod& method, const PointCloud& source,
+                        const PointCloud& target, bool normalize, const AlignContext& context) {
     if (!normalize) return method.Align(source, target, context);
     const Normalization n = FitNormalization(source, target);
     AlignResult r = method.Align(Normalize(source, n), Normalize(target, n), context);

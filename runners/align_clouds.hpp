@@ -25,10 +25,7 @@ Transform Denormalize(const Transform& T_normalized, const Normalization& n);
 
 /// Runs `method` on the clouds (normalised first when `normalize`); the result's transform is
 /// in the clouds' own frame either way.
-AlignResult AlignClouds(RegistrationMethod& method,
-                        const PointCloud& source,
-                        const PointCloud& target,
-                        bool normalize,
-                        const AlignContext& context);
+AlignResult AlignClouds(RegistrationMethod& method, const PointCloud& source,
+                        const PointCloud& target, bool normalize, const AlignContext& context);
 
 }  // namespace regbench

@@ -66,8 +66,7 @@ void CopyBounded(char* dst, std::size_t cap, const std::string& src) {
 }  // namespace
 
 InterruptNotice::InterruptNotice(const std::atomic<std::size_t>* rows_safe,
-                                 const std::string& part_path,
-                                 const std::string& resume_command) {
+                                 const std::string& part_path, const std::string& resume_command) {
     if (g_installed) throw std::logic_error("InterruptNotice: one at a time");
     g_rows_safe = rows_safe;
     CopyBounded(g_part_path, sizeof(g_part_path), part_path);

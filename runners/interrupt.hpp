@@ -14,8 +14,7 @@ namespace regbench {
 /// handlers are restored by the destructor.
 class InterruptNotice {
 public:
-    InterruptNotice(const std::atomic<std::size_t>* rows_safe,
-                    const std::string& part_path,
+    InterruptNotice(const std::atomic<std::size_t>* rows_safe, const std::string& part_path,
                     const std::string& resume_command);
     ~InterruptNotice();
     InterruptNotice(const InterruptNotice&) = delete;

@@ -62,12 +62,8 @@ Status StatusOf(const AlignResult& r) {
     return r.status == AlignStatus::kOk ? Status::kOk : Status::kFailed;
 }
 
-CallOutcome AlignIsolated(RegistrationMethod& method,
-                          const Pair& pair,
-                          const AlignContext& context,
-                          double timeout,
-                          int threads,
-                          const ForkHooks& hooks) {
+CallOutcome AlignIsolated(RegistrationMethod& method, const Pair& pair, const AlignContext& context,
+                          double timeout, int threads, const ForkHooks& hooks) {
     int fds[2];
     if (pipe(fds) != 0)
         return Failure(Status::kFailed, "pipe() failed: " + std::string(strerror(errno)), 0);
@@ -167,8 +163,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method,
     }
 }
 
-CallOutcome AlignInProcess(RegistrationMethod& method,
-                           const Pair& pair,
+CallOutcome AlignInProcess(RegistrationMethod& method, const Pair& pair,
                            const AlignContext& context) {
     CallOutcome out;
     out.result = method.Align(pair.source, pair.target, context);

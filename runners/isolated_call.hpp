@@ -28,19 +28,14 @@ struct ForkHooks {
 };
 
 /// Calls method.Align on the pair in this process (a crash here ends the run).
-CallOutcome AlignInProcess(RegistrationMethod& method,
-                           const Pair& pair,
+CallOutcome AlignInProcess(RegistrationMethod& method, const Pair& pair,
                            const AlignContext& context);
 
 /// Runs Align in a forked child with `threads` OpenMP threads. The child sends the result as
 /// JSON through a pipe and dies with the parent (no orphan keeps computing). The parent kills
 /// it after `timeout` seconds (status kTimeout); a child killed by a signal or exiting without
 /// a result gives kCrashed. Failures carry the reason in result.message.
-CallOutcome AlignIsolated(RegistrationMethod& method,
-                          const Pair& pair,
-                          const AlignContext& context,
-                          double timeout,
-                          int threads,
-                          const ForkHooks& hooks = {});
+CallOutcome AlignIsolated(RegistrationMethod& method, const Pair& pair, const AlignContext& context,
+                          double timeout, int threads, const ForkHooks& hooks = {});
 
 }  // namespace regbench

@@ -25,8 +25,7 @@ struct Located {
 
 /// Adds the rows of one shard file to `rows`, every line checked; no torn line is forgiven
 /// here: a shard that did not finish has no final file to merge.
-void AddRows(const std::string& path,
-             const RowExpectation& expect,
+void AddRows(const std::string& path, const RowExpectation& expect,
              const std::map<std::string, std::size_t>& method_index,
              std::map<RowKey, Located>* rows) {
     ForEachJsonlLine(

@@ -21,8 +21,8 @@ namespace regbench {
 
 const std::vector<MethodInfo>& AllMethods() {
     static const std::vector<MethodInfo> methods = {
-        IdentityMethodInfo(), IcpMethodInfo(),       IcpPlMethodInfo(), FgrMethodInfo(),
-        GicpMethodInfo(),     NdtMethodInfo(),       CpdMethodInfo(),   GmmRegMethodInfo(),
+        IdentityMethodInfo(), IcpMethodInfo(),       IcpPlMethodInfo(),   FgrMethodInfo(),
+        GicpMethodInfo(),     NdtMethodInfo(),       CpdMethodInfo(),     GmmRegMethodInfo(),
         SvrMethodInfo(),      FilterRegMethodInfo(),
 #ifdef REGBENCH_HAVE_LEARNED
         OgmmMethodInfo(),     OgmmNoIcpMethodInfo(), DeepGmrMethodInfo(), DeepGmrNoIcpMethodInfo(),
@@ -52,8 +52,8 @@ CostClass MethodCost(const std::string& name, const nlohmann::json& params) {
                    ? params[key].get<std::string>()
                    : std::string("auto");
     };
-    if (name == "cpd") return mode("e_step") == "dense" ? CostClass::kQuadratic
-                                                        : CostClass::kNearLinear;
+    if (name == "cpd")
+        return mode("e_step") == "dense" ? CostClass::kQuadratic : CostClass::kNearLinear;
     if (name == "gmmreg" || name == "svr") {
         return mode("kernel_sums") == "dense" ? CostClass::kQuadratic : CostClass::kNearLinear;
     }

@@ -234,8 +234,7 @@ std::string ToJsonLine(const ResultRow& row) {
 }
 
 void ForEachJsonlLine(
-    const std::string& path,
-    TornLastLine torn,
+    const std::string& path, TornLastLine torn,
     const std::function<void(const std::string& where, const nlohmann::json& value)>& visit) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open results file");
@@ -283,8 +282,7 @@ std::vector<ResultRow> ReadResultRows(const std::string& path) {
     return rows;
 }
 
-void WriteResultRows(const std::string& path,
-                     const std::vector<ResultRow>& rows,
+void WriteResultRows(const std::string& path, const std::vector<ResultRow>& rows,
                      const std::vector<std::string>& inputs) {
     std::string text;
     for (const auto& r : rows) text += ToJsonLine(r) + "\n";

@@ -34,8 +34,8 @@ struct DataTag {
     std::string dataset = "unknown";
     std::string protocol = "unknown";
     std::string pairing = "unknown";
-    nlohmann::json seed;       ///< generation seed (null when unknown)
-    std::string content_hash;  ///< hash of the pair file's arrays; empty in old rows
+    nlohmann::json seed;         ///< generation seed (null when unknown)
+    std::string content_hash;    ///< hash of the pair file's arrays; empty in old rows
     std::string dataset_sha256;  ///< sha256 of the dataset file it came from (a single .h5 etc.)
 };
 void to_json(nlohmann::json& j, const DataTag& d);
@@ -106,8 +106,7 @@ enum class TornLastLine {
 /// visit(where, value) for each non-blank line in order, `where` being "path:line". Throws
 /// "path: cannot open results file" or "where: not JSON: ..." (see TornLastLine).
 void ForEachJsonlLine(
-    const std::string& path,
-    TornLastLine torn,
+    const std::string& path, TornLastLine torn,
     const std::function<void(const std::string& where, const nlohmann::json& value)>& visit);
 
 /// Reads a JSONL file of objects (blank lines skipped). Throws naming file and line.
@@ -118,8 +117,7 @@ std::vector<ResultRow> ReadResultRows(const std::string& path);
 /// Writes rows (one per line) to path atomically and checked (core/atomic_file): readers never
 /// see half a file, a write error (full disk, file-size limit) throws naming the path, and
 /// `inputs` (the files the rows came from) are never replaced.
-void WriteResultRows(const std::string& path,
-                     const std::vector<ResultRow>& rows,
+void WriteResultRows(const std::string& path, const std::vector<ResultRow>& rows,
                      const std::vector<std::string>& inputs = {});
 
 }  // namespace regbench

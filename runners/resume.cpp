@@ -50,8 +50,7 @@ void CheckRequiredFields(const nlohmann::json& row, const std::string& where) {
 
 }  // namespace
 
-ResultRow CheckResultRow(const nlohmann::json& json,
-                         const RowExpectation& expect,
+ResultRow CheckResultRow(const nlohmann::json& json, const RowExpectation& expect,
                          const std::string& where) {
     CheckRequiredFields(json, where);
     ResultRow row;

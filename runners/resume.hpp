@@ -27,8 +27,7 @@ struct RowExpectation {
 /// status a run writes (ok, failed, timeout, crashed), a pair of this file and shard, a listed
 /// method with the same resolved parameters, the same pair content hash. Returns the typed row
 /// (origin = where). Throws std::runtime_error starting with `where`.
-ResultRow CheckResultRow(const nlohmann::json& row,
-                         const RowExpectation& expect,
+ResultRow CheckResultRow(const nlohmann::json& row, const RowExpectation& expect,
                          const std::string& where);
 
 /// Reads rows of an interrupted or finished run for --resume: each line is checked with

@@ -117,8 +117,7 @@ private:
 /// A number the method's option field cannot hold exactly (2.5 or -1 into an iteration count,
 /// 1e23 into an int) is truncated or wrapped by the JSON binding: compare each given number
 /// with the value the method kept and refuse any difference.
-void RequireExactNumbers(const std::string& method,
-                         const nlohmann::json& given,
+void RequireExactNumbers(const std::string& method, const nlohmann::json& given,
                          const nlohmann::json& kept) {
     if (!given.is_object()) return;
     for (const auto& item : given.items()) {
@@ -177,11 +176,8 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
     return specs;
 }
 
-ResultRow MakeResultRow(std::size_t pair_index,
-                        const Pair& pair,
-                        const MethodSpec& method,
-                        const AlignResult& result,
-                        const RowContext& context) {
+ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSpec& method,
+                        const AlignResult& result, const RowContext& context) {
     ResultRow row;
     row.pair = pair_index;
     row.method = method.name;
@@ -342,9 +338,7 @@ void CheckRowSettings(const ResultRow& r, const RunOptions& options, const PairS
 
 /// Reads the kept rows of an interrupted run (its .part file, else the finished output).
 /// Every kept row is checked against this run; a foreign row is refused, never mixed.
-Resumed LoadResume(const RunOptions& options,
-                   const PairSet& set,
-                   const std::string& part_path,
+Resumed LoadResume(const RunOptions& options, const PairSet& set, const std::string& part_path,
                    const RowExpectation& expect) {
     Resumed resumed;
     if (!options.resume) return resumed;
@@ -391,9 +385,7 @@ struct RunState {
 };
 
 /// One (pair, method) call, isolated when a timeout is set, turned into its row.
-ResultRow RunCall(const RunPlan& plan,
-                  RegistrationMethod& method,
-                  const MethodSpec& spec,
+ResultRow RunCall(const RunPlan& plan, RegistrationMethod& method, const MethodSpec& spec,
                   const AlignContext& context) {
     const RunOptions& options = plan.options;
     const std::size_t k = context.pair_index;
@@ -402,8 +394,8 @@ ResultRow RunCall(const RunPlan& plan,
     // pair; metrics still compare against the full pair.
     nlohmann::json downsampled;
     const ExternalMethod* external = FindExternal(options, spec.name);
-    const bool reduce =
-        options.downsample && external == nullptr && NeedsScaleGuard(spec, pair, options.max_points);
+    const bool reduce = options.downsample && external == nullptr &&
+                        NeedsScaleGuard(spec, pair, options.max_points);
     const Pair reduced =
         reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
     const Pair& input = reduce ? reduced : pair;
@@ -482,8 +474,7 @@ void RunWorkers(const RunPlan& plan, RunState& state) {
 
 /// The final file: rows sorted by (pair, method order), so its order does not depend on
 /// --jobs; written atomically, then the .part file is removed.
-void WriteSortedRows(const RunOptions& options,
-                     const std::string& part_path,
+void WriteSortedRows(const RunOptions& options, const std::string& part_path,
                      const RowExpectation& expect) {
     std::vector<ResultRow> all = ReadResumableRows(part_path, expect);
     std::map<std::string, std::size_t> order;

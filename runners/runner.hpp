@@ -42,11 +42,8 @@ struct RowContext {
 
 /// One result row: the call's outcome plus the metrics against the pair's T_gt (computed after
 /// the timed call). `run` and `score` both build rows here, so their schemas cannot drift.
-ResultRow MakeResultRow(std::size_t pair_index,
-                        const Pair& pair,
-                        const MethodSpec& method,
-                        const AlignResult& result,
-                        const RowContext& context);
+ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSpec& method,
+                        const AlignResult& result, const RowContext& context);
 
 /// The `data` tag of rows computed on `set` read from `pairs_path`.
 DataTag DataTagOf(const std::string& pairs_path, const PairSet& set);

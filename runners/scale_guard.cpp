@@ -12,10 +12,8 @@ namespace {
 std::size_t Points(const PointCloud& c) { return static_cast<std::size_t>(c.rows()); }
 
 /// Evenly spaced rows floor(i * n / k) of a cloud and its labels.
-void Stride(const PointCloud& in,
-            const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels,
-            std::size_t k,
-            PointCloud* out,
+void Stride(const PointCloud& in, const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>& labels,
+            std::size_t k, PointCloud* out,
             Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>* out_labels) {
     const std::size_t n = Points(in);
     out->resize(static_cast<Eigen::Index>(k), 3);
@@ -34,10 +32,8 @@ bool NeedsScaleGuard(const MethodSpec& method, const Pair& pair, std::size_t max
            std::max(Points(pair.source), Points(pair.target)) > max_points;
 }
 
-std::string CheckScale(const PairSet& set,
-                       const std::vector<std::size_t>& indices,
-                       const std::vector<MethodSpec>& methods,
-                       std::size_t max_points,
+std::string CheckScale(const PairSet& set, const std::vector<std::size_t>& indices,
+                       const std::vector<MethodSpec>& methods, std::size_t max_points,
                        bool downsample) {
     std::string report;
     for (const auto& spec : methods) {
@@ -57,12 +53,13 @@ std::string CheckScale(const PairSet& set,
         if (affected == 0) continue;
         const Pair& w = set.pairs[worst_pair];
         char line[512];
-        std::snprintf(line, sizeof(line),
-                      "%s (dense) is O(N*M): %zu pair(s) have a cloud above --max-points %zu; the largest, "
-                      "pair %zu, is %zu x %zu points = %.3g kernel evaluations per iteration "
-                      "(%.2gx a 10,000-point pair, which takes CPD ~4.5 s on one thread)",
-                      spec.name.c_str(), affected, max_points, worst_pair, Points(w.source),
-                      Points(w.target), worst, worst / 1e8);
+        std::snprintf(
+            line, sizeof(line),
+            "%s (dense) is O(N*M): %zu pair(s) have a cloud above --max-points %zu; the largest, "
+            "pair %zu, is %zu x %zu points = %.3g kernel evaluations per iteration "
+            "(%.2gx a 10,000-point pair, which takes CPD ~4.5 s on one thread)",
+            spec.name.c_str(), affected, max_points, worst_pair, Points(w.source), Points(w.target),
+            worst, worst / 1e8);
         report += std::string(line) + "\n";
     }
     if (report.empty()) return report;

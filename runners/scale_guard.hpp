@@ -24,10 +24,8 @@ bool NeedsScaleGuard(const MethodSpec& method, const Pair& pair, std::size_t max
 /// Checks every (pair, method) call of the run. Refuses (std::runtime_error with the expected
 /// cost: pairs affected, largest N x M) unless `downsample`; with it, returns the notice that
 /// says which calls will be downsampled (empty when none).
-std::string CheckScale(const PairSet& set,
-                       const std::vector<std::size_t>& indices,
-                       const std::vector<MethodSpec>& methods,
-                       std::size_t max_points,
+std::string CheckScale(const PairSet& set, const std::vector<std::size_t>& indices,
+                       const std::vector<MethodSpec>& methods, std::size_t max_points,
                        bool downsample);
 
 /// The recorded rule: keeps points floor(i * n / max_points), i = 0 .. max_points-1, of each

@@ -67,8 +67,7 @@ std::size_t CheckedPair(double value, std::size_t num_pairs, const std::string& 
         // %.17g reports the index as written (1e300 was cast to -9223372036854775808).
         char text[64];
         std::snprintf(text, sizeof(text), "%.17g", value);
-        throw std::runtime_error(where + ": pair " + text +
-                                 " is out of range (the pair file has " +
+        throw std::runtime_error(where + ": pair " + text + " is out of range (the pair file has " +
                                  std::to_string(num_pairs) + " pairs, 0.." +
                                  std::to_string(num_pairs - 1) + ")");
     }
@@ -76,11 +75,8 @@ std::size_t CheckedPair(double value, std::size_t num_pairs, const std::string& 
 }
 
 /// Parses one JSONL line; false when it belongs to another method (rescoring a results file).
-bool ParseJsonLine(const std::string& line,
-                   const std::string& where,
-                   std::size_t num_pairs,
-                   const std::string& method,
-                   ExternalTransform* out) {
+bool ParseJsonLine(const std::string& line, const std::string& where, std::size_t num_pairs,
+                   const std::string& method, ExternalTransform* out) {
     nlohmann::json j;
     try {
         j = ParseJsonBounded(line, where);
@@ -101,8 +97,8 @@ bool ParseJsonLine(const std::string& line,
     }
     if (j.contains("content_hash") && j["content_hash"].is_string()) {
         out->content_hash = j["content_hash"].get<std::string>();
-    } else if (j.contains("data") && j["data"].is_object() &&
-               j["data"].contains("content_hash") && j["data"]["content_hash"].is_string()) {
+    } else if (j.contains("data") && j["data"].is_object() && j["data"].contains("content_hash") &&
+               j["data"]["content_hash"].is_string()) {
         out->content_hash = j["data"]["content_hash"].get<std::string>();  // a result row
     }
     if (j.contains("seconds") && !j["seconds"].is_null()) {
@@ -113,9 +109,7 @@ bool ParseJsonLine(const std::string& line,
 }
 
 /// Parses one CSV line: pair, the 12 entries of the top 3 rows, optional seconds.
-void ParseCsvLine(const std::string& line,
-                  const std::string& where,
-                  std::size_t num_pairs,
+void ParseCsvLine(const std::string& line, const std::string& where, std::size_t num_pairs,
                   ExternalTransform* out) {
     std::vector<double> v;
     std::stringstream ss(line);
@@ -145,10 +139,8 @@ void ParseCsvLine(const std::string& line,
 
 }  // namespace
 
-std::vector<ExternalTransform> ReadTransforms(const std::string& path,
-                                              std::size_t num_pairs,
-                                              const std::string& method,
-                                              double rigid_tolerance,
+std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size_t num_pairs,
+                                              const std::string& method, double rigid_tolerance,
                                               bool allow_scale) {
     const bool csv = EndsWith(path, ".csv");
     if (!csv && !EndsWith(path, ".jsonl") && !EndsWith(path, ".json")) {
@@ -227,8 +219,9 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     // Transforms computed on other pairs would be scored against the wrong ground truth.
     for (const auto& t : given) {
         if (!t.content_hash.empty() && t.content_hash != context.data.content_hash) {
-            throw std::runtime_error(t.origin + ": the transform was computed on the pair file "
-                                                "with content hash " +
+            throw std::runtime_error(t.origin +
+                                     ": the transform was computed on the pair file "
+                                     "with content hash " +
                                      t.content_hash + ", not on " + o.pairs_path + " (" +
                                      context.data.content_hash +
                                      "); score it against the pair file it was computed on");

@@ -48,10 +48,8 @@ struct ExternalTransform {
 /// row-major; an optional header line starting with "pair"). Throws std::runtime_error naming
 /// file:line for a malformed line, a pair index outside [0, num_pairs), a pair given twice or
 /// a matrix that is not rigid (a similarity with `allow_scale`) within `rigid_tolerance`.
-std::vector<ExternalTransform> ReadTransforms(const std::string& path,
-                                              std::size_t num_pairs,
-                                              const std::string& method,
-                                              double rigid_tolerance,
+std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size_t num_pairs,
+                                              const std::string& method, double rigid_tolerance,
                                               bool allow_scale = false);
 
 struct ScoreSummary {

@@ -22,10 +22,8 @@ void BM_Cpd(benchmark::State& state, const nlohmann::json& params) {
 
 /// Registers BM_Cpd/<name> with `params` at each (points, threads) of `args`, in milliseconds
 /// of real time; `once`: a single iteration (the large clouds).
-void RegisterCpd(const std::string& name,
-                 const nlohmann::json& params,
-                 const std::vector<std::vector<int64_t>>& args,
-                 bool once) {
+void RegisterCpd(const std::string& name, const nlohmann::json& params,
+                 const std::vector<std::vector<int64_t>>& args, bool once) {
     auto* b = benchmark::RegisterBenchmark(("BM_Cpd/" + name).c_str(), BM_Cpd, params);
     for (const auto& a : args) b->Args(a);
     b->ArgNames({"points", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();

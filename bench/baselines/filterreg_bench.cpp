@@ -46,8 +46,7 @@ BENCHMARK_CAPTURE(BM_FilterReg, compat_none, std::string(R"({"compat": "none"})"
     ->ArgsProduct({{717, 2048, 10000}, {1, 2}})
     ->ArgNames({"points", "threads"})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FilterReg,
-                  exact_compat_none,
+BENCHMARK_CAPTURE(BM_FilterReg, exact_compat_none,
                   std::string(R"({"compat": "none", "estimator": "exact"})"))
     ->ArgsProduct({{717, 2048}, {1, 2}})
     ->ArgNames({"points", "threads"})

@@ -81,9 +81,7 @@ void BM_GmmL2Evaluation(benchmark::State& state) {
 
 BENCHMARK_CAPTURE(BM_L2Align, gmmreg, std::string("gmmreg"), std::string("{}"))->REGBENCH_L2_SIZES;
 // Point features cost O(M N) per evaluation: 10k-point pairs would take several seconds.
-BENCHMARK_CAPTURE(BM_L2Align,
-                  gmmreg_correct,
-                  std::string("gmmreg"),
+BENCHMARK_CAPTURE(BM_L2Align, gmmreg_correct, std::string("gmmreg"),
                   std::string(R"({"compat": "correct"})"))
     ->Args({717, 1})
     ->Args({717, 2})
@@ -91,15 +89,11 @@ BENCHMARK_CAPTURE(BM_L2Align,
     ->Args({2048, 2})
     ->ArgNames({"points", "threads"})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_L2Align,
-                  gmmreg_correct_sklearn,
-                  std::string("gmmreg"),
+BENCHMARK_CAPTURE(BM_L2Align, gmmreg_correct_sklearn, std::string("gmmreg"),
                   std::string(R"({"compat": "correct", "gmm": "sklearn"})"))
     ->REGBENCH_L2_SIZES;
 BENCHMARK_CAPTURE(BM_L2Align, svr, std::string("svr"), std::string("{}"))->REGBENCH_L2_SIZES;
-BENCHMARK_CAPTURE(BM_L2Align,
-                  svr_correct,
-                  std::string("svr"),
+BENCHMARK_CAPTURE(BM_L2Align, svr_correct, std::string("svr"),
                   std::string(R"({"compat": "correct"})"))
     ->REGBENCH_L2_SIZES;
 BENCHMARK(BM_SphericalGmmFit)->REGBENCH_L2_SIZES;

@@ -44,8 +44,7 @@ inline void ReportAlign(benchmark::State& state, const BenchPair& pair, const Al
 /// The timed loop of the probabilistic-method benchmarks: aligns `pair` with `method` on
 /// state.range(1) OpenMP threads (restored afterwards), sets ReportAlign's counters and returns
 /// the last result.
-inline AlignResult TimeAlign(benchmark::State& state,
-                             RegistrationMethod& method,
+inline AlignResult TimeAlign(benchmark::State& state, RegistrationMethod& method,
                              const BenchPair& pair) {
     const int threads = static_cast<int>(state.range(1));
     const int saved = omp_get_max_threads();

@@ -97,9 +97,7 @@ Summary Summarise(std::vector<double> values) {
     return s;
 }
 
-void Report(benchmark::State& state,
-            const std::string& prefix,
-            const Summary& s,
+void Report(benchmark::State& state, const std::string& prefix, const Summary& s,
             std::string& label) {
     state.counters[prefix + "_mean"] = s.mean;
     state.counters[prefix + "_min"] = s.min;

@@ -78,8 +78,7 @@ void TimeAgainstGemm(benchmark::State& state, double macs, Work&& work) {
 }
 
 /// Forward of one pair of state.range(0) points.
-void TimeForward(benchmark::State& state,
-                 ogmm::RegistrationNet& net,
+void TimeForward(benchmark::State& state, ogmm::RegistrationNet& net,
                  const nlohmann::json& config) {
     net.eval();
     const int64_t points = state.range(0);
@@ -95,8 +94,7 @@ void TimeForward(benchmark::State& state,
 }
 
 /// One training step (train mode, Adam) on kTrainBatch pairs of state.range(0) points.
-void TimeTrainStep(benchmark::State& state,
-                   ogmm::RegistrationNet& net,
+void TimeTrainStep(benchmark::State& state, ogmm::RegistrationNet& net,
                    const nlohmann::json& config) {
     net.train();
     const int64_t points = state.range(0);
@@ -120,8 +118,7 @@ nlohmann::json OgmmConfig(const std::string& name, const std::string& attention)
     return config;
 }
 
-void BM_OgmmForward(benchmark::State& state,
-                    const std::string& name,
+void BM_OgmmForward(benchmark::State& state, const std::string& name,
                     const std::string& attention) {
     torch::set_num_threads(static_cast<int>(state.range(1)));
     const nlohmann::json config = OgmmConfig(name, attention);
@@ -182,8 +179,8 @@ const bool kRegistered = [] {
     }
     Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,
                                            std::string("ogmm-small")));
-    Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small",
-                                           BM_DeepGmrTrainStep, std::string("deepgmr-small")));
+    Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small", BM_DeepGmrTrainStep,
+                                           std::string("deepgmr-small")));
     return true;
 }();
 

@@ -12,18 +12,17 @@
 // the GEMM floor (ogmm/cost MACs, 3x the forward's for a training step, at the rate of a
 // 717x512x512 fp32 torch::mm timed interleaved with the work, about 1 GEMM second per 4 work
 // seconds), the ratio to it, pairs per CPU second and the minor page faults per repetition.
+#include <sys/resource.h>
 #include <torch/csrc/autograd/profiler_legacy.h>
 #include <torch/torch.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <sys/resource.h>
 
 #include "core/cpu_time.hpp"
 #include "ogmm/cost.hpp"
@@ -74,8 +73,8 @@ void Print(const std::map<std::string, Totals>& totals, int repetitions) {
               [](const auto& a, const auto& b) { return a.second.self_us > b.second.self_us; });
     double all_self = 0.0;
     for (const auto& [name, t] : rows) all_self += t.self_us;
-    std::printf("%-44s %8s %12s %8s %12s\n", "name (per repetition)", "calls", "self ms",
-                "self %", "incl. ms");
+    std::printf("%-44s %8s %12s %8s %12s\n", "name (per repetition)", "calls", "self ms", "self %",
+                "incl. ms");
     for (const auto& [name, t] : rows) {
         if (t.self_us < 0.002 * all_self && name.rfind("ogmm::", 0) != 0 &&
             name.rfind("deepgmr::", 0) != 0) {
@@ -111,8 +110,8 @@ int main(int argc, char** argv) {
     // A training step runs with the allocator setting `regbench train` uses; REGBENCH_MALLOC=
     // default keeps glibc's (for A/B runs).
     const char* malloc_mode = std::getenv("REGBENCH_MALLOC");
-    const bool retain = mode == "train" &&
-                        !(malloc_mode != nullptr && std::string(malloc_mode) == "default");
+    const bool retain =
+        mode == "train" && !(malloc_mode != nullptr && std::string(malloc_mode) == "default");
     if (retain) regbench::ogmm::RetainFreedMemoryForTraining();
     torch::manual_seed(0);
     const nlohmann::json config = regbench::ogmm::NamedConfig(name);
@@ -166,17 +165,18 @@ int main(int argc, char** argv) {
         const double rate = static_cast<double>(gemms) * 717.0 * 512.0 * 512.0 / gemm;
         const double forward_macs =
             static_cast<double>(regbench::ogmm::ComputeForwardCost(config, points, points).total);
-        const double macs = (mode == "train" ? 3.0 : 1.0) * forward_macs * static_cast<double>(batch);
+        const double macs =
+            (mode == "train" ? 3.0 : 1.0) * forward_macs * static_cast<double>(batch);
         const double per = work / repetitions;
-        std::printf("%s %s: %lld points, batch %lld, 1 thread, %d repetitions%s\n",
-                    name.c_str(), full_mode.c_str(), static_cast<long long>(points),
+        std::printf("%s %s: %lld points, batch %lld, 1 thread, %d repetitions%s\n", name.c_str(),
+                    full_mode.c_str(), static_cast<long long>(points),
                     static_cast<long long>(batch), repetitions,
                     retain ? ", freed memory retained (as regbench train)" : "");
-        std::printf("cpu_s %.4f  GMAC %.3f  GMAC_per_s %.2f  floor_s %.4f  ratio %.3f  "
-                    "pairs_per_cpu_s %.3f  minflt %.0f\n",
-                    per, macs * 1e-9, rate * 1e-9, macs / rate, per / (macs / rate),
-                    static_cast<double>(batch) / per,
-                    static_cast<double>(faults) / repetitions);
+        std::printf(
+            "cpu_s %.4f  GMAC %.3f  GMAC_per_s %.2f  floor_s %.4f  ratio %.3f  "
+            "pairs_per_cpu_s %.3f  minflt %.0f\n",
+            per, macs * 1e-9, rate * 1e-9, macs / rate, per / (macs / rate),
+            static_cast<double>(batch) / per, static_cast<double>(faults) / repetitions);
         return 0;
     }
     profiler::thread_event_lists events;

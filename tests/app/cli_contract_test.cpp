@@ -74,9 +74,9 @@ TEST(CliContract, CompareFailsWhenEveryCandidateCallFailed) {
     const CliResult r = RunCli("compare " + base.string() + " " + bad.string());
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("Verdict: FAIL"), std::string::npos) << r.output;
-    EXPECT_EQ(RunCli("compare " + base.string() + " " + bad.string() + " --allow-new-failures")
-                  .exit_code,
-              3);  // 2 pairs cannot reach p < 0.05 (2 / 2^2 = 0.5): inconclusive, never PASS
+    EXPECT_EQ(
+        RunCli("compare " + base.string() + " " + bad.string() + " --allow-new-failures").exit_code,
+        3);  // 2 pairs cannot reach p < 0.05 (2 / 2^2 = 0.5): inconclusive, never PASS
 }
 
 TEST(CliContract, CompareOnFivePairsIsInconclusive) {
@@ -94,18 +94,16 @@ TEST(CliContract, CompareOnFivePairsIsInconclusive) {
 TEST(CliContract, UsageErrorsExitTwoWithOneLine) {
     const fs::path base = Dir() / "base_usage.jsonl";
     WriteRows(base, 6, 0.0, Status::kOk);
-    ExpectUsageError(RunCli("compare " + base.string() + " " + base.string() +
-                            " --tolerance mae_x=1"),
-                     "mae_x");
+    ExpectUsageError(
+        RunCli("compare " + base.string() + " " + base.string() + " --tolerance mae_x=1"), "mae_x");
     ExpectUsageError(RunCli("compare " + base.string() + " " + base.string() + " --alpha 2"),
                      "--alpha");
     ExpectUsageError(RunCli("run --pairs x.h5 --methods identity --out y.jsonl --jobs 0"),
                      "--jobs");
     ExpectUsageError(RunCli("run --pairs x.h5 --methods identity --out y.jsonl --shard 2/2"),
                      "--shard");
-    ExpectUsageError(
-        RunCli("compare " + base.string() + " " + base.string() + " --no-such-flag"),
-        "--no-such-flag");
+    ExpectUsageError(RunCli("compare " + base.string() + " " + base.string() + " --no-such-flag"),
+                     "--no-such-flag");
     // reproduce refuses --jobs 0 before it generates any pair file.
     const fs::path out = Dir() / "reproduce_jobs0";
     fs::remove_all(out);
@@ -113,17 +111,16 @@ TEST(CliContract, UsageErrorsExitTwoWithOneLine) {
     EXPECT_FALSE(fs::exists(out));
     // An unknown dataset is a refusal of input naming every built-in name (issue 26: the
     // message left out indoor-sim).
-    const CliResult dataset =
-        RunCli("generate --protocol partial --dataset nosuch --split test --pairs 1 --seed 1 "
-               "--out " +
-               (Dir() / "nosuch.h5").string());
+    const CliResult dataset = RunCli(
+        "generate --protocol partial --dataset nosuch --split test --pairs 1 --seed 1 "
+        "--out " +
+        (Dir() / "nosuch.h5").string());
     EXPECT_EQ(dataset.exit_code, 1) << dataset.output;
     EXPECT_NE(dataset.output.find("cgal, procedural; indoor-sim"), std::string::npos)
         << dataset.output;
     // A refusal of input (a missing file) is exit 1.
-    EXPECT_EQ(RunCli("compare " + (Dir() / "missing.jsonl").string() + " " + base.string())
-                  .exit_code,
-              1);
+    EXPECT_EQ(
+        RunCli("compare " + (Dir() / "missing.jsonl").string() + " " + base.string()).exit_code, 1);
 }
 
 // README command 1 failed in a fresh clone: `reproduce --out out/reproduce` stopped with
@@ -136,7 +133,8 @@ TEST(CliContract, FolderOutputsCreateTheirMissingParents) {
     fs::create_directories(dir);
     const fs::path pairs = dir / "pairs.h5";
     ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 1 "
-                     "--seed 1 --out " + pairs.string())
+                     "--seed 1 --out " +
+                     pairs.string())
                   .exit_code,
               0);
     const CliResult exported =
@@ -148,9 +146,9 @@ TEST(CliContract, FolderOutputsCreateTheirMissingParents) {
                (dir / "c/d/rep").string());
     EXPECT_EQ(reproduced.exit_code, 0) << reproduced.output;
     EXPECT_TRUE(fs::exists(dir / "c/d/rep/tables.md")) << reproduced.output;
-    const CliResult one_file = RunCli("run --pairs " + pairs.string() +
-                                      " --methods identity -q --out " +
-                                      (dir / "e/f/run.jsonl").string());
+    const CliResult one_file =
+        RunCli("run --pairs " + pairs.string() + " --methods identity -q --out " +
+               (dir / "e/f/run.jsonl").string());
     EXPECT_EQ(one_file.exit_code, 1) << one_file.output;
     EXPECT_NE(one_file.output.find("does not exist"), std::string::npos) << one_file.output;
     EXPECT_FALSE(fs::exists(dir / "e")) << one_file.output;
@@ -223,8 +221,7 @@ TEST(CliContract, ReportPaperInEveryFormatAndNoMixedSubsets) {
     EXPECT_EQ(csv.exit_code, 0) << csv.output;
     // One record per cell, as every table's CSV (reports/table.hpp).
     const std::string table = "paper:table1_modelnet_partial:same_category,icp,";
-    EXPECT_NE(csv.output.find(table + "pairs,pairs,measured,4,"), std::string::npos)
-        << csv.output;
+    EXPECT_NE(csv.output.find(table + "pairs,pairs,measured,4,"), std::string::npos) << csv.output;
     EXPECT_NE(csv.output.find(table + "paper:mae_r,paper mae_r,paper,10.333,"), std::string::npos)
         << csv.output;
     for (const char* format : {"json", "latex", "md"}) {

@@ -11,9 +11,9 @@
 #include <tuple>
 #include <vector>
 
-#include "tests/testing/hostile_pair_files.hpp"
 #include "tests/testing/cli.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/hostile_pair_files.hpp"
 
 namespace regbench {
 namespace {

@@ -43,11 +43,8 @@ void WriteXyz(const fs::path& path, int n, double offset) {
 }
 
 /// One float dataset of the given shape in an open HDF5 file.
-void WriteDataset(hid_t file,
-                  const char* name,
-                  const std::vector<hsize_t>& dims,
-                  const std::vector<double>& values,
-                  hid_t type) {
+void WriteDataset(hid_t file, const char* name, const std::vector<hsize_t>& dims,
+                  const std::vector<double>& values, hid_t type) {
     const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
     const hid_t ds = H5Dcreate2(file, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
@@ -199,12 +196,15 @@ TEST(CliTestSets, DeepGmrTestFileByItselfGivesItsStoredPairsAndHash) {
     ::pclose(p);
     EXPECT_EQ(set.provenance.at("dataset_sha256"), std::string(buf));
     const fs::path rows = dir / "rows.jsonl";
-    ASSERT_EQ(RunCli("run --pairs " + pairs.string() + " --methods identity -q --out " +
-                     rows.string()).exit_code, 0);
+    ASSERT_EQ(
+        RunCli("run --pairs " + pairs.string() + " --methods identity -q --out " + rows.string())
+            .exit_code,
+        0);
     const CliResult rep = RunCli("report " + rows.string());
     ASSERT_EQ(rep.exit_code, 0) << rep.output;
     EXPECT_NE(rep.output.find("dataset `" + h5.string() + "` (sha256 " + std::string(buf) + ")"),
-              std::string::npos) << rep.output;
+              std::string::npos)
+        << rep.output;
     fs::remove_all(dir);
 }
 
@@ -212,12 +212,8 @@ TEST(CliTestSets, DeepGmrTestFileByItselfGivesItsStoredPairsAndHash) {
 /// holding the shipped ogmm checkpoint as `ogmm` and as the one variant ablation/KIND/ROW (any
 /// OGMM checkpoint will do: a variant is named by its folder). Sets `cells` to tables.json and
 /// `learned` to whether this build has ogmm.
-void ReproduceWithOneVariant(const fs::path& dir,
-                             const std::string& kind,
-                             const std::string& row,
-                             const std::string& args,
-                             nlohmann::json* cells,
-                             bool* learned) {
+void ReproduceWithOneVariant(const fs::path& dir, const std::string& kind, const std::string& row,
+                             const std::string& args, nlohmann::json* cells, bool* learned) {
     const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
     ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
     const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";

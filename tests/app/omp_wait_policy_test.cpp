@@ -9,8 +9,8 @@
 
 #include "core/transform.hpp"
 #include "runners/runner.hpp"
-#include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
 
 namespace regbench {
 namespace {

@@ -40,7 +40,8 @@ TEST(ApproximatedSums, GmmRegMatchesItsDenseModeOnFourThousandPoints) {
     const AlignResult dense =
         CreateMethod("gmmreg", {{"kernel_sums", "dense"}})->Align(p.source, p.target);
     const AlignResult approx =
-        CreateMethod("gmmreg", {{"approx_min_pairs", 0}, {"compress_cell_sigmas", 0.25}})->Align(p.source, p.target);
+        CreateMethod("gmmreg", {{"approx_min_pairs", 0}, {"compress_cell_sigmas", 0.25}})
+            ->Align(p.source, p.target);
     ASSERT_EQ(dense.status, AlignStatus::kOk) << dense.message;
     ASSERT_EQ(approx.status, AlignStatus::kOk) << approx.message;
     EXPECT_FALSE(dense.extra["approximated_sums"].get<bool>());

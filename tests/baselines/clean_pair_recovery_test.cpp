@@ -53,8 +53,7 @@ TEST_P(CleanCompletePairRecovery, RotationErrorWithinTolerance) {
 }
 
 INSTANTIATE_TEST_SUITE_P(
-    Methods,
-    CleanCompletePairRecovery,
+    Methods, CleanCompletePairRecovery,
     ::testing::Values(
         // Local methods from a small motion: 0.5 degrees for the ICPs and GICP, 1 for NDT's
         // voxel approximation. ICP must iterate (a single step leaves more than 0.5 degrees,

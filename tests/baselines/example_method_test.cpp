@@ -71,10 +71,8 @@ Eigen::Vector3d Centre3(const PointCloud& p, Centre how) {
     return c;
 }
 
-AlignResult AlignCentroid(const CentroidOptions& o,
-                          const PointCloud& source,
-                          const PointCloud& target,
-                          const AlignContext& /*context*/) {
+AlignResult AlignCentroid(const CentroidOptions& o, const PointCloud& source,
+                          const PointCloud& target, const AlignContext& /*context*/) {
     const Eigen::Vector3d offset = Centre3(target, o.centre) - Centre3(source, o.centre);
     AlignResult r;
     r.T_target_source = MakeTransform(Eigen::Matrix3d::Identity(), o.step * offset);

@@ -30,8 +30,7 @@ Transform SpecMotion() {
                          {0.1, -0.05, 0.2});
 }
 
-AlignResult RunFilterReg(const std::string& params,
-                         const PointCloud& source,
+AlignResult RunFilterReg(const std::string& params, const PointCloud& source,
                          const PointCloud& target) {
     auto method = CreateMethod("filterreg", nlohmann::json::parse(params));
     return method->Align(source, target);

@@ -16,7 +16,8 @@
 namespace regbench {
 namespace {
 
-using namespace testing;  // the shared fixtures and checks (tests/testing, registration_fixtures.hpp)
+using namespace testing;  // the shared fixtures and checks (tests/testing,
+                          // registration_fixtures.hpp)
 
 constexpr int kPoints = 717;
 constexpr double kRotTolDeg = 1.0;

@@ -15,7 +15,8 @@
 namespace regbench {
 namespace {
 
-using namespace testing;  // the shared fixtures and checks (tests/testing, registration_fixtures.hpp)
+using namespace testing;  // the shared fixtures and checks (tests/testing,
+                          // registration_fixtures.hpp)
 
 struct L2Case {
     std::string method;
@@ -79,8 +80,7 @@ TEST_P(L2Method, CorrectModeIsUnitAndOffsetInvariant) {
     EXPECT_LT(TranslationError(r.T_target_source, T), 0.01 * kScale);
 }
 
-INSTANTIATE_TEST_SUITE_P(GmmRegAndSvr,
-                         L2Method,
+INSTANTIATE_TEST_SUITE_P(GmmRegAndSvr, L2Method,
                          ::testing::Values(L2Case{"gmmreg", 2, 3, true},
                                            L2Case{"svr", 14, 16, false}),
                          [](const auto& info) { return info.param.method; });

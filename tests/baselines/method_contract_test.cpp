@@ -132,10 +132,8 @@ TEST_P(MethodContract, ThreadCountDoesNotChangeResult) {
     EXPECT_LT((one.T_target_source - two.T_target_source).cwiseAbs().maxCoeff(), kThreadTol);
 }
 
-void ExpectFailsNaming(RegistrationMethod& method,
-                       const PointCloud& source,
-                       const PointCloud& target,
-                       const std::string& expected_in_message) {
+void ExpectFailsNaming(RegistrationMethod& method, const PointCloud& source,
+                       const PointCloud& target, const std::string& expected_in_message) {
     const AlignResult r = method.Align(source, target);
     EXPECT_EQ(r.status, AlignStatus::kFailed);
     EXPECT_NE(r.message.find(expected_in_message), std::string::npos) << r.message;
@@ -211,9 +209,7 @@ TEST_P(MethodContract, DefaultsRoundTripAndAreDocumented) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllMethods,
-                         MethodContract,
-                         ::testing::ValuesIn(MethodNames()),
+INSTANTIATE_TEST_SUITE_P(AllMethods, MethodContract, ::testing::ValuesIn(MethodNames()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                              std::string name = info.param;
                              for (char& c : name) {

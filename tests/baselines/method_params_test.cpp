@@ -213,9 +213,7 @@ std::string TestName(const ::testing::TestParamInfo<std::string>& info) {
     return name;
 }
 
-INSTANTIATE_TEST_SUITE_P(Registry,
-                         MethodSchema,
-                         ::testing::ValuesIn(SchemaMethodNames()),
+INSTANTIATE_TEST_SUITE_P(Registry, MethodSchema, ::testing::ValuesIn(SchemaMethodNames()),
                          TestName);
 
 }  // namespace

@@ -36,17 +36,14 @@ inline double RreDeg(const KnownPair& pair, const Transform& T_est) {
 }
 
 /// Aligns `source` to `target` with a fresh `method` built from `params`.
-inline AlignResult AlignWith(const std::string& method,
-                             const nlohmann::json& params,
-                             const PointCloud& source,
-                             const PointCloud& target) {
+inline AlignResult AlignWith(const std::string& method, const nlohmann::json& params,
+                             const PointCloud& source, const PointCloud& target) {
     return CreateMethod(method, params)->Align(source, target);
 }
 
 /// Aligns the pair with a fresh `method` built from `params`, and fails the test (naming the
 /// method's message) unless the call returned a transform.
-inline AlignResult AlignOk(const std::string& method,
-                           const KnownPair& pair,
+inline AlignResult AlignOk(const std::string& method, const KnownPair& pair,
                            const nlohmann::json& params = nlohmann::json::object()) {
     const AlignResult r = AlignWith(method, params, pair.source, pair.target);
     EXPECT_EQ(r.status, AlignStatus::kOk) << method << ": " << r.message;

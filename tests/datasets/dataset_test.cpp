@@ -203,8 +203,8 @@ TEST(OpenDataset, Hdf5RejectsTruncatedAndMalformedFilesNamingThem) {
     ExpectThrowsWith([&] { OpenDataset(dir.string(), "train"); }, bad_label + ": label 77");
     // Issue 27: a file of a few KB declaring (1e7, 2048, 3) floats (245 GB) ended in a bare
     // std::bad_alloc; the declared size is refused before allocation, naming file and dataset.
-    const std::string huge = WriteH5(dir / "ply_data_train0.h5",
-                                     {{"data", {10000000, 2048, 3}, {}}, {"label", {2, 1}, {0, 1}}});
+    const std::string huge = WriteH5(
+        dir / "ply_data_train0.h5", {{"data", {10000000, 2048, 3}, {}}, {"label", {2, 1}, {0, 1}}});
     ASSERT_LT(fs::file_size(huge), 100000u);
     ExpectThrowsWith([&] { OpenDataset(dir.string(), "train"); },
                      huge + ": dataset 'data' declares shape [10000000, 2048, 3]");

@@ -27,10 +27,8 @@ constexpr const char* kPlyAscii =
 
 /// Writes `text` as `dir`/`name` and expects ReadPointFile to refuse it with a message naming the
 /// file's path followed by `where` (":line: reason", or nothing).
-void ExpectRefused(const std::filesystem::path& dir,
-                   const std::string& name,
-                   const std::string& text,
-                   const std::string& where = "") {
+void ExpectRefused(const std::filesystem::path& dir, const std::string& name,
+                   const std::string& text, const std::string& where = "") {
     SCOPED_TRACE(name);
     const std::string path = WriteText(dir / name, text);
     ExpectThrowsWith([&] { ReadPointFile(path); }, path + where);

@@ -45,9 +45,7 @@ Eigen::VectorXd OffUnitTheta() {
 
 /// On random mixtures of 40 and 50 components (drawn from `seed`), the cost's gradient at
 /// OffUnitTheta is `factor` times the central-difference gradient.
-void ExpectGradientIsScaledNumeric(std::uint64_t seed,
-                                   double sigma,
-                                   L2Gradient gradient,
+void ExpectGradientIsScaledNumeric(std::uint64_t seed, double sigma, L2Gradient gradient,
                                    double factor) {
     auto rng = MakePairRng(seed, 0);
     const MixtureFeatures s = RandomMixture(rng, 40), t = RandomMixture(rng, 50);

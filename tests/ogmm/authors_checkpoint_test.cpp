@@ -5,8 +5,6 @@
 // sha256 from Python's hashlib, and the round trip's equality from torch.load + torch.equal +
 // load_state_dict(strict=True) in the authors' layout. Skipped (with the reason) where
 // /usr/bin/python3 has no torch.
-#include "ogmm/authors_state_dict.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -14,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "ogmm/authors_state_dict.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/gmm_head.hpp"
 #include "ogmm/net.hpp"
@@ -50,13 +49,15 @@ protected:
     static void SetUpTestSuite() {
         torch::set_num_threads(1);
         if (Shell(kPython + " -c 'import torch' 2>/dev/null").second != 0) {
-            missing_ = kPython + " cannot import torch (scripts/install_deps.sh installs "
+            missing_ = kPython +
+                       " cannot import torch (scripts/install_deps.sh installs "
                        "python3-torch); the parity fixtures are written by it";
             return;
         }
         dir_ = new fs::path(testing::FreshTempDir("authors_ckpt"));
-        const auto [out, rc] = Shell(kPython + " " + SourceDir() +
-                                     "/tests/ogmm/authors_parity.py make " + dir_->string() + " 2>&1");
+        const auto [out, rc] =
+            Shell(kPython + " " + SourceDir() + "/tests/ogmm/authors_parity.py make " +
+                  dir_->string() + " 2>&1");
         ASSERT_EQ(rc, 0) << out;
         std::ifstream in(*dir_ / "reference.json");
         ref_ = new nlohmann::json(nlohmann::json::parse(in));
@@ -154,8 +155,7 @@ TEST_P(AuthorsParity, ImportedForwardMatchesPyTorch) {
 }
 
 INSTANTIATE_TEST_SUITE_P(
-    All,
-    AuthorsParity,
+    All, AuthorsParity,
     ::testing::Combine(::testing::Values("deepgmr_rri", "deepgmr_xyz", "ogmm_small"),
                        ::testing::Values("legacy", "zip")),
     [](const auto& info) { return std::get<0>(info.param) + "_" + std::get<1>(info.param); });
@@ -170,9 +170,11 @@ TEST_F(AuthorsCheckpoint, RoundTripIsBitIdenticalAndLoadsStrictly) {
             const ImportOptions o = OptionsFor(name);
             ImportAuthorsCheckpoint(pth.string(), ck.string(), o);
             const fs::path back = File("rt_" + name + "_" + format + ".pth");
-            testing::WriteBytes(back, WriteTorchSaveZip(ExportAuthorsStateDict(ck.string(), o.from)));
-            const auto [out, rc] = Shell(kPython + " " + SourceDir() + "/tests/ogmm/authors_parity.py compare " +
-                                         pth.string() + " " + back.string() + " " + o.from + " 2>&1");
+            testing::WriteBytes(back,
+                                WriteTorchSaveZip(ExportAuthorsStateDict(ck.string(), o.from)));
+            const auto [out, rc] =
+                Shell(kPython + " " + SourceDir() + "/tests/ogmm/authors_parity.py compare " +
+                      pth.string() + " " + back.string() + " " + o.from + " 2>&1");
             EXPECT_EQ(rc, 0) << name << " " << format << ": " << out;
             EXPECT_NE(out.find("identical"), std::string::npos) << out;
         }
@@ -186,9 +188,8 @@ TEST_F(AuthorsCheckpoint, ForeignCorruptAndTruncatedFilesAreRefusedByName) {
     ImportOptions deepgmr;
     deepgmr.from = "deepgmr";
     const auto refused = [&](const fs::path& f, const ImportOptions& o) {
-        const std::string e = ErrorOf([&] {
-            ImportAuthorsCheckpoint(f.string(), File("refused").string(), o);
-        });
+        const std::string e =
+            ErrorOf([&] { ImportAuthorsCheckpoint(f.string(), File("refused").string(), o); });
         EXPECT_FALSE(fs::exists(File("refused"))) << f;
         return e;
     };
@@ -197,10 +198,12 @@ TEST_F(AuthorsCheckpoint, ForeignCorruptAndTruncatedFilesAreRefusedByName) {
         EXPECT_NE(e.find(File(f).string()), std::string::npos) << e;
     }
     EXPECT_NE(refused(File("torchscript.pth"), deepgmr).find("TorchScript"), std::string::npos);
-    EXPECT_NE(refused(File("ogmm_small_zip.pth"), deepgmr).find("not a DeepGMR"), std::string::npos);
+    EXPECT_NE(refused(File("ogmm_small_zip.pth"), deepgmr).find("not a DeepGMR"),
+              std::string::npos);
     for (const char* f : {"deepgmr_xyz_legacy.pth", "deepgmr_xyz_zip.pth"}) {
         const std::string bytes = testing::ReadBytes(File(f));
-        for (const size_t cut : {size_t{1}, size_t{20}, size_t{300}, bytes.size() / 2, bytes.size() - 9}) {
+        for (const size_t cut :
+             {size_t{1}, size_t{20}, size_t{300}, bytes.size() / 2, bytes.size() - 9}) {
             const fs::path t = File(std::string("cut_") + f);
             testing::WriteBytes(t, bytes.substr(0, cut));
             const std::string e = refused(t, deepgmr);
@@ -234,8 +237,11 @@ TEST_F(AuthorsCheckpoint, ForeignCorruptAndTruncatedFilesAreRefusedByName) {
     EXPECT_NE(e.find(broken.string()), std::string::npos) << e;
     EXPECT_NE(e.find("missing tensor backbone.decoder.1.1.running_var"), std::string::npos) << e;
     EXPECT_NE(e.find("unexpected tensor backbone.extra.weight"), std::string::npos) << e;
-    EXPECT_NE(e.find("tensor backbone.decoder.2.0.weight has shape [128, 255, 1], expected [128, 256, 1]"),
-              std::string::npos) << e;
+    EXPECT_NE(
+        e.find(
+            "tensor backbone.decoder.2.0.weight has shape [128, 255, 1], expected [128, 256, 1]"),
+        std::string::npos)
+        << e;
 }
 
 // The two formats of one state dict read to the same tensors (torch.save wrote both).

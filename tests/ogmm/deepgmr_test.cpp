@@ -59,15 +59,14 @@ TEST_P(DeepGmrShapes, ForwardShapesAndNormalisationAtPaperSizes) {
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllConfigs,
-    DeepGmrShapes,
-    ::testing::Values("deepgmr", "deepgmr-small", "deepgmr-orig", "deepgmr-orig-xyz"),
-    [](const auto& info) {
-        std::string s = info.param;
-        for (char& c : s) c = c == '-' ? '_' : c;
-        return s;
-    });
+INSTANTIATE_TEST_SUITE_P(AllConfigs, DeepGmrShapes,
+                         ::testing::Values("deepgmr", "deepgmr-small", "deepgmr-orig",
+                                           "deepgmr-orig-xyz"),
+                         [](const auto& info) {
+                             std::string s = info.param;
+                             for (char& c : s) c = c == '-' ? '_' : c;
+                             return s;
+                         });
 
 TEST(DeepGmr, ClosedFormRecoversAKnownMotionWithUnequalWeightsAndVariances) {
     // Hand-made mixtures: 8 source means, target means = R mu + t exactly, uneven pi and
@@ -317,9 +316,7 @@ class DeepGmrParity : public ::testing::TestWithParam<DeepGmrParityCase> {};
 
 TEST_P(DeepGmrParity, MatchesThePyTorchReference) { ExpectDeepGmrParity(GetParam()); }
 
-INSTANTIATE_TEST_SUITE_P(Reference,
-                         DeepGmrParity,
-                         ::testing::ValuesIn(ParityCases()),
+INSTANTIATE_TEST_SUITE_P(Reference, DeepGmrParity, ::testing::ValuesIn(ParityCases()),
                          [](const ::testing::TestParamInfo<DeepGmrParityCase>& info) {
                              return info.param.name;
                          });

@@ -19,13 +19,15 @@ namespace regbench::ogmm {
 namespace {
 
 /// max |a - b| <= rel * max |b| (+ a floor for all-zero tensors).
-void ExpectClose(const torch::Tensor& a, const torch::Tensor& b, double rel, const std::string& what) {
+void ExpectClose(const torch::Tensor& a, const torch::Tensor& b, double rel,
+                 const std::string& what) {
     ASSERT_TRUE(a.defined()) << what;
     ASSERT_TRUE(b.defined()) << what;
     ASSERT_EQ(a.sizes(), b.sizes()) << what;
     const double scale = b.abs().max().item<double>();
     const double diff = (a - b).abs().max().item<double>();
-    EXPECT_LE(diff, rel * scale + 1e-30) << what << ": max |diff| " << diff << ", max |ref| " << scale;
+    EXPECT_LE(diff, rel * scale + 1e-30)
+        << what << ": max |diff| " << diff << ", max |ref| " << scale;
 }
 
 /// Random stage parameters for channel widths c0 -> c1 -> ..., leaves that require gradients,
@@ -35,8 +37,8 @@ std::vector<EdgeStage> RandomStages(const std::vector<int64_t>& widths, torch::D
     for (size_t s = 0; s + 1 < widths.size(); ++s) {
         const int64_t in = widths[s], out = widths[s + 1];
         EdgeStage st;
-        st.weight = (torch::randn({out, in}, dtype) / std::sqrt(static_cast<double>(in)))
-                        .requires_grad_();
+        st.weight =
+            (torch::randn({out, in}, dtype) / std::sqrt(static_cast<double>(in))).requires_grad_();
         st.bn_weight = (1 + 0.3 * torch::randn({out}, dtype)).requires_grad_();
         st.bn_bias = (0.2 * torch::randn({out}, dtype)).requires_grad_();
         st.running_mean = 0.1 * torch::randn({out}, dtype);
@@ -64,11 +66,8 @@ std::vector<EdgeStage> Copy(const std::vector<EdgeStage>& stages) {
 }
 
 /// Runs both on `rows`, backpropagates the same upstream gradient, compares everything.
-void CompareWithReference(const torch::Tensor& rows_in,
-                          const std::vector<int64_t>& widths,
-                          int64_t k,
-                          double rel,
-                          int calls = 1) {
+void CompareWithReference(const torch::Tensor& rows_in, const std::vector<int64_t>& widths,
+                          int64_t k, double rel, int calls = 1) {
     const auto dtype = rows_in.scalar_type();
     const std::vector<EdgeStage> ref = RandomStages(widths, dtype);
     const std::vector<EdgeStage> fused = Copy(ref);
@@ -154,7 +153,8 @@ TEST(EdgeStages, FusedFloatErrorIsThatOfTheLibTorchComposition) {
     check(rows_fused.grad(), rows_ref.grad(), rows_truth.grad(), "d rows");
     for (size_t s = 0; s < ref.size(); ++s) {
         const std::string st = "stage " + std::to_string(s + 1) + ": ";
-        check(fused[s].weight.grad(), ref[s].weight.grad(), truth[s].weight.grad(), st + "d weight");
+        check(fused[s].weight.grad(), ref[s].weight.grad(), truth[s].weight.grad(),
+              st + "d weight");
         check(fused[s].bn_weight.grad(), ref[s].bn_weight.grad(), truth[s].bn_weight.grad(),
               st + "d bn weight");
         check(fused[s].bn_bias.grad(), ref[s].bn_bias.grad(), truth[s].bn_bias.grad(),

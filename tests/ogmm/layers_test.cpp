@@ -31,10 +31,8 @@ double SquaredDistance(const Point& a, const Point& b) {
 
 // Brute-force farthest point sampling in double: the textbook definition, written independently
 // of the tensor code (running min distance, argmax with lowest index on ties).
-std::vector<int64_t> BruteFps(const std::vector<Point>& pts,
-                              std::vector<double> running,
-                              int64_t start,
-                              int64_t n) {
+std::vector<int64_t> BruteFps(const std::vector<Point>& pts, std::vector<double> running,
+                              int64_t start, int64_t n) {
     std::vector<int64_t> chosen;
     int64_t next = start;
     for (int64_t i = 0; i < n; ++i) {
@@ -54,8 +52,7 @@ std::vector<int64_t> BruteFps(const std::vector<Point>& pts,
 
 // idx [B, n] is the brute-force FPS of each cloud of xyz from starts[b], with an infinite
 // running distance (as FpsRandom begins).
-void ExpectBruteFpsFromStarts(const torch::Tensor& idx,
-                              const torch::Tensor& xyz,
+void ExpectBruteFpsFromStarts(const torch::Tensor& idx, const torch::Tensor& xyz,
                               const torch::Tensor& starts) {
     for (int64_t b = 0; b < idx.size(0); ++b) {
         const auto pts = CloudOf(xyz, b);

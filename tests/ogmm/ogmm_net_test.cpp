@@ -132,8 +132,7 @@ TEST_P(OgmmShapes, ForwardGivesRigidTransformsAndPerPointScores) {
     EXPECT_TRUE(torch::isfinite(out.T).all().item<bool>());
 }
 
-INSTANTIATE_TEST_SUITE_P(NamedConfigs,
-                         OgmmShapes,
+INSTANTIATE_TEST_SUITE_P(NamedConfigs, OgmmShapes,
                          ::testing::Combine(::testing::Values("ogmm", "ogmm-small", "ogmm-tiny"),
                                             ::testing::Values(717, 1024, 1433),
                                             ::testing::Values(1, 4)),

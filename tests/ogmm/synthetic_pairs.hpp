@@ -26,9 +26,7 @@ inline PointCloud KeepAlong(const PointCloud& c, const Eigen::Vector3d& dir, Eig
 }
 
 /// Pair `index` of stream `seed`: `points` sampled, each cloud keeps 70% of them.
-inline TrainSample SyntheticPair(std::uint64_t seed,
-                                 std::uint64_t index,
-                                 Eigen::Index points,
+inline TrainSample SyntheticPair(std::uint64_t seed, std::uint64_t index, Eigen::Index points,
                                  double max_deg = 45.0) {
     std::mt19937_64 rng = MakePairRng(seed, index);
     const PointCloud shape = BumpyEllipsoidSurface(rng, points);

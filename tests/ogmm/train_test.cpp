@@ -1,5 +1,4 @@
 #include "ogmm/train.hpp"
-#include "ogmm/train_batch.hpp"
 
 #include <gtest/gtest.h>
 #include <time.h>
@@ -14,6 +13,7 @@
 #include <sstream>
 
 #include "ogmm/edge_stages.hpp"
+#include "ogmm/train_batch.hpp"
 #include "ogmm/zoo.hpp"
 #include "synthetic_pairs.hpp"
 
@@ -39,9 +39,7 @@ nlohmann::json SmallRecipe(const std::string& model) {
 
 /// Options of a test run into `dir`, logging to `log`; stopped after `max_steps` (0 = the
 /// recipe's epochs), continuing the run already in `dir` when `resume`.
-TrainOptions Options(const fs::path& dir,
-                     std::ostream& log,
-                     std::int64_t max_steps = 0,
+TrainOptions Options(const fs::path& dir, std::ostream& log, std::int64_t max_steps = 0,
                      bool resume = false) {
     TrainOptions o;
     o.out_dir = dir.string();

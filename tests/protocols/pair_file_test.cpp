@@ -5,16 +5,14 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/testing/files.hpp"
 #include "tests/testing/same_pairs.hpp"
 #include "tests/testing/synthetic.hpp"
-#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
 
-std::string TempPath(const std::string& name) {
-    return regbench::testing::TempPath(name).string();
-}
+std::string TempPath(const std::string& name) { return regbench::testing::TempPath(name).string(); }
 
 PairSet TwoPairs() {
     PairSet set;

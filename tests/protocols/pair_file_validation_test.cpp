@@ -9,8 +9,8 @@
 #include "protocols/pair_file.hpp"
 #include "tests/testing/expect_throw.hpp"
 #include "tests/testing/file_size_limit.hpp"
-#include "tests/testing/hostile_pair_files.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/hostile_pair_files.hpp"
 
 namespace regbench {
 namespace {
@@ -27,9 +27,7 @@ TEST_P(HostilePairFile, IsRefusedNamingFileAndProblem) {
     fs::remove(path);
 }
 
-INSTANTIATE_TEST_SUITE_P(Cases,
-                         HostilePairFile,
-                         ::testing::ValuesIn(testing::HostileCases()),
+INSTANTIATE_TEST_SUITE_P(Cases, HostilePairFile, ::testing::ValuesIn(testing::HostileCases()),
                          [](const auto& info) { return info.param.name; });
 
 TEST(PairFileValidation, ProperRotationIsAccepted) {

@@ -8,12 +8,8 @@
 namespace regbench {
 namespace {
 
-ResultRow Row(const std::string& method,
-              double mae_r,
-              double mae_t,
-              const std::string& category,
-              std::optional<double> overlap,
-              Status status = Status::kOk) {
+ResultRow Row(const std::string& method, double mae_r, double mae_t, const std::string& category,
+              std::optional<double> overlap, Status status = Status::kOk) {
     ResultRow r;
     r.method = method;
     r.status = status;

@@ -207,12 +207,8 @@ TEST(PaperReport, CsvAndJsonRoundTripWithProvenance) {
 
 /// A result row of `method` with the CPU time of its call and, for a learned method
 /// (`network` > 0), the network's CPU time, MACs and floor as the learned methods write them.
-ResultRow TimedRow(int pair,
-                   const std::string& method,
-                   double cpu_seconds,
-                   double network = 0.0,
-                   double macs = 0.0,
-                   double floor = 0.0) {
+ResultRow TimedRow(int pair, const std::string& method, double cpu_seconds, double network = 0.0,
+                   double macs = 0.0, double floor = 0.0) {
     ResultRow r = Row(pair, method, 1.0, 2 * cpu_seconds);  // wall: not what is shown
     r.cpu_seconds = cpu_seconds;
     if (network > 0.0) {

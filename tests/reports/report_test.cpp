@@ -15,12 +15,8 @@
 namespace regbench {
 namespace {
 
-ResultRow Row(const std::string& method,
-              double mae_r,
-              double mae_t,
-              double seconds,
-              Status status = Status::kOk,
-              std::size_t pair = 0) {
+ResultRow Row(const std::string& method, double mae_r, double mae_t, double seconds,
+              Status status = Status::kOk, std::size_t pair = 0) {
     ResultRow r;
     r.pair = pair;
     r.method = method;

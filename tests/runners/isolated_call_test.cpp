@@ -13,10 +13,10 @@
 
 #include "core/file_lock.hpp"
 #include "core/transform.hpp"
-#include "tests/testing/files.hpp"
-#include "tests/testing/temp_dir_test.hpp"
 #include "runners/runner.hpp"
+#include "tests/testing/files.hpp"
 #include "tests/testing/synthetic.hpp"
+#include "tests/testing/temp_dir_test.hpp"
 
 namespace regbench {
 namespace {

@@ -83,8 +83,7 @@ protected:
     }
     /// Resumes `o` with `.part` = `lines` and returns the error (empty if it succeeded).
     /// With `torn_last`, the last line has no newline: a write cut short by a kill.
-    std::string ResumeWith(RunOptions o,
-                           const std::vector<std::string>& lines,
+    std::string ResumeWith(RunOptions o, const std::vector<std::string>& lines,
                            bool torn_last = false) {
         {
             std::ofstream part(o.out_path + ".part");
@@ -331,9 +330,10 @@ TEST_F(Reliability, ScaleGuardLetsApproximatingMethodsRunByDefault) {
     for (const char* name : {"cpd", "gmmreg", "svr"}) {
         const MethodSpec spec = ParseMethodSpecs(name, {}).front();
         EXPECT_EQ(MethodCost(spec.name, spec.params), CostClass::kNearLinear) << name;
-        const MethodSpec dense = ParseMethodSpecs(
-            name, {{name, {{std::string(name) == "cpd" ? "e_step" : "kernel_sums", "dense"}}}})
-                                     .front();
+        const MethodSpec dense =
+            ParseMethodSpecs(
+                name, {{name, {{std::string(name) == "cpd" ? "e_step" : "kernel_sums", "dense"}}}})
+                .front();
         EXPECT_EQ(MethodCost(dense.name, dense.params), CostClass::kQuadratic) << name;
     }
     RunOptions o = Options("guard_auto.jsonl", pairs_);

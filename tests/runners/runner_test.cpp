@@ -10,9 +10,9 @@
 
 #include "protocols/pair_file.hpp"
 #include "runners/registry.hpp"
+#include "tests/testing/files.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/temp_dir_test.hpp"
-#include "tests/testing/files.hpp"
 
 namespace regbench {
 namespace {
@@ -31,8 +31,7 @@ protected:
     }
     /// Runs `a` and `b` and expects their rows to agree on `keys`, row by row in file order;
     /// returns b's rows.
-    std::vector<nlohmann::json> ExpectSameRows(const RunOptions& a,
-                                               const RunOptions& b,
+    std::vector<nlohmann::json> ExpectSameRows(const RunOptions& a, const RunOptions& b,
                                                const std::vector<std::string>& keys) {
         RunBenchmark(a);
         RunBenchmark(b);

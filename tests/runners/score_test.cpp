@@ -177,19 +177,22 @@ TEST_F(ScoreTest, TransformsOfAnotherPairFileAreRefusedByTheirContentHash) {
     // (PairSetContentHash, as run writes in data.content_hash).
     const std::string hash = DataTagOf(pairs_, ReadPairFile(pairs_)).content_hash;
     const std::string identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
-    Write("ok.jsonl", "{\"pair\": 0, \"content_hash\": \"" + hash + "\", \"transform\": " +
-                          identity + "}\n");
+    Write("ok.jsonl",
+          "{\"pair\": 0, \"content_hash\": \"" + hash + "\", \"transform\": " + identity + "}\n");
     EXPECT_EQ(ScoreTransforms(Options("ok.jsonl", "mine")).missing, 3u);
     std::filesystem::remove(Path("scored.jsonl"));
-    Write("other.jsonl", "{\"pair\": 0, \"content_hash\": \"fnv1a64:0123456789abcdef\", "
-                         "\"transform\": " +
-                             identity + "}\n");
-    ExpectError(Options("other.jsonl", "mine"), "other.jsonl:1: the transform was computed on "
-                                                "the pair file with content hash "
-                                                "fnv1a64:0123456789abcdef");
+    Write("other.jsonl",
+          "{\"pair\": 0, \"content_hash\": \"fnv1a64:0123456789abcdef\", "
+          "\"transform\": " +
+              identity + "}\n");
+    ExpectError(Options("other.jsonl", "mine"),
+                "other.jsonl:1: the transform was computed on "
+                "the pair file with content hash "
+                "fnv1a64:0123456789abcdef");
     // CSV (and JSONL) take it as a header comment.
-    Write("other.csv", "# content_hash: fnv1a64:0123456789abcdef\npair,t00\n0,1,0,0,0,0,1,0,0,0,0,"
-                       "1,0\n");
+    Write("other.csv",
+          "# content_hash: fnv1a64:0123456789abcdef\npair,t00\n0,1,0,0,0,0,1,0,0,0,0,"
+          "1,0\n");
     ExpectError(Options("other.csv", "mine"), "other.csv:3:");
     Write("ok.csv", "# content_hash: " + hash + "\n0,1,0,0,0,0,1,0,0,0,0,1,0\n");
     EXPECT_EQ(ScoreTransforms(Options("ok.csv", "mine")).missing, 3u);
@@ -197,12 +200,10 @@ TEST_F(ScoreTest, TransformsOfAnotherPairFileAreRefusedByTheirContentHash) {
     // A result file of another pair file (its rows carry data.content_hash) is refused too.
     RunRows("identity");
     auto rows = ReadJsonl(Path("run.jsonl"));
-    std::ofstream(Path("foreign.jsonl"))
-        << [&] {
-               rows[0]["data"]["content_hash"] = "fnv1a64:ffff";
-               return rows[0].dump();
-           }()
-        << "\n";
+    std::ofstream(Path("foreign.jsonl")) << [&] {
+        rows[0]["data"]["content_hash"] = "fnv1a64:ffff";
+        return rows[0].dump();
+    }() << "\n";
     ExpectError(Options("foreign.jsonl", "identity"), "fnv1a64:ffff");
 }
 

@@ -7,8 +7,8 @@
 #include "core/cpu_time.hpp"
 #include "runners/runner.hpp"
 #include "runners/timing_summary.hpp"
-#include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
 
 namespace regbench {
 namespace {

@@ -19,8 +19,7 @@ namespace regbench::testing {
 /// `expect_in_message`, 4 when it threw an E not naming it, 0 when it did not throw (any other
 /// exception ends the child by a signal).
 template <typename E = std::exception>
-int RunUnderFileSizeLimit(rlim_t limit,
-                          const std::string& expect_in_message,
+int RunUnderFileSizeLimit(rlim_t limit, const std::string& expect_in_message,
                           const std::function<void()>& write) {
     const pid_t pid = fork();
     if (pid == 0) {

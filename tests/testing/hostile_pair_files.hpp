@@ -55,9 +55,7 @@ inline std::function<void(hid_t)> SetPairString(const char* name, std::string v)
 
 /// Replaces dataset `path` by one of shape `dims`; writes `values` unless empty (then the
 /// dataset has no storage at all: a header that declares data the file does not hold).
-inline void ReplaceDataset(hid_t file,
-                           const std::string& path,
-                           std::vector<hsize_t> dims,
+inline void ReplaceDataset(hid_t file, const std::string& path, std::vector<hsize_t> dims,
                            const std::vector<double>& values) {
     H5Ldelete(file, path.c_str(), H5P_DEFAULT);
     const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
@@ -117,7 +115,10 @@ inline std::vector<HostileCase> HostileCases() {
          }},
         {"missing_group", "num_pairs", [](hid_t f) { H5Ldelete(f, "/pairs/000001", H5P_DEFAULT); }},
         // Issue 27: these ended in a bare [json.exception.type_error.316/302] naming nothing.
-        {"shape_not_utf8", "attribute 'shape' is not valid UTF-8", SetPairString("shape", "a\xFF" "b")},
+        {"shape_not_utf8", "attribute 'shape' is not valid UTF-8",
+         SetPairString("shape",
+                       "a\xFF"
+                       "b")},
         {"category_not_utf8", "attribute 'category' is not valid UTF-8",
          SetPairString("category", "\xC3")},
         {"provenance_not_utf8", "attribute 'provenance' is not valid UTF-8",

@@ -13,8 +13,7 @@ namespace regbench::testing {
 
 /// Creating `method` with `params` must throw std::invalid_argument whose message contains
 /// `needle` (the parameter's name, quoted or not as the caller wants).
-inline void ExpectRejected(const std::string& method,
-                           const nlohmann::json& params,
+inline void ExpectRejected(const std::string& method, const nlohmann::json& params,
                            const std::string& needle) {
     try {
         CreateMethod(method, params);

@@ -59,9 +59,7 @@ inline Transform ThirtyDegreesAboutZ() {
 
 /// The crop protocol in miniature: keep the points with x below the 70% quantile, add
 /// N(0, jitter^2) noise per coordinate.
-inline PointCloud CropAndJitter(const PointCloud& P,
-                                double keep,
-                                double jitter,
+inline PointCloud CropAndJitter(const PointCloud& P, double keep, double jitter,
                                 std::uint64_t seed) {
     std::vector<double> xs;
     for (Eigen::Index i = 0; i < P.rows(); ++i) xs.push_back(P(i, 0));

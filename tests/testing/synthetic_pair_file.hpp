@@ -15,11 +15,8 @@ namespace regbench::testing {
 /// Writes `count` SyntheticPairs of `points` points to `path`: pair k has shape seed
 /// first_seed + k and ground truth motion(k); the provenance is dataset "synthetic", protocol
 /// "test" and seed `provenance_seed`.
-inline void WriteSyntheticPairFile(const std::string& path,
-                                   int count,
-                                   Eigen::Index points,
-                                   std::uint64_t first_seed,
-                                   int provenance_seed,
+inline void WriteSyntheticPairFile(const std::string& path, int count, Eigen::Index points,
+                                   std::uint64_t first_seed, int provenance_seed,
                                    const std::function<Transform(int k)>& motion) {
     PairSet set;
     set.provenance = {{"dataset", "synthetic"}, {"protocol", "test"}, {"seed", provenance_seed}};
@@ -39,10 +36,7 @@ inline Transform TurnAboutZ(int k) {
 /// the derived fixture's constructor gives, pairs_ being Path("pairs.h5").
 class PairFileTest : public TempDirTest {
 protected:
-    PairFileTest(int count,
-                 Eigen::Index points,
-                 std::uint64_t first_seed,
-                 int provenance_seed,
+    PairFileTest(int count, Eigen::Index points, std::uint64_t first_seed, int provenance_seed,
                  std::function<Transform(int k)> motion = TurnAboutZ)
         : count_(count),
           points_(points),
