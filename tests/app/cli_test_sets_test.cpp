@@ -52,6 +52,58 @@ void WriteDataset(hid_t file, const char* name, const std::vector<hsize_t>& dims
     H5Sclose(space);
 }
 
+/// A DeepGMR-layout stored-pair file's arrays: `count` pairs of `points` points each (p_i =
+/// (0.125 i, 0.25 (i % 2) + s, 0.5 (i % 3)) in pair s), each target the source translated by
+/// `step * s` along `axis`, the transform that translation (so target = T source exactly).
+struct StoredPairs {
+    hsize_t count, points;
+    std::vector<double> source, target, transform;
+};
+
+StoredPairs TranslatedPairs(int count, int points, int axis, double step) {
+    StoredPairs sp{static_cast<hsize_t>(count), static_cast<hsize_t>(points), {}, {}, {}};
+    for (int s = 0; s < count; ++s) {
+        for (int i = 0; i < points; ++i) {
+            const std::vector<double> p = {0.125 * i, 0.25 * (i % 2) + s, 0.5 * (i % 3)};
+            sp.source.insert(sp.source.end(), p.begin(), p.end());
+            std::vector<double> q = p;
+            q[static_cast<std::size_t>(axis)] += step * s;
+            sp.target.insert(sp.target.end(), q.begin(), q.end());
+        }
+        std::vector<double> T = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        T[static_cast<std::size_t>(axis) * 4 + 3] = step * s;
+        sp.transform.insert(sp.transform.end(), T.begin(), T.end());
+    }
+    return sp;
+}
+
+/// Writes `sp` as datasets source / target (float32) and transform (of `transform_type`).
+void WriteStoredPairs(const fs::path& path, const StoredPairs& sp, hid_t transform_type) {
+    const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    WriteDataset(file, "source", {sp.count, sp.points, 3}, sp.source, H5T_IEEE_F32LE);
+    WriteDataset(file, "target", {sp.count, sp.points, 3}, sp.target, H5T_IEEE_F32LE);
+    WriteDataset(file, "transform", {sp.count, 4, 4}, sp.transform, transform_type);
+    H5Fclose(file);
+}
+
+/// Pair k of `set` must be stored pair k % count exactly: float32 points widened, the
+/// translation as stored.
+void ExpectStoredPairs(const PairSet& set, const StoredPairs& sp) {
+    for (std::size_t k = 0; k < set.pairs.size(); ++k) {
+        const std::size_t s = k % sp.count;
+        ASSERT_EQ(set.pairs[k].source.rows(), static_cast<Eigen::Index>(sp.points));
+        for (std::size_t i = 0; i < sp.points; ++i) {
+            for (std::size_t d = 0; d < 3; ++d) {
+                const std::size_t at = (s * sp.points + i) * 3 + d;
+                const auto row = static_cast<Eigen::Index>(i), col = static_cast<Eigen::Index>(d);
+                EXPECT_EQ(set.pairs[k].source(row, col), sp.source[at]);
+                EXPECT_EQ(set.pairs[k].target(row, col), sp.target[at]);
+                EXPECT_EQ(set.pairs[k].T_gt(col, 3), sp.transform[s * 16 + d * 4 + 3]);
+            }
+        }
+    }
+}
+
 TEST(CliTestSets, PairsAllMakesOnePairPerItem) {
     // A folder of 3 point files is a dataset of 3 items (split `all`).
     const fs::path dir = FreshDir("pairs_all");
@@ -83,23 +135,9 @@ TEST(CliTestSets, ReproduceUsesTheStoredIclNuimPairs) {
     const fs::path dir = FreshDir("reproduce_icl");
     // ICL-NUIM root: test/icl_nuim.h5 with 2 stored pairs of 6 points; the transform is a
     // translation by (0.5 s, 0, 0) with the identity rotation, so target = source + t is exact.
-    std::vector<double> source, target, transform;
-    for (int s = 0; s < 2; ++s) {
-        for (int i = 0; i < 6; ++i) {
-            const std::vector<double> p = {0.125 * i, 0.25 * (i % 2) + s, 0.5 * (i % 3)};
-            source.insert(source.end(), p.begin(), p.end());
-            target.insert(target.end(), {p[0] + 0.5 * s, p[1], p[2]});
-        }
-        const std::vector<double> T = {1, 0, 0, 0.5 * s, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-        transform.insert(transform.end(), T.begin(), T.end());
-    }
+    const StoredPairs stored = TranslatedPairs(2, 6, 0, 0.5);
     fs::create_directories(dir / "icl" / "test");
-    const hid_t file = H5Fcreate((dir / "icl" / "test" / "icl_nuim.h5").c_str(), H5F_ACC_TRUNC,
-                                 H5P_DEFAULT, H5P_DEFAULT);
-    WriteDataset(file, "source", {2, 6, 3}, source, H5T_IEEE_F32LE);
-    WriteDataset(file, "target", {2, 6, 3}, target, H5T_IEEE_F32LE);
-    WriteDataset(file, "transform", {2, 4, 4}, transform, H5T_IEEE_F64LE);
-    H5Fclose(file);
+    WriteStoredPairs(dir / "icl" / "test" / "icl_nuim.h5", stored, H5T_IEEE_F64LE);
     // 7Scenes root with one test (office) scan of 2100 points (the protocol samples 2048).
     fs::create_directories(dir / "7s" / "7-scenes-office");
     {
@@ -126,17 +164,7 @@ TEST(CliTestSets, ReproduceUsesTheStoredIclNuimPairs) {
     const PairSet set = ReadPairFile((out / "pairs" / "tab3_icl_nuim.h5").string());
     EXPECT_EQ(set.provenance.at("pairing"), "stored");
     ASSERT_EQ(set.pairs.size(), 4u);
-    for (std::size_t k = 0; k < 4; ++k) {
-        const std::size_t s = k % 2;
-        ASSERT_EQ(set.pairs[k].source.rows(), 6);
-        for (int i = 0; i < 6; ++i) {
-            for (int d = 0; d < 3; ++d) {
-                EXPECT_EQ(set.pairs[k].source(i, d), source[s * 18 + i * 3 + d]);
-                EXPECT_EQ(set.pairs[k].target(i, d), target[s * 18 + i * 3 + d]);
-            }
-        }
-        EXPECT_EQ(set.pairs[k].T_gt(0, 3), 0.5 * static_cast<double>(s));
-    }
+    ExpectStoredPairs(set, stored);
     // 7Scenes keeps the resampling protocol.
     EXPECT_EQ(ReadPairFile((out / "pairs" / "tab3_7scenes.h5").string()).provenance.at("pairing"),
               "independent");
@@ -158,37 +186,16 @@ TEST(CliTestSets, ReproduceUsesTheStoredIclNuimPairs) {
 // coreutils' sha256sum of the same file).
 TEST(CliTestSets, DeepGmrTestFileByItselfGivesItsStoredPairsAndHash) {
     const fs::path dir = FreshDir("deepgmr_file");
-    std::vector<double> source, target, transform;
-    for (int s = 0; s < 3; ++s) {
-        for (int i = 0; i < 8; ++i) {
-            const std::vector<double> p = {0.125 * i, 0.25 * (i % 2) - s, 0.5 * (i % 3)};
-            source.insert(source.end(), p.begin(), p.end());
-            target.insert(target.end(), {p[0], p[1] + 0.25 * s, p[2]});
-        }
-        const std::vector<double> T = {1, 0, 0, 0, 0, 1, 0, 0.25 * s, 0, 0, 1, 0, 0, 0, 0, 1};
-        transform.insert(transform.end(), T.begin(), T.end());
-    }
+    const StoredPairs stored = TranslatedPairs(3, 8, 1, 0.25);
     const fs::path h5 = dir / "my_copy_of_the_clean_set.h5";
-    const hid_t file = H5Fcreate(h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    WriteDataset(file, "source", {3, 8, 3}, source, H5T_IEEE_F32LE);
-    WriteDataset(file, "target", {3, 8, 3}, target, H5T_IEEE_F32LE);
-    WriteDataset(file, "transform", {3, 4, 4}, transform, H5T_IEEE_F32LE);
-    H5Fclose(file);
+    WriteStoredPairs(h5, stored, H5T_IEEE_F32LE);
     const fs::path pairs = dir / "pairs.h5";
     const CliResult g = RunCli("generate --dataset " + h5.string() +
                                " --pairing stored --pairs all --points 8 --out " + pairs.string());
     ASSERT_EQ(g.exit_code, 0) << g.output;
     const PairSet set = ReadPairFile(pairs.string());
     ASSERT_EQ(set.pairs.size(), 3u);
-    for (std::size_t k = 0; k < 3; ++k) {
-        for (int i = 0; i < 8; ++i) {
-            for (int d = 0; d < 3; ++d) {
-                EXPECT_EQ(set.pairs[k].source(i, d), source[k * 24 + i * 3 + d]);
-                EXPECT_EQ(set.pairs[k].target(i, d), target[k * 24 + i * 3 + d]);
-            }
-        }
-        EXPECT_EQ(set.pairs[k].T_gt(1, 3), 0.25 * static_cast<double>(k));
-    }
+    ExpectStoredPairs(set, stored);
     FILE* p = ::popen(("sha256sum " + h5.string()).c_str(), "r");
     ASSERT_NE(p, nullptr);
     char buf[65] = {0};
@@ -208,12 +215,23 @@ TEST(CliTestSets, DeepGmrTestFileByItselfGivesItsStoredPairsAndHash) {
     fs::remove_all(dir);
 }
 
-/// `regbench reproduce ARGS --jobs 1 --out DIR/report` with $REGBENCH_MODELS = DIR/models
-/// holding the shipped ogmm checkpoint as `ogmm` and as the one variant ablation/KIND/ROW (any
-/// OGMM checkpoint will do: a variant is named by its folder). Sets `cells` to tables.json and
-/// `learned` to whether this build has ogmm.
-void ReproduceWithOneVariant(const fs::path& dir, const std::string& kind, const std::string& row,
-                             const std::string& args, nlohmann::json* cells, bool* learned) {
+/// What ReproduceWithOneVariant leaves: its folder, the report folder in it, tables.json and
+/// whether this build has ogmm.
+struct VariantRun {
+    fs::path dir, out;
+    nlohmann::json cells;
+    bool learned = false;
+};
+
+/// `regbench reproduce ARGS --jobs 1 --out DIR/report` in a fresh folder DIR (FreshDir(name))
+/// with $REGBENCH_MODELS = DIR/models holding the shipped ogmm checkpoint as `ogmm` and as the
+/// one variant ablation/KIND/ROW (any OGMM checkpoint will do: a variant is named by its
+/// folder).
+void ReproduceWithOneVariant(const std::string& name, const std::string& kind,
+                             const std::string& row, const std::string& args, VariantRun* v) {
+    v->dir = FreshDir(name);
+    v->out = v->dir / "report";
+    const fs::path& dir = v->dir;
     const char* src_env = std::getenv("REGBENCH_SOURCE_DIR");
     ASSERT_NE(src_env, nullptr) << "CTest sets REGBENCH_SOURCE_DIR";
     const fs::path shipped = fs::path(src_env) / "data" / "models" / "ogmm";
@@ -221,14 +239,13 @@ void ReproduceWithOneVariant(const fs::path& dir, const std::string& kind, const
     fs::create_directories(dir / "models" / "ablation" / kind);
     fs::create_directory_symlink(shipped, dir / "models" / "ogmm");
     fs::create_directory_symlink(shipped, dir / "models" / "ablation" / kind / row);
-    *learned = RunCli("methods").output.find("ogmm") != std::string::npos;
+    v->learned = RunCli("methods").output.find("ogmm") != std::string::npos;
     ::setenv("REGBENCH_MODELS", (dir / "models").c_str(), 1);
-    const CliResult r =
-        RunCli("reproduce " + args + " --jobs 1 --out " + (dir / "report").string());
+    const CliResult r = RunCli("reproduce " + args + " --jobs 1 --out " + v->out.string());
     ::unsetenv("REGBENCH_MODELS");
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    std::ifstream f(dir / "report" / "tables.json");
-    *cells = nlohmann::json::parse(f);
+    std::ifstream f(v->out / "tables.json");
+    v->cells = nlohmann::json::parse(f);
 }
 
 TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
@@ -236,15 +253,13 @@ TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
     // Here only no_SPE has one (any OGMM checkpoint will do: the row is named by its folder),
     // so no_SPE is measured on the Tab. 1 same-category pairs and the other rows say
     // "not trained". A build without LibTorch has no ogmm: every row says "not trained".
-    const fs::path dir = FreshDir("reproduce_ablation");
-    const fs::path out = dir / "report";
-    nlohmann::json cells;
-    bool learned = false;
-    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant(
-        dir, "components", "no_SPE", "--tables table4 --methods identity,ogmm --pairs 2", &cells,
-        &learned));
+    VariantRun v;
+    ASSERT_NO_FATAL_FAILURE(
+        ReproduceWithOneVariant("reproduce_ablation", "components", "no_SPE",
+                                "--tables table4 --methods identity,ogmm --pairs 2", &v));
+    const bool learned = v.learned;
     int measured_no_spe = 0, not_trained = 0;
-    for (const auto& c : cells) {
+    for (const auto& c : v.cells) {
         if (c.at("table") != "table4_ablation_components") continue;
         if (c.at("source") != "measured") continue;
         if (c.at("row") == "no_SPE" && learned) {
@@ -261,10 +276,10 @@ TEST(CliTestSets, ReproduceFillsAblationRowsFromShippedVariantCheckpoints) {
     EXPECT_EQ(measured_no_spe, learned ? 3 : 0);
     EXPECT_EQ(not_trained, learned ? 9 : 12);
     if (learned) {
-        EXPECT_TRUE(fs::exists(out / "results" / "ablation_components_no_SPE.jsonl"));
-        EXPECT_FALSE(fs::exists(out / "results" / "ablation_components_full.jsonl"));
+        EXPECT_TRUE(fs::exists(v.out / "results" / "ablation_components_no_SPE.jsonl"));
+        EXPECT_FALSE(fs::exists(v.out / "results" / "ablation_components_full.jsonl"));
     }
-    fs::remove_all(dir);
+    fs::remove_all(v.dir);
 }
 
 TEST(CliTestSets, ReproduceFillsClusterCountColumnsFromVariantCheckpoints) {
@@ -272,14 +287,12 @@ TEST(CliTestSets, ReproduceFillsClusterCountColumnsFromVariantCheckpoints) {
     // the others variants under $REGBENCH_MODELS/ablation/clusters/<J>. Here only J = 8 has one
     // (any OGMM checkpoint will do), so OGMM's row has columns 32 and 8 measured on the sweep's
     // 50% level and '-' in 16, 48 and 64. Without LibTorch nothing is measured.
-    const fs::path dir = FreshDir("reproduce_clusters");
-    const fs::path out = dir / "report";
-    nlohmann::json cells;
-    bool learned = false;
-    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant(
-        dir, "clusters", "8", "--tables supp_cluster --pairs 2", &cells, &learned));
+    VariantRun v;
+    ASSERT_NO_FATAL_FAILURE(ReproduceWithOneVariant("reproduce_clusters", "clusters", "8",
+                                                    "--tables supp_cluster --pairs 2", &v));
+    const bool learned = v.learned;
     std::set<std::string> measured;
-    for (const auto& c : cells) {
+    for (const auto& c : v.cells) {
         if (c.at("table") != "supp_cluster_count" || c.at("source") != "measured") continue;
         if (!c.at("value").is_number()) continue;
         EXPECT_EQ(c.at("row"), "OGMM") << c.dump();
@@ -290,14 +303,14 @@ TEST(CliTestSets, ReproduceFillsClusterCountColumnsFromVariantCheckpoints) {
     }
     EXPECT_EQ(measured, learned ? (std::set<std::string>{"32", "8"}) : std::set<std::string>{});
     if (learned) {
-        EXPECT_TRUE(fs::exists(out / "results" / "ablation_clusters_8.jsonl"));
+        EXPECT_TRUE(fs::exists(v.out / "results" / "ablation_clusters_8.jsonl"));
     } else {
         // Without LibTorch the table is still written, saying why it is empty.
-        std::ifstream md(out / "tables.md");
+        std::ifstream md(v.out / "tables.md");
         const std::string text{std::istreambuf_iterator<char>(md), {}};
         EXPECT_NE(text.find("No regbench run fills this table"), std::string::npos) << text;
     }
-    fs::remove_all(dir);
+    fs::remove_all(v.dir);
 }
 
 }  // namespace

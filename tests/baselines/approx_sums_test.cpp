@@ -6,6 +6,9 @@
 // 0.25-sigma cells, which do merge.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+#include <string>
+
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
@@ -35,37 +38,43 @@ double RotationDiffDeg(const AlignResult& a, const AlignResult& b) {
                             b.T_target_source.topLeftCorner<3, 3>());
 }
 
-TEST(ApproximatedSums, GmmRegMatchesItsDenseModeOnFourThousandPoints) {
+/// A method's result on the 4k pair in its exact mode and with its approximations forced on.
+struct BothModes {
+    AlignResult dense, approx;
+};
+
+/// `method` on the 4k pair in its exact mode (kernel_sums dense) and with `approx_params`;
+/// both calls must succeed, and extra[`flag`] must say the approximation was off in the
+/// first and on in the second.
+void AlignBothModes(const std::string& method, const nlohmann::json& approx_params,
+                    const char* flag, BothModes* r) {
     const Pair4k p = MakePair4k();
-    const AlignResult dense =
-        CreateMethod("gmmreg", {{"kernel_sums", "dense"}})->Align(p.source, p.target);
-    const AlignResult approx =
-        CreateMethod("gmmreg", {{"approx_min_pairs", 0}, {"compress_cell_sigmas", 0.25}})
-            ->Align(p.source, p.target);
-    ASSERT_EQ(dense.status, AlignStatus::kOk) << dense.message;
-    ASSERT_EQ(approx.status, AlignStatus::kOk) << approx.message;
-    EXPECT_FALSE(dense.extra["approximated_sums"].get<bool>());
-    EXPECT_TRUE(approx.extra["approximated_sums"].get<bool>());
-    EXPECT_LT(RotationDiffDeg(dense, approx), kBudgetDeg);
+    r->dense = CreateMethod(method, {{"kernel_sums", "dense"}})->Align(p.source, p.target);
+    r->approx = CreateMethod(method, approx_params)->Align(p.source, p.target);
+    ASSERT_EQ(r->dense.status, AlignStatus::kOk) << r->dense.message;
+    ASSERT_EQ(r->approx.status, AlignStatus::kOk) << r->approx.message;
+    EXPECT_FALSE(r->dense.extra[flag].get<bool>());
+    EXPECT_TRUE(r->approx.extra[flag].get<bool>());
+}
+
+TEST(ApproximatedSums, GmmRegMatchesItsDenseModeOnFourThousandPoints) {
+    BothModes r;
+    ASSERT_NO_FATAL_FAILURE(
+        AlignBothModes("gmmreg", {{"approx_min_pairs", 0}, {"compress_cell_sigmas", 0.25}},
+                       "approximated_sums", &r));
+    EXPECT_LT(RotationDiffDeg(r.dense, r.approx), kBudgetDeg);
 }
 
 TEST(ApproximatedSums, SvrWithSubsampledSvmAndApproximatedSumsMatchesDenseMode) {
-    const Pair4k p = MakePair4k();
-    const AlignResult dense =
-        CreateMethod("svr", {{"kernel_sums", "dense"}})->Align(p.source, p.target);
-    const AlignResult approx =
-        CreateMethod("svr", {{"approx_min_pairs", 0}, {"svm_max_points", 2000}})
-            ->Align(p.source, p.target);
-    ASSERT_EQ(dense.status, AlignStatus::kOk) << dense.message;
-    ASSERT_EQ(approx.status, AlignStatus::kOk) << approx.message;
-    EXPECT_FALSE(dense.extra["svm_subsampled"].get<bool>());
-    EXPECT_TRUE(approx.extra["svm_subsampled"].get<bool>());
+    BothModes r;
+    ASSERT_NO_FATAL_FAILURE(AlignBothModes(
+        "svr", {{"approx_min_pairs", 0}, {"svm_max_points", 2000}}, "svm_subsampled", &r));
     // SVR's mixtures are its support vectors (a few hundred here, spread over the surface):
     // compressing them would not halve them and the cutoff radius covers the blob, so the
     // L2 sums rightly stay exact (gmm_l2_test checks those rules; the GMMReg test above the
     // accuracy of compression).
-    EXPECT_FALSE(approx.extra["approximated_sums"].get<bool>());
-    EXPECT_LT(RotationDiffDeg(dense, approx), kBudgetDeg);
+    EXPECT_FALSE(r.approx.extra["approximated_sums"].get<bool>());
+    EXPECT_LT(RotationDiffDeg(r.dense, r.approx), kBudgetDeg);
 }
 
 }  // namespace
