@@ -256,22 +256,16 @@ MethodInfo MakeInfo(const std::string& name, const std::string& model_dir,
 
 }  // namespace
 
-MethodInfo OgmmMethodInfo() {
-    return MakeInfo<true, true>(
-        "ogmm", "ogmm",
-        "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement");
-}
-MethodInfo OgmmNoIcpMethodInfo() {
-    return MakeInfo<false, true>("ogmm-noicp", "ogmm",
-                                 "OGMM network alone (LibTorch, CPU batch 1)");
-}
-MethodInfo DeepGmrMethodInfo() {
-    return MakeInfo<true, false>(
-        "deepgmr", "deepgmr",
-        "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement");
-}
-MethodInfo DeepGmrNoIcpMethodInfo() {
-    return MakeInfo<false, false>("deepgmr-noicp", "deepgmr",
-                                  "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone");
+std::vector<MethodInfo> LearnedMethodInfos() {
+    return {
+        MakeInfo<true, true>(
+            "ogmm", "ogmm",
+            "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement"),
+        MakeInfo<false, true>("ogmm-noicp", "ogmm", "OGMM network alone (LibTorch, CPU batch 1)"),
+        MakeInfo<true, false>(
+            "deepgmr", "deepgmr",
+            "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement"),
+        MakeInfo<false, false>("deepgmr-noicp", "deepgmr",
+                               "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone")};
 }
 }  // namespace regbench

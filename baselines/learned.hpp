@@ -2,19 +2,17 @@
 // Learned methods (DeepGMR, OGMM) as regbench methods: batch-1 CPU inference of a checkpoint,
 // optionally refined by Open3D point-to-point ICP as the OGMM authors' evaluation does.
 #include <string>
+#include <vector>
 
 #include "core/registration.hpp"
 
 namespace regbench {
 
-/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`. Any checkpoint of the method's family
-/// (config.arch "ogmm" / "deepgmr") runs under it, e.g. `deepgmr` with checkpoint = a
+/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`, in that order. Any checkpoint of the method's
+/// family (config.arch "ogmm" / "deepgmr") runs under it, e.g. `deepgmr` with checkpoint = a
 /// deepgmr-orig run. Creating the method opens checkpoint.json: a missing folder, an unreadable
 /// checkpoint or one of the other family is refused (std::invalid_argument naming the folder).
-MethodInfo OgmmMethodInfo();
-MethodInfo OgmmNoIcpMethodInfo();
-MethodInfo DeepGmrMethodInfo();
-MethodInfo DeepGmrNoIcpMethodInfo();
+std::vector<MethodInfo> LearnedMethodInfos();
 
 /// Directory of the shipped checkpoint `name` (e.g. "ogmm"): $REGBENCH_MODELS/<name> when that
 /// variable is set, else <source dir baked in at build time>/data/models/<name>.

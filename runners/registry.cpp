@@ -2,6 +2,7 @@
 
 #include <map>
 #include <stdexcept>
+#include <utility>
 
 #include "baselines/cpd.hpp"
 #include "baselines/fgr.hpp"
@@ -20,14 +21,16 @@
 namespace regbench {
 
 const std::vector<MethodInfo>& AllMethods() {
-    static const std::vector<MethodInfo> methods = {
-        IdentityMethodInfo(), IcpMethodInfo(),       IcpPlMethodInfo(),   FgrMethodInfo(),
-        GicpMethodInfo(),     NdtMethodInfo(),       CpdMethodInfo(),     GmmRegMethodInfo(),
-        SvrMethodInfo(),      FilterRegMethodInfo(),
+    static const std::vector<MethodInfo> methods = [] {
+        std::vector<MethodInfo> m = {IdentityMethodInfo(), IcpMethodInfo(),    IcpPlMethodInfo(),
+                                     FgrMethodInfo(),      GicpMethodInfo(),   NdtMethodInfo(),
+                                     CpdMethodInfo(),      GmmRegMethodInfo(), SvrMethodInfo(),
+                                     FilterRegMethodInfo()};
 #ifdef REGBENCH_HAVE_LEARNED
-        OgmmMethodInfo(),     OgmmNoIcpMethodInfo(), DeepGmrMethodInfo(), DeepGmrNoIcpMethodInfo(),
+        for (auto& info : LearnedMethodInfos()) m.push_back(std::move(info));
 #endif
-    };
+        return m;
+    }();
     return methods;
 }
 
