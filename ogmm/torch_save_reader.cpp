@@ -3,6 +3,7 @@
 #include <caffe2/serialize/inline_container.h>
 #include <caffe2/serialize/istream_adapter.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <fstream>
@@ -50,24 +51,32 @@ struct Obj {
     std::vector<int64_t> sizes, strides;             // kTensor
 };
 
-/// Storage classes a state dict may reference, by pickled name.
+/// The tensor types a state dict may hold; each is pickled as the storage class
+/// torch.<c10::toString(type)>Storage (FloatStorage, BFloat16Storage, ...).
+constexpr c10::ScalarType kStorageDtypes[] = {c10::ScalarType::Float, c10::ScalarType::Double,
+                                              c10::ScalarType::Half,  c10::ScalarType::BFloat16,
+                                              c10::ScalarType::Long,  c10::ScalarType::Int,
+                                              c10::ScalarType::Short, c10::ScalarType::Char,
+                                              c10::ScalarType::Byte,  c10::ScalarType::Bool};
+
+/// The storage class of `t` without the module ("FloatStorage"); throws for other types.
+std::string StorageName(c10::ScalarType t) {
+    if (std::find(std::begin(kStorageDtypes), std::end(kStorageDtypes), t) ==
+        std::end(kStorageDtypes)) {
+        throw std::runtime_error(std::string("cannot save tensors of type ") + c10::toString(t));
+    }
+    return std::string(c10::toString(t)) + "Storage";
+}
+
+/// The tensor type of a pickled storage class name ("torch.FloatStorage").
 bool StorageDtype(const std::string& global, c10::ScalarType* out) {
-    static const std::map<std::string, c10::ScalarType> kTypes = {
-        {"torch.FloatStorage", c10::ScalarType::Float},
-        {"torch.DoubleStorage", c10::ScalarType::Double},
-        {"torch.HalfStorage", c10::ScalarType::Half},
-        {"torch.BFloat16Storage", c10::ScalarType::BFloat16},
-        {"torch.LongStorage", c10::ScalarType::Long},
-        {"torch.IntStorage", c10::ScalarType::Int},
-        {"torch.ShortStorage", c10::ScalarType::Short},
-        {"torch.CharStorage", c10::ScalarType::Char},
-        {"torch.ByteStorage", c10::ScalarType::Byte},
-        {"torch.BoolStorage", c10::ScalarType::Bool},
-    };
-    const auto it = kTypes.find(global);
-    if (it == kTypes.end()) return false;
-    *out = it->second;
-    return true;
+    for (const c10::ScalarType t : kStorageDtypes) {
+        if (global == "torch." + StorageName(t)) {
+            *out = t;
+            return true;
+        }
+    }
+    return false;
 }
 
 /// The restricted unpickler. One instance per file; Run() may be called for several
@@ -669,34 +678,6 @@ private:
     }
     std::string out_;
 };
-
-std::string StorageName(c10::ScalarType t) {
-    switch (t) {
-        case c10::ScalarType::Float:
-            return "FloatStorage";
-        case c10::ScalarType::Double:
-            return "DoubleStorage";
-        case c10::ScalarType::Half:
-            return "HalfStorage";
-        case c10::ScalarType::BFloat16:
-            return "BFloat16Storage";
-        case c10::ScalarType::Long:
-            return "LongStorage";
-        case c10::ScalarType::Int:
-            return "IntStorage";
-        case c10::ScalarType::Short:
-            return "ShortStorage";
-        case c10::ScalarType::Char:
-            return "CharStorage";
-        case c10::ScalarType::Byte:
-            return "ByteStorage";
-        case c10::ScalarType::Bool:
-            return "BoolStorage";
-        default:
-            throw std::runtime_error(std::string("cannot save tensors of type ") +
-                                     c10::toString(t));
-    }
-}
 
 }  // namespace
 
