@@ -14,13 +14,11 @@
 
 namespace regbench {
 Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
-    Table t;
-    t.id = "distribution";
-    t.title = "Per-method distribution of every metric";
-    t.caption = fmt::format(
-        "mean ± half-width of the 95% percentile-bootstrap CI ({} resamples, seed {}), "
-        "median and sample std over pairs with a finite value",
-        o.bootstrap_samples, o.seed);
+    Table t{
+        "distribution", "Per-method distribution of every metric",
+        fmt::format("mean ± half-width of the 95% percentile-bootstrap CI ({} resamples, seed {}), "
+                    "median and sample std over pairs with a finite value",
+                    o.bootstrap_samples, o.seed)};
     t.columns.push_back({"pairs", "pairs", CellSource::kMeasured, Better::kNone, 0});
     for (const auto& m : o.metrics) {
         const int d = FindMetric(m).decimals;
@@ -55,12 +53,10 @@ Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptio
 }
 
 Table StatusTable(const std::vector<ResultRow>& rows) {
-    Table t;
-    t.id = "status";
-    t.title = "Calls per status";
-    t.caption =
+    Table t{
+        "status", "Calls per status",
         "ok / failed (the method reported failure) / timeout / crashed (isolated runs) / other; "
-        "null metrics: rows whose metrics are missing or not finite, counted as failures";
+        "null metrics: rows whose metrics are missing or not finite, counted as failures"};
     const std::vector<std::string> statuses = {"ok", "failed", "timeout", "crashed", "other"};
     for (const auto& s : statuses) {
         t.columns.push_back({s, s, CellSource::kMeasured, Better::kNone, 0});
@@ -89,12 +85,10 @@ Table StatusTable(const std::vector<ResultRow>& rows) {
 }
 
 Table RecallTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
-    Table t;
-    t.id = "recall";
-    t.title = "Recall at several thresholds";
-    t.caption =
+    Table t{
+        "recall", "Recall at several thresholds",
         "recall@(r, t): fraction of pairs with mae_r < r degrees and mae_t < t; pairs with null "
-        "metrics count as misses";
+        "metrics count as misses"};
     t.columns.push_back({"pairs", "pairs", CellSource::kMeasured, Better::kNone, 0});
     for (const auto& [r, tt] : o.recall) {
         t.columns.push_back({fmt::format("recall@({:g},{:g})", r, tt),
@@ -153,12 +147,9 @@ void AddMeanRows(Table& t, const std::vector<ResultRow>& rows, const BreakdownOp
 }  // namespace
 
 Table CategoryTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
-    Table t;
-    t.id = "category";
-    t.title = "Mean " + o.key_metric + " per category";
-    t.caption =
-        "shape categories of the pairs; each cell averages the pairs of that category (n: how "
-        "many)";
+    Table t{"category", "Mean " + o.key_metric + " per category",
+            "shape categories of the pairs; each cell averages the pairs of that category (n: how "
+            "many)"};
     std::set<std::string> categories;
     for (const auto& r : rows) categories.insert(r.category);
     for (const auto& c : categories) {
@@ -173,13 +164,11 @@ Table CategoryTable(const std::vector<ResultRow>& rows, const BreakdownOptions& 
 }
 
 Table OverlapTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
-    Table t;
-    t.id = "overlap";
-    t.title = "Mean " + o.key_metric + " by measured overlap";
-    t.caption =
+    Table t{
+        "overlap", "Mean " + o.key_metric + " by measured overlap",
         "bins of the pair's measured overlap, min(source ratio, target ratio), as the pair file "
         "labels it; each cell averages the pairs in the bin (n: how many; also the JSON/CSV "
-        "`pairs` field)";
+        "`pairs` field)"};
     for (std::size_t b = 0; b + 1 < o.overlap_edges.size(); ++b) {
         const double lo = o.overlap_edges[b];
         const double hi = std::min(1.0, o.overlap_edges[b + 1]);

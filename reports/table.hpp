@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace regbench {
@@ -78,6 +79,10 @@ struct TableRow {
 };
 
 struct Table {
+    Table() = default;
+    Table(std::string id_, std::string title_, std::string caption_)
+        : id(std::move(id_)), title(std::move(title_)), caption(std::move(caption_)) {}
+
     std::string id;       ///< e.g. "table1_modelnet_partial"
     std::string title;    ///< e.g. "Tab. 1: partial-to-partial"; "" for no heading
     std::string caption;  ///< names the data each side came from and the pairing
