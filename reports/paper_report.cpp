@@ -58,20 +58,31 @@ std::string DescribeSetData(const ResultSet& s) {
 /// itself scores: what a perfect registration gets; a method can only go below it by fitting
 /// the noise), or why there is none.
 void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
-    bool any = false;
+    // Sets with the same floor (an ablation's variants, the cluster-count columns: the same
+    // pairs) share one note naming their groups.
+    struct Floor {
+        double value;
+        std::string groups;
+    };
+    std::vector<Floor> floors;
     for (const auto& s : sets) {
-        if (!std::isfinite(s.provenance.gt_ccd_floor)) continue;
-        any = true;
-        const std::string note = fmt::format(
-            "Ground-truth CCD floor{}: {:.4f} (CCD of the true "
-            "transform on these pairs: what a perfect registration scores)",
-            s.group.empty() ? "" : " (" + s.group + ")", s.provenance.gt_ccd_floor);
-        // Sets on the same pairs (an ablation's variants) share one note.
-        if (std::find(t->notes.begin(), t->notes.end(), note) == t->notes.end()) {
-            t->notes.push_back(note);
+        const double value = s.provenance.gt_ccd_floor;
+        if (!std::isfinite(value)) continue;
+        auto f = std::find_if(floors.begin(), floors.end(),
+                              [&](const Floor& x) { return x.value == value; });
+        if (f == floors.end()) f = floors.insert(floors.end(), Floor{value, ""});
+        if (!s.group.empty() &&
+            (", " + f->groups + ", ").find(", " + s.group + ", ") == std::string::npos) {
+            f->groups += (f->groups.empty() ? "" : ", ") + s.group;
         }
     }
-    if (!any) {
+    for (const auto& f : floors) {
+        t->notes.push_back(fmt::format(
+            "Ground-truth CCD floor{}: {:.4f} (CCD of the true transform on these pairs: what a "
+            "perfect registration scores)",
+            f.groups.empty() ? "" : " (" + f.groups + ")", f.value));
+    }
+    if (floors.empty()) {
         t->notes.push_back(
             "Ground-truth CCD floor: not known (no pair file behind this table's rows).");
     }

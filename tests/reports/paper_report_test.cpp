@@ -390,5 +390,20 @@ TEST(PaperReport, AblationVariantsOnTheSamePairsAreDescribedOnce) {
     EXPECT_NE(t.notes[0].find("Ground-truth CCD floor: 0.1041"), std::string::npos) << t.notes[0];
 }
 
+// The cluster-count table's columns (groups 32, 8, 64) are variants on one pair file. Its
+// table printed one floor note per column, identical but for the group (found 2026-12-04 in
+// `reproduce --tables supp_cluster`). Expected, by hand: one note naming the three groups.
+TEST(PaperReport, GroupsOnTheSamePairsShareOneFloorNote) {
+    const auto set = [](const std::string& group) {
+        return ResultSet{group, {Row(0, "ogmm", 1.0), Row(1, "ogmm", 2.0)}, Prov("p.h5"), ""};
+    };
+    const Table t =
+        BuildPaperTable(FindPaperTableSpec("supp_cluster_count"), {set("32"), set("8"), set("64")},
+                        LoadPaperTables(DefaultPaperTablesPath()), {});
+    ASSERT_EQ(t.notes.size(), 1u);
+    EXPECT_NE(t.notes[0].find("Ground-truth CCD floor (32, 8, 64): 0.1041"), std::string::npos)
+        << t.notes[0];
+}
+
 }  // namespace
 }  // namespace regbench
