@@ -107,11 +107,11 @@ void WriteText(const fs::path& path, const std::string& text) {
 
 /// Methods to run: `names` (a file's or --methods; empty: every registered one), and the
 /// reasons the wanted ones that cannot run are left out. Only methods in `learned` may be left
-/// out of a list that names them; a file's list (`from_file`) may end up empty (its table then
-/// says why), --methods may not.
+/// out of a list that names them; a file's list (no --methods given) may end up empty (its table
+/// then says why), --methods may not.
 std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
                                       const std::set<std::string>& learned,
-                                      const ReproduceOptions& o, bool from_file,
+                                      const ReproduceOptions& o,
                                       std::map<std::string, std::string>* unavailable,
                                       std::ostream& log) {
     const bool named = !names.empty();
@@ -139,6 +139,7 @@ std::vector<MethodSpec> ChooseMethods(std::vector<std::string> names,
             log << "reproduce: " << name << " left out (not trained: " << e.what() << ")\n";
         }
     }
+    const bool from_file = o.methods.empty();
     if (specs.empty() && !(named && from_file)) {
         throw std::runtime_error("reproduce: no method can run");
     }
@@ -157,7 +158,7 @@ std::map<std::string, std::vector<MethodSpec>> ChooseAllMethods(
     for (const auto& f : files) {
         const auto& names = o.methods.empty() ? f.methods : o.methods;
         if (!by_list.count(names))
-            by_list[names] = ChooseMethods(names, learned, o, o.methods.empty(), unavailable, log);
+            by_list[names] = ChooseMethods(names, learned, o, unavailable, log);
         by_table[f.table] = by_list[names];
     }
     for (const auto& name : learned) {
