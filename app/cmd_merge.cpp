@@ -14,18 +14,15 @@ namespace {
 
 void SetupMergeCommand(CLI::App* cmd) {
     auto o = std::make_shared<MergeOptions>();
-    auto methods = std::make_shared<std::string>();
-    auto params = std::make_shared<std::string>();
+    auto m = std::make_shared<MethodArgs>();
     cmd->add_option("results", o->inputs, "Shard result files (JSONL)")->required();
     cmd->add_option("--out", o->out_path, "Merged JSONL (written atomically)")->required();
     cmd->add_option("--pairs", o->pairs_path, "The pair file the shards ran on")->required();
-    cmd->add_option("--methods", *methods, "The methods the shards ran (as given to run)")
-        ->required();
-    cmd->add_option("--params", *params, "The --params the shards ran with (JSON)");
-    cmd->callback([o, methods, params] {
+    m->Add(cmd, "The methods the shards ran (as given to run)",
+           "The --params the shards ran with (JSON)");
+    cmd->callback([o, m] {
         MergeOptions options = *o;
-        const nlohmann::json p = ParseParamsOption(*params);
-        options.methods = ParseMethodSpecs(*methods, p);
+        options.methods = m->Specs();
         const std::size_t n = MergeResults(options);
         std::cerr << "merge: wrote " << n << " rows from " << options.inputs.size() << " files to "
                   << options.out_path << "\n";

@@ -17,18 +17,15 @@ namespace {
 
 void SetupRunCommand(CLI::App* cmd) {
     auto opts = std::make_shared<RunOptions>();
-    auto methods = std::make_shared<std::string>();
-    auto params = std::make_shared<std::string>();
+    auto m = std::make_shared<MethodArgs>();
     auto shard = std::make_shared<std::string>("0/1");
     auto quiet = std::make_shared<bool>(false);
     auto euler = std::make_shared<std::string>("zyx");
     auto force = std::make_shared<bool>(false);
     cmd->add_option("--pairs", opts->pairs_path, "Frozen HDF5 pair file (regbench generate/import)")
         ->required();
-    cmd->add_option("--methods", *methods, "Comma-separated method names (see `regbench methods`)")
-        ->required();
-    cmd->add_option("--params", *params,
-                    "JSON object of parameters per method, e.g. '{\"cpd\": {\"w\": 0.1}}'");
+    m->Add(cmd, "Comma-separated method names (see `regbench methods`)",
+           "JSON object of parameters per method, e.g. '{\"cpd\": {\"w\": 0.1}}'");
     cmd->add_option("--out", opts->out_path,
                     "Output JSONL (written as OUT.part, renamed at the end)")
         ->required();
@@ -78,8 +75,7 @@ void SetupRunCommand(CLI::App* cmd) {
                                      ": already exists; pass --resume to continue it or --force "
                                      "to replace it");
         }
-        const nlohmann::json p = ParseParamsOption(*params);
-        o.methods = ParseMethodSpecs(*methods, p);
+        o.methods = m->Specs();
         ParseShard(*shard, &o.shard_index, &o.shard_count);
         o.progress = !*quiet;
         o.euler = ParseEulerConvention(*euler);
