@@ -10,6 +10,26 @@
 
 namespace regbench {
 
+const std::vector<MetricField>& PerPairMetrics() {
+    static const std::vector<MetricField> metrics = {
+        {"mae_r", &PairMetrics::mae_r, 4},
+        {"mae_t", &PairMetrics::mae_t, 4},
+        {"mse_r", &PairMetrics::mse_r, 4},
+        {"mse_t", &PairMetrics::mse_t, 4},
+        {"rre", &PairMetrics::rre, 4},
+        {"rte", &PairMetrics::rte, 4},
+        {"ccd", &PairMetrics::ccd, 4},
+        {"chamfer", &PairMetrics::chamfer, 4},
+        {"overlap_rmse", &PairMetrics::overlap_rmse, 4}};
+    return metrics;
+}
+
+std::optional<double> MetricField::Of(const PairMetrics& m) const {
+    const double x = m.*field;
+    if (!std::isfinite(x)) return std::nullopt;
+    return x;
+}
+
 PairMetrics MotionMetrics(const Transform& T_gt, const Transform& T_est, EulerConvention euler) {
     PairMetrics m;
     m.euler = euler;

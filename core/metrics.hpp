@@ -3,6 +3,8 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <limits>
+#include <optional>
+#include <vector>
 
 #include "core/point_cloud.hpp"
 #include "core/transform.hpp"
@@ -29,6 +31,23 @@ struct PairMetrics {
     /// distances are both below the clip; false means "discard this pair" under that variant.
     bool ccd_within_clip = true;
 };
+
+/// A per-pair metric: its name (the JSONL `metrics` key, the CLI's and Python's), its field of
+/// PairMetrics, and the one number format tables print it with.
+struct MetricField {
+    const char* name;
+    double PairMetrics::*field;
+    int decimals;
+
+    /// The metric's value in `m`, or nullopt when it is not finite (a null in the JSONL: the
+    /// row counts as a failure of this metric).
+    std::optional<double> Of(const PairMetrics& m) const;
+};
+
+/// Every per-pair metric (mae_r, mae_t, mse_r, mse_t, rre, rte, ccd, chamfer, overlap_rmse),
+/// in the order reports list them: the one list that JSONL rows, reports and the Python
+/// module read and write.
+const std::vector<MetricField>& PerPairMetrics();
 
 /// Rotation/translation metrics only (no clouds needed). `euler` picks the Euler angles of
 /// mae_r / mse_r: scipy's extrinsic 'zyx' (the paper's evaluation code) unless asked otherwise.

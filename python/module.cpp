@@ -202,16 +202,8 @@ py::dict Metrics(py::handle T_est, py::handle T_gt, py::handle source, py::handl
         m.overlap_rmse = OverlapRmse(gt, est, src, labels);
     }
     py::dict d;
-    d["mae_r"] = m.mae_r;
-    d["mae_t"] = m.mae_t;
-    d["mse_r"] = m.mse_r;
-    d["mse_t"] = m.mse_t;
-    d["rre"] = m.rre;
-    d["rte"] = m.rte;
-    d["ccd"] = m.ccd;
-    d["chamfer"] = m.chamfer;
+    for (const auto& f : PerPairMetrics()) d[f.name] = m.*f.field;
     d["ccd_within_clip"] = m.ccd_within_clip;
-    d["overlap_rmse"] = m.overlap_rmse;
     d["euler"] = ToString(m.euler);
     return d;
 }

@@ -34,7 +34,7 @@ Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptio
             const MetricField& metric = FindMetric(m);
             std::vector<double> v;
             for (const ResultRow* r : group) {
-                if (const auto x = metric.Of(*r)) v.push_back(*x);
+                if (const auto x = metric.Of(r->metrics)) v.push_back(*x);
             }
             const BootstrapCi ci =
                 BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
@@ -128,7 +128,7 @@ void AddMeanRows(Table& t, const std::vector<ResultRow>& rows, const BreakdownOp
         for (const ResultRow* r : RowsOf(rows, method)) {
             const std::optional<std::size_t> column = column_of(*r);
             if (!column) continue;
-            if (const auto x = metric.Of(*r)) cells[*column].push_back(*x);
+            if (const auto x = metric.Of(r->metrics)) cells[*column].push_back(*x);
         }
         TableRow row{method, {}};
         for (std::size_t c = 0; c < cells.size(); ++c) {

@@ -179,8 +179,8 @@ CompareResult CompareResults(const std::vector<ResultRow>& base,
             const MetricField& field = FindMetric(metric);
             std::vector<double> b, n, d;
             for (const auto& [rb, rn] : matched[method]) {
-                const auto vb = field.Of(*rb);
-                const auto vn = field.Of(*rn);
+                const auto vb = field.Of(rb->metrics);
+                const auto vn = field.Of(rn->metrics);
                 if (!vb || !vn) continue;
                 b.push_back(*vb);
                 n.push_back(*vn);

@@ -293,7 +293,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
                         if (method.empty()) method = r.method;
                         // Null metrics are failures: they keep the pair count honest but no
                         // number can stand in for them, so the cell says how many.
-                        if (const auto x = metric.Of(r)) v.push_back(*x);
+                        if (const auto x = metric.Of(r.metrics)) v.push_back(*x);
                     }
                     // The stream of the breakdowns (reports/breakdown.cpp): one CI per
                     // (method, metric) on the same pairs, so a report never shows two.

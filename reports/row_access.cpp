@@ -7,33 +7,15 @@
 
 namespace regbench {
 
-namespace {
-const MetricField kMetrics[] = {{"mae_r", &PairMetrics::mae_r, 4},
-                                {"mae_t", &PairMetrics::mae_t, 4},
-                                {"mse_r", &PairMetrics::mse_r, 4},
-                                {"mse_t", &PairMetrics::mse_t, 4},
-                                {"rre", &PairMetrics::rre, 4},
-                                {"rte", &PairMetrics::rte, 4},
-                                {"ccd", &PairMetrics::ccd, 4},
-                                {"chamfer", &PairMetrics::chamfer, 4},
-                                {"overlap_rmse", &PairMetrics::overlap_rmse, 4}};
-}  // namespace
-
-std::optional<double> MetricField::Of(const PairMetrics& m) const {
-    const double x = m.*field;
-    if (!std::isfinite(x)) return std::nullopt;
-    return x;
-}
-
 std::vector<std::string> MetricNames() {
     std::vector<std::string> names;
-    for (const auto& m : kMetrics) names.push_back(m.name);
+    for (const auto& m : PerPairMetrics()) names.push_back(m.name);
     return names;
 }
 
 const MetricField& FindMetric(const std::string& name) {
     std::string known;
-    for (const auto& m : kMetrics) {
+    for (const auto& m : PerPairMetrics()) {
         if (name == m.name) return m;
         known += (known.empty() ? "" : ", ") + std::string(m.name);
     }

@@ -1,7 +1,7 @@
 #pragma once
-// How reports read the typed result row (runners/result_row.hpp): a descriptor per per-pair
-// metric (its name, its field of PairMetrics, its number format), so a metric is named by
-// string once, where the options name it, and read through its field everywhere else.
+// How reports read the typed result row (runners/result_row.hpp): per-pair metrics through
+// their descriptors (core/metrics.hpp MetricField), so a metric is named by string once, where
+// the options name it, and read through its field everywhere else.
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,19 +10,6 @@
 #include "runners/result_row.hpp"
 
 namespace regbench {
-
-/// A per-pair metric as reports read it: its name (the JSONL `metrics` key, the CLI's), its
-/// field of the typed row, and the one number format tables print it with.
-struct MetricField {
-    const char* name;
-    double PairMetrics::*field;
-    int decimals;
-
-    /// The metric's value in `m`, or nullopt when it is not finite (a null in the JSONL: the
-    /// row counts as a failure of this metric).
-    std::optional<double> Of(const PairMetrics& m) const;
-    std::optional<double> Of(const ResultRow& row) const { return Of(row.metrics); }
-};
 
 /// The metric called `name` (mae_r, mae_t, mse_r, mse_t, rre, rte, ccd, chamfer, overlap_rmse);
 /// throws std::invalid_argument listing them.

@@ -42,28 +42,22 @@ std::optional<double> OptionalNumber(const nlohmann::json& j, const char* key) {
 }
 
 nlohmann::json MetricsToJson(const PairMetrics& m) {
-    return {{"mae_r", FiniteOrNull(m.mae_r)},       {"mae_t", FiniteOrNull(m.mae_t)},
-            {"mse_r", FiniteOrNull(m.mse_r)},       {"mse_t", FiniteOrNull(m.mse_t)},
-            {"rre", FiniteOrNull(m.rre)},           {"rte", FiniteOrNull(m.rte)},
-            {"ccd", FiniteOrNull(m.ccd)},           {"chamfer", FiniteOrNull(m.chamfer)},
-            {"ccd_within_clip", m.ccd_within_clip}, {"overlap_rmse", FiniteOrNull(m.overlap_rmse)}};
+    nlohmann::json j = {{"ccd_within_clip", m.ccd_within_clip}};
+    for (const auto& f : PerPairMetrics()) j[f.name] = FiniteOrNull(m.*f.field);
+    return j;
 }
 
 PairMetrics MetricsFromJson(const nlohmann::json& j, EulerConvention euler) {
     if (!j.is_object()) throw std::invalid_argument("metrics is not an object");
     PairMetrics m;
     m.euler = euler;
-    m.mae_r = NumberOrNaN(j, "mae_r");
-    m.mae_t = NumberOrNaN(j, "mae_t");
-    m.mse_r = NumberOrNaN(j, "mse_r");
-    m.mse_t = NumberOrNaN(j, "mse_t");
-    m.rre = NumberOrNaN(j, "rre");
-    m.rte = NumberOrNaN(j, "rte");
-    m.ccd = NumberOrNaN(j, "ccd");
-    m.chamfer = NumberOrNaN(j, "chamfer");
+    for (const auto& f : PerPairMetrics()) {
+        // overlap_rmse came later than the others: older rows have none (NaN, so 3DMatch
+        // recall refuses them).
+        const bool old_row = f.field == &PairMetrics::overlap_rmse && !j.contains(f.name);
+        m.*f.field = old_row ? kNaN : NumberOrNaN(j, f.name);
+    }
     m.ccd_within_clip = j.value("ccd_within_clip", true);
-    // Added later than the others: older rows have none (NaN, so 3DMatch recall refuses them).
-    m.overlap_rmse = j.contains("overlap_rmse") ? NumberOrNaN(j, "overlap_rmse") : kNaN;
     return m;
 }
 
