@@ -59,19 +59,22 @@ constexpr c10::ScalarType kStorageDtypes[] = {c10::ScalarType::Float, c10::Scala
                                               c10::ScalarType::Short, c10::ScalarType::Char,
                                               c10::ScalarType::Byte,  c10::ScalarType::Bool};
 
-/// The storage class of `t` without the module ("FloatStorage"); throws for other types.
+/// The storage class of `t` without the module: "FloatStorage".
+std::string StorageClass(c10::ScalarType t) { return std::string(c10::toString(t)) + "Storage"; }
+
+/// StorageClass of a type a state dict may hold; throws for other types.
 std::string StorageName(c10::ScalarType t) {
     if (std::find(std::begin(kStorageDtypes), std::end(kStorageDtypes), t) ==
         std::end(kStorageDtypes)) {
         throw std::runtime_error(std::string("cannot save tensors of type ") + c10::toString(t));
     }
-    return std::string(c10::toString(t)) + "Storage";
+    return StorageClass(t);
 }
 
 /// The tensor type of a pickled storage class name ("torch.FloatStorage").
 bool StorageDtype(const std::string& global, c10::ScalarType* out) {
     for (const c10::ScalarType t : kStorageDtypes) {
-        if (global == "torch." + StorageName(t)) {
+        if (global == "torch." + StorageClass(t)) {
             *out = t;
             return true;
         }
