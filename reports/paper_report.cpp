@@ -62,7 +62,7 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
     // pairs) share one note naming their groups.
     struct Floor {
         double value;
-        std::string groups;
+        std::vector<std::string> groups;
     };
     std::vector<Floor> floors;
     for (const auto& s : sets) {
@@ -70,17 +70,17 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
         if (!std::isfinite(value)) continue;
         auto f = std::find_if(floors.begin(), floors.end(),
                               [&](const Floor& x) { return x.value == value; });
-        if (f == floors.end()) f = floors.insert(floors.end(), Floor{value, ""});
+        if (f == floors.end()) f = floors.insert(floors.end(), Floor{value, {}});
         if (!s.group.empty() &&
-            (", " + f->groups + ", ").find(", " + s.group + ", ") == std::string::npos) {
-            f->groups += (f->groups.empty() ? "" : ", ") + s.group;
+            std::find(f->groups.begin(), f->groups.end(), s.group) == f->groups.end()) {
+            f->groups.push_back(s.group);
         }
     }
     for (const auto& f : floors) {
         t->notes.push_back(fmt::format(
             "Ground-truth CCD floor{}: {:.4f} (CCD of the true transform on these pairs: what a "
             "perfect registration scores)",
-            f.groups.empty() ? "" : " (" + f.groups + ")", f.value));
+            f.groups.empty() ? "" : fmt::format(" ({})", fmt::join(f.groups, ", ")), f.value));
     }
     if (floors.empty()) {
         t->notes.push_back(
