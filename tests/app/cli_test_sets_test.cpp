@@ -92,13 +92,14 @@ void ExpectStoredPairs(const PairSet& set, const StoredPairs& sp) {
     for (std::size_t k = 0; k < set.pairs.size(); ++k) {
         const std::size_t s = k % sp.count;
         ASSERT_EQ(set.pairs[k].source.rows(), static_cast<Eigen::Index>(sp.points));
-        for (std::size_t i = 0; i < sp.points; ++i) {
-            for (std::size_t d = 0; d < 3; ++d) {
+        for (std::size_t d = 0; d < 3; ++d) {
+            const auto col = static_cast<Eigen::Index>(d);
+            EXPECT_EQ(set.pairs[k].T_gt(col, 3), sp.transform[s * 16 + d * 4 + 3]);
+            for (std::size_t i = 0; i < sp.points; ++i) {
                 const std::size_t at = (s * sp.points + i) * 3 + d;
-                const auto row = static_cast<Eigen::Index>(i), col = static_cast<Eigen::Index>(d);
+                const auto row = static_cast<Eigen::Index>(i);
                 EXPECT_EQ(set.pairs[k].source(row, col), sp.source[at]);
                 EXPECT_EQ(set.pairs[k].target(row, col), sp.target[at]);
-                EXPECT_EQ(set.pairs[k].T_gt(col, 3), sp.transform[s * 16 + d * 4 + 3]);
             }
         }
     }
