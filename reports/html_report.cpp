@@ -253,7 +253,7 @@ std::string TimeVsAccuracySvg(const std::vector<ResultRow>& rows) {
     for (std::size_t i = 0; i < methods.size(); ++i) {
         std::vector<double> secs, err;
         for (const ResultRow* r : RowsOf(rows, methods[i])) {
-            secs.push_back(std::max(r->seconds, 1e-6));
+            secs.push_back(std::max(r->result.seconds, 1e-6));
             if (std::isfinite(r->metrics.mae_r)) err.push_back(r->metrics.mae_r);
         }
         t[i] = SampleMedian(secs);
@@ -363,7 +363,8 @@ std::string RenderHtmlReport(const HtmlReportOptions& o) {
             for (int k = 0; k < o.gallery_per_method && k < static_cast<int>(mine.size()); ++k) {
                 const Pair* pair = sec.pair_lookup(*mine[k]);
                 if (pair == nullptr) continue;
-                s += "<figure>" + PairProjectionSvg(*pair, mine[k]->transform, o.gallery_points) +
+                s += "<figure>" +
+                     PairProjectionSvg(*pair, mine[k]->result.T_target_source, o.gallery_points) +
                      fmt::format(
                          "<figcaption>pair {} ({}), MAE(R) {:.2f}°, {}</figcaption></figure>",
                          mine[k]->pair, Escape(mine[k]->shape), MaeROrInf(*mine[k]),

@@ -338,9 +338,9 @@ struct TimingRow {
 };
 
 double ExtraNumber(const ResultRow& row, const char* key) {
-    if (!row.extra.is_object()) return std::nan("");
-    const auto v = row.extra.find(key);
-    return v != row.extra.end() && v->is_number() ? v->get<double>() : std::nan("");
+    if (!row.result.extra.is_object()) return std::nan("");
+    const auto v = row.result.extra.find(key);
+    return v != row.result.extra.end() && v->is_number() ? v->get<double>() : std::nan("");
 }
 
 /// Mean of `v`, NaN (a blank cell) when empty.
@@ -379,15 +379,16 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
             if (r.status != Status::kOk) continue;
             // Rows written before cpu_seconds existed read 0 s: no CPU time to show (as in
             // runners/timing_summary).
-            if (r.cpu_seconds > 0.0) row.cpu.push_back(1e3 * r.cpu_seconds);
+            if (r.result.cpu_seconds > 0.0) row.cpu.push_back(1e3 * r.result.cpu_seconds);
             const double network = ExtraNumber(r, "network_cpu_seconds");
             const double macs = ExtraNumber(r, "macs");
             const double floor = ExtraNumber(r, "floor_seconds");
             if (std::isfinite(network)) row.network.push_back(1e3 * network);
             if (std::isfinite(macs)) row.gmac.push_back(1e-9 * macs);
             if (std::isfinite(floor)) row.floor.push_back(1e3 * floor);
-            const auto blas = r.extra.is_object() ? r.extra.find("blas") : r.extra.end();
-            if (blas != r.extra.end() && blas->is_string() && std::isfinite(floor)) {
+            const auto blas =
+                r.result.extra.is_object() ? r.result.extra.find("blas") : r.result.extra.end();
+            if (blas != r.result.extra.end() && blas->is_string() && std::isfinite(floor)) {
                 learned_blas.insert(
                     fmt::format("{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
                                 blas->get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));

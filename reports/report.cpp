@@ -36,7 +36,7 @@ PairMetrics MetricsIn(const ResultRow& r, const ReportOptions& o) {
             r.origin.substr(0, r.origin.rfind(':')), r.method, ToString(*o.euler)));
     }
     PairMetrics m = r.metrics;
-    const PairMetrics motion = MotionMetrics(*r.gt_transform, r.transform, *o.euler);
+    const PairMetrics motion = MotionMetrics(*r.gt_transform, r.result.T_target_source, *o.euler);
     m.euler = *o.euler;
     m.mae_r = motion.mae_r;
     m.mse_r = motion.mse_r;
@@ -65,7 +65,7 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
     std::size_t recalled = 0, succeeded = 0, recalled_3dm = 0;
     for (const ResultRow* r : group) {
         const PairMetrics m = MetricsIn(*r, o);
-        secs.push_back(r->seconds);
+        secs.push_back(r->result.seconds);
         s.threads = r->threads;
         if (!AllFinite(m)) {
             // Not a number to average: the row counts as a failure and is named.

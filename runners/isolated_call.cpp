@@ -17,35 +17,6 @@
 namespace regbench {
 namespace {
 
-nlohmann::json AlignResultToJson(const AlignResult& r) {
-    return {{"transform", TransformToJson(r.T_target_source)},
-            {"iterations", r.iterations},
-            {"stop_reason", r.stop_reason},
-            {"seconds", r.seconds},
-            {"cpu_seconds", r.cpu_seconds},
-            {"cpu_scope", r.cpu_scope},
-            {"status", ToString(r.status)},
-            {"message", r.message},
-            {"scale", r.scale},
-            {"extra", r.extra}};
-}
-
-AlignResult AlignResultFromJson(const nlohmann::json& j) {
-    AlignResult r;
-    r.T_target_source = TransformFromJson(j.at("transform"));
-    r.iterations = j.at("iterations").get<int>();
-    r.stop_reason = j.at("stop_reason").get<std::string>();
-    r.seconds = j.at("seconds").get<double>();
-    r.cpu_seconds = j.value("cpu_seconds", 0.0);
-    r.cpu_scope = j.value("cpu_scope", std::string("thread"));
-    r.status =
-        j.at("status") == ToString(AlignStatus::kOk) ? AlignStatus::kOk : AlignStatus::kFailed;
-    r.message = j.at("message").get<std::string>();
-    r.scale = j.at("scale").get<double>();
-    r.extra = j.at("extra");
-    return r;
-}
-
 CallOutcome Failure(Status status, const std::string& message, double seconds) {
     CallOutcome out;
     out.result.status = AlignStatus::kFailed;
@@ -91,15 +62,15 @@ CallOutcome AlignIsolated(RegistrationMethod& method, const Pair& pair, const Al
             try {
                 // A message holding a library's non-UTF-8 bytes is sent with U+FFFD for them
                 // instead of throwing type_error.316 here.
-                payload = AlignResultToJson(method.Align(pair.source, pair.target, context))
+                payload = nlohmann::json(method.Align(pair.source, pair.target, context))
                               .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
             } catch (const std::exception& e) {
                 AlignResult failed;
                 failed.status = AlignStatus::kFailed;
                 failed.stop_reason = "exception";
                 failed.message = method.Name() + ": " + e.what();
-                payload = AlignResultToJson(failed).dump(-1, ' ', false,
-                                                         nlohmann::json::error_handler_t::replace);
+                payload = nlohmann::json(failed).dump(-1, ' ', false,
+                                                      nlohmann::json::error_handler_t::replace);
             }
             size_t off = 0;
             while (off < payload.size()) {
@@ -154,7 +125,7 @@ CallOutcome AlignIsolated(RegistrationMethod& method, const Pair& pair, const Al
     }
     try {
         CallOutcome out;
-        out.result = AlignResultFromJson(nlohmann::json::parse(payload));
+        out.result = nlohmann::json::parse(payload).get<AlignResult>();
         out.status = StatusOf(out.result);
         return out;
     } catch (const std::exception& e) {

@@ -155,21 +155,41 @@ Transform TransformFromJson(const nlohmann::json& j) {
     return T;
 }
 
+void to_json(nlohmann::json& j, const AlignResult& r) {
+    j = {{"transform", TransformToJson(r.T_target_source)},
+         {"iterations", r.iterations},
+         {"stop_reason", r.stop_reason},
+         {"seconds", r.seconds},
+         {"cpu_seconds", r.cpu_seconds},
+         {"cpu_scope", r.cpu_scope},
+         {"status", ToString(r.status)},
+         {"message", r.message},
+         {"scale", r.scale},
+         {"extra", r.extra}};
+}
+
+void from_json(const nlohmann::json& j, AlignResult& r) {
+    r.T_target_source =
+        j.contains("transform") ? TransformFromJson(j.at("transform")) : Transform::Identity();
+    r.iterations = j.value("iterations", 0);
+    r.stop_reason = j.value("stop_reason", "");
+    r.seconds = j.value("seconds", 0.0);
+    // Rows from before CPU timing existed read as 0 s of the calling thread.
+    r.cpu_seconds = j.value("cpu_seconds", 0.0);
+    r.cpu_scope = j.value("cpu_scope", "thread");
+    r.status = j.value("status", "ok") == "ok" ? AlignStatus::kOk : AlignStatus::kFailed;
+    r.message = j.value("message", "");
+    r.scale = j.value("scale", 1.0);
+    r.extra = j.value("extra", nlohmann::json::object());
+}
+
 void to_json(nlohmann::json& j, const ResultRow& row) {
     j = row.other.is_object() ? row.other : nlohmann::json::object();
+    j.update(nlohmann::json(row.result));
     j["pair"] = row.pair;
     j["method"] = row.method;
     j["params"] = row.params;
-    j["transform"] = TransformToJson(row.transform);
-    j["seconds"] = row.seconds;
-    j["cpu_seconds"] = row.cpu_seconds;
-    j["cpu_scope"] = row.cpu_scope;
-    j["iterations"] = row.iterations;
     j["status"] = row.status;
-    j["message"] = row.message;
-    j["stop_reason"] = row.stop_reason;
-    j["scale"] = row.scale;
-    j["extra"] = row.extra;
     j["threads"] = row.threads;
     j["shape"] = row.shape;
     j["category"] = row.category;
@@ -190,18 +210,8 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     row.pair = j.at("pair").get<std::size_t>();
     row.method = j.at("method").get<std::string>();
     row.params = j.value("params", nlohmann::json::object());
-    row.transform =
-        j.contains("transform") ? TransformFromJson(j.at("transform")) : Transform::Identity();
-    row.seconds = j.value("seconds", 0.0);
-    // Rows from before CPU timing existed read as 0 s of the calling thread.
-    row.cpu_seconds = j.value("cpu_seconds", 0.0);
-    row.cpu_scope = j.value("cpu_scope", "thread");
-    row.iterations = j.value("iterations", 0);
     row.status = j.contains("status") ? j.at("status").get<Status>() : Status::kOk;
-    row.message = j.value("message", "");
-    row.stop_reason = j.value("stop_reason", "");
-    row.scale = j.value("scale", 1.0);
-    row.extra = j.value("extra", nlohmann::json::object());
+    row.result = j.get<AlignResult>();
     row.threads = j.value("threads", 1);
     row.shape = j.value("shape", "");
     row.category = j.value("category", "");

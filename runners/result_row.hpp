@@ -10,6 +10,7 @@
 
 #include "core/metrics.hpp"
 #include "core/point_cloud.hpp"
+#include "core/registration.hpp"
 
 namespace regbench {
 
@@ -41,6 +42,13 @@ struct DataTag {
 void to_json(nlohmann::json& j, const DataTag& d);
 void from_json(const nlohmann::json& j, DataTag& d);
 
+/// A call's result under the keys a row stores it by ("transform", "seconds", "cpu_seconds",
+/// "cpu_scope", "iterations", "status", "message", "stop_reason", "scale", "extra"); also what
+/// an isolated child sends back through its pipe. A missing key reads as AlignResult's default
+/// (rows written before the key existed); any status but "ok" reads as failed.
+void to_json(nlohmann::json& j, const AlignResult& r);
+void from_json(const nlohmann::json& j, AlignResult& r);
+
 /// One JSONL line. Keys are those rows have always had (so old files read) plus `euler`,
 /// `source_overlap_ratio`, `target_overlap_ratio`, `cpu_seconds`, `cpu_scope`, `machine`; keys this
 /// struct does not know are kept in `other` and written back, so a newer writer's columns survive a
@@ -49,17 +57,10 @@ struct ResultRow {
     std::size_t pair = 0;                              ///< index in the pair file
     std::string method;                                ///< registry name (or `score --method`)
     nlohmann::json params = nlohmann::json::object();  ///< the method's full parameters
-    Transform transform = Transform::Identity();       ///< estimated T_target_source
-    double seconds = 0.0;                              ///< wall time of the call
-    /// CPU time of the call (AlignResult::cpu_seconds); 0 in rows written before it existed.
-    double cpu_seconds = 0.0;
-    std::string cpu_scope = "thread";  ///< "thread" or "process": which clock cpu_seconds read
-    int iterations = 0;
-    Status status = Status::kOk;
-    std::string message;  ///< empty when ok
-    std::string stop_reason;
-    double scale = 1.0;                               ///< estimated scale (1 if none)
-    nlohmann::json extra = nlohmann::json::object();  ///< method diagnostics
+    /// The call's result: transform, times, iterations, stop reason, message, scale, extras.
+    /// Its ok/failed `status` follows `status` below when a row is read back.
+    AlignResult result;
+    Status status = Status::kOk;  ///< the runner's verdict (adds timeouts and crashes)
     int threads = 1;                                  ///< OpenMP threads of the call
     std::string shape;                                ///< the pair's mesh / scan name
     std::string category;

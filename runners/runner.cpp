@@ -182,16 +182,8 @@ ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSp
     row.pair = pair_index;
     row.method = method.name;
     row.params = method.params;
-    row.transform = result.T_target_source;
-    row.seconds = result.seconds;
-    row.cpu_seconds = result.cpu_seconds;
-    row.cpu_scope = result.cpu_scope;
-    row.iterations = result.iterations;
+    row.result = result;
     row.status = context.status.value_or(StatusOf(result));
-    row.message = result.message;
-    row.stop_reason = result.stop_reason;
-    row.scale = result.scale;
-    row.extra = result.extra;
     row.threads = context.threads;
     row.shape = pair.shape;
     row.category = pair.category;

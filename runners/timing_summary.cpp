@@ -12,8 +12,8 @@ TimingSummary SummariseTiming(const std::vector<ResultRow>& rows) {
     std::size_t load_rows = 0;
     for (const auto& row : rows) {
         if (row.status != Status::kOk) continue;
-        const double w = row.seconds;
-        const double c = row.cpu_seconds;
+        const double w = row.result.seconds;
+        const double c = row.result.cpu_seconds;
         if (!(w > 0.0) || !(c > 0.0)) continue;
         ++s.rows;
         wall += w;

@@ -40,10 +40,10 @@ std::vector<ResultRow> Rows() {
             r.method = m;
             r.shape = "ring";
             r.category = k % 2 ? "a" : "b";
-            r.seconds = m == "cpd" ? 0.05 : 0.005;
+            r.result.seconds = m == "cpd" ? 0.05 : 0.005;
             r.source_overlap_ratio = 0.5 + 0.015 * k;
             r.target_overlap_ratio = 0.55 + 0.01 * k;
-            r.transform(0, 3) = 0.1 * (k % 3);
+            r.result.T_target_source(0, 3) = 0.1 * (k % 3);
             r.metrics.mae_r = e;
             r.metrics.mae_t = e / 100;
             r.metrics.ccd = 0.05;

@@ -15,7 +15,7 @@ ResultRow Row(int pair, const std::string& method, double mae_r, double seconds 
     ResultRow r;
     r.pair = static_cast<std::size_t>(pair);
     r.method = method;
-    r.seconds = seconds;
+    r.result.seconds = seconds;
     r.metrics.mae_r = mae_r;
     r.metrics.mae_t = mae_r / 100;
     r.metrics.ccd = 0.05 + mae_r / 1000;
@@ -213,13 +213,13 @@ TEST(PaperReport, CsvAndJsonRoundTripWithProvenance) {
 ResultRow TimedRow(int pair, const std::string& method, double cpu_seconds, double network = 0.0,
                    double macs = 0.0, double floor = 0.0) {
     ResultRow r = Row(pair, method, 1.0, 2 * cpu_seconds);  // wall: not what is shown
-    r.cpu_seconds = cpu_seconds;
+    r.result.cpu_seconds = cpu_seconds;
     if (network > 0.0) {
-        r.extra = {{"network_cpu_seconds", network},
-                   {"macs", macs},
-                   {"floor_seconds", floor},
-                   {"gemm_gmac_per_s", 1e-9 * macs / floor},
-                   {"blas", "TestBLAS 1.0 (pthreads)"}};
+        r.result.extra = {{"network_cpu_seconds", network},
+                          {"macs", macs},
+                          {"floor_seconds", floor},
+                          {"gemm_gmac_per_s", 1e-9 * macs / floor},
+                          {"blas", "TestBLAS 1.0 (pthreads)"}};
     }
     return r;
 }

@@ -21,7 +21,7 @@ ResultRow Row(const std::string& method, double mae_r, double mae_t, double seco
     r.pair = pair;
     r.method = method;
     r.status = status;
-    r.seconds = seconds;
+    r.result.seconds = seconds;
     r.metrics.mae_r = mae_r;
     r.metrics.mae_t = mae_t;
     r.metrics.mse_r = mae_r * mae_r;
@@ -275,7 +275,8 @@ TEST(Report, EulerOptionRecomputesFromStoredGroundTruth) {
     ResultRow r = Row("a", 0.0, 0.0, 1);
     r.euler = EulerConvention::kXyz;
     r.gt_transform = MakeTransform(RotationXyzProductDeg(10, 20, 30), Eigen::Vector3d::Zero());
-    r.transform = MakeTransform(RotationXyzProductDeg(16, 20, 25), Eigen::Vector3d::Zero());
+    r.result.T_target_source =
+        MakeTransform(RotationXyzProductDeg(16, 20, 25), Eigen::Vector3d::Zero());
     ReportOptions o;
     o.euler = EulerConvention::kZyx;
     const auto tables = BuildTables({r}, o);

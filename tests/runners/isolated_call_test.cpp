@@ -94,26 +94,27 @@ TEST(AlignIsolated, CrashAndHangBecomeRowsAndTheOtherCallsComplete) {
     }
     ASSERT_EQ(rows.size(), 5u);
     EXPECT_EQ(rows[1].status, Status::kCrashed);
-    EXPECT_NE(rows[1].message.find("crashed with signal " + std::to_string(SIGABRT)),
+    EXPECT_NE(rows[1].result.message.find("crashed with signal " + std::to_string(SIGABRT)),
               std::string::npos)
-        << rows[1].message;
+        << rows[1].result.message;
     EXPECT_EQ(rows[2].status, Status::kTimeout);
-    EXPECT_NE(rows[2].message.find("exceeded timeout"), std::string::npos) << rows[2].message;
+    EXPECT_NE(rows[2].result.message.find("exceeded timeout"), std::string::npos)
+        << rows[2].result.message;
     EXPECT_EQ(rows[3].status, Status::kCrashed);
-    EXPECT_NE(rows[3].message.find("child exited without a result"), std::string::npos)
-        << rows[3].message;
+    EXPECT_NE(rows[3].result.message.find("child exited without a result"), std::string::npos)
+        << rows[3].result.message;
     // Failed calls carry the identity fallback, never a half-made transform.
     for (const std::size_t k : {1, 2, 3}) {
-        EXPECT_TRUE(rows[k].transform == Transform::Identity()) << k;
+        EXPECT_TRUE(rows[k].result.T_target_source == Transform::Identity()) << k;
     }
     // The calls before and after the bad ones are complete rows: the child's transform came
     // through the pipe bit for bit (JSON doubles round-trip), and the metrics against the
     // pair's ground truth (= the answer) are zero.
     for (const std::size_t k : {0, 4}) {
         EXPECT_EQ(rows[k].status, Status::kOk) << k;
-        EXPECT_EQ(rows[k].iterations, 7) << k;
-        EXPECT_EQ(rows[k].stop_reason, "converged") << k;
-        EXPECT_TRUE(rows[k].transform == Answer()) << k;
+        EXPECT_EQ(rows[k].result.iterations, 7) << k;
+        EXPECT_EQ(rows[k].result.stop_reason, "converged") << k;
+        EXPECT_TRUE(rows[k].result.T_target_source == Answer()) << k;
         EXPECT_NEAR(rows[k].metrics.rre, 0.0, 1e-5) << k;  // acos near 1: ~1e-6 deg
         EXPECT_NEAR(rows[k].metrics.rte, 0.0, 1e-12) << k;
     }

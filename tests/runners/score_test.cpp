@@ -112,14 +112,14 @@ TEST_F(ScoreTest, JsonlFromAnotherLanguageAndMissingPairs) {
     const auto rows = ReadResultRows(o.out_path);
     ASSERT_EQ(rows.size(), 4u);
     EXPECT_EQ(rows[0].status, Status::kOk);
-    EXPECT_EQ(rows[0].seconds, 0.5);
+    EXPECT_EQ(rows[0].result.seconds, 0.5);
     EXPECT_EQ(rows[1].method, "mine");
-    EXPECT_EQ(rows[1].transform(0, 3), 0.1);
+    EXPECT_EQ(rows[1].result.T_target_source(0, 3), 0.1);
     EXPECT_EQ(rows[3].status, Status::kMissing);
-    EXPECT_EQ(rows[3].transform, Transform::Identity());
+    EXPECT_EQ(rows[3].result.T_target_source, Transform::Identity());
     const PairSet set = ReadPairFile(pairs_);
     // Metrics are those of the given transform against the pair's ground truth.
-    const PairMetrics m = MotionMetrics(set.pairs[1].T_gt, rows[1].transform);
+    const PairMetrics m = MotionMetrics(set.pairs[1].T_gt, rows[1].result.T_target_source);
     EXPECT_DOUBLE_EQ(rows[1].metrics.mae_r, m.mae_r);
     EXPECT_DOUBLE_EQ(rows[1].metrics.rre, m.rre);
     EXPECT_EQ(rows[1].euler, EulerConvention::kZyx);
@@ -216,7 +216,7 @@ TEST_F(ScoreTest, SimilaritiesNeedAllowScale) {
     o.allow_scale = true;
     ScoreTransforms(o);
     const auto rows = ReadResultRows(o.out_path);
-    EXPECT_DOUBLE_EQ(rows[0].scale, 2.0);
+    EXPECT_DOUBLE_EQ(rows[0].result.scale, 2.0);
     const PairSet set = ReadPairFile(pairs_);
     const PairMetrics m = MotionMetrics(
         set.pairs[0].T_gt, MakeTransform(RotationZyxProductDeg(90, 0, 0), Eigen::Vector3d::Zero()));

@@ -59,8 +59,8 @@ TEST(RunnerTiming, EveryOkRowHasPositiveCpuSecondsAndTheMachineLoad) {
 ResultRow Row(double wall, double cpu, Status status = Status::kOk) {
     ResultRow row;
     row.status = status;
-    row.seconds = wall;
-    row.cpu_seconds = cpu;
+    row.result.seconds = wall;
+    row.result.cpu_seconds = cpu;
     row.machine = {{"loadavg", {3.0, 2.0, 1.0}}};
     return row;
 }
@@ -69,7 +69,7 @@ TEST(TimingSummary, RatioOfMeansAndWarningAboveThreshold) {
     // Hand values: wall 0.2 + 0.4 = 0.6, CPU 0.1 + 0.2 = 0.3 -> ratio 2; the failed row and the
     // row without cpu_seconds are skipped.
     ResultRow old_row;  // written before cpu_seconds existed: reads as 0
-    old_row.seconds = 5.0;
+    old_row.result.seconds = 5.0;
     std::vector<ResultRow> rows = {Row(0.2, 0.1), Row(0.4, 0.2), Row(9.0, 1.0, Status::kFailed),
                                    old_row};
     const TimingSummary s = SummariseTiming(rows);
