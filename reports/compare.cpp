@@ -324,6 +324,9 @@ std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& 
     return out;
 }
 
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(MethodCalls, method, pairs, failed_base, failed_new,
+                                   new_failures)
+
 nlohmann::json CompareToJson(const CompareResult& r, const CompareOptions& o) {
     nlohmann::json changes = nlohmann::json::array();
     for (const auto& c : r.changes) {
@@ -343,14 +346,6 @@ nlohmann::json CompareToJson(const CompareResult& r, const CompareOptions& o) {
                            {"underpowered", c.underpowered},
                            {"regression", c.regression}});
     }
-    nlohmann::json calls = nlohmann::json::array();
-    for (const auto& m : r.calls) {
-        calls.push_back({{"method", m.method},
-                         {"pairs", m.pairs},
-                         {"failed_base", m.failed_base},
-                         {"failed_new", m.failed_new},
-                         {"new_failures", m.new_failures}});
-    }
     const CompareVerdict v = r.Verdict();
     return {{"matched_rows", r.matched_rows},
             {"verdict", v == CompareVerdict::kPass   ? "PASS"
@@ -360,7 +355,7 @@ nlohmann::json CompareToJson(const CompareResult& r, const CompareOptions& o) {
             {"allow_new_failures", r.allow_new_failures},
             {"min_pairs", r.min_pairs},
             {"power", o.power},
-            {"calls", calls},
+            {"calls", r.calls},
             {"base_only", r.base_only},
             {"new_only", r.new_only},
             {"alpha", o.alpha},

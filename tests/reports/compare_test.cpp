@@ -154,6 +154,10 @@ TEST(Compare, EveryCallFailingOnTwoPairsFailsTheGate) {
     const std::string md = FormatCompareMarkdown(res, CompareOptions{});
     EXPECT_NE(md.find("icp: 2 call(s) ok in the baseline failed"), std::string::npos) << md;
     EXPECT_NE(md.find("Verdict: FAIL"), std::string::npos) << md;
+    // --json: the per-method call counts under the keys docs/reports.md names.
+    const nlohmann::json calls = CompareToJson(res, CompareOptions{}).at("calls");
+    EXPECT_EQ(calls, nlohmann::json::parse(R"([{"method": "icp", "pairs": 2, "failed_base": 0,
+                                                "failed_new": 2, "new_failures": 2}])"));
 }
 
 TEST(Compare, NewTimeoutsAndCrashesFailPerMethodUnlessAllowed) {
