@@ -92,9 +92,9 @@ REGBENCH_INLINE void NormReluMaxBody(const T* __restrict y, int64_t points, int6
 }
 
 // Backward reduction of a stage whose rows feed the next stage: g = [z > 0] (dz + the pooled
-// gradient at the argmax); sum += g, dot += (y - mean) g.
+// gradient at the argmax), written over dz for GradApplyRows; sum += g, dot += (y - mean) g.
 template <typename T>
-REGBENCH_INLINE void GradSumsRowsBody(const T* __restrict dz, const T* __restrict z,
+REGBENCH_INLINE void GradSumsRowsBody(T* __restrict dz, const T* __restrict z,
                                       const T* __restrict y, const T* __restrict mean,
                                       const int32_t* __restrict arg, const T* __restrict dpool,
                                       int64_t ld, int64_t points, int64_t k, int64_t C,
@@ -111,6 +111,7 @@ REGBENCH_INLINE void GradSumsRowsBody(const T* __restrict dz, const T* __restric
             for (int64_t c = 0; c < C; ++c) {
                 const T g0 = dz[r + c] + (at[c] == jj ? dp[c] : T(0));
                 const T g = z[r + c] <= T(0) ? T(0) : g0;  // threshold_backward's rule
+                dz[r + c] = g;
                 f1[c] += g;
                 f2[c] += (y[r + c] - mean[c]) * g;
             }
@@ -142,27 +143,18 @@ REGBENCH_INLINE void GradSumsPooledBody(const T* __restrict y, const T* __restri
     }
 }
 
-// BatchNorm's input gradient, in place over dz: dx = (g - grad_mean - (y - mean) kk) invstd w,
-// the expression of LibTorch's batch_norm_cpu_backward (kk = dot invstd^2 / M).
+// BatchNorm's input gradient, in place over the g that GradSumsRows left in dz:
+// dx = (g - grad_mean - (y - mean) kk) invstd w, the expression of LibTorch's
+// batch_norm_cpu_backward (kk = dot invstd^2 / M).
 template <typename T>
-REGBENCH_INLINE void GradApplyRowsBody(T* __restrict io, const T* __restrict z,
-                                       const T* __restrict y, const T* __restrict mean,
-                                       const int32_t* __restrict arg, const T* __restrict dpool,
-                                       int64_t ld, int64_t points, int64_t k, int64_t C,
+REGBENCH_INLINE void GradApplyRowsBody(T* __restrict io, const T* __restrict y,
+                                       const T* __restrict mean, int64_t rows, int64_t C,
                                        const T* __restrict grad_mean, const T* __restrict kk,
                                        const T* __restrict invstd, const T* __restrict w) {
-    for (int64_t p = 0; p < points; ++p) {
-        const int32_t* __restrict at = arg + p * C;
-        const T* __restrict dp = dpool + p * ld;
-        for (int64_t j = 0; j < k; ++j) {
-            const int64_t r = (p * k + j) * C;
-            const auto jj = static_cast<int32_t>(j);
-            for (int64_t c = 0; c < C; ++c) {
-                const T g0 = io[r + c] + (at[c] == jj ? dp[c] : T(0));
-                const T g = z[r + c] <= T(0) ? T(0) : g0;
-                const T centred = (y[r + c] - mean[c]) * kk[c];
-                io[r + c] = (g - grad_mean[c] - centred) * invstd[c] * w[c];
-            }
+    for (int64_t r = 0; r < rows * C; r += C) {
+        for (int64_t c = 0; c < C; ++c) {
+            const T centred = (y[r + c] - mean[c]) * kk[c];
+            io[r + c] = (io[r + c] - grad_mean[c] - centred) * invstd[c] * w[c];
         }
     }
 }
@@ -207,7 +199,7 @@ REGBENCH_INLINE void GradApplyPooledBody(T* __restrict io, const T* __restrict m
             NormReluMaxBody<T, false>(y, points, k, C, alpha, beta, z, pooled, ld, arg);          \
         }                                                                                         \
     }                                                                                             \
-    REGBENCH_SIMD_CLONES void GradSumsRows(const T* dz, const T* z, const T* y, const T* mean,    \
+    REGBENCH_SIMD_CLONES void GradSumsRows(T* dz, const T* z, const T* y, const T* mean,          \
                                            const int32_t* arg, const T* dpool, int64_t ld,        \
                                            int64_t points, int64_t k, int64_t C, T* f1, T* f2,    \
                                            double* sum, double* dot) {                            \
@@ -218,12 +210,10 @@ REGBENCH_INLINE void GradApplyPooledBody(T* __restrict io, const T* __restrict m
         int64_t ld, int64_t points, int64_t k, int64_t C, double* sum, double* dot) {             \
         GradSumsPooledBody<T>(y, mean, arg, dpool, pooled, ld, points, k, C, sum, dot);           \
     }                                                                                             \
-    REGBENCH_SIMD_CLONES void GradApplyRows(                                                      \
-        T* io, const T* z, const T* y, const T* mean, const int32_t* arg, const T* dpool,         \
-        int64_t ld, int64_t points, int64_t k, int64_t C, const T* grad_mean, const T* kk,        \
-        const T* invstd, const T* w) {                                                            \
-        GradApplyRowsBody<T>(io, z, y, mean, arg, dpool, ld, points, k, C, grad_mean, kk, invstd, \
-                             w);                                                                  \
+    REGBENCH_SIMD_CLONES void GradApplyRows(T* io, const T* y, const T* mean, int64_t rows,       \
+                                            int64_t C, const T* grad_mean, const T* kk,           \
+                                            const T* invstd, const T* w) {                        \
+        GradApplyRowsBody<T>(io, y, mean, rows, C, grad_mean, kk, invstd, w);                     \
     }                                                                                             \
     REGBENCH_SIMD_CLONES void GradApplyPooled(                                                    \
         T* io, const T* mean, const int32_t* arg, const T* dpool, const T* pooled, int64_t ld,    \
@@ -447,8 +437,7 @@ struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
             const T* wp = gamma.data_ptr<T>();
             ForChunks(P, [&](int64_t, int64_t first, int64_t count) {
                 if (rows_out) {
-                    GradApplyRows(io + first * k * C, zp + first * k * C, yp + first * k * C, mp,
-                                  ap + first * C, dp + first * total, total, count, k, C, gm, kp,
+                    GradApplyRows(io + first * k * C, yp + first * k * C, mp, count * k, C, gm, kp,
                                   ip, wp);
                 } else {
                     GradApplyPooled(io + first * k * C, mp, ap + first * C, dp + first * total,
