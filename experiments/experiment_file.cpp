@@ -142,8 +142,8 @@ ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& f
 }
 
 ProtocolOptions ProtocolOptionsOf(const ExperimentSpec& s) {
-    ProtocolOptions o = DefaultProtocolOptions(ParseProtocol(s.protocol));
-    from_json(s.protocol_options, o);
+    ProtocolOptions o = ProtocolOptionsFromJson(s.protocol_options,
+                                                DefaultProtocolOptions(ParseProtocol(s.protocol)));
     if (!s.pairing.empty()) o.pairing = ParsePairing(s.pairing);
     if (s.noise_free) o.noise_sigma = 0.0;
     ValidateProtocolOptions(o);

@@ -140,7 +140,7 @@ TrainingBundle ReadTrainingBundle(const std::string& path) {
                                         ", this build reads " + std::to_string(kFormatVersion));
         }
         TrainingBundle b;
-        from_json(j.at("protocol"), b.protocol);
+        b.protocol = ProtocolOptionsFromJson(j.at("protocol"), ProtocolOptions{});
         ValidateProtocolOptions(b.protocol);
         b.val_pairs = j.at("val_pairs").get<int>();
         if (b.val_pairs < 1) throw std::invalid_argument("val_pairs must be at least 1");

@@ -10,6 +10,7 @@
 #include "core/enum_names.hpp"
 #include "core/kd_tree.hpp"
 #include "core/math_constants.hpp"
+#include "core/params.hpp"
 #include "core/rng.hpp"
 #include "core/transform.hpp"
 
@@ -187,51 +188,25 @@ std::vector<std::string> ProtocolNames() {
     return names;
 }
 
-void to_json(nlohmann::json& j, const ProtocolOptions& o) {
-    j = nlohmann::json{{"protocol", ToString(o.protocol)},
-                       {"points", o.points},
-                       {"keep", o.keep},
-                       {"noise_sigma", o.noise_sigma},
-                       {"noise_clip", o.noise_clip},
-                       {"motion", ToString(o.motion)},
-                       {"max_rotation_deg", o.max_rotation_deg},
-                       {"max_translation", o.max_translation},
-                       {"pairing", ToString(o.pairing)},
-                       {"eta", o.eta},
-                       {"density_keep", o.density_keep},
-                       {"sweep_keeps", o.sweep_keeps}};
+void to_json(nlohmann::json& j, Protocol p) { j = ToString(p); }
+void from_json(const nlohmann::json& j, Protocol& p) { p = ParseProtocol(j.get<std::string>()); }
+void to_json(nlohmann::json& j, MotionConvention m) { j = ToString(m); }
+void from_json(const nlohmann::json& j, MotionConvention& m) {
+    m = ParseMotionConvention(j.get<std::string>());
 }
+void to_json(nlohmann::json& j, Pairing p) { j = ToString(p); }
+void from_json(const nlohmann::json& j, Pairing& p) { p = ParsePairing(j.get<std::string>()); }
 
-void from_json(const nlohmann::json& j, ProtocolOptions& o) {
-    if (!j.is_object()) throw std::invalid_argument("protocol options must be a JSON object");
-    if (j.contains("protocol")) o = DefaultProtocolOptions(ParseProtocol(j.at("protocol")));
-    const nlohmann::json known = o;
-    for (const auto& item : j.items()) {
-        if (!known.contains(item.key())) {
-            throw std::invalid_argument("unknown protocol parameter '" + item.key() + "'");
-        }
-        const auto& def = known.at(item.key());
-        const bool numeric_ok = def.is_number() && item.value().is_number();
-        if (!numeric_ok && def.type() != item.value().type()) {
-            throw std::invalid_argument("protocol parameter '" + item.key() + "' expects " +
-                                        def.type_name() + ", got " + item.value().dump());
-        }
+ProtocolOptions ProtocolOptionsFromJson(const nlohmann::json& j, const ProtocolOptions& base) {
+    if (j.is_null()) return base;
+    if (!j.is_object()) {
+        throw std::invalid_argument("protocol options must be a JSON object, got " + j.dump());
     }
-    try {
-        o.points = j.value("points", o.points);
-        o.keep = j.value("keep", o.keep);
-        o.noise_sigma = j.value("noise_sigma", o.noise_sigma);
-        o.noise_clip = j.value("noise_clip", o.noise_clip);
-        if (j.contains("motion")) o.motion = ParseMotionConvention(j.at("motion"));
-        o.max_rotation_deg = j.value("max_rotation_deg", o.max_rotation_deg);
-        o.max_translation = j.value("max_translation", o.max_translation);
-        if (j.contains("pairing")) o.pairing = ParsePairing(j.at("pairing"));
-        o.eta = j.value("eta", o.eta);
-        o.density_keep = j.value("density_keep", o.density_keep);
-        o.sweep_keeps = j.value("sweep_keeps", o.sweep_keeps);
-    } catch (const nlohmann::json::exception& e) {
-        throw std::invalid_argument(std::string("bad protocol parameters: ") + e.what());
-    }
+    const bool names_protocol = j.contains("protocol") && j["protocol"].is_string();
+    nlohmann::json merged =
+        names_protocol ? DefaultProtocolOptions(ParseProtocol(j["protocol"])) : base;
+    merged.update(j);
+    return ParseConfig<ProtocolOptions>(merged, "protocol options");
 }
 
 ProtocolOptions DefaultProtocolOptions(Protocol p) {

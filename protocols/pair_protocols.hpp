@@ -50,6 +50,14 @@ MotionConvention ParseMotionConvention(const std::string& name);
 Pairing ParsePairing(const std::string& name);
 /// Every protocol name, in declaration order.
 std::vector<std::string> ProtocolNames();
+/// The enums in JSON by name; reading one is strict (the parsers above), where nlohmann's enum
+/// macro would map an unknown name to the first value.
+void to_json(nlohmann::json& j, Protocol p);
+void from_json(const nlohmann::json& j, Protocol& p);
+void to_json(nlohmann::json& j, MotionConvention m);
+void from_json(const nlohmann::json& j, MotionConvention& m);
+void to_json(nlohmann::json& j, Pairing p);
+void from_json(const nlohmann::json& j, Pairing& p);
 
 struct ProtocolOptions {
     Protocol protocol = Protocol::kPartial;  ///< which protocol
@@ -69,10 +77,16 @@ struct ProtocolOptions {
     std::vector<double> sweep_keeps = {0.25, 0.35, 0.45, 0.55, 0.65};
 };
 
-void to_json(nlohmann::json& j, const ProtocolOptions& o);
-/// Reads keys present in `j` over the defaults of `o.protocol`; unknown keys and bad enum
-/// names throw std::invalid_argument naming them.
-void from_json(const nlohmann::json& j, ProtocolOptions& o);
+/// Every field under its own name (a pair file's provenance "params", a training bundle's
+/// "protocol"); reading needs every key: ProtocolOptionsFromJson reads a partial object.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(ProtocolOptions, protocol, points, keep, noise_sigma, noise_clip,
+                                   motion, max_rotation_deg, max_translation, pairing, eta,
+                                   density_keep, sweep_keeps)
+/// The keys `j` gives over `base`, or over the defaults of the protocol `j` names
+/// (DefaultProtocolOptions). Unknown keys, wrong JSON types, fractional values of integer keys
+/// and unknown names throw std::invalid_argument naming the key (ParseConfig's rules, as model
+/// and training configs); ranges are ValidateProtocolOptions'.
+ProtocolOptions ProtocolOptionsFromJson(const nlohmann::json& j, const ProtocolOptions& base);
 
 /// Paper defaults for `p` (indoor samples 2048 points, every other protocol 1024).
 ProtocolOptions DefaultProtocolOptions(Protocol p);

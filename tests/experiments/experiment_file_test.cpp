@@ -160,8 +160,8 @@ TEST_F(ExperimentFileTest, MalformedFilesAreRefusedNamingFileAndKey) {
          ": variants: rows[0]: parameter 'config' expects object, got 3"},
         {head + "\"caption\": \"c\"}", ": parameter 'experiments' is required"},
         {head + R"("experiments": [{)" + good + R"(, "protocol_options": {"bogus": 1}}]})",
-         ": experiments[0]: parameter 'protocol_options' is not valid: unknown protocol "
-         "parameter 'bogus'"},
+         ": experiments[0]: parameter 'protocol_options' is not valid: protocol options: "
+         "unknown parameter 'bogus'"},
         {head + R"("experiments": [{)" + good + R"(, "protocol_options": {"keep": 1.5}}]})",
          ": experiments[0]: parameter 'protocol_options' is not valid: "},
         {head + R"("experiments": [{)" + good + R"(, "protocol_options": 3}]})",

@@ -310,9 +310,35 @@ TEST(Options, JsonRoundTripAndUnknownKeys) {
     const ProtocolOptions back = j.get<ProtocolOptions>();
     EXPECT_EQ(nlohmann::json(back), j);
     EXPECT_EQ(back.points, 2048);
-    EXPECT_THROW(nlohmann::json({{"kep", 0.5}}).get<ProtocolOptions>(), std::invalid_argument);
-    EXPECT_THROW(nlohmann::json({{"pairing", "both"}}).get<ProtocolOptions>(),
-                 std::invalid_argument);
+    const ProtocolOptions partial;
+    EXPECT_THROW(ProtocolOptionsFromJson({{"kep", 0.5}}, partial), std::invalid_argument);
+    EXPECT_THROW(ProtocolOptionsFromJson({{"pairing", "both"}}, partial), std::invalid_argument);
+    EXPECT_THROW(ProtocolOptionsFromJson({{"keep", "0.5"}}, partial), std::invalid_argument);
+}
+
+TEST(Options, PartialJsonReadsOverTheNamedProtocolsDefaults) {
+    // Defaults by hand: indoor samples 2048 points (the paper's Tab. 3), the others 1024.
+    EXPECT_EQ(ProtocolOptionsFromJson({{"protocol", "indoor"}}, ProtocolOptions{}).points, 2048);
+    ProtocolOptions base;
+    base.keep = 0.5;
+    const ProtocolOptions o = ProtocolOptionsFromJson({{"noise_sigma", 0.02}}, base);
+    EXPECT_EQ(o.keep, 0.5);
+    EXPECT_EQ(o.noise_sigma, 0.02);
+    EXPECT_EQ(o.points, 1024);
+    EXPECT_EQ(ProtocolOptionsFromJson(nullptr, base).keep, 0.5);
+}
+
+TEST(Options, IntegerKeysFollowTheOneRule) {
+    // As every method parameter and config: 717.0 is the whole number 717, 717.5 is refused
+    // (it used to be truncated to 717 silently).
+    EXPECT_EQ(ProtocolOptionsFromJson({{"points", 717.0}}, ProtocolOptions{}).points, 717);
+    try {
+        ProtocolOptionsFromJson({{"points", 717.5}}, ProtocolOptions{});
+        ADD_FAILURE() << "717.5 points accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("'points' must be a whole number"), std::string::npos)
+            << e.what();
+    }
 }
 
 TEST(ShapeSource, PointSourceSamplesDistinctPointsAndRejectsTooFew) {
