@@ -15,6 +15,8 @@
 namespace regbench::app {
 namespace {
 
+// Long on purpose: a flat list of the command's options (CLI11), one statement each, in the
+// order --help prints them; the work is in reports/.
 void SetupReportCommand(CLI::App* cmd) {
     auto files = std::make_shared<std::vector<std::string>>();
     auto format = std::make_shared<std::string>("md");

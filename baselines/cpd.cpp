@@ -63,6 +63,9 @@ bool CpdEStep::UsesTruncation(double sigma2) const {
            r < options_.truncation_max_diag_fraction * target_blocked_.bbox_diagonal();
 }
 
+// Long on purpose: the fused pass (below) keeps den_n, p1 and PX of a chunk of targets in one
+// loop nest so that nothing M x N is stored; split into functions, the chunk's accumulators
+// and their fixed reduction order would have to travel between them.
 void CpdEStep::ComputeFused(double sigma2, double c, CpdPosteriors& out) {
     const Eigen::Index n = target_blocked_.size();
     const Eigen::Index m = source_.size();

@@ -236,6 +236,9 @@ KMeansResult KMeansPlusPlusLloyd(const PointCloud& X, int k, const KMeansOptions
     return r;
 }
 
+// Long on purpose: it follows sklearn's GaussianMixture.fit (spherical) in its order
+// (k-means start, E-step, M-step, lower-bound stop), so the two read side by side; the
+// parameter update is a lambda because the start and every M-step share it.
 SphericalGmm FitSphericalGmm(const PointCloud& X, const GmmFitOptions& options,
                              std::mt19937_64& rng) {
     const long n = static_cast<long>(X.rows());

@@ -189,6 +189,9 @@ nlohmann::json InferAuthorsConfig(const StateDict& sd, const std::string& file,
     throw std::invalid_argument("--from must be deepgmr or ogmm, got '" + options.from + "'");
 }
 
+// Long on purpose: the import is one checked sequence (read, strip "module.", map every tensor,
+// refuse leftovers, write, describe) whose steps each use what the previous one produced; the
+// key mapping itself is AuthorsKeyMapping.
 nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string& out_dir,
                                        const ImportOptions& options) {
     if (options.from != "deepgmr" && options.from != "ogmm") {

@@ -264,6 +264,9 @@ std::pair<std::vector<double>, std::vector<double>> AddChunks(const std::vector<
 // the forward from `stages` (not autograd inputs).
 // ---------------------------------------------------------------------------------------------
 
+// Forward and Backward are long on purpose: each is one loop over the stages (Backward in
+// reverse) whose steps hand tensors to each other and to the saved context in LibTorch's
+// autograd order; the arithmetic itself is in the kernels above.
 struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
     template <typename T>
     static torch::Tensor Forward(AutogradContext* ctx, const torch::Tensor& rows,
@@ -366,6 +369,7 @@ struct EdgeChainFunction : public torch::autograd::Function<EdgeChainFunction> {
         return out;
     }
 
+    // Long on purpose, as Forward (the comment above this struct).
     template <typename T>
     static variable_list Backward(AutogradContext* ctx, const torch::Tensor& dout) {
         const variable_list saved = ctx->get_saved_variables();

@@ -95,6 +95,9 @@ public:
     const std::map<std::string, int>& storages() const { return storages_; }
 
     /// Runs one pickle from pos() to its STOP; returns the top object.
+    // Long on purpose: one switch over the opcodes, as pickle's own load loop is written. Each
+    // case is a few lines on the shared stack, marks and memo; split up, the cases would only
+    // pass that state around.
     int Run() {
         stack_.clear();
         marks_.clear();

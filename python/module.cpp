@@ -231,39 +231,15 @@ std::string CallableName(py::handle item, py::handle* fn) {
     return name;
 }
 
-py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle params, bool resume,
-             py::handle timeout, int jobs, int threads, const std::string& euler,
-             std::size_t max_points, bool downsample, bool progress) {
-    RunOptions o;
-    try {
-        o.pairs_path =
-            py::isinstance<PairFile>(pairs) ? pairs.cast<const PairFile&>().path : PathOf(pairs);
-    } catch (const py::cast_error&) {
-        throw py::type_error("pairs must be a path or a PairFile");
-    }
-    RequireFile(o.pairs_path, "pair file");
-    o.out_path = PathOf(out);
-    o.resume = resume;
-    o.jobs = jobs;
-    o.threads_per_call = threads;
-    o.euler = ParseEulerConvention(euler);
-    o.max_points = max_points;
-    o.downsample = downsample;
-    o.progress = progress;
-    if (!timeout.is_none()) {
-        if (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)) {
-            throw py::type_error("timeout must be a number of seconds or None");
-        }
-        o.timeout_seconds = timeout.cast<double>();
-        if (!(o.timeout_seconds > 0.0))
-            throw py::value_error("timeout must be > 0 seconds (or None)");
-    }
-    const nlohmann::json by_method = ParamsToJson(params, "params");
+/// Adds `methods` to o.methods in the order given: names of built-in methods ("a,b" and "all"
+/// too) and callables, each with its entry of `by_method` (run()'s `params`); callables also
+/// go to o.external_methods. Throws Python's TypeError / ValueError naming the bad item.
+void AddMethods(py::handle methods, const nlohmann::json& by_method,
+                const std::shared_ptr<PendingInterrupt>& pending, RunOptions& o) {
     const auto params_of = [&](const std::string& name) {
         return by_method.contains(name) ? by_method.at(name) : nlohmann::json::object();
     };
 
-    // Methods in the order given: names of built-in methods ("a,b" and "all" too) and callables.
     py::list items;
     const bool named_callable = py::isinstance<py::tuple>(methods) && py::len(methods) == 2 &&
                                 py::isinstance<py::str>(methods[py::int_(0)]) &&
@@ -275,7 +251,6 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
     } else {
         for (const auto& item : methods) items.append(item);
     }
-    const auto pending = std::make_shared<PendingInterrupt>();
     const ForkHooks fork_hooks = InterpreterForkHooks();
     for (const auto& item : items) {
         if (py::isinstance<py::str>(item)) {
@@ -329,6 +304,37 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
                                   "' which is not in methods");
         }
     }
+}
+
+py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle params, bool resume,
+             py::handle timeout, int jobs, int threads, const std::string& euler,
+             std::size_t max_points, bool downsample, bool progress) {
+    RunOptions o;
+    try {
+        o.pairs_path =
+            py::isinstance<PairFile>(pairs) ? pairs.cast<const PairFile&>().path : PathOf(pairs);
+    } catch (const py::cast_error&) {
+        throw py::type_error("pairs must be a path or a PairFile");
+    }
+    RequireFile(o.pairs_path, "pair file");
+    o.out_path = PathOf(out);
+    o.resume = resume;
+    o.jobs = jobs;
+    o.threads_per_call = threads;
+    o.euler = ParseEulerConvention(euler);
+    o.max_points = max_points;
+    o.downsample = downsample;
+    o.progress = progress;
+    if (!timeout.is_none()) {
+        if (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)) {
+            throw py::type_error("timeout must be a number of seconds or None");
+        }
+        o.timeout_seconds = timeout.cast<double>();
+        if (!(o.timeout_seconds > 0.0))
+            throw py::value_error("timeout must be > 0 seconds (or None)");
+    }
+    const auto pending = std::make_shared<PendingInterrupt>();
+    AddMethods(methods, ParamsToJson(params, "params"), pending, o);
     // Ctrl-C stays Python's: between calls the runner asks whether one arrived (only the main
     // thread can see it) or a callable raised KeyboardInterrupt / SystemExit.
     const unsigned long caller = PyThread_get_thread_ident();
@@ -381,24 +387,8 @@ py::object ReadResults(py::handle path_like, py::handle as_frame) {
     return pandas.attr("json_normalize")(out, py::arg("max_level") = 1);
 }
 
-}  // namespace
-}  // namespace regbench::python
-
-PYBIND11_MODULE(regbench, m) {
-    using namespace regbench;
-    using namespace regbench::python;
-    m.doc() =
-        "regbench from Python: frozen pair files as NumPy arrays, every registered method and "
-        "metric, and Python callables benchmarked beside the built-in methods by the same "
-        "runner (timing, failures, timeouts, resume, result rows). See docs/python.md.";
-    m.attr("__version__") = std::string(RegbenchVersion()) + "+g" + RegbenchGitSha();
-
-    m.def("methods", &Methods,
-          "methods() -> list[dict]\n\n"
-          "Every registered method: name, summary, defaults (every parameter with its default), "
-          "param_docs (one line per parameter) and schema (JSON Schema, or None), as "
-          "`regbench methods --json` prints them.");
-
+/// Pair: one pair of a pair file, its clouds as NumPy views.
+void BindPair(py::module_& m) {
     py::class_<PairRef> pair(m, "Pair",
                              "One pair of a pair file. `source` and `target` are (N, 3) float64 "
                              "views of the PairFile's arrays (no copy; writing to them changes "
@@ -447,7 +437,10 @@ PYBIND11_MODULE(regbench, m) {
                    " points, overlap " + std::to_string(q.source_overlap_ratio) + ">";
         });
     DefDataTagShortcuts(pair, [](const PairRef& p) -> const DataTag& { return p.file->data; });
+}
 
+/// PairFile and its iterator.
+void BindPairFile(py::module_& m) {
     py::class_<PairIterator>(m, "_PairIterator")
         .def("__iter__", [](py::object self) { return self; })
         .def("__next__", [](PairIterator& it) {
@@ -480,7 +473,10 @@ PYBIND11_MODULE(regbench, m) {
                    ", content " + f.data.content_hash + ">";
         });
     DefDataTagShortcuts(pair_file, [](const PairFile& f) -> const DataTag& { return f.data; });
+}
 
+/// align() with its AlignResult, and metrics().
+void BindAlign(py::module_& m) {
     py::class_<AlignOutcome>(m, "AlignResult", "What align() returns.")
         .def_property_readonly("method", [](const AlignOutcome& a) { return a.method; })
         .def_property_readonly(
@@ -536,7 +532,10 @@ PYBIND11_MODULE(regbench, m) {
           "mae_r, mse_r (degrees, Euler angles of `euler`: 'zyx' or 'xyz'), mae_t, mse_t, rre "
           "(degrees), rte, ccd, chamfer, ccd_within_clip, overlap_rmse (over the source points "
           "labelled 1 in source_overlap; all points when None), and euler.");
+}
 
+/// run() and read_results().
+void BindRun(py::module_& m) {
     m.def("run", &Run, py::arg("pairs"), py::arg("methods"), py::arg("out"),
           py::arg("params") = py::none(), py::arg("resume") = false,
           py::arg("timeout") = py::none(), py::kw_only(), py::arg("jobs") = 1,
@@ -562,4 +561,28 @@ PYBIND11_MODULE(regbench, m) {
           "reader. A pandas DataFrame (nested keys one level flattened: metrics.mae_r, "
           "data.content_hash, params.w, ...) when pandas is importable and as_frame is not "
           "False, else a list of dicts.");
+}
+
+}  // namespace
+}  // namespace regbench::python
+
+PYBIND11_MODULE(regbench, m) {
+    using namespace regbench;
+    using namespace regbench::python;
+    m.doc() =
+        "regbench from Python: frozen pair files as NumPy arrays, every registered method and "
+        "metric, and Python callables benchmarked beside the built-in methods by the same "
+        "runner (timing, failures, timeouts, resume, result rows). See docs/python.md.";
+    m.attr("__version__") = std::string(RegbenchVersion()) + "+g" + RegbenchGitSha();
+
+    m.def("methods", &Methods,
+          "methods() -> list[dict]\n\n"
+          "Every registered method: name, summary, defaults (every parameter with its default), "
+          "param_docs (one line per parameter) and schema (JSON Schema, or None), as "
+          "`regbench methods --json` prints them.");
+
+    BindPair(m);
+    BindPairFile(m);
+    BindAlign(m);
+    BindRun(m);
 }

@@ -118,6 +118,58 @@ CompareVerdict CompareResult::Verdict() const {
     return CompareVerdict::kPass;
 }
 
+namespace {
+
+using MatchedRows = std::vector<std::pair<const ResultRow*, const ResultRow*>>;
+
+/// One method's paired test of one metric over its matched (baseline, candidate) rows.
+MetricChange TestMetric(const std::string& method, const std::string& metric,
+                        const MatchedRows& pairs, const CompareOptions& o) {
+    MetricChange c;
+    c.method = method;
+    c.metric = metric;
+    const auto tol = o.tolerance.find(metric);
+    c.tolerance = tol == o.tolerance.end() ? o.default_tolerance : tol->second;
+    const MetricField& field = FindMetric(metric);
+    std::vector<double> b, n, d;
+    for (const auto& [rb, rn] : pairs) {
+        const auto vb = field.Of(rb->metrics);
+        const auto vn = field.Of(rn->metrics);
+        if (!vb || !vn) continue;
+        b.push_back(*vb);
+        n.push_back(*vn);
+        d.push_back(*vn - *vb);
+    }
+    c.pairs = d.size();
+    c.detectable = DetectableWorsening(d, o.alpha, o.power);
+    if (d.empty()) {
+        c.underpowered = true;
+        return c;
+    }
+    c.base_mean = SampleMean(b);
+    c.new_mean = SampleMean(n);
+    const BootstrapCi ci =
+        BootstrapMean(d, o.bootstrap_samples, o.seed, StreamId(method + "/" + metric));
+    c.diff_mean = ci.mean;
+    c.ci_lo = ci.lo;
+    c.ci_hi = ci.hi;
+    c.p_value = WilcoxonSignedRank(d).p_value;
+    // Below the exact test's floor nothing is significant: the normal approximation
+    // taken for tied differences would call 5 equal shifts p = 0.043.
+    c.significant =
+        !std::isinf(c.detectable) && c.p_value < o.alpha && (c.ci_lo > 0.0 || c.ci_hi < 0.0);
+    c.worse = c.significant && c.diff_mean > 0.0;
+    c.regression = c.worse && c.diff_mean > c.tolerance;
+    // Conclusive without a regression when the test could detect a worsening of the
+    // tolerance's size, or the CI already bounds the worsening by the tolerance; never
+    // when the exact test cannot reach alpha at all.
+    c.underpowered = !c.regression && (std::isinf(c.detectable) ||
+                                       (c.detectable > c.tolerance && c.ci_hi > c.tolerance));
+    return c;
+}
+
+}  // namespace
+
 CompareResult CompareResults(const std::vector<ResultRow>& base,
                              const std::vector<ResultRow>& candidate, const CompareOptions& o,
                              const std::string& base_name, const std::string& new_name) {
@@ -139,7 +191,7 @@ CompareResult CompareResults(const std::vector<ResultRow>& base,
     out.allow_new_failures = o.allow_new_failures;
     out.min_pairs = o.min_pairs;
     std::vector<std::string> methods;
-    std::map<std::string, std::vector<std::pair<const ResultRow*, const ResultRow*>>> matched;
+    std::map<std::string, MatchedRows> matched;
     for (const auto& [key, row] : base_index) {
         const std::string& method = std::get<2>(key);
         const auto it = new_index.find(key);
@@ -171,49 +223,7 @@ CompareResult CompareResults(const std::vector<ResultRow>& base,
     }
     for (const auto& method : methods) {
         for (const auto& metric : o.metrics) {
-            MetricChange c;
-            c.method = method;
-            c.metric = metric;
-            const auto tol = o.tolerance.find(metric);
-            c.tolerance = tol == o.tolerance.end() ? o.default_tolerance : tol->second;
-            const MetricField& field = FindMetric(metric);
-            std::vector<double> b, n, d;
-            for (const auto& [rb, rn] : matched[method]) {
-                const auto vb = field.Of(rb->metrics);
-                const auto vn = field.Of(rn->metrics);
-                if (!vb || !vn) continue;
-                b.push_back(*vb);
-                n.push_back(*vn);
-                d.push_back(*vn - *vb);
-            }
-            c.pairs = d.size();
-            c.detectable = DetectableWorsening(d, o.alpha, o.power);
-            if (d.empty()) {
-                c.underpowered = true;
-                out.changes.push_back(c);
-                continue;
-            }
-            c.base_mean = SampleMean(b);
-            c.new_mean = SampleMean(n);
-            const BootstrapCi ci =
-                BootstrapMean(d, o.bootstrap_samples, o.seed, StreamId(method + "/" + metric));
-            c.diff_mean = ci.mean;
-            c.ci_lo = ci.lo;
-            c.ci_hi = ci.hi;
-            c.p_value = WilcoxonSignedRank(d).p_value;
-            // Below the exact test's floor nothing is significant: the normal approximation
-            // taken for tied differences would call 5 equal shifts p = 0.043.
-            c.significant = !std::isinf(c.detectable) && c.p_value < o.alpha &&
-                            (c.ci_lo > 0.0 || c.ci_hi < 0.0);
-            c.worse = c.significant && c.diff_mean > 0.0;
-            c.regression = c.worse && c.diff_mean > c.tolerance;
-            // Conclusive without a regression when the test could detect a worsening of the
-            // tolerance's size, or the CI already bounds the worsening by the tolerance; never
-            // when the exact test cannot reach alpha at all.
-            c.underpowered =
-                !c.regression &&
-                (std::isinf(c.detectable) || (c.detectable > c.tolerance && c.ci_hi > c.tolerance));
-            out.changes.push_back(c);
+            out.changes.push_back(TestMetric(method, metric, matched[method], o));
         }
     }
     return out;

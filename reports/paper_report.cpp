@@ -241,6 +241,43 @@ double PaperCell(const nlohmann::json& paper, const std::string& table,
     return rows.at(paper_row).at(static_cast<std::size_t>(c)).get<double>();
 }
 
+namespace {
+
+/// The measured cell of row `label`, metric `m`: the mean over the set's rows of that row,
+/// with its bootstrap CI and pair count.
+Cell MeasuredCell(const ResultSet& set, const std::string& label, const std::string& m,
+                  const PaperTableOptions& o) {
+    Cell measured;
+    const MetricField& metric = FindMetric(m);
+    std::vector<double> v;
+    std::size_t n = 0;
+    std::string method;  // the rows' own method name, as the breakdowns use
+    for (const auto& r : set.rows) {
+        if (PaperRowOf(r, set) != label) continue;
+        ++n;
+        if (method.empty()) method = r.method;
+        // Null metrics are failures: they keep the pair count honest but no
+        // number can stand in for them, so the cell says how many.
+        if (const auto x = metric.Of(r.metrics)) v.push_back(*x);
+    }
+    // The stream of the breakdowns (reports/breakdown.cpp): one CI per
+    // (method, metric) on the same pairs, so a report never shows two.
+    const BootstrapCi ci =
+        BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
+    measured.value = ci.mean;
+    if (v.size() >= 2) {
+        measured.ci_lo = ci.lo;
+        measured.ci_hi = ci.hi;
+    }
+    measured.pairs = n;
+    if (v.size() < n) {
+        measured.text = fmt::format("{:.{}f} ({} null)", ci.mean, metric.decimals, n - v.size());
+    }
+    return measured;
+}
+
+}  // namespace
+
 Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& sets,
                       const nlohmann::json& paper, const PaperTableOptions& o) {
     Table t;
@@ -283,32 +320,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
             for (const auto& m : spec.metrics) {
                 Cell measured;
                 if (set != nullptr) {
-                    const MetricField& metric = FindMetric(m);
-                    std::vector<double> v;
-                    std::size_t n = 0;
-                    std::string method;  // the rows' own method name, as the breakdowns use
-                    for (const auto& r : set->rows) {
-                        if (PaperRowOf(r, *set) != label) continue;
-                        ++n;
-                        if (method.empty()) method = r.method;
-                        // Null metrics are failures: they keep the pair count honest but no
-                        // number can stand in for them, so the cell says how many.
-                        if (const auto x = metric.Of(r.metrics)) v.push_back(*x);
-                    }
-                    // The stream of the breakdowns (reports/breakdown.cpp): one CI per
-                    // (method, metric) on the same pairs, so a report never shows two.
-                    const BootstrapCi ci =
-                        BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
-                    measured.value = ci.mean;
-                    if (v.size() >= 2) {
-                        measured.ci_lo = ci.lo;
-                        measured.ci_hi = ci.hi;
-                    }
-                    measured.pairs = n;
-                    if (v.size() < n) {
-                        measured.text = fmt::format("{:.{}f} ({} null)", ci.mean, metric.decimals,
-                                                    n - v.size());
-                    }
+                    measured = MeasuredCell(*set, label, m, o);
                 } else if (reasons.count(label)) {
                     measured.text = reasons[label];
                 }
@@ -348,6 +360,45 @@ double MeanOrBlank(const std::vector<double>& v) {
     return v.empty() ? std::nan("") : SampleMean(v);
 }
 
+/// The timing rows of Tab. 6: by method, or by the set's label (a variant such as
+/// OGMM_full_attention), in order of first appearance; and the learned methods' BLAS notes.
+struct Timings {
+    std::vector<std::string> order;
+    std::map<std::string, TimingRow> by_label;
+    std::set<std::string> learned_blas;
+};
+
+Timings CollectTimings(const std::vector<ResultSet>& sets) {
+    Timings t;
+    for (const auto& s : sets) {
+        for (const auto& r : s.rows) {
+            const std::string label = s.row_label.empty() ? r.method : s.row_label;
+            if (!t.by_label.count(label)) t.order.push_back(label);
+            TimingRow& row = t.by_label[label];
+            row.threads = r.threads;
+            row.points = s.provenance.points;
+            if (r.status != Status::kOk) continue;
+            // Rows written before cpu_seconds existed read 0 s: no CPU time to show (as in
+            // runners/timing_summary).
+            if (r.result.cpu_seconds > 0.0) row.cpu.push_back(1e3 * r.result.cpu_seconds);
+            const double network = ExtraNumber(r, "network_cpu_seconds");
+            const double macs = ExtraNumber(r, "macs");
+            const double floor = ExtraNumber(r, "floor_seconds");
+            if (std::isfinite(network)) row.network.push_back(1e3 * network);
+            if (std::isfinite(macs)) row.gmac.push_back(1e-9 * macs);
+            if (std::isfinite(floor)) row.floor.push_back(1e3 * floor);
+            const auto blas =
+                r.result.extra.is_object() ? r.result.extra.find("blas") : r.result.extra.end();
+            if (blas != r.result.extra.end() && blas->is_string() && std::isfinite(floor)) {
+                t.learned_blas.insert(
+                    fmt::format("{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
+                                blas->get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));
+            }
+        }
+    }
+    return t;
+}
+
 }  // namespace
 
 Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json& paper,
@@ -365,38 +416,9 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
                  {"threads", "threads", CellSource::kMeasured, Better::kNone, 0},
                  {"paper:ms", "paper ms", CellSource::kPaper, Better::kNone, 0}};
     const auto& rows = paper.at("tables").at("table6_inference_time").at("rows");
-    // Rows by method, or by the set's label (a variant such as OGMM_full_attention), in order.
-    std::vector<std::string> order;
-    std::map<std::string, TimingRow> by_label;
-    std::set<std::string> learned_blas;
-    for (const auto& s : sets) {
-        for (const auto& r : s.rows) {
-            const std::string label = s.row_label.empty() ? r.method : s.row_label;
-            if (!by_label.count(label)) order.push_back(label);
-            TimingRow& row = by_label[label];
-            row.threads = r.threads;
-            row.points = s.provenance.points;
-            if (r.status != Status::kOk) continue;
-            // Rows written before cpu_seconds existed read 0 s: no CPU time to show (as in
-            // runners/timing_summary).
-            if (r.result.cpu_seconds > 0.0) row.cpu.push_back(1e3 * r.result.cpu_seconds);
-            const double network = ExtraNumber(r, "network_cpu_seconds");
-            const double macs = ExtraNumber(r, "macs");
-            const double floor = ExtraNumber(r, "floor_seconds");
-            if (std::isfinite(network)) row.network.push_back(1e3 * network);
-            if (std::isfinite(macs)) row.gmac.push_back(1e-9 * macs);
-            if (std::isfinite(floor)) row.floor.push_back(1e3 * floor);
-            const auto blas =
-                r.result.extra.is_object() ? r.result.extra.find("blas") : r.result.extra.end();
-            if (blas != r.result.extra.end() && blas->is_string() && std::isfinite(floor)) {
-                learned_blas.insert(
-                    fmt::format("{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
-                                blas->get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));
-            }
-        }
-    }
-    for (const auto& label : order) {
-        const TimingRow& m = by_label[label];
+    Timings timings = CollectTimings(sets);
+    for (const auto& label : timings.order) {
+        const TimingRow& m = timings.by_label[label];
         Cell mean, median, network, gmac, floor, ratio, points, th, p;
         mean.value = MeanOrBlank(m.cpu);
         median.value = m.cpu.empty() ? std::nan("") : SampleMedian(m.cpu);
@@ -431,7 +453,7 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
     for (const auto& s : files) t.provenance.push_back(s.provenance);
     AddFloorNotes(files, &t);
     std::string learned;
-    for (const auto& b : learned_blas) learned += (learned.empty() ? "" : "; ") + b;
+    for (const auto& b : timings.learned_blas) learned += (learned.empty() ? "" : "; ") + b;
     t.caption = fmt::format(
         "CPU milliseconds of the method's own call per pair (successful calls; the harness's "
         "loading, metrics and I/O excluded; a learned method's call includes its ICP "
