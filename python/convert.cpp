@@ -80,13 +80,34 @@ nlohmann::json PyToJson(py::handle value, const std::string& what) {
                          " as JSON (use dict, list, str, int, float, bool or None)");
 }
 
+namespace {
+
+/// Parameters are recorded in every result row as JSON, which has no NaN or infinity (a row
+/// would hold null, and resuming would find other parameters): refused by name, as the CLI's
+/// JSON parser refuses them.
+void RefuseNonFinite(const nlohmann::json& j, const std::string& what) {
+    if (j.is_number_float() && !std::isfinite(j.get<double>())) {
+        throw py::value_error(what + " must be finite (JSON has no NaN or infinity), got " +
+                              std::to_string(j.get<double>()));
+    }
+    if (j.is_object()) {
+        for (const auto& item : j.items()) RefuseNonFinite(item.value(), what + "." + item.key());
+    } else if (j.is_array()) {
+        for (const auto& v : j) RefuseNonFinite(v, what);
+    }
+}
+
+}  // namespace
+
 nlohmann::json ParamsToJson(py::handle params, const std::string& what) {
     if (params.is_none()) return nlohmann::json::object();
     if (!py::isinstance<py::dict>(params)) {
         throw py::value_error(what + " must be a dict (or None), got " +
                               py::str(params.get_type().attr("__name__")).cast<std::string>());
     }
-    return PyToJson(params, what);
+    nlohmann::json j = PyToJson(params, what);
+    RefuseNonFinite(j, what);
+    return j;
 }
 
 namespace {

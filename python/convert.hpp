@@ -20,7 +20,8 @@ py::object JsonToPy(const nlohmann::json& j);
 /// and arrays) as JSON; anything else raises TypeError naming `what`.
 nlohmann::json PyToJson(py::handle value, const std::string& what);
 
-/// A method's parameters: None is {}, otherwise a dict (ValueError naming `what` if not).
+/// A method's parameters: None is {}, otherwise a dict (ValueError naming `what` if not, or
+/// naming the key of a NaN or infinite number, which a row's JSON cannot record).
 nlohmann::json ParamsToJson(py::handle params, const std::string& what);
 
 /// An (N, 3) floating-point array (any array-like NumPy accepts) as a point cloud, copied.

@@ -79,6 +79,11 @@ def test_align_refuses_bad_method_and_params(pair_file):
         regbench.align(pair.source, pair.target, "cpd", [1, 2])
     with pytest.raises(ValueError, match="threads must be >= 1"):
         regbench.align(pair.source, pair.target, "cpd", threads=0)
+    # Rows record parameters as JSON, which has no NaN or infinity: such a run used to write
+    # null and then refuse its own rows on resume ("ran with other parameters").
+    for bad in (float("inf"), float("-inf"), float("nan")):
+        with pytest.raises(ValueError, match=r"params\.max_correspondence_distance must be finite"):
+            regbench.align(pair.source, pair.target, "icp", {"max_correspondence_distance": bad})
 
 
 def test_align_releases_the_gil():

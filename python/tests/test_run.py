@@ -119,6 +119,10 @@ def test_bad_method_lists_are_refused(pair_file, tmp_path):
         regbench.run(pair_file, [py_icp, py_icp], out)
     with pytest.raises(ValueError, match="params names method 'cpd'"):
         regbench.run(pair_file, ["icp"], out, params={"cpd": {}})
+    inf = {"icp": {"max_correspondence_distance": float("inf")}}
+    with pytest.raises(ValueError, match=r"params\.icp\.max_correspondence_distance must be finite"):
+        regbench.run(pair_file, ["icp"], out, params=inf)
+    assert not out.exists()
     with pytest.raises(ValueError, match="timeout must be > 0"):
         regbench.run(pair_file, ["icp"], out, timeout=0)
     with pytest.raises(TypeError, match="methods must be a list"):
