@@ -399,8 +399,9 @@ MethodInfo MakeMethodInfo(const std::string& name, const std::string& summary) {
 
 /// Parses a config struct bound by NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT (model and
 /// training configs, whose JSON is also a file format): keys absent from `j` keep the
-/// struct's defaults; unknown keys, wrong JSON types and fractional values of integer keys
-/// (RequireWholeNumber) throw std::invalid_argument naming `what` and the key.
+/// struct's defaults; unknown keys, wrong JSON types, fractional values of integer keys
+/// (RequireWholeNumber) and integers the field's type cannot hold throw std::invalid_argument
+/// naming `what` and the key.
 template <class Config>
 Config ParseConfig(const nlohmann::json& j, const std::string& what) {
     if (!j.is_null() && !j.is_object()) {
@@ -408,6 +409,8 @@ Config ParseConfig(const nlohmann::json& j, const std::string& what) {
     }
     nlohmann::json merged = Config{};
     if (j.is_null()) return Config{};
+    nlohmann::json given = j;
+    std::vector<std::string> integer_keys;
     for (const auto& item : j.items()) {
         const auto def = merged.find(item.key());
         if (def == merged.end()) {
@@ -419,14 +422,30 @@ Config ParseConfig(const nlohmann::json& j, const std::string& what) {
         const bool numeric_ok = def->is_number() && item.value().is_number();
         Require(numeric_ok || def->type() == item.value().type(), what, item.key(),
                 std::string("expects ") + def->type_name() + ", got " + item.value().dump());
-        if (def->is_number_integer()) RequireWholeNumber(item.value(), what, item.key());
+        if (def->is_number_integer()) {
+            RequireWholeNumber(item.value(), what, item.key());
+            integer_keys.push_back(item.key());
+            // 2.0 as the integer 2 (exact: |x| <= 2^53), so that no float is cast to an int.
+            if (item.value().is_number_float()) {
+                given[item.key()] = static_cast<std::int64_t>(item.value().get<double>());
+            }
+        }
     }
-    merged.update(j);
+    merged.update(given);
+    Config c;
     try {
-        return merged.get<Config>();
+        c = merged.get<Config>();
     } catch (const nlohmann::json::exception& e) {
         throw std::invalid_argument(what + ": bad parameters: " + e.what());
     }
+    // An integer its field's type cannot hold (3e9 in an int) comes back as another number;
+    // compared as text, since nlohmann's == calls -1 and 2^64 - 1 equal.
+    const nlohmann::json back = c;
+    for (const auto& key : integer_keys) {
+        Require(back.at(key).dump() == given.at(key).dump(), what, key,
+                "is out of range of its integer type, got " + j.at(key).dump());
+    }
+    return c;
 }
 
 }  // namespace regbench

@@ -328,17 +328,25 @@ TEST(Options, PartialJsonReadsOverTheNamedProtocolsDefaults) {
     EXPECT_EQ(ProtocolOptionsFromJson(nullptr, base).keep, 0.5);
 }
 
+/// The message ProtocolOptionsFromJson refuses `j` with ("" when it reads it).
+std::string ProtocolRefusal(const nlohmann::json& j) {
+    try {
+        ProtocolOptionsFromJson(j, ProtocolOptions{});
+    } catch (const std::invalid_argument& e) {
+        return e.what();
+    }
+    return "";
+}
+
 TEST(Options, IntegerKeysFollowTheOneRule) {
     // As every method parameter and config: 717.0 is the whole number 717, 717.5 is refused
-    // (it used to be truncated to 717 silently).
+    // (it used to be truncated to 717 silently), and 1e12 too (it used to reach
+    // ValidateProtocolOptions as -2147483648: "must be >= 3, got -2147483648").
     EXPECT_EQ(ProtocolOptionsFromJson({{"points", 717.0}}, ProtocolOptions{}).points, 717);
-    try {
-        ProtocolOptionsFromJson({{"points", 717.5}}, ProtocolOptions{});
-        ADD_FAILURE() << "717.5 points accepted";
-    } catch (const std::invalid_argument& e) {
-        EXPECT_NE(std::string(e.what()).find("'points' must be a whole number"), std::string::npos)
-            << e.what();
-    }
+    const std::string fraction = ProtocolRefusal({{"points", 717.5}});
+    EXPECT_NE(fraction.find("'points' must be a whole number"), std::string::npos) << fraction;
+    const std::string huge = ProtocolRefusal({{"points", 1e12}});
+    EXPECT_NE(huge.find("'points' is out of range"), std::string::npos) << huge;
 }
 
 TEST(ShapeSource, PointSourceSamplesDistinctPointsAndRejectsTooFew) {
