@@ -13,6 +13,7 @@
 #include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "ogmm/authors_checkpoint.hpp"
+#include "ogmm/family.hpp"
 #endif
 
 namespace regbench::app {
@@ -25,13 +26,20 @@ struct ImportArgs {
     ogmm::ImportOptions options;
 };
 
+/// The network families with an authors' checkpoint format (ogmm/family.hpp), "a | b".
+std::string Formats() {
+    std::string list;
+    for (const auto& f : ogmm::AuthorsFormats()) list += (list.empty() ? "" : " | ") + f;
+    return list;
+}
+
 void SetupImport(CLI::App* cmd) {
     auto a = std::make_shared<ImportArgs>();
     cmd->add_option("FILE", a->file, "The authors' torch.save state dict (.pth; zip or legacy)")
         ->required();
-    cmd->add_option("--from", a->options.from, "Whose module saved it: deepgmr | ogmm")
+    cmd->add_option("--from", a->options.from, "Whose module saved it: " + Formats())
         ->required()
-        ->check(CLI::IsMember({"deepgmr", "ogmm"}));
+        ->check(CLI::IsMember(ogmm::AuthorsFormats()));
     cmd->add_option("--out", a->out, "Checkpoint folder to write")->required();
     cmd->add_option("--rri-variant", a->options.rri_variant,
                     "DeepGMR RRI orientation at run time: cuda (GPU kernel; the released models) "
@@ -76,9 +84,9 @@ struct ExportArgs {
 void SetupExport(CLI::App* cmd) {
     auto a = std::make_shared<ExportArgs>();
     cmd->add_option("DIR", a->dir, "regbench checkpoint folder")->required();
-    cmd->add_option("--to", a->to, "Whose module will load it: deepgmr | ogmm")
+    cmd->add_option("--to", a->to, "Whose module will load it: " + Formats())
         ->required()
-        ->check(CLI::IsMember({"deepgmr", "ogmm"}));
+        ->check(CLI::IsMember(ogmm::AuthorsFormats()));
     cmd->add_option("--out", a->out, ".pth file to write (zip format, torch.load-able)")
         ->required();
     cmd->callback([a] {
@@ -93,6 +101,13 @@ void SetupExport(CLI::App* cmd) {
     });
 }
 #else
+/// The network families with an authors' checkpoint format (ogmm/family.hpp), "a | b".
+std::string Formats() {
+    std::string list;
+    for (const auto& f : ogmm::AuthorsFormats()) list += (list.empty() ? "" : " | ") + f;
+    return list;
+}
+
 void SetupImport(CLI::App* cmd) {
     cmd->callback(
         [] { throw std::runtime_error("import-checkpoint: this build has no LibTorch"); });

@@ -19,6 +19,7 @@
 #include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
 #include "experiments/training.hpp"
+#include "ogmm/family.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
 #endif
@@ -42,6 +43,7 @@ struct TrainArgs {
     bool val_icp = true;
     std::string ablation;
     std::string bundle;  ///< --write-bundle FILE: write the data and config, train nothing
+    bool list_models = false;  ///< --list-models: print the families' models and stop
 };
 
 /// The command as given, for checkpoints' provenance.
@@ -123,11 +125,41 @@ void WriteBundle(const TrainArgs& a, const std::string& command_line) {
               << "regbench-train-portable " << a.bundle << " --out DIR [--device cuda]\n";
 }
 
+/// The zoo's model names (ogmm/family.hpp), comma-separated.
+std::string ModelList() {
+    std::string list;
+    for (const auto& m : ogmm::ModelNames()) list += (list.empty() ? "" : ", ") + m;
+    return list;
+}
+
+/// --list-models: each network family (ogmm/family.hpp), its models and methods, and every
+/// config key with each model's value and the key's doc.
+void ListModels() {
+    for (const auto& f : ogmm::Families()) {
+        std::cout << f.arch << "  -  " << f.summary << "\n    models:";
+        for (const auto& m : f.models) std::cout << " " << m;
+        std::cout << "\n    methods:";
+        for (const auto& m : f.methods) std::cout << " " << m.name;
+        std::cout << "\n";
+        for (const auto& [key, doc] : f.config_docs) {
+            std::string values;
+            for (const auto& m : f.models) {
+                const nlohmann::json c = f.named_config(m);
+                values += (values.empty() ? "" : " | ") +
+                          (c.contains(key) ? c.at(key).dump() : std::string("-"));
+            }
+            std::cout << "    " << key << " = " << values << "    # " << doc << "\n";
+        }
+    }
+}
+
 void Run(const TrainArgs& a, const std::string& command_line) {
+    if (a.list_models) {
+        ListModels();
+        return;
+    }
     if (a.ablation.empty() && a.model.empty()) {
-        throw std::invalid_argument(
-            "train: --model is required (known: deepgmr, deepgmr-small, "
-            "deepgmr-orig, deepgmr-orig-xyz, ogmm, ogmm-small, ogmm-tiny)");
+        throw std::invalid_argument("train: --model is required (known: " + ModelList() + ")");
     }
     // One writer per run directory (OUT.lock beside it), taken before the data are built: a
     // second train (or any regbench writer) on the same --out is refused naming the pid.
@@ -158,8 +190,10 @@ void Run(const TrainArgs& a, const std::string& command_line) {
 void SetupTrainCommand(CLI::App* cmd) {
     auto a = std::make_shared<TrainArgs>();
     cmd->add_option("--model", a->model,
-                    "Model: deepgmr, deepgmr-small, deepgmr-orig, deepgmr-orig-xyz, ogmm, "
-                    "ogmm-small, ogmm-tiny (ablations: default ogmm-small)");
+                    "Model: " + ModelList() + " (ablations: default the plan file's model)");
+    cmd->add_flag("--list-models", a->list_models,
+                  "Print every network family's models, methods and config keys (values per "
+                  "model, one doc per key), then stop");
     cmd->add_option("--config", a->config_file, "JSON file merged over the named config");
     cmd->add_option("--out", a->out, "Run directory (checkpoints last/ best/, metrics.csv)");
     cmd->add_option("--protocol", a->data.protocol, "Pair protocol")->capture_default_str();

@@ -73,6 +73,11 @@ struct CpdOptions : GmmEmOptions {
         c.AtMost("cluster_cell_sigmas", cluster_cell_sigmas, 1.0);
         c.AtLeast("cluster_min_points", cluster_min_points, 0);
     }
+    /// Scale guard class: the dense E-step is O(N * M); auto and truncated switch to their
+    /// approximations (cell compression, truncation) at scale.
+    CostClass Cost() const {
+        return e_step == GaussSumMode::kDense ? CostClass::kQuadratic : CostClass::kNearLinear;
+    }
     /// compat "probreg": probreg 0.3.7's defaults for these keys.
     void ApplyCompat() {
         if (compat != Compat::kProbreg) return;

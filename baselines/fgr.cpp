@@ -97,6 +97,8 @@ struct FgrOptions {
         c.Below("tuple_scale", tuple_scale, 1.0);
         c.AtLeast("maximum_tuple_count", maximum_tuple_count, 1);
     }
+    /// Scale guard class: kd-tree feature matching, near-linear.
+    CostClass Cost() const { return CostClass::kNearLinear; }
 };
 
 /// Optional voxel downsampling, then normals (FPFH needs them).

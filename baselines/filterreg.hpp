@@ -78,6 +78,8 @@ struct FilterRegOptions : GmmEmOptions {
         c.Above("min_sigma2", min_sigma2, 0.0);
         c.AtLeast("normals_k", normals_k, 3);
     }
+    /// Scale guard class: permutohedral lattice, near-linear.
+    CostClass Cost() const { return CostClass::kNearLinear; }
     /// compat "probreg": probreg 0.3.7's defaults for these keys.
     void ApplyCompat() {
         if (compat != Compat::kProbreg) return;

@@ -61,6 +61,8 @@ struct GicpOptions {
         c.Above("translation_gradient_tolerance", translation_gradient_tolerance, 0.0);
         c.Above("rotation_gradient_tolerance", rotation_gradient_tolerance, 0.0);
     }
+    /// Scale guard class: kd-tree searches, near-linear.
+    CostClass Cost() const { return CostClass::kNearLinear; }
 };
 
 using PclGicp = pcl::GeneralizedIterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ>;

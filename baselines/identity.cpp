@@ -5,7 +5,12 @@
 namespace regbench {
 namespace {
 
-AlignResult AlignIdentity(const NoOptions&, const PointCloud&, const PointCloud&,
+/// No parameters; its cost does not depend on the clouds.
+struct IdentityOptions : NoOptions {
+    CostClass Cost() const { return CostClass::kConstant; }
+};
+
+AlignResult AlignIdentity(const IdentityOptions&, const PointCloud&, const PointCloud&,
                           const AlignContext&) {
     AlignResult r;
     r.stop_reason = "no_op";
@@ -15,7 +20,7 @@ AlignResult AlignIdentity(const NoOptions&, const PointCloud&, const PointCloud&
 }  // namespace
 
 MethodInfo IdentityMethodInfo() {
-    return MakeMethodInfo<NoOptions>(
+    return MakeMethodInfo<IdentityOptions>(
         "identity", "no motion (returns I); the floor every method must beat", AlignIdentity);
 }
 

@@ -2,6 +2,7 @@
 // reached through ogmm/ (ogmm/inference.hpp), ICP through the `icp` method (baselines/icp.cpp).
 #include "baselines/learned.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -13,8 +14,8 @@
 #include "core/data_dir.hpp"
 #include "core/params.hpp"
 #include "ogmm/checkpoint.hpp"
-#include "ogmm/checkpoint_json.hpp"
 #include "ogmm/cost.hpp"
+#include "ogmm/family.hpp"
 #include "ogmm/gemm_floor.hpp"
 #include "ogmm/inference.hpp"
 
@@ -207,49 +208,57 @@ private:
 };
 
 /// Opens the checkpoint's checkpoint.json when the method is created, i.e. before a run
-/// starts: a missing or unreadable checkpoint, or one of another model family (an OGMM
-/// checkpoint under `deepgmr` would run OGMM under DeepGMR's name), is refused naming the
-/// folder. The weights load on first use.
-void CheckCheckpoint(const std::string& name, const std::string& dir) {
+/// starts: a missing or unreadable checkpoint, a config its family refuses (sizes out of range),
+/// or one of another network family (an OGMM checkpoint under `deepgmr` would run OGMM under
+/// DeepGMR's name) is refused naming the folder. The weights load on first use.
+void CheckCheckpoint(const ogmm::NetworkFamily& family, const ogmm::LearnedMethodSpec& method,
+                     const std::string& dir, const nlohmann::json& inference) {
     if (!std::filesystem::is_directory(dir)) {
-        throw std::invalid_argument(name + ": checkpoint directory " + dir +
+        throw std::invalid_argument(method.name + ": checkpoint directory " + dir +
                                     " does not exist (train one with `regbench train`, or set "
                                     "parameter checkpoint / $REGBENCH_MODELS)");
     }
-    nlohmann::json j;
+    std::string arch;
     try {
-        j = ogmm::ReadCheckpointJson(dir);
+        arch = ogmm::CheckCheckpointModel(dir, inference);
     } catch (const std::exception& e) {
-        throw std::invalid_argument(name + ": " + e.what());
+        throw std::invalid_argument(method.name + ": " + e.what());
     }
-    const std::string arch = ogmm::CheckpointArch(j);  // config.arch, checked a string
-    const std::string family = name.rfind("deepgmr", 0) == 0 ? "deepgmr" : "ogmm";
-    if (arch != family) {
-        throw std::invalid_argument(name + ": checkpoint " + dir + " holds a " + arch +
-                                    " model (config.arch), not " + family + "; run it as " + arch +
-                                    (name.find("-noicp") != std::string::npos ? "-noicp" : ""));
+    if (arch != family.arch) {
+        std::string instead = arch;  // the method of the checkpoint's family with the same ICP
+        for (const auto& m : ogmm::FindFamily(arch).methods) {
+            if (m.icp == method.icp) instead = m.name;
+        }
+        throw std::invalid_argument(method.name + ": checkpoint " + dir + " holds a " + arch +
+                                    " model (config.arch), not " + family.arch + "; run it as " +
+                                    instead);
     }
 }
 
 template <bool kIcp, bool kAttention>
-MethodInfo MakeInfo(const std::string& name, const std::string& model_dir,
-                    const std::string& summary) {
+MethodInfo MakeInfo(const ogmm::NetworkFamily& family, const ogmm::LearnedMethodSpec& method) {
     using Options = LearnedOptions<kIcp, kAttention>;
-    MethodInfo info = DescribeMethod<Options>(name, summary);
+    MethodInfo info = DescribeParams<Options>(method.name, method.summary);
+    info.cost = [cost = family.cost_class](const nlohmann::json&) { return cost; };
+    const std::string model_dir = family.shipped_model;
     const std::string shipped = ShippedCheckpointDir(model_dir) + " ($REGBENCH_MODELS overrides)";
     info.param_docs.at("checkpoint") += shipped;
     info.schema["properties"]["checkpoint"]["description"] = info.param_docs.at("checkpoint");
-    info.create = [name,
-                   model_dir](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
+    info.create = [family, method](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
+        const std::string& name = method.name;
         if (!kIcp && j.is_object() &&
             (j.contains("icp_max_correspondence_distance") || j.contains("icp_max_iterations"))) {
             throw std::invalid_argument(name +
                                         ": no ICP in this variant; drop the icp_* parameters");
         }
         const auto o = ParseParams<Options>(name, j);
-        CheckCheckpoint(name,
-                        o.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : o.checkpoint);
-        return std::make_unique<LearnedMethod>(name, model_dir, o);
+        nlohmann::json inference = nlohmann::json::object();
+        if (!o.attention.empty()) inference["attention"] = o.attention;
+        CheckCheckpoint(family, method,
+                        o.checkpoint.empty() ? ShippedCheckpointDir(family.shipped_model)
+                                             : o.checkpoint,
+                        inference);
+        return std::make_unique<LearnedMethod>(name, family.shipped_model, o);
     };
     return info;
 }
@@ -257,15 +266,22 @@ MethodInfo MakeInfo(const std::string& name, const std::string& model_dir,
 }  // namespace
 
 std::vector<MethodInfo> LearnedMethodInfos() {
-    return {
-        MakeInfo<true, true>(
-            "ogmm", "ogmm",
-            "OGMM network (LibTorch, CPU batch 1) + Open3D point-to-point ICP refinement"),
-        MakeInfo<false, true>("ogmm-noicp", "ogmm", "OGMM network alone (LibTorch, CPU batch 1)"),
-        MakeInfo<true, false>(
-            "deepgmr", "deepgmr",
-            "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement"),
-        MakeInfo<false, false>("deepgmr-noicp", "deepgmr",
-                               "DeepGMR, OGMM paper's variant (DGCNN encoder), network alone")};
+    std::vector<MethodInfo> out;
+    for (const auto& family : ogmm::Families()) {
+        // The one inference option a method can take as a parameter today is "attention"
+        // (LearnedOptions); a family with another needs a field there.
+        const auto& keys = family.inference_keys;
+        const bool attention = std::find(keys.begin(), keys.end(), "attention") != keys.end();
+        for (const auto& method : family.methods) {
+            if (method.icp) {
+                out.push_back(attention ? MakeInfo<true, true>(family, method)
+                                        : MakeInfo<true, false>(family, method));
+            } else {
+                out.push_back(attention ? MakeInfo<false, true>(family, method)
+                                        : MakeInfo<false, false>(family, method));
+            }
+        }
+    }
+    return out;
 }
 }  // namespace regbench

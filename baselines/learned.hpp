@@ -8,13 +8,15 @@
 
 namespace regbench {
 
-/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`, in that order. Any checkpoint of the method's
-/// family (config.arch "ogmm" / "deepgmr") runs under it, e.g. `deepgmr` with checkpoint = a
-/// deepgmr-orig run. Creating the method opens checkpoint.json: a missing folder, an unreadable
-/// checkpoint or one of the other family is refused (std::invalid_argument naming the folder).
+/// The methods of every network family (ogmm/family.hpp), in the registry's order (today
+/// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`). Any checkpoint of the method's family
+/// (its config.arch) runs under it, e.g. `deepgmr` with checkpoint = a deepgmr-orig run.
+/// Creating the method opens checkpoint.json: a missing folder, an unreadable checkpoint, a
+/// config its family refuses or one of another family is refused (std::invalid_argument
+/// naming the folder).
 std::vector<MethodInfo> LearnedMethodInfos();
 
-/// Directory of the shipped checkpoint `name` (e.g. "ogmm"): $REGBENCH_MODELS/<name> when that
+/// Directory of the shipped checkpoint `name` (a family's shipped_model): $REGBENCH_MODELS/<name> when that
 /// variable is set, else <source dir baked in at build time>/data/models/<name>.
 std::string ShippedCheckpointDir(const std::string& name);
 

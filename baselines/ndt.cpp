@@ -59,6 +59,8 @@ struct NdtOptions {
         c.AtLeast("transformation_rotation_epsilon", transformation_rotation_epsilon, 0.0);
         c.Below("transformation_rotation_epsilon", transformation_rotation_epsilon, 1.0);
     }
+    /// Scale guard class: voxel grid, near-linear.
+    CostClass Cost() const { return CostClass::kNearLinear; }
 };
 
 using PclNdt = pcl::NormalDistributionsTransform<pcl::PointXYZ, pcl::PointXYZ>;

@@ -31,6 +31,8 @@ struct Open3dIcpOptions {
         c.AtLeast("relative_fitness", relative_fitness, 0.0);
         c.AtLeast("relative_rmse", relative_rmse, 0.0);
     }
+    /// Scale guard class: kd-tree searches, O((N + M) log M).
+    CostClass Cost() const { return CostClass::kNearLinear; }
     open3d::pipelines::registration::ICPConvergenceCriteria Criteria() const {
         return {relative_fitness, relative_rmse, max_iterations};
     }

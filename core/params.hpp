@@ -362,15 +362,29 @@ private:
     AlignFunction<Options> align_;
 };
 
-/// MethodInfo without `create`: name, summary, docs, defaults and schema.
+/// MethodInfo without `create` and `cost`: name, summary, docs, defaults and schema.
 template <class Options>
-MethodInfo DescribeMethod(const std::string& name, const std::string& summary) {
+MethodInfo DescribeParams(const std::string& name, const std::string& summary) {
     MethodInfo info;
     info.name = name;
     info.summary = summary;
     info.param_docs = ParamDocs<Options>();
     info.defaults = ParamsToJson(Options{});
     info.schema = ParamSchemaOf<Options>(name, summary);
+    return info;
+}
+
+/// MethodInfo without `create`: DescribeParams and the cost class. The options struct declares
+/// its method's cost class as `CostClass Cost() const` (it may depend on the options: CPD's
+/// dense E-step is quadratic, its default approximation is not).
+template <class Options>
+MethodInfo DescribeMethod(const std::string& name, const std::string& summary) {
+    static_assert(std::is_same_v<decltype(std::declval<const Options&>().Cost()), CostClass>,
+                  "a method's options struct declares `CostClass Cost() const`");
+    MethodInfo info = DescribeParams<Options>(name, summary);
+    info.cost = [name](const nlohmann::json& params) {
+        return ParseParams<Options>(name, params).Cost();
+    };
     return info;
 }
 

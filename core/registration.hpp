@@ -89,6 +89,14 @@ std::string ValidateCloud(const PointCloud& cloud, const std::string& which);
 
 namespace regbench {
 
+/// How a method's time per iteration grows with the cloud sizes N (source) and M (target): what
+/// the scale guard (runners/scale_guard.hpp) asks of each method before a run.
+enum class CostClass {
+    kConstant,    ///< independent of the clouds (identity)
+    kNearLinear,  ///< O((N + M) log M): kd-tree, voxel or lattice based
+    kQuadratic,   ///< O(N * M): dense kernel sums over all point pairs
+};
+
 /// What the registry knows about a method: each method's file provides one of these
 /// (e.g. `MethodInfo CpdMethodInfo();`), and runners/registry.cpp lists them.
 struct MethodInfo {
@@ -101,6 +109,8 @@ struct MethodInfo {
     /// The parameters' JSON Schema (core/params.hpp ParamSchemaOf),
     /// or null for methods described by hand.
     nlohmann::json schema;
+    /// The method's cost class under resolved parameters `params` (its options' Cost()).
+    std::function<CostClass(const nlohmann::json& params)> cost;
     /// Creates an instance; throws std::invalid_argument on unknown keys / bad values.
     std::function<std::unique_ptr<RegistrationMethod>(const nlohmann::json&)> create;
 };

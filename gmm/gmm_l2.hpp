@@ -195,6 +195,12 @@ struct AnnealedL2Options {
         c.AtLeast("compress_cell_sigmas", sums.compress_cell_sigmas, 0.0);
         c.AtMost("compress_cell_sigmas", sums.compress_cell_sigmas, 1.0);
     }
+    /// Scale guard class: the dense kernel sums are O(N * M); the approximations (the default)
+    /// switch on by themselves above their size thresholds.
+    CostClass Cost() const {
+        return sums.kernel_sums == L2KernelSums::kDense ? CostClass::kQuadratic
+                                                        : CostClass::kNearLinear;
+    }
 };
 
 /// Outcome of MinimizeAnnealedL2.

@@ -1,6 +1,8 @@
 #pragma once
 // The state-dict level of ogmm/authors_checkpoint.hpp: the functions that take or return the
-// authors' tensors themselves (LibTorch types), for ogmm/ and its tests.
+// authors' tensors themselves (LibTorch types), for ogmm/ and its tests, and the AuthorsFormat
+// a network family declares (ogmm/family.hpp) to map the authors' state dicts onto its own.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -9,13 +11,43 @@
 
 namespace regbench::ogmm {
 
+/// How a family's authors lay out their state dict (NetworkFamily::authors).
+struct AuthorsFormat {
+    /// The authors' module and file, recorded in an imported checkpoint.json.
+    std::string module;
+    /// The regbench config (zoo form, with "arch", "name" and "train") the authors' state dict
+    /// `tensors` of file `file` holds, read from its tensor names and shapes (and `options`
+    /// for what no shape fixes). Throws std::runtime_error naming the file and tensor.
+    std::function<nlohmann::json(const StateDict& tensors, const std::string& file,
+                                 const ImportOptions& options)>
+        infer_config;
+    /// The authors' key of regbench tensor `name`; unset: the same name.
+    std::function<std::string(const std::string& name)> authors_name;
+    /// Rank of an authors' key in their state_dict order (keys sort by it, stably); unset:
+    /// regbench's order is theirs.
+    std::function<int(const std::string& authors_key)> module_rank;
+    /// Refuses (std::runtime_error naming `where`) a config the authors' module cannot hold;
+    /// unset: every config of the family exports.
+    std::function<void(const nlohmann::json& config, const std::string& where)> check_export;
+};
+
 /// The regbench model config (zoo form, with "arch", "name" and "train") the state dict
-/// `tensors` of file `file` describes. Throws std::runtime_error naming the file and tensor.
+/// `tensors` of file `file` describes, as the family options.from reads it. Throws
+/// std::runtime_error naming the file and tensor.
 nlohmann::json InferAuthorsConfig(const StateDict& tensors, const std::string& file,
                                   const ImportOptions& options);
 
-/// The state dict the authors' module `to` ("deepgmr" | "ogmm") would have for the checkpoint
-/// in `dir`, in their key order. Throws naming the folder when it is of another family.
+/// The state dict the authors' module of family `to` would have for the checkpoint in `dir`,
+/// in their key order. Throws naming the folder when it is of another family.
 StateDict ExportAuthorsStateDict(const std::string& dir, const std::string& to);
+
+/// Throws std::runtime_error "<file>: <what>" (an authors' file that does not fit).
+[[noreturn]] void RefuseAuthorsFile(const std::string& file, const std::string& what);
+
+/// The tensor `key` of `sd` with `dims` dimensions; refuses the file naming the key when it is
+/// missing ("not <network> state dict", listing the first keys it has) or of another rank.
+const torch::Tensor& RequireAuthorsTensor(const StateDict& sd, const std::string& key,
+                                          int64_t dims, const std::string& file,
+                                          const std::string& network);
 
 }  // namespace regbench::ogmm

@@ -16,6 +16,7 @@
 #include "core/atomic_file.hpp"
 #include "core/version.hpp"
 #include "ogmm/checkpoint_json.hpp"
+#include "ogmm/family.hpp"
 #include "ogmm/net.hpp"
 #include "ogmm/zoo.hpp"
 
@@ -157,19 +158,21 @@ nlohmann::json LoadCheckpointAs(const std::string& dir, RegistrationNet& net,
     return j;
 }
 
-/// Refuses an `inference` that is not an object of InferenceOnlyConfigKeys.
-void CheckInferenceKeys(const nlohmann::json& inference) {
+/// Refuses an `inference` that is not an object of keys of `family.inference_keys`.
+void CheckInferenceKeys(const nlohmann::json& inference, const NetworkFamily& family) {
     if (!inference.is_object()) {
         throw std::invalid_argument("inference config overrides must be an object, got " +
                                     inference.dump());
     }
-    const auto& allowed = InferenceOnlyConfigKeys();
+    const auto& allowed = family.inference_keys;
     for (const auto& [key, value] : inference.items()) {
         (void)value;
         if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-            throw std::invalid_argument("config key '" + key +
-                                        "' changes the network's parameters; only "
-                                        "\"attention\" may differ from the checkpoint's");
+            std::string may;
+            for (const auto& k : allowed) may += (may.empty() ? "\"" : ", \"") + k + "\"";
+            throw std::invalid_argument(
+                "config key '" + key + "' changes the network's parameters; only " +
+                (may.empty() ? std::string("no key") : may) + " may differ from the checkpoint's");
         }
     }
 }
@@ -181,20 +184,27 @@ nlohmann::json LoadCheckpoint(const std::string& dir, RegistrationNet& net,
     return LoadCheckpointAs(dir, net, optimizer, nlohmann::json::object());
 }
 
-const std::vector<std::string>& InferenceOnlyConfigKeys() {
-    static const std::vector<std::string> kKeys = {"attention"};
-    return kKeys;
-}
-
 nlohmann::json CheckpointNetConfig(const std::string& dir, const nlohmann::json& inference) {
-    CheckInferenceKeys(inference);
     const nlohmann::json j = ReadCheckpointJson(dir);
     // "config" (the zoo config, with "arch") builds it; model_config is what it must equal.
     nlohmann::json config = j.contains("config") ? j.at("config") : j.at("model_config");
-    if (config.is_object()) {
-        for (const auto& [key, value] : inference.items()) config[key] = value;
-    }
+    CheckInferenceKeys(inference, FamilyOfConfig(config));
+    for (const auto& [key, value] : inference.items()) config[key] = value;
     return config;
+}
+
+std::string CheckCheckpointModel(const std::string& dir, const nlohmann::json& inference) {
+    const nlohmann::json config = CheckpointNetConfig(dir, inference);
+    try {
+        const NetworkFamily& family = FamilyOfConfig(config);
+        nlohmann::json net = config;
+        net.erase("train");
+        family.check_config(net);
+        return family.arch;
+    } catch (const std::exception& e) {
+        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
+                                 ": cannot build its model: " + e.what());
+    }
 }
 
 std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(const std::string& dir,

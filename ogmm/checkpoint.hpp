@@ -41,14 +41,10 @@ nlohmann::json ReadCheckpointJson(const std::string& dir);
 nlohmann::json LoadCheckpoint(const std::string& dir, RegistrationNet& net,
                               torch::optim::Optimizer* optimizer = nullptr);
 
-/// Config keys that change what a network computes at inference but none of its parameters, so
-/// a checkpoint's weights load under another value: OGMM's "attention" ("clustered" attends to
-/// FPS anchors, "full" to every point; the same modules either way, ogmm/ogmm_net.cpp Anchors).
-const std::vector<std::string>& InferenceOnlyConfigKeys();
-
 /// Builds the network the checkpoint describes (zoo) and loads its weights; eval mode.
-/// `inference` (keys of InferenceOnlyConfigKeys only) is merged over the checkpoint's config
-/// first, e.g. {"attention": "full"}; another key is refused (std::invalid_argument naming it).
+/// `inference` (keys of its family's NetworkFamily::inference_keys only, ogmm/family.hpp) is
+/// merged over the checkpoint's config first, e.g. {"attention": "full"}; another key is
+/// refused (std::invalid_argument naming it).
 std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(
     const std::string& dir, const nlohmann::json& inference = nlohmann::json::object());
 
@@ -56,5 +52,11 @@ std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(
 /// LoadNetFromCheckpoint builds it: what ComputeForwardCost (ogmm/cost.hpp) counts.
 nlohmann::json CheckpointNetConfig(const std::string& dir,
                                    const nlohmann::json& inference = nlohmann::json::object());
+
+/// Checks the checkpoint in `dir` without building its network or reading its weights: its
+/// checkpoint.json, `inference` as LoadNetFromCheckpoint checks it, and its config by its
+/// family's check_config (sizes in range). Returns the family's arch. Throws naming the file.
+std::string CheckCheckpointModel(const std::string& dir,
+                                 const nlohmann::json& inference = nlohmann::json::object());
 
 }  // namespace regbench::ogmm

@@ -89,8 +89,8 @@ nlohmann::json ParseCheckpointJson(const std::string& text, const std::string& p
 }
 
 std::string CheckpointArch(const nlohmann::json& checkpoint) {
-    if (!checkpoint.contains("config")) return "ogmm";
-    return checkpoint.at("config").value("arch", std::string("ogmm"));
+    if (!checkpoint.contains("config")) return "";
+    return checkpoint.at("config").value("arch", std::string());
 }
 
 }  // namespace regbench::ogmm

@@ -19,7 +19,8 @@ nlohmann::json ParseCheckpointJson(const std::string& text, const std::string& p
 /// the key and the value.
 void CheckTrainerStateJson(const nlohmann::json& j);
 
-/// The model family a checked checkpoint holds: config.arch, "ogmm" when absent.
+/// The model family a checked checkpoint holds: config.arch; "" when it records none (written
+/// before configs had "arch": ogmm/family.hpp FamilyOfConfig says which family that is).
 std::string CheckpointArch(const nlohmann::json& checkpoint);
 
 }  // namespace regbench::ogmm

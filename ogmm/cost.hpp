@@ -15,14 +15,24 @@ struct ForwardCost {
     std::map<std::string, std::int64_t> parts;  ///< e.g. "dgcnn", "attention", "gmm_fit"
 };
 
-/// MACs of one batch-1 forward of the network `config` describes (a zoo config, "arch" "ogmm" or
-/// "deepgmr"; without "arch" an OGMM config is assumed) on a source of `source_points` and a
-/// target of `target_points` points. Counts every convolution and matrix product (1x1 convs,
+/// MACs of one batch-1 forward of the network `config` describes (a zoo config; its family,
+/// ogmm/family.hpp FamilyOfConfig, counts) on a source of `source_points` and a target of
+/// `target_points` points. Counts every convolution and matrix product (1x1 convs,
 /// kNN Gram matrices, attention scores and messages, mixture statistics, distances of FPS and
 /// of the GMM fit); element-wise work (BatchNorm, activations, softmax, Sinkhorn's exp/log,
 /// RRI's trigonometry, kd-tree searches) is not counted. Throws std::invalid_argument naming a
 /// missing key or a non-positive point count.
 ForwardCost ComputeForwardCost(const nlohmann::json& config, std::int64_t source_points,
                                std::int64_t target_points);
+
+// Building blocks of the families' counts (ogmm/<family>_family.cpp).
+
+/// The integer `key` of `config`; throws std::invalid_argument naming a missing key.
+std::int64_t CostKey(const nlohmann::json& config, const char* key);
+/// Adds `macs` to `cost.parts[part]` and to the total.
+void AddMacs(ForwardCost& cost, const std::string& part, std::int64_t macs);
+/// Static DGCNN on n points with k neighbours and output width d: edge convs 6->64->64->128->256
+/// on n k edges, the 512 -> d conv per point, and the kNN Gram matrix (3 n^2).
+std::int64_t DgcnnMacs(std::int64_t n, std::int64_t k, std::int64_t d);
 
 }  // namespace regbench::ogmm

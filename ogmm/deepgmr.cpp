@@ -1,6 +1,7 @@
 #include "ogmm/deepgmr.hpp"
 
 #include <stdexcept>
+#include <tuple>
 
 #include "core/enum_names.hpp"
 #include "core/params.hpp"
@@ -105,6 +106,20 @@ DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
             "deepgmr config: clusters, rri_k, d_model, emb_dims, dgcnn_k, head_hidden "
             "must be positive (rri_k >= 2): " +
             ToJson(c).dump());
+    }
+    // No trained configuration comes near these; a network built above them would not fit in
+    // memory (clusters 1e9 asks for terabytes), so they are refused before anything is built.
+    for (const auto& [key, v, most] : {std::tuple<const char*, int, int>{"clusters", c.clusters,
+                                                                         1 << 16},
+                                       {"d_model", c.d_model, 1 << 16},
+                                       {"emb_dims", c.emb_dims, 1 << 16},
+                                       {"head_hidden", c.head_hidden, 1 << 16},
+                                       {"rri_k", c.rri_k, 1 << 10},
+                                       {"dgcnn_k", c.dgcnn_k, 1 << 10}}) {
+        if (v > most) {
+            throw std::invalid_argument("deepgmr config: '" + std::string(key) + "' must be <= " +
+                                        std::to_string(most) + ", got " + std::to_string(v));
+        }
     }
     return c;
 }

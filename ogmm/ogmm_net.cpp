@@ -34,8 +34,29 @@ constexpr double kMeanDenominator = 1e-5;    // mu, nu = sum gamma x / (sum gamm
 constexpr double kOverlapSumFloor = 1e-4;    // w = op / max(sum op, 1e-4)
 constexpr double kKabschRegulariser = 1e-5;  // H + 1e-5 I before the SVD
 
+/// Sizes above these are refused: no trained configuration comes near them, and a network built
+/// with them would not fit in memory (emb_dims 1e9 asks for 4e18 bytes).
+constexpr int64_t kMaxWidth = 1 << 16;       // emb_dims, anchors, clusters, welsch_keypoints
+constexpr int64_t kMaxNeighbours = 1 << 10;  // k, spe_k
+constexpr int64_t kMaxRounds = 100000;       // gmm_iterations, sinkhorn_iterations
+
 void ValidateValues(const OgmmConfig& c) {
     Require(c.emb_dims >= 2 && c.emb_dims % 2 == 0, kName, "emb_dims", "must be even and >= 2");
+    for (const auto& [key, v] : {std::pair<const char*, int64_t>{"emb_dims", c.emb_dims},
+                                 {"anchors", c.anchors},
+                                 {"clusters", c.clusters},
+                                 {"welsch_keypoints", c.welsch_keypoints}}) {
+        Require(v <= kMaxWidth, kName, key, "must be <= 65536, got " + std::to_string(v));
+    }
+    for (const auto& [key, v] :
+         {std::pair<const char*, int64_t>{"k", c.k}, {"spe_k", c.spe_k}}) {
+        Require(v <= kMaxNeighbours, kName, key, "must be <= 1024, got " + std::to_string(v));
+    }
+    for (const auto& [key, v] : {std::pair<const char*, int64_t>{"gmm_iterations",
+                                                                 c.gmm_iterations},
+                                 {"sinkhorn_iterations", c.sinkhorn_iterations}}) {
+        Require(v <= kMaxRounds, kName, key, "must be <= 100000, got " + std::to_string(v));
+    }
     Require(c.heads >= 1, kName, "heads", "must be >= 1");
     Require(c.emb_dims % c.heads == 0, kName, "emb_dims", "must be divisible by heads");
     Require(c.anchors >= 1, kName, "anchors", "must be >= 1");

@@ -52,6 +52,11 @@ nlohmann::json OgmmConfigToJson(const OgmmConfig& config);
 /// (d 128, 32, 32) and "ogmm-tiny" (d 64, 16, 16). Throws naming an unknown name.
 nlohmann::json OgmmNamedConfig(const std::string& name);
 
+/// The OGMM authors' training recipe (their DeepGMR baseline shares it): Adam 1e-4 with weight
+/// decay 1e-4, MultiStepLR at epochs 75/150/200 of 450 (x0.1), batch 24. Milestones are
+/// fractions of the run so they scale with a shorter budget.
+nlohmann::json OgmmTrainingRecipe();
+
 /// Builds an OgmmNet from a (validated) JSON config.
 std::shared_ptr<RegistrationNet> MakeOgmmNet(const nlohmann::json& config);
 

@@ -29,6 +29,9 @@ struct ExternalMethod {
     std::function<std::unique_ptr<RegistrationMethod>()> create;
     /// Run around the fork of each isolated call (--timeout); empty when none is needed.
     ForkHooks fork_hooks;
+    /// Its cost class under its params (as MethodInfo::cost of a registered method); unset:
+    /// unknown, and the scale guard skips it.
+    std::function<CostClass(const nlohmann::json& params)> cost;
 };
 
 struct RunOptions {
@@ -48,7 +51,7 @@ struct RunOptions {
     bool downsample = false;  ///< guard: run on stride-downsampled clouds instead of refusing
     EulerConvention euler = EulerConvention::kZyx;  ///< Euler angles of mae_r / rmse_r
     /// Methods of `methods` that are not registered, by name (which must not be a registered
-    /// method's). The scale guard skips them: their cost is unknown.
+    /// method's). The scale guard asks their `cost`, and skips those without one.
     std::map<std::string, ExternalMethod> external_methods;
     /// For a caller that handles SIGINT/SIGTERM itself (the Python module): when set, the run
     /// installs no signal handlers and calls this after each call, before its row is written.

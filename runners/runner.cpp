@@ -310,8 +310,10 @@ void CheckRowSettings(const ResultRow& r, const RunOptions& options, const PairS
                std::to_string(options.threads_per_call));
     }
     const Pair& pair = set.pairs.at(r.pair);
-    const bool reduce = options.downsample && FindExternal(options, r.method) == nullptr &&
-                        NeedsScaleGuard(MethodSpec{r.method, r.params}, pair, options.max_points);
+    const bool reduce =
+        options.downsample &&
+        NeedsScaleGuard(GuardedCost(MethodSpec{r.method, r.params}, options), pair,
+                        options.max_points);
     nlohmann::json expected = nullptr;
     if (reduce) DownsampleByStride(pair, options.max_points, &expected);
     const auto got = r.other.find("downsampled");
@@ -386,8 +388,8 @@ ResultRow RunCall(const RunPlan& plan, RegistrationMethod& method, const MethodS
     // pair; metrics still compare against the full pair.
     nlohmann::json downsampled;
     const ExternalMethod* external = FindExternal(options, spec.name);
-    const bool reduce = options.downsample && external == nullptr &&
-                        NeedsScaleGuard(spec, pair, options.max_points);
+    const bool reduce = options.downsample &&
+                        NeedsScaleGuard(GuardedCost(spec, options), pair, options.max_points);
     const Pair reduced =
         reduce ? DownsampleByStride(pair, options.max_points, &downsampled) : Pair{};
     const Pair& input = reduce ? reduced : pair;
@@ -505,12 +507,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
     // downsample).
     RunPlan plan(options, set);
     plan.indices = ShardPairs(set.pairs.size(), options);
-    std::vector<MethodSpec> guarded;  // registered methods: the scale guard knows their cost
-    for (const auto& spec : options.methods) {
-        if (FindExternal(options, spec.name) == nullptr) guarded.push_back(spec);
-    }
-    const std::string notice =
-        CheckScale(set, plan.indices, guarded, options.max_points, options.downsample);
+    const std::string notice = CheckScale(set, plan.indices, options);
     if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
     const std::string part_path = options.out_path + ".part";
     CheckOutputPath(options.out_path, {options.pairs_path});

@@ -27,22 +27,31 @@ void Stride(const PointCloud& in, const Eigen::Matrix<std::uint8_t, Eigen::Dynam
 
 }  // namespace
 
-bool NeedsScaleGuard(const MethodSpec& method, const Pair& pair, std::size_t max_points) {
-    return max_points > 0 && MethodCost(method.name, method.params) == CostClass::kQuadratic &&
+std::optional<CostClass> GuardedCost(const MethodSpec& method, const RunOptions& options) {
+    const auto external = options.external_methods.find(method.name);
+    if (external == options.external_methods.end()) return MethodCost(method.name, method.params);
+    if (!external->second.cost) return std::nullopt;
+    return external->second.cost(method.params);
+}
+
+bool NeedsScaleGuard(std::optional<CostClass> cost, const Pair& pair, std::size_t max_points) {
+    return max_points > 0 && cost == CostClass::kQuadratic &&
            std::max(Points(pair.source), Points(pair.target)) > max_points;
 }
 
 std::string CheckScale(const PairSet& set, const std::vector<std::size_t>& indices,
-                       const std::vector<MethodSpec>& methods, std::size_t max_points,
-                       bool downsample) {
+                       const RunOptions& options) {
+    const std::size_t max_points = options.max_points;
+    const bool downsample = options.downsample;
     std::string report;
-    for (const auto& spec : methods) {
+    for (const auto& spec : options.methods) {
+        const std::optional<CostClass> cost = GuardedCost(spec, options);
         std::size_t affected = 0;
         double worst = 0;
         std::size_t worst_pair = 0;
         for (const std::size_t k : indices) {
             const Pair& p = set.pairs[k];
-            if (!NeedsScaleGuard(spec, p, max_points)) continue;
+            if (!NeedsScaleGuard(cost, p, max_points)) continue;
             ++affected;
             const double nm = static_cast<double>(Points(p.source)) * Points(p.target);
             if (nm > worst) {

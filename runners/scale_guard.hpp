@@ -5,6 +5,7 @@
 // downsampled by an explicit, recorded rule.
 #include <cstddef>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,16 +18,20 @@ namespace regbench {
 /// (1 thread, README); at 20,000 about 4x that, and 200,000 points would take ~30 min.
 constexpr std::size_t kDefaultMaxPoints = 20000;
 
-/// True when `method` with its resolved parameters is O(N*M) (MethodCost: a dense mode, or a
-/// method without approximation) and a cloud of `pair` has more than `max_points` points.
-bool NeedsScaleGuard(const MethodSpec& method, const Pair& pair, std::size_t max_points);
+/// The cost class the scale guard uses for `method` (resolved parameters) in a run with
+/// `options`: a registered method's (MethodCost: a dense mode, or a method without
+/// approximation, is O(N*M)), an external method's own `cost`; nullopt (not guarded) for an
+/// external method without one.
+std::optional<CostClass> GuardedCost(const MethodSpec& method, const RunOptions& options);
+
+/// True when `cost` is O(N*M) and a cloud of `pair` has more than `max_points` points.
+bool NeedsScaleGuard(std::optional<CostClass> cost, const Pair& pair, std::size_t max_points);
 
 /// Checks every (pair, method) call of the run. Refuses (std::runtime_error with the expected
 /// cost: pairs affected, largest N x M) unless `downsample`; with it, returns the notice that
 /// says which calls will be downsampled (empty when none).
 std::string CheckScale(const PairSet& set, const std::vector<std::size_t>& indices,
-                       const std::vector<MethodSpec>& methods, std::size_t max_points,
-                       bool downsample);
+                       const RunOptions& options);
 
 /// The recorded rule: keeps points floor(i * n / max_points), i = 0 .. max_points-1, of each
 /// cloud above max_points (a deterministic, evenly spaced stride; no RNG), with their overlap

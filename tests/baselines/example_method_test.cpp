@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -12,6 +13,10 @@
 
 #include "core/params.hpp"
 #include "core/transform.hpp"
+#include "runners/result_row.hpp"
+#include "runners/runner.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/temp_dir_test.hpp"
 
 namespace regbench {
 namespace {
@@ -58,6 +63,8 @@ struct CentroidOptions {
         c.Above("step", step, 0.0);
         c.AtMost("step", step, 1.0);
     }
+    /// Two centres, O(N + M) (O(N log N) for the median): never refused at scale.
+    CostClass Cost() const { return CostClass::kNearLinear; }
 };
 
 Eigen::Vector3d Centre3(const PointCloud& p, Centre how) {
@@ -139,6 +146,40 @@ TEST(ExampleMethod, BadParametersNameTheParameter) {
             EXPECT_EQ(std::string(e.what()).rfind("centroid: ", 0), 0u) << e.what();
         }
     }
+}
+
+class ExampleMethodRun : public testing::TempDirTest {};
+
+TEST_F(ExampleMethodRun, RunsOnA40000PointPairFileBecauseTheScaleGuardAsksTheMethod) {
+    // The runner takes the method as a caller-supplied one with its registry entry's create and
+    // cost: as registered, the scale guard asks CentroidOptions::Cost (near-linear) and runs it
+    // on 40,000 points; declared quadratic, the same run is refused before any output exists.
+    const std::string pairs = Path("pairs.h5");
+    const Eigen::Vector3d t(0.5, 0.25, -1.0);
+    testing::WriteSyntheticPairFile(pairs, 1, 40000, 11, 1, [&](int) {
+        return MakeTransform(Eigen::Matrix3d::Identity(), t);
+    });
+    const MethodInfo info = CentroidMethodInfo();
+    RunOptions run;
+    run.pairs_path = pairs;
+    run.out_path = Path("rows.jsonl");
+    run.progress = false;
+    run.methods = {{"centroid", info.defaults}};
+    ExternalMethod external;
+    external.create = [info] { return info.create(nlohmann::json::object()); };
+    external.cost = info.cost;
+    run.external_methods["centroid"] = external;
+    RunBenchmark(run);
+    const auto rows = ReadResultRows(run.out_path);
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_EQ(rows[0].result.status, AlignStatus::kOk) << rows[0].result.message;
+
+    run.out_path = Path("refused.jsonl");
+    run.external_methods["centroid"].cost = [](const nlohmann::json&) {
+        return CostClass::kQuadratic;
+    };
+    EXPECT_THROW(RunBenchmark(run), std::runtime_error);
+    EXPECT_FALSE(std::filesystem::exists(run.out_path));
 }
 
 }  // namespace

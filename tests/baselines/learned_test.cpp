@@ -115,7 +115,12 @@ TEST(Learned, CheckpointJsonWithMistypedKeysIsRefusedNamingFileAndKey) {
     };
     const std::vector<Case> cases = {{"/config/arch", 5, "'config.arch' must be a string, got 5"},
                                      {"/config", 5, "'config' must be an object, got 5"},
-                                     {"/trainer/step", 1e30, "'step' is 1e+30"}};
+                                     {"/trainer/step", 1e30, "'step' is 1e+30"},
+                                     // Issue 44: sizes no network can be built with ran, failed
+                                     // every row and exited 0; refused by the family's check.
+                                     {"/config/clusters", 1e9, "'clusters' must be <= 65536"},
+                                     {"/config/emb_dims", 1e12, "emb_dims"},
+                                     {"/config/k", 1e6, "'k' must be <= 1024"}};
     for (const Case& c : cases) {
         nlohmann::json j = good;
         j[nlohmann::json::json_pointer(c.pointer)] = c.value;

@@ -40,7 +40,7 @@ done
 # LibTorch stays inside ogmm/ (docs/layout.md): other folders include only the ogmm/ headers
 # that name no LibTorch type, and those headers include no LibTorch header nor another of ogmm/.
 torch_free=" ogmm/authors_checkpoint.hpp ogmm/checkpoint.hpp ogmm/checkpoint_json.hpp ogmm/cost.hpp
-  ogmm/gemm_floor.hpp ogmm/inference.hpp ogmm/train.hpp ogmm/zoo.hpp "
+  ogmm/family.hpp ogmm/gemm_floor.hpp ogmm/inference.hpp ogmm/train.hpp ogmm/zoo.hpp "
 while IFS= read -r line; do
   file="${line%%:*}"
   target="${line#*#include [\"<]}"

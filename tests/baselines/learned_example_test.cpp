@@ -1,0 +1,230 @@
+// The worked example of docs/adding-a-learned-method.md, compiled and tested so the document
+// cannot rot: a network family `centroid-net` (not in the tree) declared once, registered,
+// trained for two steps, imported from an "authors'" state dict, and run as a regbench method
+// on a 40,000-point pair file. The block between the EXAMPLE markers is the document's
+// ogmm/centroid_net.cpp verbatim; keep them in step. In the tree the family is listed in
+// ogmm/family.cpp; here RegisterFamily adds the same object before the registry is first used.
+#include <gtest/gtest.h>
+#include <torch/torch.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/rng.hpp"
+#include "core/transform.hpp"
+#include "ogmm/authors_state_dict.hpp"
+#include "ogmm/checkpoint.hpp"
+#include "ogmm/cost.hpp"
+#include "ogmm/family.hpp"
+#include "ogmm/net.hpp"
+#include "ogmm/train.hpp"
+#include "ogmm/zoo.hpp"
+#include "runners/registry.hpp"
+#include "runners/result_row.hpp"
+#include "runners/runner.hpp"
+#include "tests/testing/synthetic_pair_file.hpp"
+#include "tests/testing/temp_dir_test.hpp"
+
+namespace regbench::ogmm {
+
+// EXAMPLE BEGIN
+using torch::indexing::Slice;
+
+/// A toy network: the offset between the clouds' centroids through a learned 3x3 map (and
+/// bias); the rotation is the identity.
+class CentroidNet : public RegistrationNet {
+public:
+    explicit CentroidNet(const nlohmann::json& config) : config_(config) {
+        const bool bias = config.at("bias").get<bool>();
+        offset_ =
+            register_module("offset", torch::nn::Linear(torch::nn::LinearOptions(3, 3).bias(bias)));
+    }
+    NetOutput Forward(const PairBatch& batch) override {
+        const torch::Tensor d = batch.target.mean(1) - batch.source.mean(1);  // [B, 3]
+        const torch::Tensor t = offset_->forward(d);
+        const int64_t b = d.size(0);
+        const torch::Tensor R = torch::eye(3, d.options()).expand({b, 3, 3});
+        const torch::Tensor last = torch::eye(4, d.options()).index({Slice(3, 4)});  // 0 0 0 1
+        NetOutput out;
+        out.T = torch::cat({torch::cat({R, t.unsqueeze(2)}, 2), last.expand({b, 1, 4})}, 1);
+        return out;
+    }
+    LossTerms Loss(const PairBatch& batch, const NetOutput& output) override {
+        const torch::Tensor t = output.T.index({Slice(), Slice(0, 3), 3});
+        const torch::Tensor t_gt = batch.T_gt.index({Slice(), Slice(0, 3), 3});
+        LossTerms terms;
+        terms["translation"] = (t - t_gt).pow(2).mean();
+        terms["total"] = terms["translation"];
+        return terms;
+    }
+    nlohmann::json Config() const override { return config_; }
+
+private:
+    nlohmann::json config_;
+    torch::nn::Linear offset_{nullptr};
+};
+
+/// Keys: "arch", "name" and "bias" (the 3x3 map has a bias: true or false).
+void CheckCentroidNetConfig(const nlohmann::json& c) {
+    for (const auto& [key, value] : c.items()) {
+        if (key != "arch" && key != "name" && key != "bias") {
+            throw std::invalid_argument("centroid-net config: unknown key '" + key + "'");
+        }
+    }
+    if (!c.contains("bias") || !c.at("bias").is_boolean()) {
+        throw std::invalid_argument("centroid-net config: 'bias' must be true or false");
+    }
+}
+
+nlohmann::json CentroidNetConfig(const std::string& model) {
+    return {{"arch", "centroid-net"},
+            {"name", model},
+            {"bias", true},
+            {"train",
+             {{"lr", 0.05},
+              {"batch", 4},
+              {"epochs", 2},
+              {"pairs_per_epoch", 16},
+              {"schedule", "constant"}}}};
+}
+
+/// The "authors'" layout: one nn.Linear(3, 3) named fc.
+nlohmann::json InferCentroidNetConfig(const StateDict& sd, const std::string& file,
+                                      const ImportOptions& /*options*/) {
+    RequireAuthorsTensor(sd, "fc.weight", 2, file, "a CentroidNet");
+    nlohmann::json c = CentroidNetConfig("centroid-net");
+    c["bias"] = false;
+    for (const auto& [key, tensor] : sd) c["bias"] = c["bias"] || key == "fc.bias";
+    return c;
+}
+
+NetworkFamily CentroidNetFamily() {
+    NetworkFamily f;
+    f.arch = "centroid-net";
+    f.summary = "worked example: a learned map of the centroid offset";
+    f.models = {"centroid-net"};
+    f.shipped_model = "centroid-net";
+    f.named_config = CentroidNetConfig;
+    f.config_docs = {{"bias", "the learned 3x3 map has a bias"}};
+    f.check_config = CheckCentroidNetConfig;
+    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
+        return std::make_shared<CentroidNet>(c);
+    };
+    f.forward_cost = [](const nlohmann::json& /*config*/, int64_t /*n*/, int64_t /*m*/) {
+        ForwardCost cost;
+        AddMacs(cost, "offset", 9);  // the 3x3 map; the two means are additions
+        return cost;
+    };
+    f.cost_class = CostClass::kNearLinear;  // two means: O(N + M)
+    f.methods = {{"centroid-net", false, "worked example: centroid offset, learned 3x3 map"}};
+    auto authors = std::make_shared<AuthorsFormat>();
+    authors->module = "CentroidNet (fc = nn.Linear(3, 3))";
+    authors->infer_config = InferCentroidNetConfig;
+    authors->authors_name = [](const std::string& name) {  // offset.weight -> fc.weight
+        return "fc." + name.substr(name.find('.') + 1);
+    };
+    f.authors = std::move(authors);
+    return f;
+}
+// EXAMPLE END
+
+namespace {
+namespace fs = std::filesystem;
+
+const bool kRegistered = [] {
+    RegisterFamily(CentroidNetFamily());
+    return true;
+}();
+
+/// A random cloud moved by a random translation: the training stream, pair `index`.
+TrainSample TranslatedCloud(std::uint64_t index) {
+    std::mt19937_64 rng = MakePairRng(1000, index);
+    const auto u = [&] { return UniformReal(rng, -1.0, 1.0); };
+    TrainSample s;
+    s.source.resize(64, 3);
+    for (Eigen::Index i = 0; i < s.source.size(); ++i) s.source.data()[i] = u();
+    const Eigen::Vector3d t(u(), u(), u());
+    s.T_gt = MakeTransform(Eigen::Matrix3d::Identity(), t);
+    s.target = s.source.rowwise() + t.transpose();
+    return s;
+}
+
+class LearnedExample : public testing::TempDirTest {};
+
+TEST_F(LearnedExample, IsAModelAMethodAndAnImportFormat) {
+    ASSERT_TRUE(kRegistered);
+    EXPECT_EQ(FamilyOfModel("centroid-net").arch, "centroid-net");
+    EXPECT_EQ(FindMethod("centroid-net").name, "centroid-net");
+    EXPECT_EQ(MethodCost("centroid-net"), CostClass::kNearLinear);
+    bool listed = false;
+    for (const auto& f : AuthorsFormats()) listed = listed || f == "centroid-net";
+    EXPECT_TRUE(listed);
+    EXPECT_EQ(ComputeForwardCost(NamedConfig("centroid-net"), 40000, 40000).total, 9);
+    EXPECT_THROW(MakeNet("centroid-net", {{"bias", 1}}), std::invalid_argument);
+    EXPECT_THROW(RegisterFamily(CentroidNetFamily()), std::invalid_argument);  // taken
+}
+
+TEST_F(LearnedExample, TrainsImportsAndRunsOnA40000PointPairFile) {
+    // Two training steps write the run folder's checkpoints.
+    TrainData data;
+    data.train_pair = TranslatedCloud;
+    data.validation = {TranslatedCloud(90001), TranslatedCloud(90002)};
+    TrainOptions options;
+    options.out_dir = Path("run");
+    options.max_steps = 2;
+    std::ostringstream log;
+    options.log = &log;
+    const TrainSummary summary = Train(NamedConfig("centroid-net"), data, options);
+    EXPECT_EQ(summary.steps, 2);
+    ASSERT_TRUE(fs::exists(fs::path(Path("run")) / "last" / kCheckpointJson)) << log.str();
+
+    // The "authors'" file: fc = the identity map without bias, so the method's translation is
+    // exactly the centroid offset.
+    const StateDict sd = {{"fc.weight", torch::eye(3)}};
+    const std::string pth = Path("centroid.pth");
+    std::ofstream(pth, std::ios::binary) << WriteTorchSaveZip(sd);
+    ImportOptions import;
+    import.from = "centroid-net";
+    const nlohmann::json imported = ImportAuthorsCheckpoint(pth, Path("imported"), import);
+    EXPECT_EQ(imported.at("config").at("bias"), false);
+
+    // 40,000 points: the scale guard asks the method (near-linear), so the run goes ahead, while
+    // a quadratic learned method on the same file is refused before it starts.
+    const std::string pairs = Path("pairs.h5");
+    const Eigen::Vector3d t(0.1, -0.2, 0.3);
+    testing::WriteSyntheticPairFile(
+        pairs, 1, 40000, 7, 1, [&](int) { return MakeTransform(Eigen::Matrix3d::Identity(), t); });
+    RunOptions run;
+    run.pairs_path = pairs;
+    run.out_path = Path("rows.jsonl");
+    run.progress = false;
+    run.methods = {{"centroid-net", {{"checkpoint", Path("imported")}}}};
+    RunBenchmark(run);
+    const auto rows = ReadResultRows(run.out_path);
+    ASSERT_EQ(rows.size(), 1u);
+    ASSERT_EQ(rows[0].result.status, AlignStatus::kOk) << rows[0].result.message;
+    // Expected: the centroid offset of the stored clouds, computed here with Eigen in double
+    // (the network computes it in float32).
+    const PairSet set = ReadPairFile(pairs);
+    const Eigen::Vector3d offset =
+        (set.pairs[0].target.colwise().mean() - set.pairs[0].source.colwise().mean()).transpose();
+    const Eigen::Vector3d got = rows[0].result.T_target_source.block<3, 1>(0, 3);
+    EXPECT_LT((got - offset).norm(), 1e-5) << got.transpose() << " vs " << offset.transpose();
+
+    RunOptions trained = run;
+    trained.out_path = Path("trained.jsonl");
+    trained.methods = {{"centroid-net", {{"checkpoint", Path("run") + "/best"}}}};
+    RunBenchmark(trained);
+    EXPECT_EQ(ReadResultRows(trained.out_path).at(0).result.status, AlignStatus::kOk);
+
+    RunOptions quadratic = run;
+    quadratic.out_path = Path("refused.jsonl");
+    quadratic.methods = {{"ogmm-noicp", nlohmann::json::object()}};
+    EXPECT_THROW(RunBenchmark(quadratic), std::runtime_error);
+    EXPECT_FALSE(fs::exists(quadratic.out_path));
+}
+
+}  // namespace
+}  // namespace regbench::ogmm
