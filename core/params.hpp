@@ -329,7 +329,8 @@ nlohmann::json ParamProperties(const std::string& name) {
 template <class Options>
 std::map<std::string, std::string> ParamDocs() {
     std::map<std::string, std::string> docs;
-    for (const auto& item : ParamProperties<Options>("").items()) {
+    const nlohmann::json properties = ParamProperties<Options>("");
+    for (const auto& item : properties.items()) {
         docs[item.key()] = item.value().at("description").get<std::string>() +
                            params_detail::RangeText(item.value());
     }

@@ -98,12 +98,13 @@ nlohmann::json ReadRange(std::string range) {
 
 /// The first range a one-line meaning states in words, or "": a comparison with a number
 /// ("(> 0)", ">= 1"), an interval of numbers ("in (0, 1]", "[0, 1)"), "positive",
-/// "non-negative". Comparisons with names ("|q - q_prev| < tol", ">= this") are meanings.
+/// "non-negative". Comparisons with names or expressions ("|q - q_prev| < tol", ">= this",
+/// "r < 1/4 of the target bbox diagonal") are meanings.
 /// Checked on the keys that can have a range (numbers and integers): a choice's doc may
 /// describe its rule with numbers (scale_rule: "when outside [0.5, 2]").
 std::string RangeInProse(const std::string& meaning) {
     static const std::regex kRange(
-        R"((^|[\s(;,])(>=|<=|>|<)\s*[-+]?[0-9.])"
+        R"((^|[\s(;,])(>=|<=|>|<)\s*[-+]?[0-9.][0-9.e+-]*(?![/0-9a-zA-Z]))"
         R"(|[\[(]\s*[-+]?[0-9][0-9.e+-]*\s*,\s*[-+]?[0-9][0-9.e+-]*\s*[\])])"
         R"(|\b(positive|non-?negative)\b)",
         std::regex::icase);
