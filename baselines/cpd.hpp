@@ -28,7 +28,7 @@ struct CpdOptions : GmmEmOptions {
     CpdSigma2Formula sigma2_formula = CpdSigma2Formula::kMl;  ///< "ml" or "probreg"
     Compat compat = Compat::kNone;                            ///< "none" or "probreg"
     GaussSumMode e_step = GaussSumMode::kAuto;                ///< "auto", "dense" or "truncated"
-    double truncation_sigmas = 4.0;  ///< truncated E-step radius in sigmas (> 0)
+    double truncation_sigmas = 4.0;                           ///< truncated E-step radius in sigmas
     /// auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal
     int truncation_min_points = 20000;
     /// auto, at scale: while a cloud has under half as many cells of edge cluster_cell_sigmas *
@@ -39,15 +39,15 @@ struct CpdOptions : GmmEmOptions {
 
     template <class F>
     void Fields(F&& f) {
-        f("w", w, "weight of the uniform outlier component, in [0, 1); probreg default 0");
-        f("maxiter", maxiter, "maximum EM iterations (>= 1); probreg 50");
+        f("w", w, "weight of the uniform outlier component; probreg default 0");
+        f("maxiter", maxiter, "maximum EM iterations; probreg 50");
         f("tol", tol, "stop when |q - q_prev| < tol, absolute on the objective q; probreg 1e-3");
         f("update_scale", update_scale,
           "estimate a scale s (similarity transform); default false, true under compat=probreg");
         f("sigma2_formula", sigma2_formula,
           "\"ml\": (cx - 2sa + s^2 b)/(Np D); \"probreg\": (cx + b - a)/(Np D) without scale "
           "(probreg's bug, sigma^2 stalls); default ml, probreg under compat=probreg");
-        f("sigma2", sigma2, "initial sigma^2 (> 0); 0 = sqsum(Y, X) as probreg");
+        f("sigma2", sigma2, "initial sigma^2; 0 = sqsum(Y, X) as probreg");
         f("compat", compat,
           "\"none\" (correct rigid CPD) or \"probreg\" (update_scale=true and probreg's sigma^2 "
           "formula unless those are given explicitly)");
@@ -55,7 +55,7 @@ struct CpdOptions : GmmEmOptions {
           "\"auto\" (dense or cell-compressed, truncated once the switch rule holds), \"dense\" "
           "(exact up to float underflow) or \"truncated\" (always r = truncation_sigmas * sigma)");
         f("truncation_sigmas", truncation_sigmas,
-          "truncated E-step radius in sigmas (> 0); 4 -> edge kernel 3.4e-4");
+          "truncated E-step radius in sigmas; 4 -> edge kernel 3.4e-4");
         f("truncation_min_points", truncation_min_points,
           "auto: truncate only if max(M, N) >= this and r < 1/4 of the target bbox diagonal");
         f("cluster_cell_sigmas", cluster_cell_sigmas,

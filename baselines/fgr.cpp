@@ -22,23 +22,23 @@ namespace {
 /// Radii follow the Open3D tutorial (and the OGMM repo's unused FPFH helper) as multiples of
 /// one voxel size; the FGR solver settings are Open3D's Python defaults.
 struct FgrOptions {
-    double voxel_size = 0.05;  ///< base length for the radii below [unit-sphere units], > 0
+    double voxel_size = 0.05;  ///< base length for the radii below [unit-sphere units]
     /// voxel-downsample both clouds first (tutorial step for dense scans)
     bool voxel_downsample = false;
-    double normal_radius_voxels = 2.0;  ///< normal radius in voxels, > 0
-    int normal_max_nn = 30;             ///< neighbour cap per normal, >= 3
-    double fpfh_radius_voxels = 5.0;    ///< FPFH radius in voxels, > 0
-    int fpfh_max_nn = 100;              ///< neighbour cap per FPFH, >= 1
+    double normal_radius_voxels = 2.0;  ///< normal radius in voxels
+    int normal_max_nn = 30;             ///< neighbour cap per normal
+    double fpfh_radius_voxels = 5.0;    ///< FPFH radius in voxels
+    int fpfh_max_nn = 100;              ///< neighbour cap per FPFH
     /// FGR max correspondence distance in voxels (used for the mu floor when decrease_mu and for
-    /// the reported fitness), > 0
+    /// the reported fitness)
     double max_correspondence_distance_voxels = 0.5;
-    double division_factor = 1.4;  ///< graduated non-convexity divisor of mu, > 1
+    double division_factor = 1.4;  ///< graduated non-convexity divisor of mu
     /// measure distances absolutely instead of relative to the object size
     bool use_absolute_scale = false;
     bool decrease_mu = false;        ///< anneal mu by division_factor every 4 iterations
-    int iteration_number = 64;       ///< number of FGR iterations (fixed), >= 1
-    double tuple_scale = 0.95;       ///< tuple-test edge-length ratio, in (0, 1)
-    int maximum_tuple_count = 1000;  ///< tuples kept at most, >= 1
+    int iteration_number = 64;       ///< number of FGR iterations (fixed)
+    double tuple_scale = 0.95;       ///< tuple-test edge-length ratio
+    int maximum_tuple_count = 1000;  ///< tuples kept at most
     bool tuple_test = true;          ///< run the tuple (geometric consistency) test
     int seed = 0;  ///< seed for Open3D's global RNG, set right before each call (tuple sampling)
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
@@ -46,35 +46,33 @@ struct FgrOptions {
     template <class F>
     void Fields(F&& f) {
         f("voxel_size", voxel_size,
-          "base length for the radii below [unit-sphere units], > 0; 0.05 ~ the sample spacing "
+          "base length for the radii below [unit-sphere units]; 0.05 ~ the sample spacing "
           "sqrt(area / 1024) of a unit-sphere object, so FPFH (0.25) sees 50-100 neighbours");
         f("voxel_downsample", voxel_downsample,
           "voxel-downsample both clouds first (tutorial step for dense scans); false: 717 points "
           "are already at ~voxel spacing");
         f("normal_radius_voxels", normal_radius_voxels,
-          "normal radius in voxels, > 0; 2 = Open3D tutorial / OGMM helper");
+          "normal radius in voxels; 2 = Open3D tutorial / OGMM helper");
         f("normal_max_nn", normal_max_nn,
-          "neighbour cap per normal, >= 3; 30 = Open3D tutorial / OGMM helper");
+          "neighbour cap per normal; 30 = Open3D tutorial / OGMM helper");
         f("fpfh_radius_voxels", fpfh_radius_voxels,
-          "FPFH radius in voxels, > 0; 5 = Open3D tutorial / OGMM helper");
+          "FPFH radius in voxels; 5 = Open3D tutorial / OGMM helper");
         f("fpfh_max_nn", fpfh_max_nn,
-          "neighbour cap per FPFH, >= 1; 100 = Open3D tutorial / OGMM helper");
+          "neighbour cap per FPFH; 100 = Open3D tutorial / OGMM helper");
         f("max_correspondence_distance_voxels", max_correspondence_distance_voxels,
           "FGR max correspondence distance in voxels (used for the mu floor when decrease_mu and "
-          "for the reported fitness), > 0; 0.5 = Open3D tutorial");
+          "for the reported fitness); 0.5 = Open3D tutorial");
         f("division_factor", division_factor,
-          "graduated non-convexity divisor of mu, > 1; 1.4 = Open3D default");
+          "graduated non-convexity divisor of mu; 1.4 = Open3D default");
         f("use_absolute_scale", use_absolute_scale,
           "measure distances absolutely instead of relative to the object size; false = Open3D "
           "default");
         f("decrease_mu", decrease_mu,
           "anneal mu by division_factor every 4 iterations; false = Open3D Python default");
         f("iteration_number", iteration_number,
-          "number of FGR iterations (fixed), >= 1; 64 = Open3D default");
-        f("tuple_scale", tuple_scale,
-          "tuple-test edge-length ratio, in (0, 1); 0.95 = Open3D default");
-        f("maximum_tuple_count", maximum_tuple_count,
-          "tuples kept at most, >= 1; 1000 = Open3D default");
+          "number of FGR iterations (fixed); 64 = Open3D default");
+        f("tuple_scale", tuple_scale, "tuple-test edge-length ratio; 0.95 = Open3D default");
+        f("maximum_tuple_count", maximum_tuple_count, "tuples kept at most; 1000 = Open3D default");
         f("tuple_test", tuple_test,
           "run the tuple (geometric consistency) test; true = Open3D default");
         f("seed", seed,

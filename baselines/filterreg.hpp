@@ -38,12 +38,12 @@ REGBENCH_CHOICES(FilterRegEstimator,
 /// iteration) are the GmmEmOptions base (gmm/gmm_common.hpp).
 struct FilterRegOptions : GmmEmOptions {
     bool update_sigma2 = true;  ///< re-estimate sigma2 in every M-step
-    /// floor on sigma2 after each iteration and on the auto init (> 0)
+    /// floor on sigma2 after each iteration and on the auto init
     double min_sigma2 = 0.0001;
     FilterRegObjective objective = FilterRegObjective::kPt2Pt;    ///< "pt2pt" or "pt2pl"
     FilterRegEstimator estimator = FilterRegEstimator::kLattice;  ///< "lattice" or "exact"
     Compat compat = Compat::kNone;                                ///< "none" or "probreg"
-    int normals_k = 30;  ///< pt2pl only: neighbours for the target's PCA normals (>= 3)
+    int normals_k = 30;  ///< pt2pl only: neighbours for the target's PCA normals
 
     template <class F>
     void Fields(F&& f) {
@@ -53,12 +53,12 @@ struct FilterRegOptions : GmmEmOptions {
         f("update_sigma2", update_sigma2,
           "re-estimate sigma2 in every M-step; default true; false under compat = \"probreg\" "
           "unless given (probreg keeps sigma fixed)");
-        f("w", w, "weight of the uniform outlier component, in [0, 1); probreg default 0");
-        f("maxiter", maxiter, "maximum EM iterations (>= 1); probreg default 50");
+        f("w", w, "weight of the uniform outlier component; probreg default 0");
+        f("maxiter", maxiter, "maximum EM iterations; probreg default 50");
         f("tol", tol,
           "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3");
         f("min_sigma2", min_sigma2,
-          "floor on sigma2 after each iteration and on the auto init (> 0); 1e-4");
+          "floor on sigma2 after each iteration and on the auto init; 1e-4");
         f("objective", objective,
           "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton on "
           "filtered target normals, normals by PCA of normals_k neighbours; give a small sigma2, "
@@ -70,7 +70,7 @@ struct FilterRegOptions : GmmEmOptions {
           "\"none\" (default): consistent w_i^2 weights and update_sigma2 on unless given; "
           "\"probreg\": Kabsch centroids weighted by w_i but H by w_i^2, pt2pl weighted by w_i, "
           "sigma fixed");
-        f("normals_k", normals_k, "pt2pl only: neighbours for the target's PCA normals (>= 3); 30");
+        f("normals_k", normals_k, "pt2pl only: neighbours for the target's PCA normals; 30");
     }
     void Validate(ParamCheck& c) const {
         GmmEmOptions::Validate(c);

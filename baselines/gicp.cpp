@@ -17,39 +17,39 @@ namespace regbench {
 namespace {
 
 struct GicpOptions {
-    /// pairs farther apart are ignored [unit-sphere units], > 0
+    /// pairs farther apart are ignored [unit-sphere units]
     double max_correspondence_distance = 1.0;
-    int max_iterations = 200;  ///< outer iteration cap, >= 1
-    /// stop when every translation entry changes less than this, > 0
+    int max_iterations = 200;  ///< outer iteration cap
+    /// stop when every translation entry changes less than this
     double transformation_epsilon = 0.0005;
-    /// stop when every rotation-matrix entry changes less than this, > 0
+    /// stop when every rotation-matrix entry changes less than this
     double rotation_epsilon = 0.002;
-    /// k nearest neighbours per point covariance, >= 3 (clouds need >= k points)
+    /// k nearest neighbours per point covariance (clouds need >= k points)
     int correspondence_randomness = 20;
-    int max_optimizer_iterations = 20;             ///< BFGS iterations per outer step, >= 1
-    double translation_gradient_tolerance = 0.01;  ///< BFGS translation gradient stop, > 0
-    double rotation_gradient_tolerance = 0.01;     ///< BFGS rotation gradient stop, > 0
+    int max_optimizer_iterations = 20;             ///< BFGS iterations per outer step
+    double translation_gradient_tolerance = 0.01;  ///< BFGS translation gradient stop
+    double rotation_gradient_tolerance = 0.01;     ///< BFGS rotation gradient stop
 
     template <class F>
     void Fields(F&& f) {
         f("max_correspondence_distance", max_correspondence_distance,
-          "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp` (covers the "
+          "pairs farther apart are ignored [unit-sphere units]; 1.0 as `icp` (covers the "
           "protocols' motions from the identity)");
-        f("max_iterations", max_iterations, "outer iteration cap, >= 1; 200 = PCL default");
+        f("max_iterations", max_iterations, "outer iteration cap; 200 = PCL default");
         f("transformation_epsilon", transformation_epsilon,
-          "stop when every translation entry changes less than this, > 0; 5e-4 = PCL default "
+          "stop when every translation entry changes less than this; 5e-4 = PCL default "
           "(0.05% of the object radius)");
         f("rotation_epsilon", rotation_epsilon,
-          "stop when every rotation-matrix entry changes less than this, > 0; 2e-3 = PCL default");
+          "stop when every rotation-matrix entry changes less than this; 2e-3 = PCL default");
         f("correspondence_randomness", correspondence_randomness,
-          "k nearest neighbours per point covariance, >= 3 (clouds need >= k points); 20 = PCL "
+          "k nearest neighbours per point covariance (clouds need >= k points); 20 = PCL "
           "default (Segal et al.)");
         f("max_optimizer_iterations", max_optimizer_iterations,
-          "BFGS iterations per outer step, >= 1; 20 = PCL default");
+          "BFGS iterations per outer step; 20 = PCL default");
         f("translation_gradient_tolerance", translation_gradient_tolerance,
-          "BFGS translation gradient stop, > 0; 1e-2 = PCL");
+          "BFGS translation gradient stop; 1e-2 = PCL");
         f("rotation_gradient_tolerance", rotation_gradient_tolerance,
-          "BFGS rotation gradient stop, > 0; 1e-2 = PCL");
+          "BFGS rotation gradient stop; 1e-2 = PCL");
     }
     void Validate(ParamCheck& c) const {
         c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);

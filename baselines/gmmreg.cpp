@@ -65,7 +65,7 @@ struct GmmRegOptions : AnnealedL2Options {
           "kernel bandwidth [input units], used only if use_estimated_sigma is false");
         f("use_estimated_sigma", use_estimated_sigma,
           "sigma = det(cov(source))^(1/6) (probreg default true)");
-        f("delta", delta, "sigma *= delta after each outer iteration, in (0, 1] (probreg 0.9)");
+        f("delta", delta, "sigma *= delta after each outer iteration (probreg 0.9)");
         f("outer_iterations", outer_iterations,
           "BFGS runs on a coarse-to-fine sigma schedule; probreg's gmmreg always runs 1");
         f("outer_tol", outer_tol, "stop the schedule when |f - f_prev| < outer_tol (probreg 1e-3)");

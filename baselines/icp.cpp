@@ -18,20 +18,19 @@ struct IcpOptions : Open3dIcpOptions {
     template <class F>
     void Fields(F&& f) {
         f("max_correspondence_distance", max_correspondence_distance,
-          "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 covers the protocols' "
+          "pairs farther apart are ignored [unit-sphere units]; 1.0 covers the protocols' "
           "motions (translation up to 0.5 per axis) from the identity; 0.07 = 2 * overlap_radius "
           "is the OGMM code's radius for refining a network's estimate, where ICP barely moves");
-        f("max_iterations", max_iterations,
-          "iteration cap, >= 1; 30 = Open3D default, as the OGMM code");
+        f("max_iterations", max_iterations, "iteration cap; 30 = Open3D default, as the OGMM code");
         f("scale_rule", scale_rule,
           "\"auto\": max_correspondence_distance is scaled by the pair's unit (RMS radius / 0.6 "
           "when outside [0.5, 2], else 1: unit-sphere objects keep the preset; "
           "docs/performance.md), the value used is in extra.resolved; \"preset\": as given");
         f("relative_fitness", relative_fitness,
-          "stop when the fitness change is below this (and the RMSE change too), >= 0; 1e-6 = "
+          "stop when the fitness change is below this (and the RMSE change too); 1e-6 = "
           "Open3D default");
         f("relative_rmse", relative_rmse,
-          "stop when the inlier-RMSE change is below this (and the fitness change too), >= 0; "
+          "stop when the inlier-RMSE change is below this (and the fitness change too); "
           "1e-6 = Open3D default");
     }
 };

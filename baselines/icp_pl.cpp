@@ -13,24 +13,23 @@ namespace {
 /// max_correspondence_distance, max_iterations, relative_fitness and relative_rmse are the
 /// Open3dIcpOptions base (baselines/open3d_adapter.hpp).
 struct IcpPlOptions : Open3dIcpOptions {
-    double normal_radius = 0.1;  ///< target-normal neighbourhood radius, > 0
-    int normal_max_nn = 30;      ///< neighbour cap per normal, >= 3
+    double normal_radius = 0.1;  ///< target-normal neighbourhood radius
+    int normal_max_nn = 30;      ///< neighbour cap per normal
 
     template <class F>
     void Fields(F&& f) {
         f("max_correspondence_distance", max_correspondence_distance,
-          "pairs farther apart are ignored [unit-sphere units], > 0; 1.0 as `icp`, so the two "
+          "pairs farther apart are ignored [unit-sphere units]; 1.0 as `icp`, so the two "
           "ICPs differ only in the cost");
-        f("max_iterations", max_iterations, "iteration cap, >= 1; 30 = Open3D default, as `icp`");
+        f("max_iterations", max_iterations, "iteration cap; 30 = Open3D default, as `icp`");
         f("relative_fitness", relative_fitness,
-          "stop threshold on the fitness change, >= 0; 1e-6 = Open3D default");
+          "stop threshold on the fitness change; 1e-6 = Open3D default");
         f("relative_rmse", relative_rmse,
-          "stop threshold on the inlier-RMSE change, >= 0; 1e-6 = Open3D default");
+          "stop threshold on the inlier-RMSE change; 1e-6 = Open3D default");
         f("normal_radius", normal_radius,
-          "target-normal neighbourhood radius, > 0; 0.1 = 2 * voxel (0.05), Open3D tutorial "
+          "target-normal neighbourhood radius; 0.1 = 2 * voxel (0.05), Open3D tutorial "
           "recipe, ~2x the sample spacing of a unit-sphere object");
-        f("normal_max_nn", normal_max_nn,
-          "neighbour cap per normal, >= 3; 30 = Open3D tutorial recipe");
+        f("normal_max_nn", normal_max_nn, "neighbour cap per normal; 30 = Open3D tutorial recipe");
     }
     void Validate(ParamCheck& c) const {
         Open3dIcpOptions::Validate(c);

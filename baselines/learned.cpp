@@ -56,8 +56,8 @@ struct LearnedOptions {
     std::string checkpoint;
     /// "" = the checkpoint's; "clustered" or "full" runs its weights with that attention.
     std::string attention;
-    double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius, > 0
-    int icp_max_iterations = 30;                    ///< ICP iterations, >= 1
+    double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius
+    int icp_max_iterations = 30;                    ///< ICP iterations
 
     template <class F>
     void Fields(F&& f) {
@@ -72,9 +72,8 @@ struct LearnedOptions {
         }
         if constexpr (kIcp) {
             f("icp_max_correspondence_distance", icp_max_correspondence_distance,
-              "ICP refinement radius, > 0; 0.07 = 2 * overlap_radius of the OGMM code");
-            f("icp_max_iterations", icp_max_iterations,
-              "ICP iterations, >= 1 (30, Open3D default)");
+              "ICP refinement radius; 0.07 = 2 * overlap_radius of the OGMM code");
+            f("icp_max_iterations", icp_max_iterations, "ICP iterations; 30 = Open3D default");
         }
     }
     void Validate(ParamCheck& c) const {

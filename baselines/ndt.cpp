@@ -15,37 +15,37 @@ namespace {
 /// PCL's defaults are tuned for metre-scale lidar maps; the scale-dependent ones are
 /// rescaled here for unit-sphere objects with ~717 points.
 struct NdtOptions {
-    double resolution = 0.25;      ///< target voxel side [unit-sphere units], > 0
-    int min_points_per_voxel = 6;  ///< cells with fewer points are dropped, >= 3
+    double resolution = 0.25;                         ///< target voxel side [unit-sphere units]
+    int min_points_per_voxel = 6;                     ///< cells with fewer points are dropped
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
-    double step_size = 0.1;                           ///< More-Thuente maximum step length, > 0
-    double outlier_ratio = 0.55;  ///< uniform outlier weight of the NDT mixture, [0, 1)
-    int max_iterations = 35;      ///< Newton iteration cap, >= 1
-    /// stop when the last step's squared translation is <= this, > 0
+    double step_size = 0.1;                           ///< More-Thuente maximum step length
+    double outlier_ratio = 0.55;                      ///< uniform outlier weight of the NDT mixture
+    int max_iterations = 35;                          ///< Newton iteration cap
+    /// stop when the last step's squared translation is <= this
     double transformation_epsilon = 1e-6;
-    /// and when cos(last step's rotation angle) >= this, [0, 1), 0 disables
+    /// and when cos(last step's rotation angle) >= this; 0 disables
     double transformation_rotation_epsilon = 0.9999995;
 
     template <class F>
     void Fields(F&& f) {
         f("resolution", resolution,
-          "target voxel side [unit-sphere units], > 0; 0.25: ~10-20 points per occupied cell of a "
+          "target voxel side [unit-sphere units]; 0.25: ~10-20 points per occupied cell of a "
           "717-point crop (PCL's 1.0 is metre-scale)");
         f("min_points_per_voxel", min_points_per_voxel,
-          "cells with fewer points are dropped, >= 3; 6 = PCL default");
+          "cells with fewer points are dropped; 6 = PCL default");
         f("scale_rule", scale_rule,
           "\"auto\": resolution and step_size scaled by the pair's unit (RMS radius / 0.6 when "
           "outside [0.5, 2], else 1; docs/performance.md), used values in extra.resolved; "
           "\"preset\": as given");
-        f("step_size", step_size, "More-Thuente maximum step length, > 0; 0.1 = PCL default");
+        f("step_size", step_size, "More-Thuente maximum step length; 0.1 = PCL default");
         f("outlier_ratio", outlier_ratio,
-          "uniform outlier weight of the NDT mixture, [0, 1); 0.55 = PCL default");
-        f("max_iterations", max_iterations, "Newton iteration cap, >= 1; 35 = PCL default");
+          "uniform outlier weight of the NDT mixture; 0.55 = PCL default");
+        f("max_iterations", max_iterations, "Newton iteration cap; 35 = PCL default");
         f("transformation_epsilon", transformation_epsilon,
-          "stop when the last step's squared translation is <= this, > 0; 1e-6 (a 1e-3 step; "
+          "stop when the last step's squared translation is <= this; 1e-6 (a 1e-3 step; "
           "PCL's 0.1 is metre-scale)");
         f("transformation_rotation_epsilon", transformation_rotation_epsilon,
-          "and when cos(last step's rotation angle) >= this, [0, 1), 0 disables; 0.9999995 = "
+          "and when cos(last step's rotation angle) >= this; 0 disables; 0.9999995 = "
           "cos(1e-3 rad)");
     }
     void Validate(ParamCheck& c) const {

@@ -18,13 +18,13 @@ open3d::geometry::PointCloud ToOpen3d(const PointCloud& points);
 /// ICPConvergenceCriteria. Both methods' options derive from it and bind these fields with
 /// their own docs.
 struct Open3dIcpOptions {
-    /// pairs farther apart are ignored [unit-sphere units], > 0
+    /// pairs farther apart are ignored [unit-sphere units]
     double max_correspondence_distance = 1.0;
-    int max_iterations = 30;         ///< iteration cap, >= 1
-    double relative_fitness = 1e-6;  ///< stop threshold on the fitness change, >= 0
-    double relative_rmse = 1e-6;     ///< stop threshold on the inlier-RMSE change, >= 0
+    int max_iterations = 30;         ///< iteration cap
+    double relative_fitness = 1e-6;  ///< stop threshold on the fitness change
+    double relative_rmse = 1e-6;     ///< stop threshold on the inlier-RMSE change
 
-    /// The ranges above (core/params.hpp).
+    /// The ranges of these fields (core/params.hpp; `regbench methods` prints them).
     void Validate(ParamCheck& c) const {
         c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
         c.AtLeast("max_iterations", max_iterations, 1);

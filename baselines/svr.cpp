@@ -32,7 +32,7 @@ void QuietLibsvm(const char*) {}
 /// AnnealedL2Options base (gmm/gmm_l2.hpp), bound here with svr's docs.
 struct SvrOptions : AnnealedL2Options {
     Compat compat = Compat::kNone;  ///< "none" or "probreg"
-    /// one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)
+    /// one-class SVM nu: fraction bound on outliers / support vectors (0.1)
     double nu = 0.1;
     bool normalize = true;  ///< optimise with both clouds centred and divided by sigma
     /// bandwidth [input units] when use_estimated_sigma is false (probreg 1.0)
@@ -53,8 +53,7 @@ struct SvrOptions : AnnealedL2Options {
           "\"none\" (default, correct: gradient=exact, normalize=true, gtol=1e-6, maxiter=200, "
           "consistent sigma schedule) or \"probreg\" (probreg v0.3.7, incl. its gamma*=10 "
           "annealing); explicit keys win");
-        f("nu", nu,
-          "one-class SVM nu in (0, 1]: fraction bound on outliers / support vectors (0.1)");
+        f("nu", nu, "one-class SVM nu: fraction bound on outliers / support vectors (0.1)");
         f("gradient", gradient,
           "\"probreg_half\" = probreg's gradient (1/2 of the true one), \"exact\"");
         f("normalize", normalize,
@@ -64,7 +63,7 @@ struct SvrOptions : AnnealedL2Options {
         f("gamma", gamma, "RBF gamma when use_estimated_sigma is false (probreg 0.5)");
         f("use_estimated_sigma", use_estimated_sigma,
           "sigma = det(cov(source))^(1/6), gamma = 1/(2 sigma^2) (true)");
-        f("delta", delta, "cost sigma *= delta per outer iteration, in (0, 1] (probreg 0.9)");
+        f("delta", delta, "cost sigma *= delta per outer iteration (probreg 0.9)");
         f("gamma_delta", gamma_delta,
           "compat probreg: SVM gamma *= gamma_delta per outer iteration (10)");
         f("outer_iterations", outer_iterations,
@@ -76,7 +75,7 @@ struct SvrOptions : AnnealedL2Options {
         f("svm_tol", svm_tol, "libsvm stopping tolerance eps (sklearn tol 1e-3)");
         f("svm_max_points", svm_max_points,
           "fit each one-class SVM on a seeded random subsample of this many points when the cloud "
-          "is larger (alphas scaled by n / subsample); >= 10");
+          "is larger (alphas scaled by n / subsample)");
         sums.Fields(f,
                     "\"auto\": from approx_min_pairs support-vector pairs on, cell-compressed "
                     "mixtures and a kd-tree cutoff (as gmmreg); \"dense\": always exact",

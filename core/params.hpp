@@ -1,6 +1,6 @@
 #pragma once
 // Method parameters, declared once. A method's options are a plain struct with a default and a
-// `///<` doc on every field, and two members:
+// `///<` doc (meaning and unit; never the range) on every field, and two members:
 //
 //   template <class F> void Fields(F&& f) { f("maxiter", maxiter, "maximum EM iterations"); }
 //   void Validate(ParamCheck& c) const { c.AtLeast("maxiter", maxiter, 1); }
@@ -8,10 +8,12 @@
 // Fields binds each field to its JSON key and the one-line meaning `regbench methods` prints;
 // Validate gives ranges (AtLeast, Above, AtMost, Below, Finite) and checks across parameters
 // (Require). From the two come parsing (ParseParams), the parameters a row records
-// (ParamsToJson), the docs, and the JSON Schema of `regbench methods --json` (ParamSchemaOf):
-// each range call writes its JSON Schema keyword there instead of checking, so the schema and
-// the parser cannot disagree. A struct with a `compat` field may add `void ApplyCompat()`, the
-// defaults its compat value presets; keys the user gives always win.
+// (ParamsToJson), the docs (ParamDocs: the meaning, then "; range ..." from Validate) and the
+// JSON Schema of `regbench methods --json` (ParamSchemaOf): each range call writes its JSON
+// Schema keyword there instead of checking, so the schema, the docs and the parser cannot
+// disagree. A range is stated only in Validate, never in the prose. A struct with a `compat`
+// field may add `void ApplyCompat()`, the defaults its compat value presets; keys the user
+// gives always win.
 // docs/adding-a-method.md walks through an example.
 #include <cmath>
 #include <limits>
@@ -201,6 +203,38 @@ void ReadField(const nlohmann::json& value, T& field, const std::string& method,
     }
 }
 
+/// A range bound as `regbench methods` prints it: whole numbers without ".0" (0, 1, 1e-06).
+inline std::string BoundText(const nlohmann::json& bound) {
+    if (bound.is_number_float()) {
+        const double v = bound.get<double>();
+        if (std::trunc(v) == v && std::abs(v) < 1e15) return std::to_string(std::llround(v));
+    }
+    return bound.dump();
+}
+
+/// "; range <r>" for a schema property with range keywords, "" without: <r> is ">= 1",
+/// "> 0", "<= 1" or "< 1" for one bound, an interval "[0, 1)" or "(0, 1]" for two, and
+/// ", finite" follows (alone: "finite") where "x-finite" is set.
+inline std::string RangeText(const nlohmann::json& property) {
+    const auto text = [&](const char* keyword) {
+        return property.contains(keyword) ? BoundText(property.at(keyword)) : std::string();
+    };
+    const bool closed_lo = property.contains("minimum");
+    const bool closed_hi = property.contains("maximum");
+    const std::string lo = closed_lo ? text("minimum") : text("exclusiveMinimum");
+    const std::string hi = closed_hi ? text("maximum") : text("exclusiveMaximum");
+    std::string range;
+    if (!lo.empty() && !hi.empty()) {
+        range = (closed_lo ? "[" : "(") + lo + ", " + hi + (closed_hi ? "]" : ")");
+    } else if (!lo.empty()) {
+        range = (closed_lo ? ">= " : "> ") + lo;
+    } else if (!hi.empty()) {
+        range = (closed_hi ? "<= " : "< ") + hi;
+    }
+    if (property.value("x-finite", false)) range += range.empty() ? "finite" : ", finite";
+    return range.empty() ? "" : "; range " + range;
+}
+
 template <class Options, class = void>
 struct HasCompat : std::false_type {};
 template <class Options>
@@ -264,21 +298,10 @@ nlohmann::json ParamsToJson(Options o) {
     return j;
 }
 
-/// key -> the one-line meaning Fields gives.
+/// The describe pass of Fields and Validate: key -> its JSON Schema property ("type",
+/// "description" (Fields' doc), "default", "enum" and the range keywords Validate declares).
 template <class Options>
-std::map<std::string, std::string> ParamDocs() {
-    std::map<std::string, std::string> docs;
-    Options o{};
-    o.Fields([&](const char* key, auto& /*field*/, const char* doc,
-                 Nullable /*nullable*/ = Nullable::kNo) { docs[key] = doc; });
-    return docs;
-}
-
-/// The JSON Schema (draft 2020-12) of the parameters: per key "type", "description",
-/// "default", "enum" and the range keywords of Validate; "x-compat-presets" lists what each
-/// compat value presets.
-template <class Options>
-nlohmann::json ParamSchemaOf(const std::string& name, const std::string& summary) {
+nlohmann::json ParamProperties(const std::string& name) {
     nlohmann::json properties = nlohmann::json::object();
     Options o{};
     o.Fields([&](const char* key, auto& field, const char* doc, Nullable nullable = Nullable::kNo) {
@@ -297,6 +320,29 @@ nlohmann::json ParamSchemaOf(const std::string& name, const std::string& summary
     });
     ParamCheck describe(name, properties);
     o.Validate(describe);
+    return properties;
+}
+
+/// key -> the line `regbench methods` prints: Fields' one-line meaning, then the range
+/// Validate declares (params_detail::RangeText), e.g. "ICP iterations; range >= 1". The
+/// prose never restates a range, so the two cannot disagree.
+template <class Options>
+std::map<std::string, std::string> ParamDocs() {
+    std::map<std::string, std::string> docs;
+    const nlohmann::json properties = ParamProperties<Options>("");
+    for (const auto& item : properties.items()) {
+        docs[item.key()] = item.value().at("description").get<std::string>() +
+                           params_detail::RangeText(item.value());
+    }
+    return docs;
+}
+
+/// The JSON Schema (draft 2020-12) of the parameters: per key "type", "description",
+/// "default", "enum" and the range keywords of Validate; "x-compat-presets" lists what each
+/// compat value presets.
+template <class Options>
+nlohmann::json ParamSchemaOf(const std::string& name, const std::string& summary) {
+    const nlohmann::json properties = ParamProperties<Options>(name);
     nlohmann::json schema = {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
                              {"title", name},
                              {"description", summary},
@@ -304,6 +350,7 @@ nlohmann::json ParamSchemaOf(const std::string& name, const std::string& summary
                              {"additionalProperties", false},
                              {"properties", properties}};
     if constexpr (params_detail::HasCompat<Options>::value) {
+        const Options o{};
         const nlohmann::json defaults = ParamsToJson(o);
         for (const auto& c : ChoicesOf(o.compat)) {
             Options preset{};

@@ -18,12 +18,12 @@ double EstimateSigmaFromCovariance(const PointCloud& Y);
 /// The EM options CPD and FilterReg share, under the same JSON keys in both; their options
 /// structs derive from it and bind these fields with their own docs.
 struct GmmEmOptions {
-    double w = 0.0;       ///< weight of the uniform outlier component, in [0, 1)
-    int maxiter = 50;     ///< maximum EM iterations (>= 1)
-    double tol = 0.001;   ///< stop when |q - q_prev| < tol, absolute on the objective q (>= 0)
-    double sigma2 = 0.0;  ///< initial sigma^2 (>= 0); 0: estimated from the clouds
+    double w = 0.0;       ///< weight of the uniform outlier component
+    int maxiter = 50;     ///< maximum EM iterations
+    double tol = 0.001;   ///< stop when |q - q_prev| < tol, absolute on the objective q
+    double sigma2 = 0.0;  ///< initial sigma^2; 0: estimated from the clouds
 
-    /// The ranges above (core/params.hpp).
+    /// The ranges of these fields (core/params.hpp; `regbench methods` prints them).
     void Validate(ParamCheck& c) const {
         c.AtLeast("w", w, 0.0);
         c.Below("w", w, 1.0);

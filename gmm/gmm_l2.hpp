@@ -62,9 +62,9 @@ REGBENCH_CHOICES(L2KernelSums, {{L2KernelSums::kAuto, "auto"}, {L2KernelSums::kD
 
 struct L2SumOptions {
     L2KernelSums kernel_sums = L2KernelSums::kAuto;  ///< kDense: always dense and exact
-    double min_pairs = 1e8;             ///< K_s * K_t at which approximation starts, >= 0
-    double cutoff_tolerance = 1e-4;     ///< relative kernel value at the cutoff radius, in (0, 1)
-    double compress_cell_sigmas = 0.1;  ///< cell edge in sigmas, in [0, 1]; 0 = no compression
+    double min_pairs = 1e8;                          ///< K_s * K_t at which approximation starts
+    double cutoff_tolerance = 1e-4;                  ///< relative kernel value at the cutoff radius
+    double compress_cell_sigmas = 0.1;               ///< cell edge in sigmas; 0 = no compression
 
     /// Binds these fields under the JSON keys of GMMReg and SVR (core/params.hpp):
     /// kernel_sums and approx_min_pairs with the method's docs (its mixtures count the pairs),
@@ -74,9 +74,9 @@ struct L2SumOptions {
         f("kernel_sums", kernel_sums, kernel_sums_doc);
         f("approx_min_pairs", min_pairs, approx_min_pairs_doc);
         f("cutoff_tolerance", cutoff_tolerance,
-          "kernel value at the cutoff radius, in (0, 1); 1e-4 -> 4.29 sigma");
+          "kernel value at the cutoff radius; 1e-4 -> 4.29 sigma");
         f("compress_cell_sigmas", compress_cell_sigmas,
-          "cell edge of the compression in sigmas, [0, 1]; 0 = none");
+          "cell edge of the compression in sigmas; 0 = none");
     }
 };
 
@@ -175,13 +175,13 @@ MixtureFeatures CompressMixture(const MixtureFeatures& mixture, double cell);
 /// approx_min_pairs, cutoff_tolerance, compress_cell_sigmas) with their own docs.
 struct AnnealedL2Options {
     L2Gradient gradient = L2Gradient::kExact;  ///< "probreg_half" (probreg's) or "exact"
-    double delta = 0.9;                        ///< sigma *= delta per outer step, in (0, 1]
-    int outer_iterations = 1;                  ///< outer (annealing) steps, >= 1
-    double outer_tol = 0.001;        ///< stop the schedule when |f - f_prev| < outer_tol, >= 0
-    BfgsOptions bfgs = {200, 1e-6};  ///< every inner BFGS run: maxiter >= 0, gtol >= 0
-    L2SumOptions sums;               ///< dense or approximated Gaussian sums in every inner run
+    double delta = 0.9;                        ///< sigma *= delta per outer step
+    int outer_iterations = 1;                  ///< outer (annealing) steps
+    double outer_tol = 0.001;                  ///< stop the schedule when |f - f_prev| < outer_tol
+    BfgsOptions bfgs = {200, 1e-6};            ///< every inner BFGS run (keys maxiter, gtol)
+    L2SumOptions sums;  ///< dense or approximated Gaussian sums in every inner run
 
-    /// The ranges above, under the methods' JSON keys (core/params.hpp).
+    /// The ranges of these fields, under the methods' JSON keys (core/params.hpp).
     void Validate(ParamCheck& c) const {
         c.Above("delta", delta, 0.0);
         c.AtMost("delta", delta, 1.0);

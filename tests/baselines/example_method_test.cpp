@@ -38,7 +38,7 @@ constexpr const char* kCentroidSchema = R"json({
     },
     "step": {
       "type": "number",
-      "description": "fraction of the offset applied, in (0, 1]",
+      "description": "fraction of the offset applied",
       "default": 1.0,
       "exclusiveMinimum": 0.0,
       "maximum": 1.0
@@ -52,12 +52,12 @@ REGBENCH_CHOICES(Centre, {{Centre::kMean, "mean"}, {Centre::kMedian, "median"}})
 
 struct CentroidOptions {
     Centre centre = Centre::kMean;  ///< "mean" or "median"
-    double step = 1.0;              ///< fraction of the offset applied, in (0, 1]
+    double step = 1.0;              ///< fraction of the offset applied
 
     template <class F>
     void Fields(F&& f) {
         f("centre", centre, "\"mean\" or \"median\" (per axis; robust to outliers)");
-        f("step", step, "fraction of the offset applied, in (0, 1]");
+        f("step", step, "fraction of the offset applied");
     }
     void Validate(ParamCheck& c) const {
         c.Above("step", step, 0.0);
@@ -106,7 +106,9 @@ TEST(ExampleMethod, RegistryEntryAndSchemaComeFromTheStruct) {
     EXPECT_EQ(info.summary, "translation only: moves the source's centre onto the target's");
     EXPECT_EQ(info.schema, nlohmann::json::parse(kCentroidSchema));
     ASSERT_EQ(info.param_docs.size(), 2u);
-    EXPECT_EQ(info.param_docs.at("step"), "fraction of the offset applied, in (0, 1]");
+    EXPECT_EQ(info.param_docs.at("step"), "fraction of the offset applied; range (0, 1]");
+    EXPECT_EQ(info.param_docs.at("centre"),
+              "\"mean\" or \"median\" (per axis; robust to outliers)");
     EXPECT_EQ(info.defaults, nlohmann::json({{"centre", "mean"}, {"step", 1.0}}));
     auto method = info.create({{"centre", "median"}});
     EXPECT_EQ(method->Name(), "centroid");

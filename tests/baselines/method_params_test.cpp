@@ -3,15 +3,18 @@
 // options struct's Fields and Validate) against what creating the method accepts and records.
 // The expected values come from the printed schema, the observed ones from parsing, so a
 // schema that documents a default, range or choice the parser does not enforce fails here.
-// The integer rule (2.0 accepted, 2.5 refused) is tested once here, for every method.
+// The integer rule (2.0 accepted, 2.5 refused) is tested once here, for every method, and so
+// is the rule that a parameter's range is stated once: printed from Validate, never in prose.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <regex>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runners/registry.hpp"
@@ -48,6 +51,67 @@ std::string TypeOf(const nlohmann::json& property) {
     return type.is_array() ? type.at(0).get<std::string>() : type.get<std::string>();
 }
 
+/// The range keywords of a schema property, bounds as doubles.
+nlohmann::json RangeKeywords(const nlohmann::json& property) {
+    nlohmann::json k = nlohmann::json::object();
+    for (const char* keyword : {"minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"}) {
+        if (property.contains(keyword)) k[keyword] = property.at(keyword).get<double>();
+    }
+    if (property.value("x-finite", false)) k["x-finite"] = true;
+    return k;
+}
+
+/// A printed range (">= 1", "(0, 1]", ">= 0, finite", "finite") read back into the keywords
+/// it stands for: the inverse of the printing, so the test does not format it a second time.
+nlohmann::json ReadRange(std::string range) {
+    nlohmann::json k = nlohmann::json::object();
+    const std::string finite = "finite";
+    if (range.size() >= finite.size() &&
+        range.compare(range.size() - finite.size(), finite.size(), finite) == 0) {
+        k["x-finite"] = true;
+        range.erase(range.size() - finite.size());
+        if (range.empty()) return k;
+        if (range.size() < 2 || range.compare(range.size() - 2, 2, ", ") != 0) return "bad";
+        range.erase(range.size() - 2);
+    }
+    const auto comma = range.find(", ");
+    if (!range.empty() && (range.front() == '[' || range.front() == '(') &&
+        comma != std::string::npos) {
+        k[range.front() == '[' ? "minimum" : "exclusiveMinimum"] =
+            std::stod(range.substr(1, comma - 1));
+        k[range.back() == ']' ? "maximum" : "exclusiveMaximum"] =
+            std::stod(range.substr(comma + 2, range.size() - comma - 3));
+        return k;
+    }
+    for (const auto& [op, keyword] :
+         std::vector<std::pair<std::string, std::string>>{{">= ", "minimum"},
+                                                          {"> ", "exclusiveMinimum"},
+                                                          {"<= ", "maximum"},
+                                                          {"< ", "exclusiveMaximum"}}) {
+        if (range.rfind(op, 0) == 0) {
+            k[keyword] = std::stod(range.substr(op.size()));
+            return k;
+        }
+    }
+    return "bad";
+}
+
+/// The first range a one-line meaning states in words, or "": a comparison with a number
+/// ("(> 0)", ">= 1"), an interval of numbers ("in (0, 1]", "[0, 1)"), "positive",
+/// "non-negative". Comparisons with names or expressions ("|q - q_prev| < tol", ">= this",
+/// "r < 1/4 of the target bbox diagonal") are meanings.
+/// Checked on the keys that can have a range (numbers and integers): a choice's doc may
+/// describe its rule with numbers (scale_rule: "when outside [0.5, 2]").
+std::string RangeInProse(const std::string& meaning) {
+    static const std::regex kRange(
+        R"((^|[\s(;,])(>=|<=|>|<)\s*[-+]?[0-9.][0-9.e+-]*(?![/0-9a-zA-Z]))"
+        R"(|[\[(]\s*[-+]?[0-9][0-9.e+-]*\s*,\s*[-+]?[0-9][0-9.e+-]*\s*[\])])"
+        R"(|\b(positive|non-?negative)\b)",
+        std::regex::icase);
+    std::smatch m;
+    return std::regex_search(meaning, m, kRange) ? m.str() : "";
+}
+
 class MethodSchema : public ::testing::TestWithParam<std::string> {
 protected:
     const MethodInfo& info() const { return FindMethod(GetParam()); }
@@ -73,8 +137,28 @@ TEST_P(MethodSchema, PropertiesAreTheParamsOfADefaultInstance) {
     std::set<std::string> param_keys;
     for (const auto& item : params.items()) param_keys.insert(item.key());
     EXPECT_EQ(schema_keys, param_keys);
+}
+
+TEST_P(MethodSchema, DocsPrintTheRangeOfValidateAndTheProseStatesNone) {
+    // Issue 40: the prose of cpd's sigma2 said "(> 0)" while Validate checks ">= 0".
     for (const auto& item : properties().items()) {
-        EXPECT_EQ(info().param_docs.at(item.key()), item.value().at("description"));
+        const std::string& key = item.key();
+        const nlohmann::json& p = item.value();
+        const std::string meaning = p.at("description").get<std::string>();
+        const std::string& doc = info().param_docs.at(key);
+        const nlohmann::json keywords = RangeKeywords(p);
+        if (keywords.empty()) {
+            EXPECT_EQ(doc, meaning) << key;
+        } else {
+            const std::string head = meaning + "; range ";
+            ASSERT_EQ(doc.rfind(head, 0), 0u) << key << ": " << doc;
+            EXPECT_EQ(ReadRange(doc.substr(head.size())), keywords) << key << ": " << doc;
+        }
+        const std::string type = TypeOf(p);
+        if (type != "number" && type != "integer") continue;
+        const std::string range = RangeInProse(meaning);
+        EXPECT_EQ(range, "") << info().name << " '" << key << "' states a range in prose: \""
+                             << range << "\" in \"" << meaning << "\"";
     }
 }
 
