@@ -28,6 +28,10 @@ Not a dependency of the product; run by hand with Debian's python3-torch:
       runs the authors' RIENET from AUTHORS_DIR (their model.py, utils.py, util.py,
       chamfer_loss.py made CPU-only, with a CPU gather_operation in pointnet2/pointnet2_utils.py)
       with the same formula weights on the equal-size cases and prints both results.
+  rienet_standin.py time AUTHORS_DIR [POINTS]
+      CPU time of the authors' RIENET forward (eval, no gradient, one torch thread) on a pair of
+      POINTS (717) uniform random points, five runs after a warm-up; their forward also
+      computes the losses, as regbench's does.
   rienet_standin.py save FILE
       torch.save of the formula-filled state dict (zip format), for regbench's reader.
 """
@@ -245,15 +249,35 @@ def expected():
     print(json.dumps(out))
 
 
-def authors(path):
+def authors_net(path):
     sys.path.insert(0, path)
     from model import RIENET  # the authors' module, made CPU-only (see the docstring)
-    args = types.SimpleNamespace(n_keypoints=CONFIG["keypoints"], nn_margin=CONFIG["nn_margin"],
+    return RIENET(types.SimpleNamespace(n_keypoints=CONFIG["keypoints"], nn_margin=CONFIG["nn_margin"],
                                  loss_margin=CONFIG["loss_margin"], list_k1=[CONFIG["k"]] * 3,
                                  list_k2=[CONFIG["k_nc"]] * 3, emb_dims=CONFIG["emb_dims"],
                                  n_iters=CONFIG["iterations"], dim=CONFIG["dim"],
-                                 dataset="modelnet40")
-    theirs = RIENET(args)
+                                 dataset="modelnet40"))
+
+
+def time_authors(path, points):
+    import time
+    torch.set_num_threads(1)
+    weights = make_net(CONFIG, torch.float32).state_dict()  # formula weights
+    net = authors_net(path)
+    net.load_state_dict(weights, strict=True)
+    net.eval()
+    src = formula_cloud(1, points, 0.0).transpose(1, 2).contiguous()
+    tgt = formula_cloud(1, points, 1.0).transpose(1, 2).contiguous()
+    with torch.no_grad():
+        net(src, tgt)
+        for _ in range(5):
+            wall, cpu = time.perf_counter(), time.process_time()
+            net(src, tgt)
+            print("wall %.3f s  cpu %.3f s" % (time.perf_counter() - wall, time.process_time() - cpu))
+
+
+def authors(path):
+    theirs = authors_net(path)
     mine = make_net(CONFIG, torch.float32)
     assert list(theirs.state_dict().keys()) == list(mine.state_dict().keys()), "key mismatch"
     theirs.load_state_dict(mine.state_dict(), strict=True)
@@ -276,6 +300,8 @@ if __name__ == "__main__":
         expected()
     elif len(sys.argv) == 3 and sys.argv[1] == "authors":
         authors(sys.argv[2])
+    elif len(sys.argv) in (3, 4) and sys.argv[1] == "time":
+        time_authors(sys.argv[2], int(sys.argv[3]) if len(sys.argv) == 4 else 717)
     elif len(sys.argv) == 3 and sys.argv[1] == "save":
         torch.save(make_net(CONFIG, torch.float32).state_dict(), sys.argv[2])
     else:
