@@ -129,6 +129,20 @@ torch::Tensor KnnIndices3d(const torch::Tensor& x, int64_t k) {
     return idx.to(x.device());
 }
 
+// Max over the k neighbours of edges [..., k, C]. With a gradient to take, max with indices:
+// its backward scatters the gradient to the argmax (one pass), where amax's backward builds an
+// equality mask, counts ties and multiplies (four passes over the B N k C map, the mask
+// converted to float on the way). The two differ only on exact positive ties, which the
+// ReLU outputs meet when two neighbours coincide; at 0 ReLU's backward zeroes both anyway.
+torch::Tensor MaxOverNeighbours(const torch::Tensor& edges) {
+    if (torch::GradMode::is_enabled() && edges.requires_grad()) {
+        return std::get<0>(edges.max(-2));
+    }
+    return edges.amax(-2);
+}
+
+}  // namespace
+
 // One DGCNN stage on rows [M, in] (M = B N k edges or B N points, channels last): the 1x1 conv as
 // a GEMM, BatchNorm, ReLU. In eval mode BatchNorm is folded into the GEMM's weights and bias
 // (W' = W g / sqrt(var + eps), b' = beta - mean g / sqrt(var + eps)), so one addmm and one
@@ -154,20 +168,6 @@ torch::Tensor RowsConvBnRelu(const torch::Tensor& rows, const torch::nn::Conv2d&
                              /*cudnn_enabled=*/false)
         .relu_();
 }
-
-// Max over the k neighbours of edges [B, N, k, C]. With a gradient to take, max with indices:
-// its backward scatters the gradient to the argmax (one pass), where amax's backward builds an
-// equality mask, counts ties and multiplies (four passes over the B N k C map, the mask
-// converted to float on the way). The two differ only on exact positive ties, which the
-// ReLU outputs meet when two neighbours coincide; at 0 ReLU's backward zeroes both anyway.
-torch::Tensor MaxOverNeighbours(const torch::Tensor& edges) {
-    if (torch::GradMode::is_enabled() && edges.requires_grad()) {
-        return std::get<0>(edges.max(2));
-    }
-    return edges.amax(2);
-}
-
-}  // namespace
 
 Conv3Impl::Conv3Impl(int64_t in_channels, int64_t out_channels, int64_t hidden_channels) {
     conv1_ = register_module("conv1", Conv1x1(in_channels, hidden_channels, true));
@@ -265,30 +265,34 @@ torch::Tensor DgcnnImpl::forward(const torch::Tensor& xyz) {
     // channel-first form (Conv2d on [B, C, N, k], amax over the innermost k) spent most of its
     // time in the amax and in the convolution's input copies (docs/performance.md).
     const int64_t batch = xyz.size(0), points = xyz.size(2);
-    torch::Tensor x = EdgeFeatures(xyz, KnnIndices(xyz, k_))  // [B, 6, N, k]
-                          .permute({0, 2, 3, 1})
-                          .reshape({batch * points * k_, 6});
-    torch::Tensor cat;  // [BN, 512]
-    if (is_training() && x.device().is_cpu() &&
-        (x.scalar_type() == torch::kFloat || x.scalar_type() == torch::kDouble)) {
-        // Training: the four edge stages with batch statistics (ogmm/edge_stages.hpp), fused
-        // into one autograd Function unless a test asks for the LibTorch composition.
-        const std::vector<EdgeStage> stages = {EdgeStageOf(conv1_, bn1_), EdgeStageOf(conv2_, bn2_),
-                                               EdgeStageOf(conv3_, bn3_),
-                                               EdgeStageOf(conv4_, bn4_)};
-        cat =
-            FusedEdgeStages() ? EdgeStagesFused(x, stages, k_) : EdgeStagesReference(x, stages, k_);
-    } else {
-        std::vector<torch::Tensor> pooled;
-        const std::pair<torch::nn::Conv2d*, torch::nn::BatchNorm2d*> stages[] = {
-            {&conv1_, &bn1_}, {&conv2_, &bn2_}, {&conv3_, &bn3_}, {&conv4_, &bn4_}};
-        for (const auto& [conv, bn] : stages) {
-            x = RowsConvBnRelu(x, *conv, *bn);
-            pooled.push_back(MaxOverNeighbours(x.view({batch, points, k_, x.size(1)})));
-        }
-        cat = torch::cat(pooled, 2).view({batch * points, -1});
-    }
+    const torch::Tensor x = EdgeFeatures(xyz, KnnIndices(xyz, k_))  // [B, 6, N, k]
+                                .permute({0, 2, 3, 1})
+                                .reshape({batch * points * k_, 6});
+    const torch::Tensor cat = PooledEdgeStages(
+        x, {{conv1_, bn1_}, {conv2_, bn2_}, {conv3_, bn3_}, {conv4_, bn4_}}, k_);  // [BN, 512]
     return RowsConvBnRelu(cat, conv5_, bn5_).view({batch, points, -1}).transpose(1, 2);
+}
+
+torch::Tensor PooledEdgeStages(torch::Tensor rows,
+                               const std::vector<std::pair<nn::Conv2d, nn::BatchNorm2d>>& stages,
+                               int64_t k) {
+    const bool training = !stages.empty() && stages.front().second->is_training();
+    if (training && rows.device().is_cpu() &&
+        (rows.scalar_type() == torch::kFloat || rows.scalar_type() == torch::kDouble)) {
+        // Training: the edge stages with batch statistics (ogmm/edge_stages.hpp), fused into
+        // one autograd Function unless a test asks for the LibTorch composition.
+        std::vector<EdgeStage> edge_stages;
+        for (const auto& [conv, bn] : stages) edge_stages.push_back(EdgeStageOf(conv, bn));
+        return FusedEdgeStages() ? EdgeStagesFused(rows, edge_stages, k)
+                                 : EdgeStagesReference(rows, edge_stages, k);
+    }
+    const int64_t points = rows.size(0) / k;
+    std::vector<torch::Tensor> pooled;
+    for (const auto& [conv, bn] : stages) {
+        rows = RowsConvBnRelu(rows, conv, bn);
+        pooled.push_back(MaxOverNeighbours(rows.view({points, k, rows.size(1)})));
+    }
+    return torch::cat(pooled, 1);
 }
 
 AttentionalPropagationImpl::AttentionalPropagationImpl(int64_t feature_dim, int64_t num_heads)

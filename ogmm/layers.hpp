@@ -6,6 +6,8 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 namespace regbench::ogmm {
 
@@ -61,6 +63,21 @@ torch::Tensor KnnIndices(const torch::Tensor& x, int64_t k);
 /// DGCNN edge features [x_j - x_i, x_i] over the neighbours idx [B, N, k]: x [B, C, N] ->
 /// [B, 2C, N, k].
 torch::Tensor EdgeFeatures(const torch::Tensor& x, const torch::Tensor& idx);
+
+/// One bias-free 1x1 Conv2d, its BatchNorm2d and ReLU on rows [M, in] (channels last) -> [M, out].
+/// In eval mode BatchNorm is folded into the GEMM; in training mode it takes the batch statistics
+/// over the M rows (what BatchNorm2d takes over B, N, k) and updates the running ones.
+torch::Tensor RowsConvBnRelu(const torch::Tensor& rows, const torch::nn::Conv2d& conv,
+                             const torch::nn::BatchNorm2d& bn);
+
+/// DGCNN edge stages: rows [P k, C0] of P points' k edges (k consecutive rows per point) go
+/// through the chain of RowsConvBnRelu `stages`; each stage's output is max-pooled over the k
+/// neighbours and the pooled maps are concatenated: [P, C1 + C2 + ...]. In training on the CPU
+/// (float or double) the chain runs as EdgeStagesFused (ogmm/edge_stages.hpp) unless
+/// SetFusedEdgeStages(false).
+torch::Tensor PooledEdgeStages(
+    torch::Tensor rows,
+    const std::vector<std::pair<torch::nn::Conv2d, torch::nn::BatchNorm2d>>& stages, int64_t k);
 
 /// Static DGCNN as in DCP: the kNN graph is built once on xyz; edge features go through a chain
 /// of bias-free Conv2d 6->64->64->128->256 (each BN2d + ReLU), every stage is max-pooled over

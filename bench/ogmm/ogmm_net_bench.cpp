@@ -1,6 +1,8 @@
 // Learned networks against their multiply-accumulate floor (docs/performance.md, section 4).
 // BM_OgmmForward / BM_DeepGmrForward: one batch-1 forward (no gradient, eval mode) per
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
+// BM_RienetForward: RIENet (ogmm/rienet.hpp, the authors' ModelNet40 config), the same way; its
+// MACs from RienetForwardMacs (not yet in ogmm/cost.hpp).
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
 // backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
 // Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
@@ -20,6 +22,7 @@
 #include "core/cpu_time.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/ogmm_net.hpp"
+#include "ogmm/rienet.hpp"
 #include "ogmm/zoo.hpp"
 
 namespace regbench::bench {
@@ -131,6 +134,22 @@ void BM_DeepGmrForward(benchmark::State& state, const std::string& name) {
     TimeForward(state, *ogmm::MakeNetFromConfig(config), config);
 }
 
+void BM_RienetForward(benchmark::State& state) {
+    torch::set_num_threads(static_cast<int>(state.range(1)));
+    ogmm::RienetNet net{ogmm::RienetConfig{}};
+    net.eval();
+    const int64_t points = state.range(0);
+    const ogmm::PairBatch pair = RandomBatch(1, points);
+    torch::NoGradGuard no_grad;
+    const auto macs =
+        static_cast<double>(ogmm::RienetForwardMacs(net.Config(), points, points).at("total"));
+    TimeAgainstGemm(state, macs, [&] {
+        const ogmm::NetOutput out = net.Forward(pair);
+        benchmark::DoNotOptimize(out.T.data_ptr());
+    });
+    state.counters["parameters"] = static_cast<double>(ogmm::CountParameters(net));
+}
+
 void BM_OgmmTrainStep(benchmark::State& state, const std::string& name) {
     torch::set_num_threads(static_cast<int>(state.range(1)));
     const nlohmann::json config = OgmmConfig(name, "clustered");
@@ -177,6 +196,7 @@ const bool kRegistered = [] {
         Configure(benchmark::RegisterBenchmark(("BM_DeepGmrForward/" + std::string(label)).c_str(),
                                                BM_DeepGmrForward, std::string(config)));
     }
+    Configure(benchmark::RegisterBenchmark("BM_RienetForward/rienet", BM_RienetForward));
     Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,
                                            std::string("ogmm-small")));
     Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small", BM_DeepGmrTrainStep,

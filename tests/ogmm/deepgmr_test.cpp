@@ -172,22 +172,6 @@ DeepGmrConfig Original(DeepGmrFeatures features) {
     return c;
 }
 
-/// T_gt of pair b: rotation 0.3 + 0.2 b rad about (1, 2, 2) / 3, t = (0.1, -0.2, 0.05 b).
-torch::Tensor FormulaMotion(int64_t batch) {
-    torch::Tensor T = torch::eye(4).repeat({batch, 1, 1});
-    for (int64_t b = 0; b < batch; ++b) {
-        const Eigen::Matrix3d R = RotationFromAxisAngle(Eigen::Vector3d(1, 2, 2) / 3.0,
-                                                        0.3 + 0.2 * static_cast<double>(b));
-        for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 3; ++c) T[b][r][c] = static_cast<float>(R(r, c));
-        }
-        T[b][0][3] = 0.1f;
-        T[b][1][3] = -0.2f;
-        T[b][2][3] = static_cast<float>(0.05 * static_cast<double>(b));
-    }
-    return T;
-}
-
 void ExpectDeepGmrParity(const DeepGmrParityCase& c) {
     torch::set_num_threads(1);
     DeepGmrNet net(c.config);
@@ -196,7 +180,7 @@ void ExpectDeepGmrParity(const DeepGmrParityCase& c) {
     PairBatch batch;
     batch.source = testing::FormulaCloud(2, c.n, 0.0);
     batch.target = testing::FormulaCloud(2, c.m, 1.0);
-    batch.T_gt = FormulaMotion(2);
+    batch.T_gt = testing::FormulaMotion(2);
     torch::NoGradGuard no_grad;
     const NetOutput out = net.Forward(batch);
     const LossTerms terms = net.Loss(batch, out);

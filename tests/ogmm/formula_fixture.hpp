@@ -7,6 +7,8 @@
 #include <cmath>
 #include <string>
 
+#include "core/transform.hpp"
+
 namespace regbench::ogmm::testing {
 
 /// 0.01 * (sum_k (k + 1) * code(name[k]) mod 997): a per-tensor phase from its name.
@@ -61,6 +63,23 @@ inline torch::Tensor FormulaCloud(int64_t batch, int64_t n, double seed) {
                          1));
     }
     return torch::stack(clouds).to(torch::kFloat);
+}
+
+/// T_gt [batch, 4, 4] (float) of pair b: rotation 0.3 + 0.2 b rad about (1, 2, 2) / 3, t = (0.1,
+/// -0.2, 0.05 b).
+inline torch::Tensor FormulaMotion(int64_t batch) {
+    torch::Tensor T = torch::eye(4).repeat({batch, 1, 1});
+    for (int64_t b = 0; b < batch; ++b) {
+        const Eigen::Matrix3d R = RotationFromAxisAngle(Eigen::Vector3d(1, 2, 2) / 3.0,
+                                                        0.3 + 0.2 * static_cast<double>(b));
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) T[b][r][c] = static_cast<float>(R(r, c));
+        }
+        T[b][0][3] = 0.1f;
+        T[b][1][3] = -0.2f;
+        T[b][2][3] = static_cast<float>(0.05 * static_cast<double>(b));
+    }
+    return T;
 }
 
 /// 0/1 labels [batch, n]: point i of cloud b overlaps when sin(0.5 i + b) > -0.2.

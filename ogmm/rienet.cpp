@@ -1,0 +1,349 @@
+#include "ogmm/rienet.hpp"
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+
+#include "core/params.hpp"
+#include "ogmm/layers.hpp"
+
+namespace regbench::ogmm {
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RienetConfig, name, emb_dims, dim, iterations, k,
+                                                k_nc, nn_margin, loss_margin, keypoints)
+
+namespace {
+
+namespace nn = torch::nn;
+using torch::indexing::Slice;
+
+constexpr double kLeakySlope = 0.2;  // the discriminator's LeakyReLU (the authors' code)
+
+nn::Conv2d Conv2dNoBias(int64_t in, int64_t out) {
+    return nn::Conv2d(nn::Conv2dOptions(in, out, 1).bias(false));
+}
+
+/// Registers bias-free 1x1 Conv1d conv1..convK, then BatchNorm1d bn1..bnK (the authors' order)
+/// on `m`: their PointNet and Pointer, which RIENET builds but never calls.
+void RegisterUnusedChain(nn::Module& m, const std::vector<std::pair<int64_t, int64_t>>& widths) {
+    for (size_t i = 0; i < widths.size(); ++i) {
+        m.register_module(
+            "conv" + std::to_string(i + 1),
+            nn::Conv1d(nn::Conv1dOptions(widths[i].first, widths[i].second, 1).bias(false)));
+    }
+    for (size_t i = 0; i < widths.size(); ++i) {
+        m.register_module("bn" + std::to_string(i + 1), nn::BatchNorm1d(widths[i].second));
+    }
+}
+
+/// Conv2d (kernel (3, 1) along the neighbours, padded, or 1x1; with bias), BN2d, LeakyReLU.
+void AddLeakyBlock(nn::Sequential& seq, int64_t in, int64_t out, bool along_neighbours) {
+    nn::Conv2dOptions options(in, out, 1);
+    if (along_neighbours) {
+        options = nn::Conv2dOptions(in, out, torch::ExpandingArray<2>({3, 1}))
+                      .padding(torch::ExpandingArray<2>({1, 0}));
+    }
+    seq->push_back(nn::Conv2d(options.bias(true)));
+    seq->push_back(nn::BatchNorm2d(out));
+    seq->push_back(nn::LeakyReLU(nn::LeakyReLUOptions().negative_slope(kLeakySlope)));
+}
+
+/// x [B, P, C], idx [B, Q, k] (values in [0, P)) -> [B, Q, k, C].
+torch::Tensor GatherRows(const torch::Tensor& x, const torch::Tensor& idx) {
+    const int64_t batch = x.size(0), points = x.size(1), channels = x.size(2);
+    const torch::Tensor base = torch::arange(batch, idx.options()).view({-1, 1, 1}) * points;
+    return x.reshape({batch * points, channels})
+        .index_select(0, (idx + base).reshape({-1}))
+        .view({batch, idx.size(1), idx.size(2), channels});
+}
+
+/// Offsets centre minus neighbour of rows x [B, N, C] over idx [B, N, k] -> [B, N, k, C].
+torch::Tensor CentreMinusNeighbours(const torch::Tensor& x, const torch::Tensor& idx) {
+    return x.unsqueeze(2) - GatherRows(x, idx);
+}
+
+/// Euclidean distances [B, N, M] of features f [B, N, C], g [B, M, C] from the Gram form,
+/// negative rounding clamped to 0 with a zero gradient there (the authors' pairwise_distance).
+torch::Tensor FeatureDistance(const torch::Tensor& f, const torch::Tensor& g) {
+    const torch::Tensor d2 =
+        f.pow(2).sum(2, true) - 2 * torch::bmm(f, g.transpose(1, 2)) + g.pow(2).sum(2).unsqueeze(1);
+    const torch::Tensor zero = d2 <= 0;
+    return torch::where(zero, torch::zeros_like(d2),
+                        torch::sqrt(torch::where(zero, torch::ones_like(d2), d2)));
+}
+
+/// Neighbourhood consensus nc[i, j] = sum over the non-self neighbours a of source point i and
+/// l of target point j (the first k - 1 after the point itself) of scores[a, l], / (k - 1).
+torch::Tensor Consensus(const torch::Tensor& scores, const torch::Tensor& idx_s,
+                        const torch::Tensor& idx_t, int64_t k) {
+    const int64_t batch = scores.size(0), n = scores.size(1), m = scores.size(2);
+    const torch::Tensor ns = idx_s.index({Slice(), Slice(), Slice(1, k)});
+    const torch::Tensor rows = GatherRows(scores, ns).sum(2);  // [B, N, M]
+    const torch::Tensor nt =
+        idx_t.index({Slice(), Slice(), Slice(1, k)}).reshape({batch, 1, m * (k - 1)});
+    return torch::gather(rows, 2, nt.expand({batch, n, m * (k - 1)}))
+               .view({batch, n, m, k - 1})
+               .sum(3) /
+           static_cast<double>(k - 1);
+}
+
+/// Weighted Kabsch: rows src, dst [B, N, 3], weights w [B, N] -> {R [B, 3, 3], t [B, 3]} with
+/// dst ~ R src + t (the authors' compute_rigid_transformation).
+std::pair<torch::Tensor, torch::Tensor> WeightedKabsch(const torch::Tensor& src,
+                                                       const torch::Tensor& dst,
+                                                       const torch::Tensor& w) {
+    const torch::Tensor ww = w.unsqueeze(2), total = w.sum(1, true);
+    const torch::Tensor cs = (src * ww).sum(1) / total, cd = (dst * ww).sum(1) / total;
+    const torch::Tensor h =
+        torch::bmm(((src - cs.unsqueeze(1)) * ww).transpose(1, 2), dst - cd.unsqueeze(1));
+    const auto [u, s, vh] = torch::linalg_svd(h);
+    const torch::Tensor v = vh.transpose(1, 2), ut = u.transpose(1, 2);
+    const torch::Tensor det = torch::det(torch::bmm(v, ut));
+    const torch::Tensor one = torch::ones_like(det);
+    const torch::Tensor r =
+        torch::bmm(v * torch::stack({one, one, det}, 1).unsqueeze(1), ut);  // V diag(1,1,d) U^T
+    return {r, cd - torch::bmm(r, cs.unsqueeze(2)).squeeze(2)};
+}
+
+/// The authors' GlobalAlignLoss: Huber (threshold c) of each point's squared distance to the
+/// nearest point of the other cloud, summed over both directions and the batch.
+torch::Tensor HuberChamfer(const torch::Tensor& a, const torch::Tensor& b, double c) {
+    const torch::Tensor d2 =
+        a.pow(2).sum(2, true) - 2 * torch::bmm(a, b.transpose(1, 2)) + b.pow(2).sum(2).unsqueeze(1);
+    const auto huber = [c](const torch::Tensor& x) {
+        return torch::where(x < c, 0.5 * x * x, c * x - 0.5 * c * c).sum();
+    };
+    return huber(std::get<0>(d2.min(2))) + huber(std::get<0>(d2.min(1)));
+}
+
+void CheckCloud(const torch::Tensor& x, const char* which, int64_t batch, int64_t min_points) {
+    if (!x.defined() || x.dim() != 3 || x.size(2) != 3 || (batch >= 0 && x.size(0) != batch)) {
+        throw std::invalid_argument(std::string("rienet: ") + which +
+                                    " must be a [B, N, 3] tensor" +
+                                    (batch >= 0 ? " with the source's batch size" : ""));
+    }
+    if (x.size(1) < min_points) {
+        throw std::invalid_argument(std::string("rienet: ") + which + " has " +
+                                    std::to_string(x.size(1)) + " points, needs at least " +
+                                    std::to_string(min_points) + " (k and k_nc neighbours)");
+    }
+}
+
+}  // namespace
+
+nlohmann::json ToJson(const RienetConfig& c) {
+    nlohmann::json j = c;
+    j["arch"] = "rienet";
+    return j;
+}
+
+RienetConfig RienetConfigFromJson(const nlohmann::json& j) {
+    nlohmann::json fields = j;
+    if (j.is_object() && j.contains("arch")) {
+        if (j.at("arch") != "rienet") {
+            throw std::invalid_argument("rienet config: arch is " + j.at("arch").dump());
+        }
+        fields.erase("arch");
+    }
+    const auto c = ParseConfig<RienetConfig>(fields, "rienet config");
+    if (c.emb_dims < 1 || c.dim < 1 || c.iterations < 1 || c.k < 2 || c.k_nc < 2 ||
+        c.keypoints < 1 || !(c.nn_margin >= 0) || !(c.loss_margin > 0)) {
+        throw std::invalid_argument(
+            "rienet config: emb_dims, dim, iterations, keypoints, loss_margin must be positive, "
+            "k and k_nc >= 2, nn_margin >= 0: " +
+            ToJson(c).dump());
+    }
+    return c;
+}
+
+RienetDgcnnImpl::RienetDgcnnImpl(int64_t emb_dims) {
+    const std::pair<int64_t, int64_t> widths[] = {
+        {3, 32}, {32, 32}, {32, 64}, {64, 128}, {256, emb_dims}};
+    for (size_t i = 0; i < 5; ++i) {
+        convs_.push_back(register_module("conv" + std::to_string(i + 1),
+                                         Conv2dNoBias(widths[i].first, widths[i].second)));
+    }
+    for (size_t i = 0; i < 5; ++i) {
+        bns_.push_back(
+            register_module("bn" + std::to_string(i + 1), nn::BatchNorm2d(widths[i].second)));
+    }
+}
+
+torch::Tensor RienetDgcnnImpl::forward(const torch::Tensor& xyz, const torch::Tensor& idx) {
+    const int64_t batch = xyz.size(0), points = xyz.size(1), k = idx.size(2);
+    // Channels last, one row per edge: neighbour minus centre (the authors' relative_coordinates).
+    const torch::Tensor rows = (-CentreMinusNeighbours(xyz, idx)).reshape({-1, 3});
+    const torch::Tensor cat = PooledEdgeStages(
+        rows,
+        {{convs_[0], bns_[0]}, {convs_[1], bns_[1]}, {convs_[2], bns_[2]}, {convs_[3], bns_[3]}},
+        k);  // [B N, 256]
+    return RowsConvBnRelu(cat, convs_[4], bns_[4]).view({batch, points, -1});
+}
+
+InlierDiscriminatorImpl::InlierDiscriminatorImpl(int64_t dim) {
+    model1_ = register_module("model1", nn::Sequential());
+    AddLeakyBlock(model1_, 3, dim, true);
+    AddLeakyBlock(model1_, dim, 2 * dim, true);
+    model2_ = register_module("model2", nn::Sequential());
+    model3_ = register_module("model3", nn::Sequential());
+    for (auto* seq : {&model2_, &model3_}) {
+        AddLeakyBlock(*seq, 2 * dim, 16, false);
+        AddLeakyBlock(*seq, 16, 16, false);
+    }
+    model4_ = register_module(
+        "model4", nn::Sequential(nn::Conv1d(nn::Conv1dOptions(16, 8, 1)), nn::BatchNorm1d(8),
+                                 nn::LeakyReLU(nn::LeakyReLUOptions().negative_slope(kLeakySlope)),
+                                 nn::Conv1d(nn::Conv1dOptions(8, 1, 1))));
+}
+
+torch::Tensor InlierDiscriminatorImpl::forward(const torch::Tensor& pseudo,
+                                               const torch::Tensor& source) {
+    // [B, N, k, 3] -> [B, 3, k, N]: the (3, 1) kernels run along the neighbours, in their
+    // order (nearest first); back to [B, C, N, k].
+    const auto local = [this](const torch::Tensor& x) {
+        return model1_->forward(x.permute({0, 3, 2, 1})).permute({0, 1, 3, 2});
+    };
+    const torch::Tensor diff = local(pseudo) - local(source);
+    const torch::Tensor attention = torch::softmax(model3_->forward(diff), 3);
+    const torch::Tensor pooled = (model2_->forward(diff) * attention).sum(3);  // [B, 16, N]
+    return 1 - torch::tanh(model4_->forward(pooled).abs()).squeeze(1);
+}
+
+RienetNet::RienetNet(const RienetConfig& config) : config_(config) {
+    auto emb_nn = register_module("emb_nn", std::make_shared<nn::Module>());
+    dgcnn_ = emb_nn->register_module("model", RienetDgcnn(config_.emb_dims));
+    auto point_embed = register_module("single_point_embed", std::make_shared<nn::Module>());
+    RegisterUnusedChain(*point_embed, {{3, 32}, {32, 32}, {32, 64}, {64, 128}, {128, 256}});
+    auto forwards = register_module("forwards", std::make_shared<nn::Module>());
+    discriminator_ = forwards->register_module("weight_function", InlierDiscriminator(config_.dim));
+    auto fuse = forwards->register_module("fuse", std::make_shared<nn::Module>());
+    RegisterUnusedChain(*fuse, {{512, 256}, {256, 64}, {64, 32}});
+}
+
+// Long on purpose: one iteration of the authors' SVDHead plus their loss terms, in their order,
+// reads best as one piece beside model.py; the blocks it is made of have names above.
+NetOutput RienetNet::Forward(const PairBatch& batch) {
+    const int64_t k = config_.k, k_nc = config_.k_nc, k_max = std::max(k, k_nc);
+    CheckCloud(batch.source, "source", -1, k_max);
+    CheckCloud(batch.target, "target", batch.source.size(0), k_max);
+    const torch::Tensor target = batch.target;
+    torch::Tensor source = batch.source;
+    const int64_t b = source.size(0), n = source.size(1);
+    const torch::Tensor idx_t = KnnIndices(target.transpose(1, 2), k_max);  // [B, M, k_max]
+    const torch::Tensor nbr_t = idx_t.index({Slice(), Slice(), Slice(0, k)});
+    torch::Tensor target_features;
+    torch::Tensor R = torch::eye(3, source.options()).expand({b, 3, 3});
+    torch::Tensor t = torch::zeros({b, 3}, source.options());
+    torch::Tensor global_alignment = torch::zeros({}, source.options());
+    torch::Tensor consensus = torch::zeros({}, source.options());
+    torch::Tensor spatial = torch::zeros({}, source.options());
+    const int64_t keypoints = std::min<int64_t>(config_.keypoints, n);
+    for (int it = 0; it < config_.iterations; ++it) {
+        const torch::Tensor idx_s = KnnIndices(source.transpose(1, 2), k_max);
+        const torch::Tensor nbr_s = idx_s.index({Slice(), Slice(), Slice(0, k)});
+        const torch::Tensor source_features = dgcnn_->forward(source, nbr_s);
+        if (!target_features.defined() || is_training()) {
+            target_features = dgcnn_->forward(target, nbr_t);
+        }
+        // Matching map refinement: point-wise map, neighbourhood consensus, refined map.
+        const torch::Tensor distance = FeatureDistance(source_features, target_features);
+        const torch::Tensor nc = Consensus(torch::softmax(-distance, 2), idx_s, idx_t, k_nc);
+        const torch::Tensor matching =
+            torch::softmax(-torch::exp(config_.nn_margin - nc) * distance, 2);
+        const torch::Tensor corr = torch::bmm(matching, target);  // pseudo targets [B, N, 3]
+        // Inlier evaluation on the two neighbourhoods, then the weighted SVD.
+        const torch::Tensor pseudo_local = CentreMinusNeighbours(corr, nbr_s);
+        const torch::Tensor weight =
+            discriminator_->forward(pseudo_local, CentreMinusNeighbours(source, nbr_s));
+        const auto [R_i, t_i] = WeightedKabsch(source, corr, weight);
+        const torch::Tensor moved = torch::bmm(source, R_i.transpose(1, 2)) + t_i.unsqueeze(1);
+        // The authors' loss terms on the keypoints of highest weight.
+        const torch::Tensor kp = std::get<1>(weight.topk(keypoints, 1)).unsqueeze(2);  // [B,K,1]
+        const auto pick = [&kp](const torch::Tensor& x) {  // [B, N, ...] -> [B, K, ...]
+            return GatherRows(x.flatten(2), kp).squeeze(2);
+        };
+        spatial = spatial - torch::log(std::get<0>(pick(matching).max(2)) + 1e-15).mean();
+        const torch::Tensor keypoint_loss = (pick(moved) - pick(corr)).pow(2).sum();
+        const torch::Tensor knn_loss =
+            (pick(CentreMinusNeighbours(moved, nbr_s)) - pick(pseudo_local)).pow(2).sum();
+        consensus = consensus + knn_loss / static_cast<double>(k_nc) + keypoint_loss;
+        global_alignment = global_alignment + HuberChamfer(target, moved, config_.loss_margin);
+        R = torch::bmm(R_i, R);
+        t = torch::bmm(R_i, t.unsqueeze(2)).squeeze(2) + t_i;
+        source = moved;
+    }
+    NetOutput out;
+    out.T = torch::eye(4, source.options()).repeat({b, 1, 1});
+    out.T.index_put_({Slice(), Slice(0, 3), Slice(0, 3)}, R);
+    out.T.index_put_({Slice(), Slice(0, 3), 3}, t);
+    out.aux["global_alignment"] = global_alignment;
+    out.aux["consensus"] = consensus;
+    out.aux["spatial_consistency"] = spatial;
+    return out;
+}
+
+LossTerms RienetNet::Loss(const PairBatch& /*batch*/, const NetOutput& output) {
+    LossTerms terms;
+    for (const char* key : {"global_alignment", "consensus", "spatial_consistency"}) {
+        terms[key] = output.aux.at(key);
+    }
+    terms["total"] = terms["global_alignment"] + terms["consensus"] + terms["spatial_consistency"];
+    return terms;
+}
+
+void LoadRienetStateDict(RienetNet& net, const StateDict& tensors, const std::string& file) {
+    std::vector<std::pair<std::string, torch::Tensor>> own;
+    for (const auto& p : net.named_parameters()) own.emplace_back(p.key(), p.value());
+    for (const auto& p : net.named_buffers()) own.emplace_back(p.key(), p.value());
+    std::set<std::string> known;
+    for (const auto& [key, value] : own) known.insert(key);
+    for (const auto& [key, value] : tensors) {
+        if (known.count(key) == 0) {
+            throw std::runtime_error(file + ": tensor " + key + " is not in RIENet's state dict");
+        }
+    }
+    torch::NoGradGuard no_grad;
+    for (auto& [key, value] : own) {
+        const auto found = std::find_if(tensors.begin(), tensors.end(),
+                                        [&key](const auto& kv) { return kv.first == key; });
+        if (found == tensors.end()) {
+            throw std::runtime_error(file + ": has no tensor " + key + " (RIENet state dict)");
+        }
+        if (found->second.sizes() != value.sizes()) {
+            throw std::runtime_error(file + ": tensor " + key + " has shape " +
+                                     c10::str(found->second.sizes()) + ", RIENet's is " +
+                                     c10::str(value.sizes()));
+        }
+        value.copy_(found->second.to(value.dtype()));
+    }
+}
+
+std::map<std::string, int64_t> RienetForwardMacs(const nlohmann::json& config, int64_t n,
+                                                 int64_t m) {
+    if (n < 1 || m < 1) {
+        throw std::invalid_argument("rienet forward cost: point counts must be positive");
+    }
+    const RienetConfig c = RienetConfigFromJson(config);
+    const int64_t e = c.emb_dims, d = c.dim, k = c.k, its = c.iterations;
+    const int64_t kp = std::min<int64_t>(c.keypoints, n);
+    // Light DGCNN per point: k edges through 3->32->32->64->128, then 256 -> emb.
+    const auto dgcnn = [&](int64_t points) {
+        return points * (k * (3 * 32 + 32 * 32 + 32 * 64 + 64 * 128) + 256 * e);
+    };
+    // Discriminator per point: model1 (kernel 3) on both neighbourhoods, model2 and model3 on
+    // the difference, model4 on the pooled features.
+    const int64_t disc_point =
+        2 * k * (3 * 3 * d + 3 * d * 2 * d) + 2 * k * (2 * d * 16 + 16 * 16) + 16 * 8 + 8;
+    std::map<std::string, int64_t> parts;
+    parts["dgcnn"] = its * dgcnn(n) + dgcnn(m);         // the target's features once (eval mode)
+    parts["matching"] = its * (n * m * e + 3 * n * m);  // Gram of features; pseudo targets
+    parts["discriminator"] = its * n * disc_point;
+    parts["svd"] = its * (9 * n + 9 * n);            // weighted covariance; moving the source
+    parts["loss"] = its * (3 * n * m + 3 * kp * k);  // chamfer Gram; keypoint offsets
+    int64_t total = 0;
+    for (const auto& [part, macs] : parts) total += macs;
+    parts["total"] = total;
+    return parts;
+}
+
+}  // namespace regbench::ogmm
