@@ -179,7 +179,7 @@ std::string TableToHtml(const Table& t) {
         s += "<tr><td>" + Escape(t.rows[r].label) + "</td>";
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
             if (!t.columns[c].shown) continue;
-            std::string text = CellText(t.rows[r].cells[c], t.columns[c], " ± ");
+            std::string text = CellText(t.rows[r].Get(t.columns[c].key), t.columns[c], " ± ");
             text = Escape(text);
             if (best[c] == static_cast<int>(r)) text = "<b>" + text + "</b>";
             s += std::string(t.columns[c].source == CellSource::kPaper ? "<td class=\"paper\">"

@@ -308,7 +308,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
     for (const auto& [method, why] : o.unavailable)
         reasons[PaperRowName(method).value_or(method)] = why;
     for (const auto& label : order) {
-        TableRow row{label, {}};
+        RowCells cells;
         for (const auto& g : spec.groups) {
             const ResultSet* set = nullptr;
             for (const auto& s : sets) {
@@ -324,15 +324,16 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
                 } else if (reasons.count(label)) {
                     measured.text = reasons[label];
                 }
-                row.cells.push_back(measured);
+                const std::string key = g.empty() ? m : g + "." + m;
+                cells.emplace_back(key, measured);
                 if (!published) continue;
                 Cell p;
                 p.source = CellSource::kPaper;
                 p.value = PaperCell(paper, spec.id, label, PaperGroupOf(spec, g), m);
-                row.cells.push_back(p);
+                cells.emplace_back("paper:" + key, p);
             }
         }
-        t.rows.push_back(row);
+        t.AddRow(label, cells);
     }
     DescribeSides(spec, pt, published, sets, &t);
     return t;
@@ -440,7 +441,15 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         } else if (name == "OGMM" && rows.contains("OGMM_clustered_attention")) {
             p.value = 1e3 * rows["OGMM_clustered_attention"].at(0).get<double>();
         }
-        t.rows.push_back({label, {mean, median, network, gmac, floor, ratio, points, th, p}});
+        t.AddRow(label, {{"cpu_ms_mean", mean},
+                         {"cpu_ms_median", median},
+                         {"network_ms", network},
+                         {"gmac", gmac},
+                         {"floor_ms", floor},
+                         {"x_floor", ratio},
+                         {"points", points},
+                         {"threads", th},
+                         {"paper:ms", p}});
     }
     // One provenance and floor note per pair file (a variant runs on the pairs of the rows).
     std::vector<ResultSet> files;

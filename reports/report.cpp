@@ -308,21 +308,29 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
         t.columns[c].shown = false;
     for (const auto& s : rt.methods) {
         const std::size_t n = s.pairs;
-        TableRow row{s.label,
-                     {MeasuredCell(static_cast<double>(n), n),
-                      MeasuredCell(static_cast<double>(s.failed), n), Mean(s.mae_r, n),
-                      Mean(s.mae_r, n), Mean(s.mae_t, n), Mean(s.ccd, n), Mean(s.rre, n),
-                      Mean(s.rte, n), MeasuredCell(s.rmse_r, n), MeasuredCell(s.rmse_t, n),
-                      MeasuredCell(s.recall, n), MeasuredCell(s.success, n)}};
-        if (o.recall_3dmatch) row.cells.push_back(MeasuredCell(s.recall_3dmatch, n));
-        for (double v : {s.median_seconds, s.mean_seconds, s.chamfer, double(s.threads)}) {
-            row.cells.push_back(MeasuredCell(v, n));
-        }
+        RowCells cells = {{"pairs", MeasuredCell(static_cast<double>(n), n)},
+                          {"failed", MeasuredCell(static_cast<double>(s.failed), n)},
+                          {"mae_r", Mean(s.mae_r, n)},
+                          {"mae_r.ci95", Mean(s.mae_r, n)},
+                          {"mae_t", Mean(s.mae_t, n)},
+                          {"ccd", Mean(s.ccd, n)},
+                          {"rre", Mean(s.rre, n)},
+                          {"rte", Mean(s.rte, n)},
+                          {"rmse_r", MeasuredCell(s.rmse_r, n)},
+                          {"rmse_t", MeasuredCell(s.rmse_t, n)},
+                          {"recall", MeasuredCell(s.recall, n)},
+                          {"success", MeasuredCell(s.success, n)},
+                          {"median_seconds", MeasuredCell(s.median_seconds, n)},
+                          {"mean_seconds", MeasuredCell(s.mean_seconds, n)},
+                          {"chamfer", MeasuredCell(s.chamfer, n)},
+                          {"threads", MeasuredCell(double(s.threads), n)}};
+        if (o.recall_3dmatch)
+            cells.emplace_back("recall_3dmatch", MeasuredCell(s.recall_3dmatch, n));
         Cell params;
         params.source = CellSource::kLabel;
         params.text = s.params.dump();
-        row.cells.push_back(params);
-        t.rows.push_back(std::move(row));
+        cells.emplace_back("params", params);
+        t.AddRow(s.label, cells);
     }
     Provenance p;
     p.pairs_file = rt.data.pairs_file;

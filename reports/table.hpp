@@ -2,6 +2,7 @@
 // Report tables as data: rows of cells with the provenance of what was measured, written to
 // Markdown, LaTeX (booktabs), CSV and JSON by reports/table_writers.cpp.
 #include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -73,10 +74,28 @@ struct Provenance {
     double noise_sigma = std::nan("");  ///< jitter sigma applied (0: noise-free; NaN: unknown)
 };
 
-struct TableRow {
-    std::string label;        ///< method (or parameter value for the supplementary tables)
-    std::vector<Cell> cells;  ///< one per column
+struct Table;
+
+/// One row of a Table: its label and a cell per column, keyed by the column's key, so a cell
+/// cannot land under another column's header. Cells are set through Table::AddRow, which
+/// refuses a key the table has no column for.
+class TableRow {
+public:
+    TableRow() = default;
+    explicit TableRow(std::string label_) : label(std::move(label_)) {}
+
+    std::string label;  ///< method (or parameter value for the supplementary tables)
+
+    /// The cell under the column with `key`; an empty cell ("-") when the row has none there.
+    const Cell& Get(const std::string& key) const;
+
+private:
+    friend struct Table;
+    std::map<std::string, Cell> cells_;
 };
+
+/// A row's cells as (column key, cell), in any order.
+using RowCells = std::vector<std::pair<std::string, Cell>>;
 
 struct Table {
     Table() = default;
@@ -91,6 +110,14 @@ struct Table {
     std::vector<TableRow> rows;
     std::vector<Provenance> provenance;
     std::vector<std::string> notes;  ///< extra lines printed under the table
+
+    /// Appends a row with its cells keyed by column key (columns without a cell show "-").
+    /// Throws std::logic_error naming the table, row and key for a key no column has, a key
+    /// given twice, or a table whose columns repeat a key.
+    TableRow& AddRow(std::string label, const RowCells& cells);
+
+    /// The index of the column with `key`; throws std::logic_error when there is none.
+    std::size_t ColumnIndex(const std::string& key) const;
 };
 
 /// A cell as the text writers show it: its text, else the number with `col.decimals` (and its

@@ -1,6 +1,8 @@
 #include <fmt/format.h>
 
+#include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/enum_names.hpp"
 #include "reports/table.hpp"
@@ -82,6 +84,41 @@ const std::vector<std::string> kCsvHeader = {
 
 }  // namespace
 
+const Cell& TableRow::Get(const std::string& key) const {
+    static const Cell kEmpty;
+    const auto it = cells_.find(key);
+    return it == cells_.end() ? kEmpty : it->second;
+}
+
+std::size_t Table::ColumnIndex(const std::string& key) const {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        if (columns[c].key == key) return c;
+    }
+    throw std::logic_error(fmt::format("table '{}' has no column '{}'", id, key));
+}
+
+TableRow& Table::AddRow(std::string label, const RowCells& cells) {
+    std::set<std::string> keys;
+    for (const auto& c : columns) {
+        if (!keys.insert(c.key).second) {
+            throw std::logic_error(fmt::format("table '{}' has two columns '{}'", id, c.key));
+        }
+    }
+    TableRow row(std::move(label));
+    for (const auto& [key, cell] : cells) {
+        if (!keys.count(key)) {
+            throw std::logic_error(fmt::format("table '{}', row '{}': no column '{}' for its cell",
+                                               id, row.label, key));
+        }
+        if (!row.cells_.emplace(key, cell).second) {
+            throw std::logic_error(
+                fmt::format("table '{}', row '{}': two cells for column '{}'", id, row.label, key));
+        }
+    }
+    rows.push_back(std::move(row));
+    return rows.back();
+}
+
 std::string CellText(const Cell& c, const Column& col, const char* pm) {
     if (!c.text.empty()) return c.text;
     if (!c.HasValue()) return "-";
@@ -102,14 +139,14 @@ int BestRow(const Table& t, std::size_t c) {
     if (col.better == Better::kNone || col.source != CellSource::kMeasured) return -1;
     int best = -1;
     for (std::size_t r = 0; r < t.rows.size(); ++r) {
-        const Cell& cell = t.rows[r].cells.at(c);
+        const Cell& cell = t.rows[r].Get(col.key);
         if (!cell.HasValue() || !cell.text.empty()) continue;
         const double v = cell.value;
         if (best < 0) {
             best = static_cast<int>(r);
             continue;
         }
-        const double b = t.rows[static_cast<std::size_t>(best)].cells[c].value;
+        const double b = t.rows[static_cast<std::size_t>(best)].Get(col.key).value;
         if ((col.better == Better::kLower && v < b) || (col.better == Better::kHigher && v > b)) {
             best = static_cast<int>(r);
         }
@@ -134,7 +171,7 @@ std::string TableToMarkdown(const Table& t) {
         out += "| " + t.rows[r].label + " |";
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
             if (!t.columns[c].shown) continue;
-            std::string s = CellText(t.rows[r].cells[c], t.columns[c], " ± ");
+            std::string s = CellText(t.rows[r].Get(t.columns[c].key), t.columns[c], " ± ");
             if (best[c] == static_cast<int>(r)) s = "**" + s + "**";
             out += " " + s + " |";
         }
@@ -156,7 +193,7 @@ std::string TableToLatex(const Table& t) {
         out += LatexEscape(t.rows[r].label);
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
             if (!t.columns[c].shown) continue;
-            const Cell& cell = t.rows[r].cells[c];
+            const Cell& cell = t.rows[r].Get(t.columns[c].key);
             std::string s = cell.text.empty() ? CellText(cell, t.columns[c], " $\\pm$ ")
                                               : LatexEscape(cell.text);
             if (best[c] == static_cast<int>(r)) s = "\\textbf{" + s + "}";
@@ -208,7 +245,7 @@ nlohmann::json TablesToJson(const std::vector<Table>& tables) {
         for (const auto& row : t.rows) {
             for (std::size_t c = 0; c < t.columns.size(); ++c) {
                 const Column& col = t.columns[c];
-                const Cell& cell = row.cells.at(c);
+                const Cell& cell = row.Get(col.key);
                 const Provenance* p = ProvenanceFor(t, col);
                 const auto num = [](double v) -> nlohmann::json {
                     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
