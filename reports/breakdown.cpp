@@ -23,9 +23,12 @@ Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptio
     for (const auto& m : o.metrics) {
         const int d = FindMetric(m).decimals;
         t.columns.push_back({m + ".mean", m + " mean", CellSource::kMeasured, Better::kLower, d});
+        // Compact: the mean with its CI; median and std in the full table.
         t.columns.push_back(
             {m + ".median", m + " median", CellSource::kMeasured, Better::kLower, d});
+        t.columns.back().compact = false;
         t.columns.push_back({m + ".std", m + " std", CellSource::kMeasured, Better::kNone, d});
+        t.columns.back().compact = false;
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
@@ -94,7 +97,7 @@ Table RecallTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o)
     for (const auto& [r, tt] : o.recall) {
         t.columns.push_back({fmt::format("recall@({:g},{:g})", r, tt),
                              fmt::format("@({:g}°, {:g})", r, tt), CellSource::kMeasured,
-                             Better::kHigher, kFractionDecimals});
+                             Better::kHigher, kFractionDecimals, CiStyle::kValueInterval});
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
@@ -105,11 +108,11 @@ Table RecallTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o)
                 // A NaN (null) metric compares false: a miss.
                 if (x->metrics.mae_r < r && x->metrics.mae_t < tt) ++hit;
             }
-            cells.emplace_back(fmt::format("recall@({:g},{:g})", r, tt),
-                               MeasuredCell(group.empty() ? std::nan("")
-                                                          : static_cast<double>(hit) /
-                                                                static_cast<double>(group.size()),
-                                            group.size()));
+            const BootstrapCi w = WilsonInterval(hit, group.size());  // NaN when no pairs
+            Cell cell = MeasuredCell(w.mean, group.size());
+            cell.ci_lo = w.lo;
+            cell.ci_hi = w.hi;
+            cells.emplace_back(fmt::format("recall@({:g},{:g})", r, tt), cell);
         }
         t.AddRow(method, cells);
     }
@@ -135,10 +138,17 @@ void AddMeanRows(Table& t, const std::vector<ResultRow>& rows, const BreakdownOp
         RowCells row;
         for (std::size_t c = 0; c < cells.size(); ++c) {
             Cell cell = MeasuredCell(SampleMean(cells[c]), cells[c].size());
+            if (cells[c].size() >= 2) {
+                const BootstrapCi ci =
+                    BootstrapMean(cells[c], o.bootstrap_samples, o.seed,
+                                  StreamId(method + "/" + o.key_metric + "/" + t.columns[c].key));
+                cell.ci_lo = ci.lo;
+                cell.ci_hi = ci.hi;
+            }
             // The pairs behind each mean, shown in the cell: bins and categories are uneven.
             if (!cells[c].empty()) {
-                cell.text = fmt::format("{:.{}f} (n={})", cell.value, t.columns[c].decimals,
-                                        cells[c].size());
+                const std::string number = CellText(cell, t.columns[c], " ± ");
+                cell.text = fmt::format("{} (n={})", number, cells[c].size());
             }
             row.emplace_back(t.columns[c].key, cell);
         }

@@ -361,6 +361,15 @@ double MeanOrBlank(const std::vector<double>& v) {
     return v.empty() ? std::nan("") : SampleMean(v);
 }
 
+/// A mean of per-call times with its 95% bootstrap CI (stream: the row label and quantity).
+void SetMeanWithCi(const std::vector<double>& v, const std::string& stream, Cell* c) {
+    c->value = MeanOrBlank(v);
+    if (v.size() < 2) return;
+    const BootstrapCi ci = BootstrapMean(v, 1000, kDefaultBootstrapSeed, StreamId(stream));
+    c->ci_lo = ci.lo;
+    c->ci_hi = ci.hi;
+}
+
 /// The timing rows of Tab. 6: by method, or by the set's label (a variant such as
 /// OGMM_full_attention), in order of first appearance; and the learned methods' BLAS notes.
 struct Timings {
@@ -421,10 +430,10 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
     for (const auto& label : timings.order) {
         const TimingRow& m = timings.by_label[label];
         Cell mean, median, network, gmac, floor, ratio, points, th, p;
-        mean.value = MeanOrBlank(m.cpu);
+        SetMeanWithCi(m.cpu, label + "/cpu_ms", &mean);
         median.value = m.cpu.empty() ? std::nan("") : SampleMedian(m.cpu);
         mean.pairs = median.pairs = m.cpu.size();
-        network.value = MeanOrBlank(m.network);
+        SetMeanWithCi(m.network, label + "/network_ms", &network);
         gmac.value = MeanOrBlank(m.gmac);
         floor.value = MeanOrBlank(m.floor);
         // CPU time of the network over the time its MACs take at the GEMM rate: the mean of

@@ -104,12 +104,18 @@ Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
     for (const auto& s : ours.methods) {
         const auto row = PaperRowName(s.method);
         const auto mine = [&](double v) { return MeasuredCell(v, s.pairs); };
+        const auto mean = [&](const Estimate& e) {  // with its bootstrap CI
+            Cell c = mine(e.mean);
+            c.ci_lo = e.lo;
+            c.ci_hi = e.hi;
+            return c;
+        };
         t.AddRow(s.method, {{"pairs", mine(static_cast<double>(s.pairs))},
-                            {"mae_r", mine(s.mae_r.mean)},
+                            {"mae_r", mean(s.mae_r)},
                             {"paper:mae_r", paper_cell(row, "mae_r")},
-                            {"mae_t", mine(s.mae_t.mean)},
+                            {"mae_t", mean(s.mae_t)},
                             {"paper:mae_t", paper_cell(row, "mae_t")},
-                            {"ccd", mine(s.ccd.mean)},
+                            {"ccd", mean(s.ccd)},
                             {"paper:ccd", paper_cell(row, "ccd")},
                             {"median_seconds", mine(s.median_seconds)},
                             {"paper:seconds", paper_cell(row, "seconds")}});

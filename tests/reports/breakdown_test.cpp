@@ -85,8 +85,10 @@ TEST(Breakdown, BinsByMeasuredOverlap) {
     EXPECT_DOUBLE_EQ(t.rows[0].Get(t.columns[0].key).value, 0.5);
     EXPECT_DOUBLE_EQ(t.rows[0].Get(t.columns[1].key).value, 5.5);
     EXPECT_EQ(t.rows[0].Get(t.columns[1].key).pairs, 2u);
-    EXPECT_EQ(t.rows[0].Get(t.columns[1].key).text,
-              "5.5000 (n=2)");  // the count is shown in the cell
+    // The count is shown in the cell, and the CI (issue 41 item 2): the bin holds 3 and 8, so
+    // a resample's mean is 3, 5.5 or 8 with probability 1/4, 1/2, 1/4 and the 2.5% and 97.5%
+    // quantiles of 1000 resampled means are 3 and 8: half-width 2.5.
+    EXPECT_EQ(t.rows[0].Get(t.columns[1].key).text, "5.5000 ± 2.5000 (n=2)");
     EXPECT_DOUBLE_EQ(t.rows[0].Get(t.columns[2].key).value, 12.0);
     EXPECT_TRUE(t.notes.empty());
 }
