@@ -37,6 +37,7 @@ void SetupAlignCommand(CLI::App* cmd) {
     auto method = std::make_shared<std::string>();
     auto params = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
+    auto save_aligned = std::make_shared<std::string>();
     auto gt = std::make_shared<std::string>();
     auto normalize = std::make_shared<bool>(false);
     auto euler = std::make_shared<std::string>("zyx");
@@ -48,6 +49,9 @@ void SetupAlignCommand(CLI::App* cmd) {
     cmd->add_option("--method", *method, "Method name (see `regbench methods`)")->required();
     cmd->add_option("--params", *params, "JSON object of the method's parameters");
     cmd->add_option("--out", *out, "Write the 4x4 (4 lines of 4 numbers) to this file");
+    cmd->add_option("--save-aligned", *save_aligned,
+                    "Write the moved source (orange) and the target (blue) to this PLY file, to "
+                    "open in any viewer (MeshLab, CloudCompare, Open3D)");
     cmd->add_option("--gt", *gt, "Ground-truth 4x4 (same format): also print the metrics");
     cmd->add_flag("--normalize", *normalize,
                   "Move both clouds by the target's centroid and scale them by one factor into "
@@ -70,12 +74,19 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"drop", "refuse"}))
         ->capture_default_str();
     cmd->callback([=] {
-        std::optional<OutputLock> lock;  // one writer per --out, inputs refused before work
+        // One writer per output file, inputs (and the other output) refused before work.
+        std::vector<std::string> inputs{*src, *tgt};
+        if (!gt->empty()) inputs.push_back(*gt);
+        std::optional<OutputLock> lock, ply_lock;
         if (!out->empty()) {
-            std::vector<std::string> inputs{*src, *tgt};
-            if (!gt->empty()) inputs.push_back(*gt);
             CheckOutputPath(*out, inputs);
             lock.emplace(*out);
+        }
+        if (!save_aligned->empty()) {
+            std::vector<std::string> taken = inputs;
+            if (!out->empty()) taken.push_back(*out);
+            CheckOutputPath(*save_aligned, taken);
+            ply_lock.emplace(*save_aligned);
         }
         const nlohmann::json p = ParseParamsOption(*params);
         const auto reg = CreateMethod(*method, p);  // validates name and params
@@ -103,9 +114,12 @@ void SetupAlignCommand(CLI::App* cmd) {
                 m.mae_r, ToString(m.euler), m.mae_t, m.rre, m.rte, m.ccd, m.chamfer);
         }
         if (!out->empty()) {
-            std::vector<std::string> inputs{*src, *tgt};
-            if (!gt->empty()) inputs.push_back(*gt);
             WriteFileAtomic(*out, FormatTransform(T), inputs);  // checked; never an input
+        }
+        if (!save_aligned->empty()) {
+            WriteFileAtomic(*save_aligned, TwoCloudPlyText(Apply(T, source), target), inputs);
+            std::cerr << "[align] wrote the moved source (orange) and the target (blue) to "
+                      << *save_aligned << "\n";
         }
         if (r.status != AlignStatus::kOk) throw std::runtime_error(*method + " failed");
     });

@@ -25,6 +25,7 @@ void SetupReportCommand(CLI::App* cmd) {
     auto euler = std::make_shared<std::string>();
     auto paper = std::make_shared<std::string>();
     auto paper_file = std::make_shared<std::string>(DefaultPaperTablesPath());
+    auto full = std::make_shared<bool>(false);
     cmd->add_option("results", *files, "One or more JSONL result files (e.g. shards)")->required();
     cmd->add_option("--format,-f", *format, "md | csv | json | latex")
         ->check(CLI::IsMember({"md", "csv", "json", "latex"}))
@@ -55,6 +56,9 @@ void SetupReportCommand(CLI::App* cmd) {
                   "unfinished run), compare them on the pairs they share (the caption says so) "
                   "instead of refusing");
     cmd->add_option("--paper-file", *paper_file, "The paper's tables (JSON)");
+    cmd->add_flag("--full", *full,
+                  "Markdown: every column at its decimals (rre, rte, rmse, mean s too) instead of "
+                  "the compact table (mean ± CI half-width rounded to the CI)");
     cmd->callback([=] {
         // Refused before reading anything: an input as --out, a directory, a device; then one
         // writer per --out until the report is in place.
@@ -85,7 +89,7 @@ void SetupReportCommand(CLI::App* cmd) {
         }
         std::string text;
         if (*format == "md") {
-            text = TablesToMarkdown(out_tables);
+            text = TablesToMarkdown(out_tables, *full ? TableForm::kFull : TableForm::kCompact);
         } else if (*format == "csv") {
             text = TablesToCsv(out_tables);
         } else if (*format == "latex") {

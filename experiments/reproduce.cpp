@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <ostream>
@@ -228,7 +229,8 @@ RunOptions ExperimentRun(const ReproduceOptions& o, const fs::path& pairs,
     return run;
 }
 
-std::string Join(const std::vector<Table>& tables, std::string (*fn)(const Table&)) {
+std::string Join(const std::vector<Table>& tables,
+                 const std::function<std::string(const Table&)>& fn) {
     std::string s;
     for (const auto& t : tables) s += fn(t) + "\n";
     return s;
@@ -507,10 +509,18 @@ std::vector<Table> BuildTables(const std::vector<ExperimentFile>& files,
     return tables;
 }
 
-/// tables.{md,tex,csv,json}.
+std::string CompactMarkdown(const Table& t) { return TableToMarkdown(t, TableForm::kCompact); }
+std::string FullMarkdown(const Table& t) { return TableToMarkdown(t, TableForm::kFull); }
+
+/// tables.{md,tex,csv,json} and tables_full.md (every column at its decimals).
 void WriteTables(const fs::path& out, const std::string& intro, const std::vector<Table>& tables) {
-    WriteText(out / "tables.md", "# regbench: the OGMM paper's tables\n\n" + intro + "\n\n" +
-                                     Join(tables, TableToMarkdown));
+    const std::string head = "# regbench: the OGMM paper's tables\n\n" + intro + "\n\n";
+    WriteText(out / "tables.md",
+              head +
+                  "Compact form: mean ± 95% CI half-width (the paper's number); every "
+                  "column at full precision: tables_full.md.\n\n" +
+                  Join(tables, CompactMarkdown));
+    WriteText(out / "tables_full.md", head + Join(tables, FullMarkdown));
     WriteText(out / "tables.tex",
               "% " + intro + "\n% needs \\usepackage{booktabs}\n" + Join(tables, TableToLatex));
     WriteText(out / "tables.csv", TablesToCsv(tables));
@@ -549,8 +559,8 @@ void WriteBreakdownsAndHtml(const fs::path& out, const std::string& intro,
         sec.pair_lookup = [set](const ResultRow& row) -> const Pair* {
             return row.pair < set->pairs.size() ? &set->pairs[row.pair] : nullptr;
         };
-        breakdowns += "## " + sec.title + "\n\n" + sec.description + "\n\n" +
-                      Join(sec.tables, TableToMarkdown);
+        breakdowns +=
+            "## " + sec.title + "\n\n" + sec.description + "\n\n" + Join(sec.tables, FullMarkdown);
         html.sections.push_back(sec);
     }
     WriteText(out / "breakdowns.md", breakdowns);

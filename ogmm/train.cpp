@@ -473,18 +473,12 @@ double Trainer::CpuSeconds() const {
     return cpu_before_ + ProcessCpuSeconds() - session_cpu_start_;
 }
 
-/// multistep: base x gamma^(milestones passed, as fractions of the planned steps); plateau:
-/// base x the factor validations have cut it by; constant: base.
+/// multistep: MultistepLearningRate; plateau: base x the factor validations have cut it by;
+/// constant: base.
 double Trainer::LearningRate() const {
     if (recipe_.schedule == "multistep") {
-        double lr = recipe_.lr;
-        const double progress =
-            static_cast<double>(state_.step) /
-            static_cast<double>(std::max<std::int64_t>(1, state_.planned_steps));
-        for (double m : recipe_.milestones) {
-            if (progress >= m) lr *= recipe_.lr_gamma;
-        }
-        return lr;
+        return MultistepLearningRate(recipe_, state_.step, state_.planned_steps,
+                                     steps_per_epoch_ * recipe_.epochs);
     }
     if (recipe_.schedule == "plateau") {
         return std::max(recipe_.lr * state_.plateau_scale, recipe_.min_lr);
@@ -504,9 +498,22 @@ void Trainer::PlanForBudget() {
     const auto fit = static_cast<std::int64_t>(budget_seconds_ / std::max(per_step, 1e-9));
     if (fit < state_.planned_steps) {
         state_.planned_steps = std::max(fit, kPlanningSteps + 1);
+        const std::int64_t recipe_steps = steps_per_epoch_ * recipe_.epochs;
         log_ << "train: LR schedule planned over " << state_.planned_steps
              << " steps, what fits the " << options_.minutes << "-minute budget at " << per_step
-             << " s a step (the recipe has " << steps_per_epoch_ * recipe_.epochs << ")\n";
+             << " s a step (the recipe has " << recipe_steps << ", about "
+             << std::ceil(per_step * static_cast<double>(recipe_steps) / 60.0)
+             << " min at this rate)";
+        if (recipe_.schedule == "multistep") {
+            // Where the compressed plan cuts the LR (MultistepLearningRate).
+            log_ << "; LR cut by " << recipe_.lr_gamma << " at steps";
+            for (double m : recipe_.milestones) {
+                const double f =
+                    static_cast<double>(state_.planned_steps) / static_cast<double>(recipe_steps);
+                log_ << " " << std::ceil((1.0 - (1.0 - m) * f) * state_.planned_steps);
+            }
+        }
+        log_ << "\n";
     }
 }
 
@@ -690,6 +697,19 @@ TrainSummary Trainer::Run() {
 }
 
 }  // namespace
+
+double MultistepLearningRate(const TrainConfig& c, std::int64_t step, std::int64_t planned_steps,
+                             std::int64_t recipe_steps) {
+    const double planned = static_cast<double>(std::max<std::int64_t>(1, planned_steps));
+    const double f =
+        std::min(1.0, planned / static_cast<double>(std::max<std::int64_t>(1, recipe_steps)));
+    const double progress = static_cast<double>(step) / planned;
+    double lr = c.lr;
+    for (double m : c.milestones) {
+        if (progress >= (f < 1.0 ? 1.0 - (1.0 - m) * f : m)) lr *= c.lr_gamma;
+    }
+    return lr;
+}
 
 void RetainFreedMemoryForTraining() {
 #if defined(__GLIBC__)

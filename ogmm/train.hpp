@@ -55,6 +55,16 @@ struct TrainConfig {
     double min_lr = 1e-6;       ///< plateau: floor
 };
 nlohmann::json ToJson(const TrainConfig& c);
+
+/// The multistep schedule's LR at `step` of a run whose LR plan spans `planned_steps` and whose
+/// recipe spans `recipe_steps` (its epochs). A run planned as long as its recipe cuts the LR by
+/// lr_gamma at each milestone (a fraction of the planned steps). A shorter plan (a wall budget,
+/// f = planned / recipe < 1) keeps the recipe's tail after each milestone at f of its length,
+/// milestone m moving to 1 - (1 - m) f, so a short run spends most of its steps at the base LR
+/// and still ends annealed (142 of 640 steps: 82% at the base LR, not 44%).
+double MultistepLearningRate(const TrainConfig& c, std::int64_t step, std::int64_t planned_steps,
+                             std::int64_t recipe_steps);
+
 /// Unknown keys or bad values throw std::invalid_argument naming them.
 TrainConfig TrainConfigFromJson(const nlohmann::json& j);
 

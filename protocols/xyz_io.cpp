@@ -307,4 +307,22 @@ PairSet ImportXyzDir(const std::string& dir, double eta) {
     return set;
 }
 
+std::string TwoCloudPlyText(const PointCloud& source, const PointCloud& target) {
+    std::string text = "ply\nformat ascii 1.0\nelement vertex " +
+                       std::to_string(source.rows() + target.rows()) +
+                       "\nproperty double x\nproperty double y\nproperty double z\n"
+                       "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                       "end_header\n";
+    char buf[128];
+    for (const auto& [cloud, rgb] :
+         {std::pair{&source, "255 128 0"}, std::pair{&target, "0 102 255"}}) {
+        for (Eigen::Index i = 0; i < cloud->rows(); ++i) {
+            std::snprintf(buf, sizeof(buf), "%.17g %.17g %.17g %s\n", (*cloud)(i, 0),
+                          (*cloud)(i, 1), (*cloud)(i, 2), rgb);
+            text += buf;
+        }
+    }
+    return text;
+}
+
 }  // namespace regbench

@@ -24,6 +24,11 @@ void ExportXyz(const PairSet& set, const std::string& dir);
 /// Writes DIR/NNNN_src.ply, NNNN_tgt.ply (ASCII PLY, double x y z) and NNNN_gt.txt.
 void ExportPly(const PairSet& set, const std::string& dir);
 
+/// ASCII PLY of two clouds in one file, to look at an alignment in any viewer: the points of
+/// `source` (e.g. moved by an estimate) coloured orange (255 128 0), then `target`'s blue
+/// (0 102 255); x y z as doubles with 17 significant digits, red green blue as uchar.
+std::string TwoCloudPlyText(const PointCloud& source, const PointCloud& target);
+
 /// Reads DIR/NNNN_{src,tgt}.xyz + NNNN_gt.txt for NNNN = 0000, 0001, ... (contiguous; every
 /// pair needs all three files) and labels overlap by radius `eta`. Shape names are the stems.
 /// Throws std::runtime_error naming the file (and line) at the first problem.

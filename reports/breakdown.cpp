@@ -23,13 +23,16 @@ Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptio
     for (const auto& m : o.metrics) {
         const int d = FindMetric(m).decimals;
         t.columns.push_back({m + ".mean", m + " mean", CellSource::kMeasured, Better::kLower, d});
+        // Compact: the mean with its CI; median and std in the full table.
         t.columns.push_back(
             {m + ".median", m + " median", CellSource::kMeasured, Better::kLower, d});
+        t.columns.back().compact = false;
         t.columns.push_back({m + ".std", m + " std", CellSource::kMeasured, Better::kNone, d});
+        t.columns.back().compact = false;
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
-        TableRow row{method, {MeasuredCell(static_cast<double>(group.size()), group.size())}};
+        RowCells cells = {{"pairs", MeasuredCell(static_cast<double>(group.size()), group.size())}};
         for (const auto& m : o.metrics) {
             const MetricField& metric = FindMetric(m);
             std::vector<double> v;
@@ -43,11 +46,11 @@ Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptio
                 mean.ci_lo = ci.lo;
                 mean.ci_hi = ci.hi;
             }
-            row.cells.push_back(mean);
-            row.cells.push_back(MeasuredCell(SampleMedian(v), v.size()));
-            row.cells.push_back(MeasuredCell(SampleStd(v), v.size()));
+            cells.emplace_back(m + ".mean", mean);
+            cells.emplace_back(m + ".median", MeasuredCell(SampleMedian(v), v.size()));
+            cells.emplace_back(m + ".std", MeasuredCell(SampleStd(v), v.size()));
         }
-        t.rows.push_back(row);
+        t.AddRow(method, cells);
     }
     return t;
 }
@@ -74,12 +77,13 @@ Table StatusTable(const std::vector<ResultRow>& rows) {
                 ++null_metrics;
             }
         }
-        TableRow row{method, {}};
+        RowCells cells;
         for (const auto& s : statuses) {
-            row.cells.push_back(MeasuredCell(static_cast<double>(count[s]), group.size()));
+            cells.emplace_back(s, MeasuredCell(static_cast<double>(count[s]), group.size()));
         }
-        row.cells.push_back(MeasuredCell(static_cast<double>(null_metrics), group.size()));
-        t.rows.push_back(row);
+        cells.emplace_back("null_metrics",
+                           MeasuredCell(static_cast<double>(null_metrics), group.size()));
+        t.AddRow(method, cells);
     }
     return t;
 }
@@ -93,23 +97,24 @@ Table RecallTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o)
     for (const auto& [r, tt] : o.recall) {
         t.columns.push_back({fmt::format("recall@({:g},{:g})", r, tt),
                              fmt::format("@({:g}°, {:g})", r, tt), CellSource::kMeasured,
-                             Better::kHigher, kFractionDecimals});
+                             Better::kHigher, kFractionDecimals, CiStyle::kValueInterval});
     }
     for (const auto& method : MethodOrder(rows)) {
         const auto group = RowsOf(rows, method);
-        TableRow row{method, {MeasuredCell(static_cast<double>(group.size()), group.size())}};
+        RowCells cells = {{"pairs", MeasuredCell(static_cast<double>(group.size()), group.size())}};
         for (const auto& [r, tt] : o.recall) {
             std::size_t hit = 0;
             for (const ResultRow* x : group) {
                 // A NaN (null) metric compares false: a miss.
                 if (x->metrics.mae_r < r && x->metrics.mae_t < tt) ++hit;
             }
-            row.cells.push_back(MeasuredCell(
-                group.empty() ? std::nan("")
-                              : static_cast<double>(hit) / static_cast<double>(group.size()),
-                group.size()));
+            const BootstrapCi w = WilsonInterval(hit, group.size());  // NaN when no pairs
+            Cell cell = MeasuredCell(w.mean, group.size());
+            cell.ci_lo = w.lo;
+            cell.ci_hi = w.hi;
+            cells.emplace_back(fmt::format("recall@({:g},{:g})", r, tt), cell);
         }
-        t.rows.push_back(row);
+        t.AddRow(method, cells);
     }
     return t;
 }
@@ -130,17 +135,24 @@ void AddMeanRows(Table& t, const std::vector<ResultRow>& rows, const BreakdownOp
             if (!column) continue;
             if (const auto x = metric.Of(r->metrics)) cells[*column].push_back(*x);
         }
-        TableRow row{method, {}};
+        RowCells row;
         for (std::size_t c = 0; c < cells.size(); ++c) {
             Cell cell = MeasuredCell(SampleMean(cells[c]), cells[c].size());
+            if (cells[c].size() >= 2) {
+                const BootstrapCi ci =
+                    BootstrapMean(cells[c], o.bootstrap_samples, o.seed,
+                                  StreamId(method + "/" + o.key_metric + "/" + t.columns[c].key));
+                cell.ci_lo = ci.lo;
+                cell.ci_hi = ci.hi;
+            }
             // The pairs behind each mean, shown in the cell: bins and categories are uneven.
             if (!cells[c].empty()) {
-                cell.text = fmt::format("{:.{}f} (n={})", cell.value, t.columns[c].decimals,
-                                        cells[c].size());
+                const std::string number = CellText(cell, t.columns[c], " ± ");
+                cell.text = fmt::format("{} (n={})", number, cells[c].size());
             }
-            row.cells.push_back(cell);
+            row.emplace_back(t.columns[c].key, cell);
         }
-        t.rows.push_back(row);
+        t.AddRow(method, row);
     }
 }
 

@@ -43,11 +43,37 @@ std::string Escape(const std::string& s) {
 
 std::string Colour(std::size_t i) { return kPalette[i % kPalette.size()]; }
 
+/// Which of the four dash patterns / marker shapes method i gets: i mod 4, shifted by one for
+/// each round of the palette, so no two of the first 48 methods share colour and pattern.
+std::size_t Variant(std::size_t i) { return (i + i / kPalette.size()) % 4; }
+
 /// Dash pattern of curve i (solid, dashed, dotted, dash-dot), so curves differ by more than
 /// colour (grey-scale print, colour-blind readers).
 std::string Dash(std::size_t i) {
     static const char* kDashes[] = {"", "7 3", "2 2", "9 3 2 3"};
-    return kDashes[i % 4];
+    return kDashes[Variant(i)];
+}
+
+/// Marker of method i centred at (x, y) with radius r: circle, square, triangle or diamond.
+std::string Marker(std::size_t i, double x, double y, double r, const std::string& extra = "") {
+    const std::string fill = "fill=\"" + Colour(i) + "\"" + extra;
+    switch (Variant(i)) {
+        case 0:
+            return fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{:.1f}\" {}/>", x, y, r,
+                               fill);
+        case 1:
+            return fmt::format(
+                "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" {}/>", x - r,
+                y - r, 2 * r, 2 * r, fill);
+        case 2:
+            return fmt::format("<path d=\"M{:.1f} {:.1f}L{:.1f} {:.1f}L{:.1f} {:.1f}Z\" {}/>", x,
+                               y - 1.2 * r, x + 1.1 * r, y + 0.8 * r, x - 1.1 * r, y + 0.8 * r,
+                               fill);
+        default:
+            return fmt::format(
+                "<path d=\"M{:.1f} {:.1f}L{:.1f} {:.1f}L{:.1f} {:.1f}L{:.1f} {:.1f}Z\" {}/>", x,
+                y - 1.3 * r, x + 1.3 * r, y, x, y + 1.3 * r, x - 1.3 * r, y, fill);
+    }
 }
 
 }  // namespace
@@ -86,7 +112,14 @@ namespace {
 struct Plot {
     double x0, x1, y0, y1;
     bool log_x = false;
-    int w = 520, h = 340, left = 56, right = 130, top = 20, bottom = 44;
+    int w = 540, h = 340, left = 56, right = 150, top = 20, bottom = 44;
+
+    /// A frame whose legend has room for `entries` lines (14 px each).
+    static Plot For(double x0, double x1, double y0, double y1, std::size_t entries) {
+        Plot p{x0, x1, y0, y1};
+        p.h = std::max(p.h, p.top + 14 * static_cast<int>(entries) + p.bottom);
+        return p;
+    }
 
     double X(double x) const {
         const double a = log_x ? std::log10(x0) : x0, b = log_x ? std::log10(x1) : x1;
@@ -107,7 +140,7 @@ struct Plot {
         for (const double xv : NiceTicks(x0, x1, log_x)) {
             s += fmt::format(
                 "<text x=\"{:.1f}\" y=\"{}\" font-size=\"11\" text-anchor=\"middle\">{:g}</text>",
-                X(xv), h - bottom + 15, xv);
+                X(xv), h - bottom + 19, xv);  // below the y axis's lowest label
         }
         for (const double yv : NiceTicks(y0, y1, false)) {
             s += fmt::format(
@@ -136,8 +169,7 @@ struct Plot {
                     "stroke-width=\"1.6\" stroke-dasharray=\"{}\"/>",
                     w - right + 4, y - 3, w - right + 20, y - 3, Colour(i), Dash(i));
             } else {
-                s += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"10\" height=\"10\" fill=\"{}\"/>",
-                                 w - right + 10, y - 8, Colour(i));
+                s += Marker(i, w - right + 14, y - 3, 4.0);
             }
             s += fmt::format("<text x=\"{}\" y=\"{}\" font-size=\"11\">{}</text>", w - right + 24,
                              y + 1, Escape(names[i]));
@@ -162,29 +194,26 @@ std::vector<double> MaeROf(const std::vector<ResultRow>& rows, const std::string
 
 }  // namespace
 
-std::string TableToHtml(const Table& t) {
+std::string TableToHtml(const Table& t, TableForm form) {
     std::string s = t.title.empty() ? "" : "<h3>" + Escape(t.title) + "</h3>\n";
     if (!t.caption.empty()) s += "<p class=\"cap\">" + Escape(t.caption) + "</p>\n";
+    for (const auto& src : DataSources(t)) {
+        s += "<p class=\"src\">Data source: " + Escape(src) + "</p>\n";
+    }
+    const ShownTable shown = ShowTable(t, form, " ± ");
     // Wide tables scroll inside their own box instead of widening the page.
     s += "<div class=\"tw\"><table><tr><th>" + Escape(t.row_header) + "</th>";
-    for (const auto& c : t.columns) {
-        if (!c.shown) continue;
-        s += std::string(c.source == CellSource::kPaper ? "<th class=\"paper\">" : "<th>") +
-             Escape(c.header) + "</th>";
+    for (const auto& c : shown.columns) {
+        s += std::string(c.paper ? "<th class=\"paper\">" : "<th>") + Escape(c.header) + "</th>";
     }
     s += "</tr>\n";
-    std::vector<int> best(t.columns.size());
-    for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
-    for (std::size_t r = 0; r < t.rows.size(); ++r) {
-        s += "<tr><td>" + Escape(t.rows[r].label) + "</td>";
-        for (std::size_t c = 0; c < t.columns.size(); ++c) {
-            if (!t.columns[c].shown) continue;
-            std::string text = CellText(t.rows[r].cells[c], t.columns[c], " ± ");
-            text = Escape(text);
-            if (best[c] == static_cast<int>(r)) text = "<b>" + text + "</b>";
-            s += std::string(t.columns[c].source == CellSource::kPaper ? "<td class=\"paper\">"
-                                                                       : "<td>") +
-                 text + "</td>";
+    for (std::size_t r = 0; r < shown.labels.size(); ++r) {
+        s += "<tr><td>" + Escape(shown.labels[r]) + "</td>";
+        for (std::size_t c = 0; c < shown.columns.size(); ++c) {
+            std::string text = Escape(shown.cells[r][c]);
+            if (shown.best[r][c]) text = "<b>" + text + "</b>";
+            s += std::string(shown.columns[c].paper ? "<td class=\"paper\">" : "<td>") + text +
+                 "</td>";
         }
         s += "</tr>\n";
     }
@@ -194,8 +223,8 @@ std::string TableToHtml(const Table& t) {
 }
 
 std::string ErrorCdfSvg(const std::vector<ResultRow>& rows, double max_deg) {
-    Plot p{0.0, max_deg, 0.0, 1.0};
     const auto methods = MethodOrder(rows);
+    const Plot p = Plot::For(0.0, max_deg, 0.0, 1.0, methods.size());
     std::string s = p.Open("MAE(R) threshold [deg]", "fraction of pairs below");
     for (std::size_t i = 0; i < methods.size(); ++i) {
         std::vector<double> v = MaeROf(rows, methods[i]);
@@ -223,7 +252,7 @@ std::string ErrorVsOverlapSvg(const std::vector<ResultRow>& rows) {
     for (const auto& r : rows) {
         if (std::isfinite(r.metrics.mae_r)) ymax = std::max(ymax, r.metrics.mae_r);
     }
-    Plot p{0.0, 1.0, 0.0, ymax * 1.05};
+    const Plot p = Plot::For(0.0, 1.0, 0.0, ymax * 1.05, methods.size());
     std::string s = p.Open("measured overlap, min(source, target)", "MAE(R) [deg]");
     std::size_t drawn = 0;
     for (std::size_t i = 0; i < methods.size(); ++i) {
@@ -231,10 +260,7 @@ std::string ErrorVsOverlapSvg(const std::vector<ResultRow>& rows) {
             const auto overlap = MeasuredOverlap(*r);
             if (!overlap || !std::isfinite(r->metrics.mae_r)) continue;
             ++drawn;
-            s += fmt::format(
-                "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"2.2\" fill=\"{}\" "
-                "fill-opacity=\"0.6\"/>",
-                p.X(*overlap), p.Y(r->metrics.mae_r), Colour(i));
+            s += Marker(i, p.X(*overlap), p.Y(r->metrics.mae_r), 2.4, " fill-opacity=\"0.6\"");
         }
     }
     if (drawn == 0) {
@@ -265,22 +291,22 @@ std::string TimeVsAccuracySvg(const std::vector<ResultRow>& rows) {
         if (std::isfinite(e[i])) emax = std::max(emax, e[i]);
     }
     if (!(tmax > 0.0)) tmin = 1e-4, tmax = 1.0;
-    Plot p{std::pow(10.0, std::floor(std::log10(tmin))),
-           std::pow(10.0, std::ceil(std::log10(tmax)) + (tmin == tmax ? 1 : 0)), 0.0, emax * 1.1};
+    Plot p = Plot::For(std::pow(10.0, std::floor(std::log10(tmin))),
+                       std::pow(10.0, std::ceil(std::log10(tmax)) + (tmin == tmax ? 1 : 0)), 0.0,
+                       emax * 1.1, methods.size());
     p.log_x = true;
     std::string s = p.Open("median seconds per pair (log)", "mean MAE(R) [deg]");
+    // Each method a marker of its own colour and shape, named in the legend: labels beside
+    // the points overlapped wherever methods are close in time and accuracy.
     for (std::size_t i = 0; i < methods.size(); ++i) {
         if (!std::isfinite(t[i]) || !std::isfinite(e[i])) continue;
-        s += fmt::format(
-            "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4\" fill=\"{}\"/><text x=\"{:.1f}\" "
-            "y=\"{:.1f}\" font-size=\"11\">{}</text>",
-            p.X(t[i]), p.Y(e[i]), Colour(i), p.X(t[i]) + 6, p.Y(e[i]) - 4, Escape(methods[i]));
+        s += Marker(i, p.X(t[i]), p.Y(e[i]), 4.5, " fill-opacity=\"0.85\"");
     }
     return s + p.Legend(methods) + "</svg>";
 }
 
 std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int max_points) {
-    const int size = 220;
+    const int size = 360;
     PointCloud aligned(pair.source.rows(), 3);
     for (Eigen::Index i = 0; i < pair.source.rows(); ++i) {
         aligned.row(i) = (estimate.topLeftCorner<3, 3>() * pair.source.row(i).transpose() +
@@ -306,7 +332,7 @@ std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int m
         std::string d;
         for (Eigen::Index i = 0; i < c.rows(); i += step) {
             // Tiny squares as one path: far smaller than one <circle> per point.
-            d += fmt::format("M{:.0f} {:.0f}h2v2h-2z", px(c(i, 0)), size - px(c(i, 1)));
+            d += fmt::format("M{:.0f} {:.0f}h3v3h-3z", px(c(i, 0)), size - px(c(i, 1)));
         }
         s += fmt::format("<path d=\"{}\" fill=\"{}\"/>", d, colour);
     };
@@ -327,7 +353,8 @@ std::string RenderHtmlReport(const HtmlReportOptions& o) {
         ".tw{max-width:100%;overflow-x:auto}"
         "td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}"
         "td:first-child,th:first-child{text-align:left}th{background:#f2f2f2}"
-        ".paper{color:#777}.cap,.note{font-size:12px;color:#444;max-width:1100px}"
+        ".src{font-weight:bold;color:#8a4b00;margin:4px "
+        "0}.paper{color:#777}.cap,.note{font-size:12px;color:#444;max-width:1100px}"
         ".plots{display:flex;flex-wrap:wrap;gap:12px}.gal{display:flex;flex-wrap:wrap;gap:8px}"
         "figure{margin:0;font-size:11px}h2{border-bottom:2px solid #ddd;margin-top:32px}"
         "</style></head><body>\n<h1>" +

@@ -28,7 +28,7 @@ struct HtmlReportOptions {
     std::vector<Table> tables;       ///< the paper's tables, shown first
     std::vector<HtmlSection> sections;
     int gallery_per_method = 2;  ///< worst pairs drawn per method
-    int gallery_points = 150;    ///< points drawn per cloud (evenly subsampled)
+    int gallery_points = 400;    ///< points drawn per cloud (evenly subsampled)
     double cdf_max_deg = 45.0;   ///< x range of the error CDF
 };
 
@@ -36,7 +36,7 @@ struct HtmlReportOptions {
 std::string RenderHtmlReport(const HtmlReportOptions& options);
 
 /// A table as an HTML <table> (best cell per column bold, paper cells in grey).
-std::string TableToHtml(const Table& t);
+std::string TableToHtml(const Table& t, TableForm form = TableForm::kCompact);
 
 /// Axis ticks at round numbers: linear, multiples of a step of 1, 2 or 5 times a power of ten
 /// (about four intervals) within [lo, hi]; log, the powers of ten within it (with their 2x and

@@ -308,7 +308,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
     for (const auto& [method, why] : o.unavailable)
         reasons[PaperRowName(method).value_or(method)] = why;
     for (const auto& label : order) {
-        TableRow row{label, {}};
+        RowCells cells;
         for (const auto& g : spec.groups) {
             const ResultSet* set = nullptr;
             for (const auto& s : sets) {
@@ -324,15 +324,16 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
                 } else if (reasons.count(label)) {
                     measured.text = reasons[label];
                 }
-                row.cells.push_back(measured);
+                const std::string key = g.empty() ? m : g + "." + m;
+                cells.emplace_back(key, measured);
                 if (!published) continue;
                 Cell p;
                 p.source = CellSource::kPaper;
                 p.value = PaperCell(paper, spec.id, label, PaperGroupOf(spec, g), m);
-                row.cells.push_back(p);
+                cells.emplace_back("paper:" + key, p);
             }
         }
-        t.rows.push_back(row);
+        t.AddRow(label, cells);
     }
     DescribeSides(spec, pt, published, sets, &t);
     return t;
@@ -358,6 +359,15 @@ double ExtraNumber(const ResultRow& row, const char* key) {
 /// Mean of `v`, NaN (a blank cell) when empty.
 double MeanOrBlank(const std::vector<double>& v) {
     return v.empty() ? std::nan("") : SampleMean(v);
+}
+
+/// A mean of per-call times with its 95% bootstrap CI (stream: the row label and quantity).
+void SetMeanWithCi(const std::vector<double>& v, const std::string& stream, Cell* c) {
+    c->value = MeanOrBlank(v);
+    if (v.size() < 2) return;
+    const BootstrapCi ci = BootstrapMean(v, 1000, kDefaultBootstrapSeed, StreamId(stream));
+    c->ci_lo = ci.lo;
+    c->ci_hi = ci.hi;
 }
 
 /// The timing rows of Tab. 6: by method, or by the set's label (a variant such as
@@ -420,10 +430,10 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
     for (const auto& label : timings.order) {
         const TimingRow& m = timings.by_label[label];
         Cell mean, median, network, gmac, floor, ratio, points, th, p;
-        mean.value = MeanOrBlank(m.cpu);
+        SetMeanWithCi(m.cpu, label + "/cpu_ms", &mean);
         median.value = m.cpu.empty() ? std::nan("") : SampleMedian(m.cpu);
         mean.pairs = median.pairs = m.cpu.size();
-        network.value = MeanOrBlank(m.network);
+        SetMeanWithCi(m.network, label + "/network_ms", &network);
         gmac.value = MeanOrBlank(m.gmac);
         floor.value = MeanOrBlank(m.floor);
         // CPU time of the network over the time its MACs take at the GEMM rate: the mean of
@@ -440,7 +450,15 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         } else if (name == "OGMM" && rows.contains("OGMM_clustered_attention")) {
             p.value = 1e3 * rows["OGMM_clustered_attention"].at(0).get<double>();
         }
-        t.rows.push_back({label, {mean, median, network, gmac, floor, ratio, points, th, p}});
+        t.AddRow(label, {{"cpu_ms_mean", mean},
+                         {"cpu_ms_median", median},
+                         {"network_ms", network},
+                         {"gmac", gmac},
+                         {"floor_ms", floor},
+                         {"x_floor", ratio},
+                         {"points", points},
+                         {"threads", th},
+                         {"paper:ms", p}});
     }
     // One provenance and floor note per pair file (a variant runs on the pairs of the rows).
     std::vector<ResultSet> files;

@@ -104,12 +104,21 @@ Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
     for (const auto& s : ours.methods) {
         const auto row = PaperRowName(s.method);
         const auto mine = [&](double v) { return MeasuredCell(v, s.pairs); };
-        TableRow r{
-            s.method,
-            {mine(static_cast<double>(s.pairs)), mine(s.mae_r.mean), paper_cell(row, "mae_r"),
-             mine(s.mae_t.mean), paper_cell(row, "mae_t"), mine(s.ccd.mean), paper_cell(row, "ccd"),
-             mine(s.median_seconds), paper_cell(row, "seconds")}};
-        t.rows.push_back(std::move(r));
+        const auto mean = [&](const Estimate& e) {  // with its bootstrap CI
+            Cell c = mine(e.mean);
+            c.ci_lo = e.lo;
+            c.ci_hi = e.hi;
+            return c;
+        };
+        t.AddRow(s.method, {{"pairs", mine(static_cast<double>(s.pairs))},
+                            {"mae_r", mean(s.mae_r)},
+                            {"paper:mae_r", paper_cell(row, "mae_r")},
+                            {"mae_t", mean(s.mae_t)},
+                            {"paper:mae_t", paper_cell(row, "mae_t")},
+                            {"ccd", mean(s.ccd)},
+                            {"paper:ccd", paper_cell(row, "ccd")},
+                            {"median_seconds", mine(s.median_seconds)},
+                            {"paper:seconds", paper_cell(row, "seconds")}});
     }
     t.notes.push_back("Ours: " + DescribeTable(ours) +
                       ". Paper: ModelNet40 / 7Scenes / ICL-NUIM as published (their machine, their "

@@ -114,15 +114,20 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
     s.ccd = boot("ccd");
     s.rre = boot("rre");
     s.rte = boot("rte");
-    s.rmse_r = std::sqrt(SampleMean(column("mse_r")));
-    s.rmse_t = std::sqrt(SampleMean(column("mse_t")));
-    s.chamfer = SampleMean(column("chamfer"));
-    const double n = static_cast<double>(group.size());
-    s.recall = static_cast<double>(recalled) / n;
-    s.success = static_cast<double>(succeeded) / n;
-    s.recall_3dmatch = static_cast<double>(recalled_3dm) / n;
+    s.chamfer = boot("chamfer");
+    // sqrt is increasing, so the root of the mean square's percentile interval is the root
+    // mean square's.
+    for (auto [rmse, mse] : {std::pair{&s.rmse_r, "mse_r"}, std::pair{&s.rmse_t, "mse_t"}}) {
+        const Estimate e = boot(mse);
+        *rmse = {std::sqrt(e.mean), std::sqrt(e.lo), std::sqrt(e.hi)};
+    }
+    const std::size_t n = group.size();
+    s.recall = WilsonInterval(recalled, n);
+    s.success = WilsonInterval(succeeded, n);
+    s.recall_3dmatch = WilsonInterval(recalled_3dm, n);
     s.median_seconds = SampleMedian(secs);
-    s.mean_seconds = SampleMean(secs);
+    s.mean_seconds =
+        BootstrapMean(secs, o.bootstrap_samples, kDefaultBootstrapSeed, StreamId(id + "seconds"));
     return s;
 }
 
@@ -272,9 +277,18 @@ Column Col(const std::string& key, const std::string& header, int decimals,
     return {key, header, CellSource::kMeasured, Better::kNone, decimals, ci};
 }
 
-/// A column of a mean over pairs of the metric `name` (rmse_r: of mse_r), in its format.
-Column MetricCol(const std::string& key, const std::string& name, const std::string& header) {
-    return Col(key, header, FindMetric(name).decimals);
+/// A column of a mean over pairs of the metric `name` (rmse_r: of mse_r), in its format, shown
+/// as mean ± the half-width of its CI; `compact` false: in the full table only.
+Column MetricCol(const std::string& key, const std::string& name, const std::string& header,
+                 bool compact = true) {
+    Column c = Col(key, header, FindMetric(name).decimals, CiStyle::kPlusMinus);
+    c.compact = compact;
+    return c;
+}
+
+/// A rate's column: the rate and its Wilson interval.
+Column RateCol(const std::string& key, const std::string& header) {
+    return Col(key, header, kFractionDecimals, CiStyle::kValueInterval);
 }
 
 }  // namespace
@@ -283,24 +297,25 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     Table t;
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
     t.caption = "Data: " + DescribeTable(rt);
+    // Every number with its 95% CI: means by bootstrap, rates by Wilson (docs/reports.md).
     t.columns = {
         Col("pairs", "pairs", 0), Col("failed", "failed", 0),
         MetricCol("mae_r", "mae_r", "mae_r [deg]"),
         // The interval's bounds at 3 decimals, as the documented table has always shown them.
         Col("mae_r.ci95", "mae_r 95% CI", 3, CiStyle::kInterval),
         MetricCol("mae_t", "mae_t", "mae_t"), MetricCol("ccd", "ccd", "ccd"),
-        MetricCol("rre", "rre", "rre [deg]"), MetricCol("rte", "rte", "rte"),
-        MetricCol("rmse_r", "mse_r", "rmse_r"), MetricCol("rmse_t", "mse_t", "rmse_t"),
-        Col("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t),
-            kFractionDecimals),
-        Col("success", fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte),
-            kFractionDecimals)};
-    if (o.recall_3dmatch) {
-        t.columns.push_back(Col("recall_3dmatch", "3DMatch recall", kFractionDecimals));
-    }
+        MetricCol("rre", "rre", "rre [deg]", false), MetricCol("rte", "rte", "rte", false),
+        MetricCol("rmse_r", "mse_r", "rmse_r", false),
+        MetricCol("rmse_t", "mse_t", "rmse_t", false),
+        RateCol("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t)),
+        RateCol("success",
+                fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte))};
+    if (o.recall_3dmatch) t.columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
     t.columns.push_back(Col("median_seconds", "median s", kSecondsDecimals));
-    t.columns.push_back(Col("mean_seconds", "mean s", kSecondsDecimals));
-    // Data columns, in CSV and JSON only.
+    t.columns.push_back(Col("mean_seconds", "mean s", kSecondsDecimals, CiStyle::kPlusMinus));
+    t.columns.back().compact = false;
+    // Data columns, in CSV and JSON only (the interval column: mae_r shows its CI itself).
+    t.columns[3].shown = false;
     t.columns.push_back(MetricCol("chamfer", "chamfer", "chamfer"));
     t.columns.push_back(Col("threads", "threads", 0));
     t.columns.push_back(Col("params", "params", 0));
@@ -308,21 +323,28 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
         t.columns[c].shown = false;
     for (const auto& s : rt.methods) {
         const std::size_t n = s.pairs;
-        TableRow row{s.label,
-                     {MeasuredCell(static_cast<double>(n), n),
-                      MeasuredCell(static_cast<double>(s.failed), n), Mean(s.mae_r, n),
-                      Mean(s.mae_r, n), Mean(s.mae_t, n), Mean(s.ccd, n), Mean(s.rre, n),
-                      Mean(s.rte, n), MeasuredCell(s.rmse_r, n), MeasuredCell(s.rmse_t, n),
-                      MeasuredCell(s.recall, n), MeasuredCell(s.success, n)}};
-        if (o.recall_3dmatch) row.cells.push_back(MeasuredCell(s.recall_3dmatch, n));
-        for (double v : {s.median_seconds, s.mean_seconds, s.chamfer, double(s.threads)}) {
-            row.cells.push_back(MeasuredCell(v, n));
-        }
+        RowCells cells = {{"pairs", MeasuredCell(static_cast<double>(n), n)},
+                          {"failed", MeasuredCell(static_cast<double>(s.failed), n)},
+                          {"mae_r", Mean(s.mae_r, n)},
+                          {"mae_r.ci95", Mean(s.mae_r, n)},
+                          {"mae_t", Mean(s.mae_t, n)},
+                          {"ccd", Mean(s.ccd, n)},
+                          {"rre", Mean(s.rre, n)},
+                          {"rte", Mean(s.rte, n)},
+                          {"rmse_r", Mean(s.rmse_r, n)},
+                          {"rmse_t", Mean(s.rmse_t, n)},
+                          {"recall", Mean(s.recall, n)},
+                          {"success", Mean(s.success, n)},
+                          {"median_seconds", MeasuredCell(s.median_seconds, n)},
+                          {"mean_seconds", Mean(s.mean_seconds, n)},
+                          {"chamfer", Mean(s.chamfer, n)},
+                          {"threads", MeasuredCell(double(s.threads), n)}};
+        if (o.recall_3dmatch) cells.emplace_back("recall_3dmatch", Mean(s.recall_3dmatch, n));
         Cell params;
         params.source = CellSource::kLabel;
         params.text = s.params.dump();
-        row.cells.push_back(params);
-        t.rows.push_back(std::move(row));
+        cells.emplace_back("params", params);
+        t.AddRow(s.label, cells);
     }
     Provenance p;
     p.pairs_file = rt.data.pairs_file;

@@ -47,12 +47,16 @@ struct MethodSummary {
     nlohmann::json params = nlohmann::json::object();
     std::size_t pairs = 0;
     std::size_t failed = 0;  ///< status != ok or a null metric (such rows count as not recalled)
-    Estimate mae_r, mae_t, ccd, rre, rte;
-    double rmse_r = 0.0, rmse_t = 0.0, chamfer = 0.0;
-    double recall = 0.0;          ///< recall@(recall_r_deg, recall_t)
-    double success = 0.0;         ///< rre/rte based
-    double recall_3dmatch = 0.0;  ///< 3DMatch-style (only with ReportOptions::recall_3dmatch)
-    double median_seconds = 0.0, mean_seconds = 0.0;
+    /// Means over the pairs with finite metrics, each with its bootstrap CI.
+    Estimate mae_r, mae_t, ccd, rre, rte, chamfer;
+    /// sqrt of the mean mse_r / mse_t; the CI is the square root of the mean's bootstrap CI.
+    Estimate rmse_r, rmse_t;
+    /// Rates over all pairs (failures count as misses), each with its Wilson interval.
+    Estimate recall;          ///< recall@(recall_r_deg, recall_t)
+    Estimate success;         ///< rre/rte based
+    Estimate recall_3dmatch;  ///< 3DMatch-style (only with ReportOptions::recall_3dmatch)
+    double median_seconds = 0.0;
+    Estimate mean_seconds;  ///< seconds per call over all pairs, with its bootstrap CI
     int threads = 1;
 };
 

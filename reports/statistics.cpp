@@ -62,6 +62,24 @@ BootstrapCi BootstrapMean(const std::vector<double>& v, int samples, std::uint64
     return e;
 }
 
+BootstrapCi WilsonInterval(std::size_t k, std::size_t n) {
+    BootstrapCi e;
+    if (n == 0) {
+        e.mean = e.lo = e.hi = std::nan("");
+        return e;
+    }
+    const double nn = static_cast<double>(n);
+    const double p = static_cast<double>(k) / nn;
+    const double z2 = kZ95 * kZ95;
+    const double centre = (p + z2 / (2.0 * nn)) / (1.0 + z2 / nn);
+    const double half =
+        kZ95 / (1.0 + z2 / nn) * std::sqrt(p * (1.0 - p) / nn + z2 / (4.0 * nn * nn));
+    e.mean = p;
+    e.lo = std::max(0.0, centre - half);
+    e.hi = std::min(1.0, centre + half);
+    return e;
+}
+
 std::uint64_t StreamId(const std::string& label) {
     std::uint64_t h = 1469598103934665603ULL;
     for (unsigned char c : label) {

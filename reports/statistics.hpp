@@ -45,6 +45,14 @@ double NearestRankQuantile(const std::vector<double>& sorted, double q);
 BootstrapCi BootstrapMean(const std::vector<double>& v, int samples, std::uint64_t seed,
                           std::uint64_t stream, double level = 0.95);
 
+/// The two-sided 95% normal quantile, Phi^-1(0.975) (scipy.stats.norm.ppf(0.975)).
+constexpr double kZ95 = 1.959963984540054;
+
+/// The proportion k / n with its 95% Wilson score interval (Wilson 1927), the CI of every
+/// rate in the reports (recall, success): mean k / n, [lo, hi] clamped to [0, 1], as
+/// scipy.stats.binomtest(k, n).proportion_ci(method="wilson"). NaN everywhere when n = 0.
+BootstrapCi WilsonInterval(std::size_t k, std::size_t n);
+
 /// A stable 64-bit stream id for a label such as "cpd/mae_r" (FNV-1a), independent of order.
 std::uint64_t StreamId(const std::string& label);
 

@@ -2,6 +2,7 @@
 // Report tables as data: rows of cells with the provenance of what was measured, written to
 // Markdown, LaTeX (booktabs), CSV and JSON by reports/table_writers.cpp.
 #include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
@@ -37,10 +38,18 @@ inline Cell MeasuredCell(double value, std::size_t pairs) {
 
 /// How a column shows its cells' CIs in Markdown, LaTeX and HTML (CSV and JSON carry them all).
 enum class CiStyle {
-    kPlusMinus,  ///< "mean ± half-width"
-    kInterval,   ///< "[lo, hi]" instead of the value (a left-aligned column)
-    kHidden,     ///< the value only
+    kPlusMinus,      ///< "mean ± half-width"
+    kInterval,       ///< "[lo, hi]" instead of the value (a left-aligned column)
+    kHidden,         ///< the value only
+    kValueInterval,  ///< "value [lo, hi]": an interval not centred on the value (a rate's Wilson)
 };
+
+/// Which Markdown / HTML table a writer shows. Compact (the default): the columns marked
+/// `compact`, each number rounded to its CI (the half-width to two significant digits, the
+/// value to the same place; a rate to 2 decimals), Markdown's "mean±half-width" without
+/// spaces, and a paper column merged into the measured one before it as "measured (paper)".
+/// Full: every shown column at its decimals.
+enum class TableForm { kCompact, kFull };
 
 /// Which way is better, for bolding the best cell of a column.
 enum class Better { kNone, kLower, kHigher };
@@ -52,7 +61,8 @@ struct Column {
     Better better = Better::kLower;
     int decimals = 4;  ///< one per quantity: reports/row_access.hpp
     CiStyle ci = CiStyle::kPlusMinus;
-    bool shown = true;  ///< false: a data column, in CSV and JSON only (e.g. a method's params)
+    bool shown = true;    ///< false: a data column, in CSV and JSON only (e.g. a method's params)
+    bool compact = true;  ///< false: shown in the full table only (TableForm::kFull)
 };
 
 /// Where a table's measured numbers came from: one entry per result set used.
@@ -73,10 +83,28 @@ struct Provenance {
     double noise_sigma = std::nan("");  ///< jitter sigma applied (0: noise-free; NaN: unknown)
 };
 
-struct TableRow {
-    std::string label;        ///< method (or parameter value for the supplementary tables)
-    std::vector<Cell> cells;  ///< one per column
+struct Table;
+
+/// One row of a Table: its label and a cell per column, keyed by the column's key, so a cell
+/// cannot land under another column's header. Cells are set through Table::AddRow, which
+/// refuses a key the table has no column for.
+class TableRow {
+public:
+    TableRow() = default;
+    explicit TableRow(std::string label_) : label(std::move(label_)) {}
+
+    std::string label;  ///< method (or parameter value for the supplementary tables)
+
+    /// The cell under the column with `key`; an empty cell ("-") when the row has none there.
+    const Cell& Get(const std::string& key) const;
+
+private:
+    friend struct Table;
+    std::map<std::string, Cell> cells_;
 };
+
+/// A row's cells as (column key, cell), in any order.
+using RowCells = std::vector<std::pair<std::string, Cell>>;
 
 struct Table {
     Table() = default;
@@ -91,14 +119,41 @@ struct Table {
     std::vector<TableRow> rows;
     std::vector<Provenance> provenance;
     std::vector<std::string> notes;  ///< extra lines printed under the table
+
+    /// Appends a row with its cells keyed by column key (columns without a cell show "-").
+    /// Throws std::logic_error naming the table, row and key for a key no column has, a key
+    /// given twice, or a table whose columns repeat a key.
+    TableRow& AddRow(std::string label, const RowCells& cells);
+
+    /// The index of the column with `key`; throws std::logic_error when there is none.
+    std::size_t ColumnIndex(const std::string& key) const;
 };
 
 /// A cell as the text writers show it: its text, else the number with `col.decimals` (and its
-/// CI as `col.ci` says, joined by `pm`), "-" when empty.
-std::string CellText(const Cell& cell, const Column& col, const char* pm);
+/// CI as `col.ci` says, joined by `pm`), "-" when empty. Compact: rounded to its CI instead.
+std::string CellText(const Cell& cell, const Column& col, const char* pm,
+                     TableForm form = TableForm::kFull);
+
+/// A table as the Markdown and HTML writers show it: one entry per shown column of `form`.
+struct ShownTable {
+    struct ShownColumn {
+        std::string header;
+        bool left = false;   ///< left-aligned (an interval column)
+        bool paper = false;  ///< the paper's numbers
+    };
+    std::vector<ShownColumn> columns;
+    std::vector<std::string> labels;              ///< one per row
+    std::vector<std::vector<std::string>> cells;  ///< [row][shown column], unescaped
+    std::vector<std::vector<bool>> best;          ///< [row][shown column]: bold it
+};
+ShownTable ShowTable(const Table& t, TableForm form, const char* pm);
+
+/// The distinct data-source notes of a table's provenance (Provenance::fallback, e.g. "embedded
+/// CGAL mesh corpus instead of ModelNet40"), which the writers show as a line of their own.
+std::vector<std::string> DataSources(const Table& t);
 
 /// Markdown: title, caption, pipe table (measured ± half-width), notes.
-std::string TableToMarkdown(const Table& t);
+std::string TableToMarkdown(const Table& t, TableForm form = TableForm::kCompact);
 
 /// LaTeX table environment with booktabs rules; the best measured cell of each column with a
 /// `better` direction is bold, CIs as "mean $\pm$ half-width"; caption escaped.
@@ -108,7 +163,8 @@ std::string TableToLatex(const Table& t);
 std::string TablesToCsv(const std::vector<Table>& tables);
 
 /// Each table's Markdown, one blank line between tables.
-std::string TablesToMarkdown(const std::vector<Table>& tables);
+std::string TablesToMarkdown(const std::vector<Table>& tables,
+                             TableForm form = TableForm::kCompact);
 
 /// JSON array with one object per (table, row, column) and structured provenance.
 nlohmann::json TablesToJson(const std::vector<Table>& tables);

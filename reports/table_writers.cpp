@@ -1,6 +1,9 @@
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/enum_names.hpp"
 #include "reports/table.hpp"
@@ -82,19 +85,115 @@ const std::vector<std::string> kCsvHeader = {
 
 }  // namespace
 
-std::string CellText(const Cell& c, const Column& col, const char* pm) {
+const Cell& TableRow::Get(const std::string& key) const {
+    static const Cell kEmpty;
+    const auto it = cells_.find(key);
+    return it == cells_.end() ? kEmpty : it->second;
+}
+
+std::size_t Table::ColumnIndex(const std::string& key) const {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        if (columns[c].key == key) return c;
+    }
+    throw std::logic_error(fmt::format("table '{}' has no column '{}'", id, key));
+}
+
+TableRow& Table::AddRow(std::string label, const RowCells& cells) {
+    std::set<std::string> keys;
+    for (const auto& c : columns) {
+        if (!keys.insert(c.key).second) {
+            throw std::logic_error(fmt::format("table '{}' has two columns '{}'", id, c.key));
+        }
+    }
+    TableRow row(std::move(label));
+    for (const auto& [key, cell] : cells) {
+        if (!keys.count(key)) {
+            throw std::logic_error(fmt::format("table '{}', row '{}': no column '{}' for its cell",
+                                               id, row.label, key));
+        }
+        if (!row.cells_.emplace(key, cell).second) {
+            throw std::logic_error(
+                fmt::format("table '{}', row '{}': two cells for column '{}'", id, row.label, key));
+        }
+    }
+    rows.push_back(std::move(row));
+    return rows.back();
+}
+
+namespace {
+
+/// Decimals of a compact cell: the CI's half-width to two significant digits, at most the
+/// column's decimals; the column's without a CI (or a zero-width one).
+int CompactDecimals(const Cell& c, const Column& col) {
+    // A rate (fraction of pairs) at percent resolution: its Wilson interval is wide anyway.
+    if (col.ci == CiStyle::kValueInterval) return std::min(2, col.decimals);
+    const double hw = c.HalfWidth();
+    if (!std::isfinite(hw) || hw <= 0.0) return col.decimals;
+    const int d = 1 - static_cast<int>(std::floor(std::log10(hw)));
+    return std::clamp(d, 0, col.decimals);
+}
+
+}  // namespace
+
+std::string CellText(const Cell& c, const Column& col, const char* pm, TableForm form) {
     if (!c.text.empty()) return c.text;
     if (!c.HasValue()) return "-";
     const bool ci = std::isfinite(c.ci_lo) && std::isfinite(c.ci_hi);
+    const int d = form == TableForm::kCompact ? CompactDecimals(c, col) : col.decimals;
     if (col.ci == CiStyle::kInterval) {
-        return ci ? fmt::format("[{:.{}f}, {:.{}f}]", c.ci_lo, col.decimals, c.ci_hi, col.decimals)
-                  : "-";
+        return ci ? fmt::format("[{:.{}f}, {:.{}f}]", c.ci_lo, d, c.ci_hi, d) : "-";
     }
-    std::string s = fmt::format("{:.{}f}", c.value, col.decimals);
-    if (ci && col.ci == CiStyle::kPlusMinus) {
-        s += fmt::format("{}{:.{}f}", pm, c.HalfWidth(), col.decimals);
+    if (form == TableForm::kCompact && col.source == CellSource::kPaper) {
+        return fmt::format("{}", c.value);  // as transcribed: shortest round-trip digits
+    }
+    std::string s = fmt::format("{:.{}f}", c.value, d);
+    if (ci && col.ci == CiStyle::kPlusMinus) s += fmt::format("{}{:.{}f}", pm, c.HalfWidth(), d);
+    if (ci && col.ci == CiStyle::kValueInterval) {
+        s += fmt::format(" [{:.{}f}, {:.{}f}]", c.ci_lo, d, c.ci_hi, d);
     }
     return s;
+}
+
+ShownTable ShowTable(const Table& t, TableForm form, const char* pm) {
+    const bool compact = form == TableForm::kCompact;
+    // Per shown column: the table's column and (compact) the paper column merged into it.
+    std::vector<std::pair<std::size_t, int>> shown;
+    for (std::size_t c = 0; c < t.columns.size(); ++c) {
+        const Column& col = t.columns[c];
+        if (!col.shown || (compact && !col.compact)) continue;
+        const bool merge = compact && col.source == CellSource::kPaper && !shown.empty() &&
+                           col.key == "paper:" + t.columns[shown.back().first].key;
+        if (merge) {
+            shown.back().second = static_cast<int>(c);
+        } else {
+            shown.emplace_back(c, -1);
+        }
+    }
+    ShownTable out;
+    for (const auto& [c, paper] : shown) {
+        const Column& col = t.columns[c];
+        out.columns.push_back({col.header + (paper >= 0 ? " (paper)" : ""),
+                               col.ci == CiStyle::kInterval, col.source == CellSource::kPaper});
+    }
+    std::vector<int> best(t.columns.size());
+    for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
+    for (std::size_t r = 0; r < t.rows.size(); ++r) {
+        out.labels.push_back(t.rows[r].label);
+        out.cells.emplace_back();
+        out.best.emplace_back();
+        for (const auto& [c, paper] : shown) {
+            const Column& col = t.columns[c];
+            std::string s = CellText(t.rows[r].Get(col.key), col, pm, form);
+            if (paper >= 0) {
+                const Column& pc = t.columns[static_cast<std::size_t>(paper)];
+                const Cell& p = t.rows[r].Get(pc.key);
+                if (p.HasValue() || !p.text.empty()) s += " (" + CellText(p, pc, pm, form) + ")";
+            }
+            out.cells.back().push_back(s);
+            out.best.back().push_back(best[c] == static_cast<int>(r));
+        }
+    }
+    return out;
 }
 
 int BestRow(const Table& t, std::size_t c) {
@@ -102,14 +201,14 @@ int BestRow(const Table& t, std::size_t c) {
     if (col.better == Better::kNone || col.source != CellSource::kMeasured) return -1;
     int best = -1;
     for (std::size_t r = 0; r < t.rows.size(); ++r) {
-        const Cell& cell = t.rows[r].cells.at(c);
+        const Cell& cell = t.rows[r].Get(col.key);
         if (!cell.HasValue() || !cell.text.empty()) continue;
         const double v = cell.value;
         if (best < 0) {
             best = static_cast<int>(r);
             continue;
         }
-        const double b = t.rows[static_cast<std::size_t>(best)].cells[c].value;
+        const double b = t.rows[static_cast<std::size_t>(best)].Get(col.key).value;
         if ((col.better == Better::kLower && v < b) || (col.better == Better::kHigher && v > b)) {
             best = static_cast<int>(r);
         }
@@ -117,26 +216,32 @@ int BestRow(const Table& t, std::size_t c) {
     return best;
 }
 
-std::string TableToMarkdown(const Table& t) {
+std::vector<std::string> DataSources(const Table& t) {
+    std::vector<std::string> out;
+    for (const auto& p : t.provenance) {
+        if (!p.fallback.empty() && std::find(out.begin(), out.end(), p.fallback) == out.end())
+            out.push_back(p.fallback);
+    }
+    return out;
+}
+
+std::string TableToMarkdown(const Table& t, TableForm form) {
     std::string out = t.title.empty() ? "" : "### " + t.title + "\n\n";
     if (!t.caption.empty()) out += t.caption + "\n\n";
+    for (const auto& src : DataSources(t)) out += "**Data source: " + src + "**\n\n";
+    // Compact: "1.2±0.3", the paper's way, two characters a cell narrower than " ± ".
+    const ShownTable s = ShowTable(t, form, form == TableForm::kCompact ? "±" : " ± ");
     out += "| " + t.row_header + " |";
     std::string rule = "|---|";
-    for (const auto& c : t.columns) {
-        if (!c.shown) continue;
+    for (const auto& c : s.columns) {
         out += " " + c.header + " |";
-        rule += c.ci == CiStyle::kInterval ? "---|" : "---:|";
+        rule += c.left ? "---|" : "---:|";
     }
     out += "\n" + rule + "\n";
-    std::vector<int> best(t.columns.size());
-    for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
-    for (std::size_t r = 0; r < t.rows.size(); ++r) {
-        out += "| " + t.rows[r].label + " |";
-        for (std::size_t c = 0; c < t.columns.size(); ++c) {
-            if (!t.columns[c].shown) continue;
-            std::string s = CellText(t.rows[r].cells[c], t.columns[c], " ± ");
-            if (best[c] == static_cast<int>(r)) s = "**" + s + "**";
-            out += " " + s + " |";
+    for (std::size_t r = 0; r < s.labels.size(); ++r) {
+        out += "| " + s.labels[r] + " |";
+        for (std::size_t c = 0; c < s.columns.size(); ++c) {
+            out += " " + (s.best[r][c] ? "**" + s.cells[r][c] + "**" : s.cells[r][c]) + " |";
         }
         out += "\n";
     }
@@ -156,7 +261,7 @@ std::string TableToLatex(const Table& t) {
         out += LatexEscape(t.rows[r].label);
         for (std::size_t c = 0; c < t.columns.size(); ++c) {
             if (!t.columns[c].shown) continue;
-            const Cell& cell = t.rows[r].cells[c];
+            const Cell& cell = t.rows[r].Get(t.columns[c].key);
             std::string s = cell.text.empty() ? CellText(cell, t.columns[c], " $\\pm$ ")
                                               : LatexEscape(cell.text);
             if (best[c] == static_cast<int>(r)) s = "\\textbf{" + s + "}";
@@ -172,10 +277,10 @@ std::string TableToLatex(const Table& t) {
     return out;
 }
 
-std::string TablesToMarkdown(const std::vector<Table>& tables) {
+std::string TablesToMarkdown(const std::vector<Table>& tables, TableForm form) {
     std::string out;
     for (std::size_t i = 0; i < tables.size(); ++i)
-        out += (i ? "\n" : "") + TableToMarkdown(tables[i]);
+        out += (i ? "\n" : "") + TableToMarkdown(tables[i], form);
     return out;
 }
 
@@ -208,7 +313,7 @@ nlohmann::json TablesToJson(const std::vector<Table>& tables) {
         for (const auto& row : t.rows) {
             for (std::size_t c = 0; c < t.columns.size(); ++c) {
                 const Column& col = t.columns[c];
-                const Cell& cell = row.cells.at(c);
+                const Cell& cell = row.Get(col.key);
                 const Provenance* p = ProvenanceFor(t, col);
                 const auto num = [](double v) -> nlohmann::json {
                     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();

@@ -67,10 +67,10 @@ pairs() {  # the embedded-corpus pairs most examples use (100 test pairs, partia
 
 example_align() {
   pairs
-  rm -rf out/pairs_ply T.txt
+  rm -rf out/pairs_ply T.txt aligned.ply
   show "regbench export out/partial_cgal_test.h5 --out out/pairs_ply --format ply"
   show "regbench align out/pairs_ply/0088_src.ply out/pairs_ply/0088_tgt.ply --method icp \\
-      --gt out/pairs_ply/0088_gt.txt --out T.txt"
+      --gt out/pairs_ply/0088_gt.txt --out T.txt --save-aligned aligned.ply"
 }
 
 example_score() {

@@ -244,6 +244,27 @@ TEST_F(SmallTrain, ResumeDropsATornMetricsLine) {
 // A run limited by --max-steps printed the LR plan's step count and an ETA to the plan's end
 // (found 2026-12-04: `--max-steps 576` of a 2,560-step plan showed "ETA 0h58m" with 3 steps
 // left). Expected, by hand: the line names the stop step and the last line's ETA is zero.
+TEST(Train, AShortBudgetPlanSpendsMostStepsAtTheBaseLr) {
+    // Issue 41 item 7: 142 planned steps of a 640-step recipe (milestones 75/450, 150/450,
+    // 200/450, gamma 0.1). Before, the milestones were fractions of the 142 steps, so from
+    // step ceil(142 * 200/450) = 64 on the LR was 1e-6: 78 of 142 steps. Now (by hand) milestone
+    // m moves to 1 - (1 - m) * 142/640: 0.8151, 0.8521, 0.8767 of 142 -> steps 116, 121, 125.
+    TrainConfig c;
+    std::int64_t base = 0, floor = 0;
+    for (std::int64_t k = 0; k < 142; ++k) {
+        const double lr = MultistepLearningRate(c, k, 142, 640);
+        base += lr == c.lr;
+        floor += std::abs(lr - 1e-6) < 1e-18;
+    }
+    EXPECT_EQ(base, 116);
+    EXPECT_EQ(floor, 142 - 125);
+    EXPECT_DOUBLE_EQ(MultistepLearningRate(c, 120, 142, 640), 1e-4);
+    // A run planned as long as its recipe keeps the recipe's milestones: 75/450 of 450 = 75.
+    EXPECT_DOUBLE_EQ(MultistepLearningRate(c, 74, 450, 450), 1e-3);
+    EXPECT_DOUBLE_EQ(MultistepLearningRate(c, 75, 450, 450), 1e-4);
+    EXPECT_DOUBLE_EQ(MultistepLearningRate(c, 200, 450, 450), 1e-3 * 1e-3);
+}
+
 TEST(Train, ProgressCountsDownToMaxSteps) {
     torch::set_num_threads(1);
     const TrainData data = testing::SyntheticData(4, 160, 2);

@@ -160,6 +160,26 @@ TEST(Compare, EveryCallFailingOnTwoPairsFailsTheGate) {
                                                 "failed_new": 2, "new_failures": 2}])"));
 }
 
+TEST(Compare, AFailStillNamesTheUnderpoweredMetricsMaeRFirst) {
+    // Issue 41 item 8: two pairs whose calls now fail FAIL the gate on the status alone; the
+    // metrics could not have been tested at all (the exact test's smallest p with 2 pairs is
+    // 2 / 2^2 = 0.5), and the FAIL says so, MAE(R) first.
+    auto candidate = Pairs(2);
+    for (auto& r : candidate) r.status = Status::kFailed;
+    const CompareResult res = CompareResults(Pairs(2), candidate, CompareOptions{});
+    ASSERT_EQ(res.Verdict(), CompareVerdict::kFail);
+    const std::string md = FormatCompareMarkdown(res, CompareOptions{});
+    const auto weak = md.find("Underpowered");
+    ASSERT_NE(weak, std::string::npos) << md;
+    const auto mae_r = md.find("- icp mae_r: 2 pairs", weak);
+    const auto mae_t = md.find("- icp mae_t: 2 pairs", weak);
+    ASSERT_NE(mae_r, std::string::npos) << md;
+    ASSERT_NE(mae_t, std::string::npos) << md;
+    EXPECT_LT(mae_r, mae_t) << md;
+    EXPECT_LT(mae_r, md.find("Verdict: FAIL")) << md;
+    EXPECT_NE(md.find("smallest p: 0.5"), std::string::npos) << md;
+}
+
 TEST(Compare, NewTimeoutsAndCrashesFailPerMethodUnlessAllowed) {
     auto candidate = Baseline();
     int changed = 0;

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 
 #include "reports/breakdown.hpp"
@@ -119,6 +120,108 @@ TEST(HtmlReport, NiceTicksAreRoundNumbers) {
     // Log axis: the powers of ten in range; within one decade, 1-2-5 steps.
     EXPECT_EQ(NiceTicks(0.004, 3.0, true), (std::vector<double>{0.01, 0.1, 1.0}));
     EXPECT_EQ(NiceTicks(0.15, 0.9, true), (std::vector<double>{0.2, 0.5}));
+}
+
+/// 13 methods of nearly the same time and accuracy (their labels would pile up in the
+/// accuracy-time plot), one with a long name, 10 pairs each.
+std::vector<ResultRow> ThirteenMethods() {
+    std::vector<ResultRow> rows;
+    for (int m = 0; m < 13; ++m) {
+        for (int k = 0; k < 10; ++k) {
+            ResultRow r;
+            r.pair = static_cast<std::size_t>(k);
+            r.method = m == 12 ? "open3d-py-icp-csv-long" : "method" + std::to_string(m);
+            r.shape = "ring";
+            r.category = "a";
+            r.result.seconds = 0.01 * (1.0 + 0.01 * m);
+            r.source_overlap_ratio = r.target_overlap_ratio = 0.6;
+            r.metrics.mae_r = 5.0 + 0.02 * m + 0.3 * k;
+            r.metrics.mae_t = r.metrics.rte = 0.01 * r.metrics.mae_r;
+            r.metrics.ccd = 0.05;
+            r.metrics.rre = r.metrics.mae_r;
+            rows.push_back(r);
+        }
+    }
+    return rows;
+}
+
+/// Runs `html` in headless Chromium at 1200 x 1000 with a script (this test's only) that
+/// reports, once laid out: the page wider than the window, a table box that must scroll, and
+/// any two <text> labels of one plot whose boxes overlap. Returns "ok" or the problems.
+std::string LayoutProblems(const std::string& html, const fs::path& dir) {
+    const std::string script = R"(<script>
+const bad = [];
+const doc = document.documentElement;
+if (doc.scrollWidth > window.innerWidth) bad.push('page ' + doc.scrollWidth + ' px wide');
+document.querySelectorAll('.tw').forEach((b, i) => {
+  if (b.scrollWidth > b.clientWidth + 1) bad.push('table ' + i + ' scrolls: ' + b.scrollWidth);
+});
+document.querySelectorAll('svg').forEach((svg, n) => {
+  const boxes = [...svg.querySelectorAll('text')].map(t => [t.textContent, t.getBoundingClientRect()]);
+  for (let i = 0; i < boxes.length; ++i) for (let j = i + 1; j < boxes.length; ++j) {
+    const [a, p] = boxes[i], [b, q] = boxes[j];
+    if (p.left < q.right - 1 && q.left < p.right - 1 && p.top < q.bottom - 1 && q.top < p.bottom - 1)
+      bad.push('plot ' + n + ': "' + a + '" overlaps "' + b + '"');
+  }
+});
+document.body.setAttribute('data-layout', bad.length ? bad.join('; ') : 'ok');
+</script>)";
+    std::string page = html;
+    page.insert(page.rfind("</body>"), script);
+    fs::create_directories(dir / "profile");
+    std::ofstream(dir / "check.html") << page;
+    const std::string cmd =
+        "timeout 180 chromium --headless --no-sandbox --disable-gpu "
+        "--disable-background-networking --disable-component-update --disable-sync "
+        "--no-first-run --user-data-dir=" +
+        (dir / "profile").string() + " --window-size=1200,1000 --dump-dom file://" +
+        (dir / "check.html").string() + " > " + (dir / "dom.html").string() + " 2> " +
+        (dir / "chromium.log").string();
+    if (std::system(cmd.c_str()) != 0)
+        return "chromium failed; see " + (dir / "chromium.log").string();
+    std::ifstream in(dir / "dom.html");
+    const std::string dom((std::istreambuf_iterator<char>(in)), {});
+    const std::string key = "data-layout=\"";
+    const auto at = dom.find(key);
+    if (at == std::string::npos) return "no layout result in the DOM";
+    const auto start = at + key.size();
+    return dom.substr(start, dom.find('"', start) - start);
+}
+
+TEST(HtmlReport, ThirteenMethodsFitAt1200PxWithoutOverlappingLabels) {
+    // Issue 41 item 4, checked in the browser: no sideways scrolling at 1200 px (compact tables),
+    // no label over another in any plot (the accuracy-time plot named its points beside them).
+    static const Pair pair = RingPair();
+    const std::vector<ResultRow> rows = ThirteenMethods();
+    HtmlReportOptions o;
+    o.title = "thirteen methods";
+    HtmlSection s;
+    s.title = "close methods";
+    s.rows = rows;
+    s.tables = {DistributionTable(rows, BreakdownOptions{}), StatusTable(rows),
+                RecallTable(rows, BreakdownOptions{})};
+    s.pair_lookup = [](const ResultRow&) { return &pair; };
+    o.sections = {s};
+    const fs::path dir =
+        fs::temp_directory_path() / ("regbench_layout_" + std::to_string(::getpid()));
+    EXPECT_EQ(LayoutProblems(RenderHtmlReport(o), dir), "ok");
+    fs::remove_all(dir);
+}
+
+TEST(HtmlReport, ThirteenMethodsGetDistinctColourAndMarkerPairs) {
+    // Method 12 repeats method 0's colour (12 in the palette); its marker and dash differ.
+    const std::string plot = TimeVsAccuracySvg(ThirteenMethods());
+    // Circles for methods 0, 4 and 8 (marker (i + i / 12) mod 4 = 0), in the plot and the
+    // legend; the rest squares, triangles, diamonds.
+    std::size_t circles = 0;
+    for (auto p = plot.find("<circle"); p != std::string::npos; p = plot.find("<circle", p + 1))
+        ++circles;
+    EXPECT_EQ(circles, 6u) << plot;
+    const std::string cdf = ErrorCdfSvg(ThirteenMethods(), 45.0);
+    const std::string solid = "stroke=\"#0072B2\" stroke-width=\"1.6\" stroke-dasharray=\"\"";
+    std::size_t solid_blue = 0;
+    for (auto p = cdf.find(solid); p != std::string::npos; p = cdf.find(solid, p + 1)) ++solid_blue;
+    EXPECT_EQ(solid_blue, 2u);  // method 0's curve and its legend line; not method 12's
 }
 
 /// Decoded 8-bit RGB(A) PNG (the only kind Chromium writes for screenshots).

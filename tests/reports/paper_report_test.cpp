@@ -76,23 +76,23 @@ TEST(PaperReport, Tab1MeansArePlainAveragesAndPaperCellsAreTheJsonNumbers) {
     EXPECT_EQ(t.rows[11].label, "OGMM");
     EXPECT_EQ(t.rows[12].label, "gicp");
     // Hand: cpd same mae_r (1 + 2 + 6) / 3 = 3; cross (10 + 20) / 2 = 15; icp same 6.
-    const auto& cpd = RowNamed(t, "CPD").cells;
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "same_category.mae_r")].value, 3.0);
-    EXPECT_EQ(cpd[Col(t, "same_category.mae_r")].pairs, 3u);
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "cross_category.mae_r")].value, 15.0);
-    EXPECT_NEAR(cpd[Col(t, "same_category.mae_t")].value, 0.03, 1e-15);
-    EXPECT_DOUBLE_EQ(RowNamed(t, "ICP").cells[Col(t, "same_category.mae_r")].value, 6.0);
+    const TableRow& cpd = RowNamed(t, "CPD");
+    EXPECT_DOUBLE_EQ(cpd.Get("same_category.mae_r").value, 3.0);
+    EXPECT_EQ(cpd.Get("same_category.mae_r").pairs, 3u);
+    EXPECT_DOUBLE_EQ(cpd.Get("cross_category.mae_r").value, 15.0);
+    EXPECT_NEAR(cpd.Get("same_category.mae_t").value, 0.03, 1e-15);
+    EXPECT_DOUBLE_EQ(RowNamed(t, "ICP").Get("same_category.mae_r").value, 6.0);
     // Paper cells, transcribed in data/paper/ogmm_wacv2023_tables.json: CPD same 11.033 /
     // 0.1139 / 0.1110, cross 12.681; ICP same 10.333; RGM (not implemented) 0.8211.
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:same_category.mae_r")].value, 11.033);
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:same_category.mae_t")].value, 0.1139);
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:same_category.ccd")].value, 0.1110);
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:cross_category.mae_r")].value, 12.681);
-    const auto& rgm = RowNamed(t, "RGM").cells;
-    EXPECT_DOUBLE_EQ(rgm[Col(t, "paper:same_category.mae_r")].value, 0.8211);
-    EXPECT_FALSE(rgm[Col(t, "same_category.mae_r")].HasValue());
-    EXPECT_EQ(RowNamed(t, "OGMM").cells[Col(t, "same_category.mae_r")].text, "not trained");
-    EXPECT_FALSE(RowNamed(t, "gicp").cells[Col(t, "paper:same_category.mae_r")].HasValue());
+    EXPECT_DOUBLE_EQ(cpd.Get("paper:same_category.mae_r").value, 11.033);
+    EXPECT_DOUBLE_EQ(cpd.Get("paper:same_category.mae_t").value, 0.1139);
+    EXPECT_DOUBLE_EQ(cpd.Get("paper:same_category.ccd").value, 0.1110);
+    EXPECT_DOUBLE_EQ(cpd.Get("paper:cross_category.mae_r").value, 12.681);
+    const TableRow& rgm = RowNamed(t, "RGM");
+    EXPECT_DOUBLE_EQ(rgm.Get("paper:same_category.mae_r").value, 0.8211);
+    EXPECT_FALSE(rgm.Get("same_category.mae_r").HasValue());
+    EXPECT_EQ(RowNamed(t, "OGMM").Get("same_category.mae_r").text, "not trained");
+    EXPECT_FALSE(RowNamed(t, "gicp").Get("paper:same_category.mae_r").HasValue());
     // Caption names both sides' data and the pairing; notes carry the CCD floor.
     EXPECT_NE(t.caption.find("dataset `cgal`"), std::string::npos) << t.caption;
     EXPECT_NE(t.caption.find("pairing independent"), std::string::npos);
@@ -120,8 +120,8 @@ TEST(PaperReport, CiIsTheBreakdownsCiForTheSameRows) {
     b.metrics = {"mae_r"};
     const Table dist = DistributionTable(rows, b);
     ASSERT_EQ(dist.rows.size(), 1u);
-    const Cell& ours = RowNamed(paper, "ICP").cells[Col(paper, "same_category.mae_r")];
-    const Cell& breakdown = dist.rows[0].cells[Col(dist, "mae_r.mean")];
+    const Cell& ours = RowNamed(paper, "ICP").Get("same_category.mae_r");
+    const Cell& breakdown = dist.rows[0].Get("mae_r.mean");
     EXPECT_DOUBLE_EQ(ours.value, breakdown.value);
     EXPECT_GT(ours.HalfWidth(), 0.0);
     EXPECT_DOUBLE_EQ(ours.HalfWidth(), breakdown.HalfWidth());
@@ -235,11 +235,11 @@ TEST(PaperReport, TimingTableMeanAndMedianByHand) {
         BuildTimingTable({s}, LoadPaperTables(DefaultPaperTablesPath()), "Test CPU", "OpenBLAS");
     ASSERT_EQ(t.rows.size(), 1u);
     // CPU milliseconds of the calls (not their wall seconds, twice as long here).
-    EXPECT_NEAR(t.rows[0].cells[Col(t, "cpu_ms_mean")].value, 300.0, 1e-12);
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "cpu_ms_median")].value, 200.0);
-    EXPECT_EQ(t.rows[0].cells[Col(t, "cpu_ms_mean")].pairs, 3u);
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "points")].value, 1024);
-    EXPECT_DOUBLE_EQ(t.rows[0].cells[Col(t, "paper:ms")].value, 4347.0);  // Tab. 6 CPD, 4.347 s
+    EXPECT_NEAR(t.rows[0].Get("cpu_ms_mean").value, 300.0, 1e-12);
+    EXPECT_DOUBLE_EQ(t.rows[0].Get("cpu_ms_median").value, 200.0);
+    EXPECT_EQ(t.rows[0].Get("cpu_ms_mean").pairs, 3u);
+    EXPECT_DOUBLE_EQ(t.rows[0].Get("points").value, 1024);
+    EXPECT_DOUBLE_EQ(t.rows[0].Get("paper:ms").value, 4347.0);  // Tab. 6 CPD, 4.347 s
     EXPECT_NE(t.caption.find("Test CPU"), std::string::npos);
     EXPECT_NE(t.caption.find("OpenBLAS"), std::string::npos);
     // The timing table carries the CCD floor of its pairs too.
@@ -273,7 +273,7 @@ TEST(PaperReport, TimingTableShowsTheLearnedRowsFloorAndTheFullAttentionRow) {
         EXPECT_NE(std::find(headers.begin(), headers.end(), h), headers.end()) << h;
     }
     const auto cell = [&](const std::string& row, const std::string& col) {
-        return RowNamed(t, row).cells[Col(t, col)];
+        return RowNamed(t, row).Get(col);
     };
     // ogmm: network 150 ms mean, 2.5 GMAC, floor 50 ms, x floor 3; the paper's clustered row.
     EXPECT_NEAR(cell("ogmm", "cpu_ms_mean").value, 250.0, 1e-9);
@@ -325,16 +325,16 @@ TEST(PaperReport, CompleteTableOffersTheCleanSharedVariantBesideThePapersC2c) {
     const ResultSet b{"c2c_clean", {Row(0, "cpd", 0.5), Row(1, "cpd", 1.5)}, clean, ""};
     const Table t = BuildPaperTable(FindPaperTableSpec("supp_complete"), {a, b},
                                     LoadPaperTables(DefaultPaperTablesPath()), {});
-    const auto& cpd = RowNamed(t, "CPD").cells;
+    const TableRow& cpd = RowNamed(t, "CPD");
     // Hand: (2 + 4) / 2 = 3 and (0.5 + 1.5) / 2 = 1.
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "c2c.mae_r")].value, 3.0);
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "c2c_clean.mae_r")].value, 1.0);
+    EXPECT_DOUBLE_EQ(cpd.Get("c2c.mae_r").value, 3.0);
+    EXPECT_DOUBLE_EQ(cpd.Get("c2c_clean.mae_r").value, 1.0);
     // The clean columns sit beside the paper's c2c cells (CPD 0.8171 deg, CCD 0.0037 as
     // transcribed in data/paper/ogmm_wacv2023_tables.json), and say so in the header.
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:c2c_clean.mae_r")].value, 0.8171);
-    EXPECT_DOUBLE_EQ(cpd[Col(t, "paper:c2c_clean.ccd")].value, 0.0037);
+    EXPECT_DOUBLE_EQ(cpd.Get("paper:c2c_clean.mae_r").value, 0.8171);
+    EXPECT_DOUBLE_EQ(cpd.Get("paper:c2c_clean.ccd").value, 0.0037);
     EXPECT_EQ(t.columns[Col(t, "paper:c2c_clean.mae_r")].header, "paper MAE(R) c2c");
-    EXPECT_FALSE(cpd[Col(t, "c2p.mae_r")].HasValue());  // no c2p rows given
+    EXPECT_FALSE(cpd.Get("c2p.mae_r").HasValue());  // no c2p rows given
     // Caption: each group's pairing and noise; notes: each group's floor.
     EXPECT_NE(t.caption.find("pairing shared"), std::string::npos) << t.caption;
     EXPECT_NE(t.caption.find("noise-free"), std::string::npos) << t.caption;

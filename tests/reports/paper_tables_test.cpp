@@ -5,12 +5,12 @@
 namespace regbench {
 namespace {
 
-/// Our side: cpd (MAE(R) 1.5) and identity (all zero), each over `pairs` pairs.
+/// Our side: cpd (MAE(R) 1.5, CI [1, 2]) and identity (all zero), each over `pairs` pairs.
 ReportTable CpdAndIdentity(std::size_t pairs) {
     ReportTable ours;
     ours.methods.resize(2);
     ours.methods[0].method = "cpd";
-    ours.methods[0].mae_r.mean = 1.5;
+    ours.methods[0].mae_r = {1.5, 1.0, 2.0};
     ours.methods[1].method = "identity";
     for (auto& m : ours.methods) m.pairs = pairs;
     return ours;
@@ -19,16 +19,21 @@ ReportTable CpdAndIdentity(std::size_t pairs) {
 TEST(PaperTables, ComparisonPutsThePaperCellNextToOurs) {
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     const ReportTable ours = CpdAndIdentity(30);
-    const std::string md = TableToMarkdown(
-        PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category"));
+    const Table t = PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category");
+    const std::string md = TableToMarkdown(t, TableForm::kFull);
     // Paper Tab. 1 cross-category CPD: MAE(R) 12.681, MAE(t) 0.1153, CCD 0.1154; Tab. 6: 4.347 s.
     // Issue 26: the pairs column (ours: 30) says what our means are over.
     EXPECT_NE(md.find("| method | pairs | mae_r |"), std::string::npos) << md;
     // Every quantity in its one format: MAE(R) 4 decimals, seconds 5, the paper's as ours.
-    EXPECT_NE(md.find("| cpd | 30 | 1.5000 | 12.6810 |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| cpd | 30 | 1.5000 ± 0.5000 | 12.6810 |"), std::string::npos) << md;
     EXPECT_NE(md.find("0.1153"), std::string::npos);
     EXPECT_NE(md.find("4.34700"), std::string::npos);
-    EXPECT_NE(md.find("| identity | 30 | 0.0000 | - |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| identity | 30 | 0.0000 ± 0.0000 | - |"), std::string::npos) << md;
+    // Compact (issue 41 item 4): mean±CI rounded to the CI (half-width 0.5: two significant
+    // digits, 2 decimals) with the paper's number as transcribed beside it in one cell.
+    const std::string compact = TableToMarkdown(t);
+    EXPECT_NE(compact.find("| method | pairs | mae_r (paper) |"), std::string::npos) << compact;
+    EXPECT_NE(compact.find("| cpd | 30 | 1.50±0.50 (12.681) |"), std::string::npos) << compact;
 }
 
 TEST(PaperTables, EveryFormatCarriesThePapersCellsAndOurPairs) {
@@ -56,7 +61,7 @@ TEST(PaperTables, EveryFormatCarriesThePapersCellsAndOurPairs) {
     EXPECT_TRUE(j[11]["value"].is_null());  // identity's paper mae_r: the paper has none
     EXPECT_EQ(j[11]["column"], "paper:mae_r");
     const std::string tex = TableToLatex(t);
-    EXPECT_NE(tex.find("cpd & 10 & 1.5000 & 12.6810"), std::string::npos) << tex;
+    EXPECT_NE(tex.find("cpd & 10 & 1.5000 $\\pm$ 0.5000 & 12.6810"), std::string::npos) << tex;
     EXPECT_NE(tex.find("\\toprule"), std::string::npos) << tex;
 }
 

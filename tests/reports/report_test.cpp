@@ -51,21 +51,32 @@ TEST(Report, AggregatesPerMethodByHand) {
     EXPECT_EQ(s[0].pairs, 3u);
     EXPECT_EQ(s[0].failed, 1u);
     EXPECT_NEAR(s[0].mae_r.mean, 0.9, 1e-12);
-    EXPECT_NEAR(s[0].rmse_r, std::sqrt((0.25 + 4.0 + 0.04) / 3.0), 1e-12);
+    EXPECT_NEAR(s[0].rmse_r.mean, std::sqrt((0.25 + 4.0 + 0.04) / 3.0), 1e-12);
     // recall@(1, 0.1): only the first row (0.5 deg, 0.01).
-    EXPECT_NEAR(s[0].recall, 1.0 / 3.0, 1e-12);
+    EXPECT_NEAR(s[0].recall.mean, 1.0 / 3.0, 1e-12);
     EXPECT_NEAR(s[0].median_seconds, 2.0, 1e-12);
     EXPECT_LE(s[0].mae_r.lo, s[0].mae_r.mean);
     EXPECT_GE(s[0].mae_r.hi, s[0].mae_r.mean);
-    EXPECT_NEAR(s[1].recall, 0.0, 1e-12);
+    EXPECT_NEAR(s[1].recall.mean, 0.0, 1e-12);
     ReportTable rt;
     rt.methods = s;
     const Table t = SummaryTable(rt, ReportOptions{});
-    const std::string md = TableToMarkdown(t);
-    EXPECT_NE(md.find("| a | 3 | 1 | 0.9000 |"), std::string::npos) << md;
+    const std::string md = TableToMarkdown(t, TableForm::kFull);
+    EXPECT_NE(md.find("| a | 3 | 1 | 0.9000 ± "), std::string::npos) << md;
     EXPECT_NE(md.find("| b |"), std::string::npos);
-    EXPECT_NE(md.find("| mae_r [deg] | mae_r 95% CI |"), std::string::npos) << md;
-    EXPECT_NE(md.find("|---:|---|---:|"), std::string::npos) << md;  // the CI column: text
+    // The interval column is data now (mae_r shows its CI itself); CSV and JSON keep it.
+    EXPECT_EQ(md.find("mae_r 95% CI"), std::string::npos) << md;
+    EXPECT_NE(TablesToCsv({t}).find(",a,mae_r.ci95,mae_r 95% CI,"), std::string::npos);
+    // Issue 41 item 2: recall and success carry their Wilson interval. a: 1 of 3 pairs
+    // recalled; scipy 1.10.1 binomtest(1, 3).proportion_ci(method="wilson") =
+    // (0.06149194472039626, 0.7923403991979523).
+    EXPECT_NEAR(s[0].recall.lo, 0.06149194472039626, 1e-12);
+    EXPECT_NEAR(s[0].recall.hi, 0.7923403991979523, 1e-12);
+    EXPECT_NE(md.find("0.333 [0.061, 0.792]"), std::string::npos) << md;
+    // rmse_r's CI is the root of the mean square's: it brackets the root mean square.
+    EXPECT_LE(s[0].rmse_r.lo, s[0].rmse_r.mean);
+    EXPECT_GE(s[0].rmse_r.hi, s[0].rmse_r.mean);
+    EXPECT_LT(s[0].rmse_r.lo, s[0].rmse_r.hi);
     // CSV and JSON carry the data columns Markdown leaves out (chamfer, threads, params).
     EXPECT_NE(TablesToCsv({t}).find(",a,mae_r,mae_r [deg],measured,0.9,"), std::string::npos);
     EXPECT_NE(TablesToCsv({t}).find(",a,params,params,measured,,,,,{}"), std::string::npos)
@@ -76,11 +87,11 @@ TEST(Report, SuccessThresholdsAreOptions) {
     // rre = 2 * mae_r, rte = 2 * mae_t: rows (rre 1, rte 0.02) and (rre 4, rte 0.02).
     const std::vector<ResultRow> rows = Numbered({Row("a", 0.5, 0.01, 1), Row("a", 2.0, 0.01, 1)});
     ReportOptions o;
-    EXPECT_NEAR(Summarize(rows, o)[0].success, 1.0, 1e-12);  // rre < 5, rte < 0.1
+    EXPECT_NEAR(Summarize(rows, o)[0].success.mean, 1.0, 1e-12);  // rre < 5, rte < 0.1
     o.success_rre_deg = 3.0;
-    EXPECT_NEAR(Summarize(rows, o)[0].success, 0.5, 1e-12);
+    EXPECT_NEAR(Summarize(rows, o)[0].success.mean, 0.5, 1e-12);
     o.success_rte = 0.01;
-    EXPECT_NEAR(Summarize(rows, o)[0].success, 0.0, 1e-12);
+    EXPECT_NEAR(Summarize(rows, o)[0].success.mean, 0.0, 1e-12);
 }
 
 TEST(Report, MedianOfEvenCountAveragesTheMiddle) {
@@ -212,7 +223,7 @@ TEST(Report, NullMetricsCountAsFailedWithTheirLine) {
     EXPECT_EQ(s.pairs, 2u);
     EXPECT_EQ(s.failed, 1u);
     EXPECT_NEAR(s.mae_r.mean, 1.0, 1e-12);  // the null row's numbers are not averaged
-    EXPECT_NEAR(s.recall, 0.0, 1e-12);      // 1 deg is not < 1; the null row is not recalled
+    EXPECT_NEAR(s.recall.mean, 0.0, 1e-12);      // 1 deg is not < 1; the null row is not recalled
     ASSERT_EQ(tables[0].notes.size(), 1u);
     EXPECT_NE(tables[0].notes[0].find("r.jsonl:2"), std::string::npos) << tables[0].notes[0];
 }
@@ -332,7 +343,7 @@ TEST(Report, Recall3dmatchUsesOverlapRmseRreAndRte) {
     rows[2].metrics.overlap_rmse = 0.1;  // rre = 20 >= 15
     ReportOptions o;
     o.recall_3dmatch = true;
-    EXPECT_NEAR(Summarize(rows, o)[0].recall_3dmatch, 1.0 / 3.0, 1e-12);
+    EXPECT_NEAR(Summarize(rows, o)[0].recall_3dmatch.mean, 1.0 / 3.0, 1e-12);
 }
 
 }  // namespace

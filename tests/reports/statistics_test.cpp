@@ -133,5 +133,23 @@ TEST(Statistics, BootstrapCiIsTheNearestRankOfTheResampledMeans) {
     EXPECT_DOUBLE_EQ(one.hi, 2.5);
 }
 
+TEST(Statistics, WilsonIntervalMatchesScipy) {
+    // scipy 1.10.1: binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson").
+    struct Case {
+        std::size_t k, n;
+        double lo, hi;
+    };
+    for (const Case& c : {Case{4, 100, 0.01566330399154762, 0.0983707143588792},
+                          Case{0, 20, 0.0, 0.16112515805281935},
+                          Case{11, 100, 0.06254196357064568, 0.18631296503080313},
+                          Case{3, 3, 0.4385029682449546, 1.0}}) {
+        const BootstrapCi w = WilsonInterval(c.k, c.n);
+        EXPECT_DOUBLE_EQ(w.mean, static_cast<double>(c.k) / static_cast<double>(c.n));
+        EXPECT_NEAR(w.lo, c.lo, 1e-12) << c.k << "/" << c.n;
+        EXPECT_NEAR(w.hi, c.hi, 1e-12) << c.k << "/" << c.n;
+    }
+    EXPECT_TRUE(std::isnan(WilsonInterval(0, 0).lo));
+}
+
 }  // namespace
 }  // namespace regbench
