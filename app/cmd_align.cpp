@@ -70,6 +70,9 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"drop", "refuse"}))
         ->capture_default_str();
     cmd->callback([=] {
+        const nlohmann::json p = ParseParamsOption(*params);
+        // validates name and params (a usage error)
+        const auto reg = AsUsageError([&] { return CreateMethod(*method, p); });
         std::optional<OutputLock> lock;  // one writer per --out, inputs refused before work
         if (!out->empty()) {
             std::vector<std::string> inputs{*src, *tgt};
@@ -77,8 +80,6 @@ void SetupAlignCommand(CLI::App* cmd) {
             CheckOutputPath(*out, inputs);
             lock.emplace(*out);
         }
-        const nlohmann::json p = ParseParamsOption(*params);
-        const auto reg = CreateMethod(*method, p);  // validates name and params
         const NonFinitePoints non_finite =
             *nan_points == "refuse" ? NonFinitePoints::kRefuse : NonFinitePoints::kDrop;
         const PointCloud source = ReadCloudFile(*src, non_finite);
