@@ -70,8 +70,10 @@ void SetupReportCommand(CLI::App* cmd) {
             throw CLI::ValidationError("--versus takes two different method names, A,B; got '" +
                                        *versus + "'");
         }
-        if (!versus->empty() && !paper->empty()) {
-            throw CLI::ValidationError("--versus and --paper exclude each other");
+        if (!versus->empty() && (!paper->empty() || !euler->empty())) {
+            throw CLI::ValidationError(
+                "--versus compares the rows as scored (their own Euler convention); it takes "
+                "neither --paper nor --euler");
         }
         // Refused before reading anything: an input as --out, a directory, a device; then one
         // writer per --out until the report is in place.
