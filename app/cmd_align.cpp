@@ -89,7 +89,8 @@ void SetupAlignCommand(CLI::App* cmd) {
             ply_lock.emplace(*save_aligned);
         }
         const nlohmann::json p = ParseParamsOption(*params);
-        const auto reg = CreateMethod(*method, p);  // validates name and params
+        // validates name and params (a usage error)
+        const auto reg = AsUsageError([&] { return CreateMethod(*method, p); });
         const NonFinitePoints non_finite =
             *nan_points == "refuse" ? NonFinitePoints::kRefuse : NonFinitePoints::kDrop;
         const PointCloud source = ReadCloudFile(*src, non_finite);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "app/cli_numbers.hpp"
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
@@ -63,10 +64,23 @@ ProgressCallback MakeProgress() {
 }
 
 /// Wraps the loader to warn when the indoor protocol (depth scans of rooms) is asked of object
-/// meshes: it runs, but the pairs are not what the paper's Tab. 3 measured.
-ShapeLoader WarnIndoorOnObjects(ShapeLoader loader, Protocol protocol) {
-    return [loader, protocol](const std::string& dataset, const std::string& split) {
+/// meshes: it runs, but the pairs are not what the paper's Tab. 3 measured; and to say so when
+/// --pairs asks for more pairs than the split has items (per overlap level): items are reused.
+ShapeLoader WarnOnLoad(ShapeLoader loader, const GenerateRequest& request) {
+    const Protocol protocol = request.options.protocol;
+    const std::size_t levels = ProtocolLevels(request.options);
+    const std::size_t pairs = request.one_per_item ? 0 : request.num_pairs;
+    return [=](const std::string& dataset, const std::string& split) {
         std::vector<ShapeSource> shapes = loader(dataset, split);
+        const std::size_t distinct = shapes.size() * levels;
+        if (!shapes.empty() && pairs > distinct) {
+            std::cerr << "generate: note: --pairs " << pairs << " is more than the "
+                      << shapes.size() << " items of '" << dataset << "' split '" << split << "'"
+                      << (levels > 1 ? " times " + std::to_string(levels) + " levels" : "")
+                      << ", so it reuses items: pair k uses item (k / " << levels << ") mod "
+                      << shapes.size() << " with its own crop, noise and motion (--pairs all "
+                      << "makes one pair per item)\n";
+        }
         const bool meshes = std::any_of(shapes.begin(), shapes.end(),
                                         [](const ShapeSource& s) { return s.is_mesh(); });
         if (protocol == Protocol::kIndoor && meshes) {
@@ -109,6 +123,7 @@ void SetupGenerateCommand(CLI::App* cmd) {
     std::string protocols;
     for (const auto& p : ProtocolNames()) protocols += (protocols.empty() ? "" : ", ") + p;
     cmd->add_option("--protocol", a->protocol, "Pair protocol: " + protocols)
+        ->check(ParsedBy(ParseProtocol, "PROTOCOL"))
         ->capture_default_str();
     cmd->add_option("--dataset", a->request.dataset, "Dataset name or path (see docs/datasets.md)")
         ->capture_default_str();
@@ -131,12 +146,14 @@ void SetupGenerateCommand(CLI::App* cmd) {
     cmd->add_option("--keep", a->flags.keep, "Crop keep ratio in (0, 1] (0.7)");
     cmd->add_option("--noise-sigma", a->flags.noise_sigma, "Jitter sigma (0.01)");
     cmd->add_option("--noise-clip", a->flags.noise_clip, "Jitter clip (0.05)");
-    cmd->add_option("--motion", a->motion, "Motion convention: euler | axis-angle (euler)");
+    cmd->add_option("--motion", a->motion, "Motion convention: euler | axis-angle (euler)")
+        ->check(ParsedBy(ParseMotionConvention, "MOTION"));
     cmd->add_option("--max-rotation-deg", a->flags.max_rotation_deg, "Max rotation [deg] (45)");
     cmd->add_option("--max-translation", a->flags.max_translation, "Max translation (0.5)");
     cmd->add_option("--pairing", a->pairing,
                     "Pairing: independent | shared | stored (the file's own source/target/"
-                    "transform, e.g. ICL-NUIM test) (independent)");
+                    "transform, e.g. ICL-NUIM test) (independent)")
+        ->check(ParsedBy(ParsePairing, "PAIRING"));
     cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)");
     cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)");
     cmd->add_option("--sweep-keeps", a->flags.sweep_keeps, "overlap-sweep: crop keep ratios")
@@ -161,10 +178,8 @@ void SetupGenerateCommand(CLI::App* cmd) {
         }
         DatasetOptions dataset_options;
         dataset_options.data_dir = a->data_dir;
-        GenerateToFile(
-            request,
-            WarnIndoorOnObjects(DatasetShapeLoader(dataset_options), request.options.protocol),
-            MakeProgress());
+        GenerateToFile(request, WarnOnLoad(DatasetShapeLoader(dataset_options), request),
+                       MakeProgress());
         std::cerr << "generate: wrote " << request.out << "\n";
     });
 }

@@ -10,6 +10,7 @@
 #include "core/file_lock.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
+#include "reports/versus.hpp"
 #include "runners/result_row.hpp"
 
 namespace regbench::app {
@@ -59,7 +60,25 @@ void SetupReportCommand(CLI::App* cmd) {
     cmd->add_flag("--full", *full,
                   "Markdown: every column at its decimals (rre, rte, rmse, mean s too) instead of "
                   "the compact table (mean ± CI half-width rounded to the CI)");
+    auto versus = std::make_shared<std::string>();
+    cmd->add_option("--versus", *versus,
+                    "A,B: instead of the summary, method A against method B on the pairs both "
+                    "ran, per metric: A - B with a 95% bootstrap CI, the Wilcoxon signed-rank p "
+                    "and A's wins, ties and losses (one table per pair file)");
     cmd->callback([=] {
+        const auto comma = versus->find(',');
+        const std::string a = versus->substr(0, comma);
+        const std::string b = comma == std::string::npos ? "" : versus->substr(comma + 1);
+        if (!versus->empty() &&
+            (a.empty() || b.empty() || b.find(',') != std::string::npos || a == b)) {
+            throw CLI::ValidationError("--versus takes two different method names, A,B; got '" +
+                                       *versus + "'");
+        }
+        if (!versus->empty() && (!paper->empty() || !euler->empty())) {
+            throw CLI::ValidationError(
+                "--versus compares the rows as scored (their own Euler convention); it takes "
+                "neither --paper nor --euler");
+        }
         // Refused before reading anything: an input as --out, a directory, a device; then one
         // writer per --out until the report is in place.
         std::optional<OutputLock> lock;
@@ -75,8 +94,16 @@ void SetupReportCommand(CLI::App* cmd) {
         if (rows.empty()) throw std::runtime_error("no result rows in " + files->front());
         ReportOptions opts = *o;
         if (!euler->empty()) opts.euler = ParseEulerConvention(*euler);
-        const std::vector<ReportTable> tables = BuildTables(rows, opts);
-        std::vector<Table> out_tables = SummaryTables(tables, opts);
+        std::vector<ReportTable> tables;
+        std::vector<Table> out_tables;
+        if (!versus->empty()) {
+            for (const auto& r : CompareMethods(rows, a, b)) {
+                out_tables.push_back(VersusTable(r));
+            }
+        } else {
+            tables = BuildTables(rows, opts);
+            out_tables = SummaryTables(tables, opts);
+        }
         if (!paper->empty()) {
             // TABLE[:GROUP] of the paper beside each result table.
             const auto colon = paper->find(':');

@@ -26,6 +26,16 @@ void SetupRunCommand(CLI::App* cmd) {
         ->required();
     m->Add(cmd, "Comma-separated method names (see `regbench methods`)",
            "JSON object of parameters per method, e.g. '{\"cpd\": {\"w\": 0.1}}'");
+    // align's and score's spelling, a common slip here: refused naming the right flag
+    // (hidden from --help; a validator, so it is reported before "--methods is required").
+    cmd->add_option("--method")
+        ->group("")
+        ->check(CLI::Validator(
+            [](std::string&) -> std::string {
+                return "run takes --methods NAME[,NAME...] (comma-separated), not --method; did "
+                       "you mean --methods?";
+            },
+            ""));
     cmd->add_option("--out", opts->out_path,
                     "Output JSONL (written as OUT.part, renamed at the end)")
         ->required();
@@ -60,6 +70,7 @@ void SetupRunCommand(CLI::App* cmd) {
                     "xyz = RPMNet's (docs/metrics.md)")
         ->check(CLI::IsMember({"zyx", "xyz"}))
         ->capture_default_str();
+    AddMetricOptions(cmd, &opts->metric_options);
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");
     cmd->callback([=] {
         RunOptions o = *opts;

@@ -39,6 +39,10 @@ void SetupScoreCommand(CLI::App* cmd) {
     cmd->add_flag("--allow-scale", o->allow_scale,
                   "Accept similarities s R (uniform scale, e.g. CPD with scale): the rotation "
                   "metrics use R, the row's scale is s");
+    cmd->add_flag("--allow-unhashed", o->allow_unhashed,
+                  "Score a transforms file that records no content hash of its pair file "
+                  "(refused by default: nothing shows it was computed on --pairs)");
+    AddMetricOptions(cmd, &o->metric_options);
     cmd->add_option("--threads", o->threads, "Threads the method used (recorded in rows)")
         ->check(PositiveWholeNumber())
         ->capture_default_str();

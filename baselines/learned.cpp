@@ -89,6 +89,8 @@ struct LearnedOptions {
     }
 };
 
+std::string CheckpointLabel(const std::string& dir);
+
 class LearnedMethod final : public RegistrationMethod {
 public:
     template <bool kIcp, bool kAttention>
@@ -101,6 +103,7 @@ public:
                    options.icp_max_iterations} {
         checkpoint_ =
             options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
+        checkpoint_label_ = CheckpointLabel(checkpoint_);
         if (!options_.attention.empty()) inference_["attention"] = options_.attention;
         // The GEMM rate of the floor, measured once per process, here in the process that
         // creates the method: the runner's isolated calls are forked from it and inherit it.
@@ -114,6 +117,7 @@ protected:
                         const AlignContext& context) override {
         AlignResult result;
         result.extra["checkpoint"] = checkpoint_;
+        if (!checkpoint_label_.empty()) result.extra["checkpoint_label"] = checkpoint_label_;
         if (!Load(result)) return result;
         const auto t0 = std::chrono::steady_clock::now();
         const CpuStopwatch cpu(context.threads);
@@ -199,12 +203,37 @@ private:
     nlohmann::json params_;
     Resolved options_;
     std::string checkpoint_;
+    std::string checkpoint_label_;  ///< "model M, step S" of checkpoint.json (report labels)
     nlohmann::json inference_ = nlohmann::json::object();  ///< {"attention": ...} when given
     nlohmann::json cost_config_;  ///< the network's zoo config, what ComputeForwardCost counts
     std::mutex load_mutex_;
     std::shared_ptr<ogmm::RegistrationNet> net_;
     std::string load_error_;
 };
+
+/// "model M, step S" (a `regbench train` checkpoint) or "model M, imported" (the authors'
+/// weights, `import-checkpoint`) from dir/checkpoint.json; "" when it cannot be read.
+std::string CheckpointLabel(const std::string& dir) {
+    nlohmann::json j;
+    try {
+        j = ogmm::ReadCheckpointJson(dir);
+    } catch (const std::exception&) {
+        return "";  // a missing checkpoint fails each call with its own message
+    }
+    std::string model =
+        j.contains("model") && j["model"].is_string() ? j["model"].get<std::string>() : "";
+    if (model.empty() && j.contains("config") && j["config"].is_object() &&
+        j["config"].contains("name") && j["config"]["name"].is_string()) {
+        model = j["config"]["name"].get<std::string>();
+    }
+    std::string label = "model " + (model.empty() ? std::string("?") : model);
+    if (j.contains("steps") && j["steps"].is_number_unsigned()) {
+        label += ", step " + std::to_string(j["steps"].get<std::uint64_t>());
+    } else if (j.contains("imported_from")) {
+        label += ", imported";
+    }
+    return label;
+}
 
 /// Opens the checkpoint's checkpoint.json when the method is created, i.e. before a run
 /// starts: a missing or unreadable checkpoint, a config its family refuses (sizes out of range),

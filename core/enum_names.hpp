@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "core/suggest.hpp"
+
 namespace regbench {
 
 template <class Enum>
@@ -53,13 +55,15 @@ std::string EnumNameList(const EnumName<Enum> (&table)[N], const std::string& se
 }
 
 /// The value named `name`; otherwise throws std::invalid_argument
-/// "<prefix>unknown <what> '<name>' (known: <names>)".
+/// "<prefix>unknown <what> '<name>' (did you mean '<close name>'? known: <names>)".
 template <class Enum, std::size_t N>
 Enum ParseEnum(const EnumName<Enum> (&table)[N], const std::string& what, const std::string& name,
                const std::string& prefix = "") {
     if (const auto value = FindEnum(table, name)) return *value;
-    throw std::invalid_argument(prefix + "unknown " + what + " '" + name +
-                                "' (known: " + EnumNameList(table) + ")");
+    std::vector<std::string> known;
+    for (const auto& e : table) known.emplace_back(e.name);
+    throw std::invalid_argument(prefix + "unknown " + what + " '" + name + "' (" +
+                                DidYouMean(name, known) + "known: " + EnumNameList(table) + ")");
 }
 
 /// The names of a choice enum, after the enum: REGBENCH_CHOICES(Centre, {{Centre::kMean,

@@ -3,7 +3,11 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "core/kd_tree.hpp"
 #include "core/transform.hpp"
@@ -85,13 +89,80 @@ double OverlapRmse(const Transform& T_gt, const Transform& T_est, const PointClo
 }
 
 PairMetrics ComputeMetrics(const Transform& T_gt, const Transform& T_est, const PointCloud& source,
-                           const PointCloud& target, EulerConvention euler) {
+                           const PointCloud& target, EulerConvention euler,
+                           const MetricOptions& options) {
     PairMetrics m = MotionMetrics(T_gt, T_est, euler);
-    const ChamferResult c = ChamferDistances(Apply(T_est, source), target);
+    const PointCloud moved = Apply(T_est, source);
+    const ChamferResult c = ChamferDistances(moved, target, options.ccd_clip);
     m.ccd = c.ccd;
     m.chamfer = c.chamfer;
     m.ccd_within_clip = c.within_clip;
+    m.ccd_clip = options.ccd_clip;
+    if (options.inlier_threshold > 0.0) {
+        m.inlier_threshold = options.inlier_threshold;
+        if (moved.rows() > 0 && target.rows() > 0) {
+            const InlierResult r = EvaluateInliers(moved, target, options.inlier_threshold);
+            m.fitness = r.fitness;
+            m.inlier_rmse = r.inlier_rmse;
+        }
+    }
     return m;
+}
+
+void CheckMetricOptions(const MetricOptions& o) {
+    if (!std::isfinite(o.ccd_clip) || o.ccd_clip <= 0.0) {
+        throw std::invalid_argument("--ccd-clip must be a finite number > 0, got " +
+                                    std::to_string(o.ccd_clip));
+    }
+    if (!std::isfinite(o.inlier_threshold) || o.inlier_threshold < 0.0) {
+        throw std::invalid_argument("--inlier-threshold must be a finite number >= 0, got " +
+                                    std::to_string(o.inlier_threshold));
+    }
+}
+
+InlierResult EvaluateInliers(const PointCloud& moved_source, const PointCloud& target,
+                             double threshold) {
+    InlierResult r;
+    if (moved_source.rows() == 0 || target.rows() == 0) return r;
+    const Eigen::VectorXd d = NearestDistances(KdTree(target), moved_source);
+    double sum = 0.0;
+    Eigen::Index inliers = 0;
+    for (Eigen::Index i = 0; i < d.size(); ++i) {
+        if (d[i] < threshold) {
+            sum += d[i] * d[i];
+            ++inliers;
+        }
+    }
+    r.fitness = static_cast<double>(inliers) / static_cast<double>(d.size());
+    r.inlier_rmse = inliers == 0 ? 0.0 : std::sqrt(sum / static_cast<double>(inliers));
+    return r;
+}
+
+double MedianCloudRadius(const std::vector<const PointCloud*>& targets) {
+    std::vector<double> radii;
+    for (const PointCloud* t : targets) {
+        if (t->rows() == 0) continue;
+        const Eigen::RowVector3d centroid = t->colwise().mean();
+        radii.push_back(std::sqrt((t->rowwise() - centroid).rowwise().squaredNorm().maxCoeff()));
+    }
+    if (radii.empty()) return std::numeric_limits<double>::quiet_NaN();
+    std::nth_element(radii.begin(), radii.begin() + static_cast<std::ptrdiff_t>(radii.size() / 2),
+                     radii.end());
+    return radii[radii.size() / 2];
+}
+
+std::string ScaleWarning(double radius, const MetricOptions& options) {
+    if (!std::isfinite(radius) || options.ccd_clip != kCcdClip) return "";
+    if (radius <= 10.0 && radius >= 0.1) return "";
+    char text[512];
+    std::snprintf(text, sizeof(text),
+                  "the clouds' median radius is %.4g (cloud units), but the default CCD clip "
+                  "%.4g and report's recall/success translation thresholds (0.1) are meant for "
+                  "objects in the unit sphere: at this scale they cannot tell methods apart; "
+                  "pass --ccd-clip (e.g. %.4g, 10%% of the radius) and report --recall-t / "
+                  "--success-rte in these units, or normalize the data",
+                  radius, kCcdClip, 0.1 * radius);
+    return text;
 }
 
 }  // namespace regbench

@@ -385,11 +385,22 @@ Pair GeneratePair(const std::vector<ShapeSource>& shapes, const ProtocolOptions&
 
 nlohmann::json ProtocolProvenance(const ProtocolOptions& options) {
     const bool stored = options.pairing == Pairing::kStored;
+    const bool noise = ProtocolAddsNoise(options.protocol) && !stored;
+    // `params` lists what the pairs were made with: stored pairs are the file's own (no
+    // protocol, only `points` and the overlap radius), and a protocol without noise carries no
+    // noise parameters, so a reader (and `inspect`) sees one noise_sigma, the applied one.
+    nlohmann::json params = options;
+    if (stored) {
+        params = {{"points", options.points}, {"pairing", "stored"}, {"eta", options.eta}};
+    } else if (!noise) {
+        params.erase("noise_sigma");
+        params.erase("noise_clip");
+    }
     nlohmann::json j = {
-        {"protocol", ToString(options.protocol)},
-        {"params", options},
+        {"protocol", stored ? std::string("stored") : ToString(options.protocol)},
+        {"params", params},
         {"pairing", ToString(options.pairing)},
-        {"noise_sigma", ProtocolAddsNoise(options.protocol) && !stored ? options.noise_sigma : 0.0},
+        {"noise_sigma", noise ? options.noise_sigma : 0.0},
         {"overlap_labels", options.pairing == Pairing::kShared ? "shared-index" : "radius"}};
     if (stored) {
         j["stored_pairs"] =

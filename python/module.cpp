@@ -19,6 +19,7 @@
 #include "protocols/pair_file.hpp"
 #include "python/callable_method.hpp"
 #include "python/convert.hpp"
+#include "reports/versus.hpp"
 #include "runners/align_clouds.hpp"
 #include "runners/registry.hpp"
 #include "runners/result_row.hpp"
@@ -387,6 +388,37 @@ py::object ReadResults(py::handle path_like, py::handle as_frame) {
     return pandas.attr("json_normalize")(out, py::arg("max_level") = 1);
 }
 
+/// compare_methods: method A against method B on their common pairs (reports/versus.hpp), from
+/// one results file or several.
+py::list CompareMethodsPy(py::handle results, const std::string& a, const std::string& b,
+                          int bootstrap, std::uint64_t seed) {
+    std::vector<std::string> paths;
+    if (py::isinstance<py::str>(results) || py::hasattr(results, "__fspath__")) {
+        paths.push_back(PathOf(results));
+    } else {
+        for (py::handle item : results) paths.push_back(PathOf(item));
+    }
+    if (bootstrap < 2) throw py::value_error("bootstrap must be >= 2");
+    std::vector<ResultRow> rows;
+    VersusOptions o;
+    o.bootstrap_samples = bootstrap;
+    o.seed = seed;
+    py::list out;
+    try {
+        for (const auto& path : paths) {
+            RequireFile(path, "results file");
+            auto part = ReadResultRows(path);
+            rows.insert(rows.end(), part.begin(), part.end());
+        }
+        for (const auto& r : CompareMethods(rows, a, b, o)) out.append(JsonToPy(VersusToJson(r)));
+    } catch (const py::error_already_set&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw py::value_error(e.what());
+    }
+    return out;
+}
+
 /// Pair: one pair of a pair file, its clouds as NumPy views.
 void BindPair(py::module_& m) {
     py::class_<PairRef> pair(m, "Pair",
@@ -555,6 +587,15 @@ void BindRun(py::module_& m) {
           "kept in OUT.part for resume=True. Returns {out, rows_written, rows_skipped, "
           "failures, wall_seconds}.");
 
+    m.def("compare_methods", &CompareMethodsPy, py::arg("results"), py::arg("a"), py::arg("b"),
+          py::arg("bootstrap") = 2000, py::arg("seed") = kDefaultBootstrapSeed,
+          "compare_methods(results, a, b, bootstrap=2000, seed=20230103) -> list[dict]\n\n"
+          "Method a against method b on the pairs both ran (results: one results file or a "
+          "list of them), as `regbench report --versus a,b`: one dict per pair file with "
+          "method_a, method_b, data, euler, pairs_a, pairs_b, common, failed_a, failed_b and "
+          "metrics, a list of {metric, pairs, mean_a, mean_b, diff_mean (a - b), ci_lo, ci_hi "
+          "(95% paired bootstrap), p_value, statistic (two-sided Wilcoxon signed-rank), wins, "
+          "ties, losses (of a; lower error wins)}.");
     m.def("read_results", &ReadResults, py::arg("path"), py::arg("as_frame") = py::none(),
           "read_results(path, as_frame=None) -> pandas.DataFrame | list[dict]\n\n"
           "Reads a results file (`run`, `score`, `merge`), each row validated by the C++ "

@@ -23,6 +23,15 @@ std::string DataKey(const DataTag& d) {
                        d.seed.dump());
 }
 
+/// A call's message on one line, at most 200 characters (a note, not a log).
+std::string OneLineMessage(std::string text) {
+    for (char& c : text) {
+        if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+    }
+    if (text.size() > 200) text = text.substr(0, 197) + "...";
+    return text;
+}
+
 std::string Where(const ResultRow& r) { return r.origin.empty() ? "(in memory)" : r.origin; }
 
 /// The row's metrics in the convention the report asks for.
@@ -50,6 +59,33 @@ bool AllFinite(const PairMetrics& m) {
     return true;
 }
 
+/// The CCD clip and Open3D inlier threshold the rows were measured with (one per set: rows
+/// measured otherwise are refused naming both), and the means of fitness and inlier RMSE.
+void SummarizeMetricOptions(const std::vector<const ResultRow*>& group,
+                            const std::vector<PairMetrics>& finite, MethodSummary* s) {
+    const PairMetrics& first = group.front()->metrics;
+    for (const ResultRow* r : group) {
+        if (r->metrics.ccd_clip != first.ccd_clip ||
+            r->metrics.inlier_threshold != first.inlier_threshold) {
+            throw std::runtime_error(fmt::format(
+                "{}: measured with ccd clip {:g} and inlier threshold {:g}, {} with {:g} and {:g}; "
+                "report rows measured alike (run --ccd-clip / --inlier-threshold)",
+                Where(*r), r->metrics.ccd_clip, r->metrics.inlier_threshold, Where(*group.front()),
+                first.ccd_clip, first.inlier_threshold));
+        }
+    }
+    s->ccd_clip = first.ccd_clip;
+    s->inlier_threshold = first.inlier_threshold;
+    if (s->inlier_threshold <= 0.0) return;
+    std::vector<double> fitness, rmse;
+    for (const PairMetrics& m : finite) {
+        if (std::isfinite(m.fitness)) fitness.push_back(m.fitness);
+        if (std::isfinite(m.inlier_rmse)) rmse.push_back(m.inlier_rmse);
+    }
+    s->fitness = SampleMean(fitness);
+    s->inlier_rmse = SampleMean(rmse);
+}
+
 /// Rows of one (method, params) set, sorted by pair.
 MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOptions& o,
                            const std::string& data_key, std::vector<std::string>* notes) {
@@ -64,6 +100,11 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
     std::vector<double> secs;
     std::size_t recalled = 0, succeeded = 0, recalled_3dm = 0;
     for (const ResultRow* r : group) {
+        if (r->status != Status::kOk && s.first_failure.empty()) {
+            s.first_failure = fmt::format(
+                "pair {}: {}: {}", r->pair, ToString(r->status),
+                r->result.message.empty() ? std::string("(no message)") : r->result.message);
+        }
         const PairMetrics m = MetricsIn(*r, o);
         secs.push_back(r->result.seconds);
         s.threads = r->threads;
@@ -128,6 +169,7 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
     s.median_seconds = SampleMedian(secs);
     s.mean_seconds =
         BootstrapMean(secs, o.bootstrap_samples, kDefaultBootstrapSeed, StreamId(id + "seconds"));
+    SummarizeMetricOptions(group, finite, &s);
     return s;
 }
 
@@ -160,6 +202,12 @@ std::vector<MethodSummary> SummarizeGroup(const std::vector<const ResultRow*>& r
         MethodSummary s = SummarizeOne(by_set[key], o, data_key, notes);
         // Several parameter sets of one method are separate rows, labelled by their params.
         if (sets_per_method[s.method] > 1) s.label = s.method + " " + s.params.dump();
+        // A learned method's row names the checkpoint it ran: model and training step.
+        const nlohmann::json& extra = by_set[key].front()->result.extra;
+        if (extra.is_object() && extra.contains("checkpoint_label") &&
+            extra["checkpoint_label"].is_string()) {
+            s.label += " (" + extra["checkpoint_label"].get<std::string>() + ")";
+        }
         out.push_back(std::move(s));
     }
     return out;
@@ -311,6 +359,26 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
         RateCol("success",
                 fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte))};
     if (o.recall_3dmatch) t.columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
+    // A clip other than the paper's is in the header; Open3D's pair only when measured.
+    const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
+    double threshold = 0.0;
+    for (const auto& s : rt.methods) {
+        if (s.ccd_clip != clip) {
+            throw std::runtime_error(fmt::format(
+                "{}: ccd measured with clip {:g} for {} and {:g} for {}: not comparable; run "
+                "them with one --ccd-clip",
+                rt.data.pairs_file, clip, rt.methods.front().label, s.ccd_clip, s.label));
+        }
+        threshold = std::max(threshold, s.inlier_threshold);
+    }
+    for (Column& c : t.columns) {
+        if (c.key == "ccd" && clip != kCcdClip) c.header = fmt::format("ccd (clip {:g})", clip);
+    }
+    if (threshold > 0.0) {
+        t.columns.push_back(
+            Col("fitness", fmt::format("fitness@{:g}", threshold), kFractionDecimals));
+        t.columns.push_back(Col("inlier_rmse", fmt::format("inlier rmse@{:g}", threshold), 4));
+    }
     t.columns.push_back(Col("median_seconds", "median s", kSecondsDecimals));
     t.columns.push_back(Col("mean_seconds", "mean s", kSecondsDecimals, CiStyle::kPlusMinus));
     t.columns.back().compact = false;
@@ -340,6 +408,10 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
                           {"chamfer", Mean(s.chamfer, n)},
                           {"threads", MeasuredCell(double(s.threads), n)}};
         if (o.recall_3dmatch) cells.emplace_back("recall_3dmatch", Mean(s.recall_3dmatch, n));
+        if (threshold > 0.0) {
+            cells.emplace_back("fitness", MeasuredCell(s.fitness, n));
+            cells.emplace_back("inlier_rmse", MeasuredCell(s.inlier_rmse, n));
+        }
         Cell params;
         params.source = CellSource::kLabel;
         params.text = s.params.dump();
@@ -354,6 +426,14 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     p.pairing = rt.data.pairing;
     p.seed = rt.data.seed;
     t.provenance = {p};
+    std::string why;  // the first message per method whose calls failed
+    for (const MethodSummary& m : rt.methods) {
+        if (!m.first_failure.empty()) {
+            why += fmt::format("\n- {}: {} of {} failed; first: {}", m.label, m.failed, m.pairs,
+                               OneLineMessage(m.first_failure));
+        }
+    }
+    if (!why.empty()) t.notes.push_back("Why calls failed (first message per method):" + why);
     if (!rt.notes.empty()) {
         std::string failed = "Rows counted as failed:";
         for (const auto& n : rt.notes) failed += "\n- " + n;

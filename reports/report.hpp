@@ -2,6 +2,7 @@
 // Aggregates result rows into per-method summaries (ReportTable: rows of MethodSummary, notes)
 // and those into report tables (reports/table.hpp), which the table writers render.
 // Metrics, thresholds and success rules are defined in docs/metrics.md.
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -47,6 +48,8 @@ struct MethodSummary {
     nlohmann::json params = nlohmann::json::object();
     std::size_t pairs = 0;
     std::size_t failed = 0;  ///< status != ok or a null metric (such rows count as not recalled)
+    /// Why the first failed call (by pair) failed: "pair k: <status>: <message>"; "" if none.
+    std::string first_failure;
     /// Means over the pairs with finite metrics, each with its bootstrap CI.
     Estimate mae_r, mae_t, ccd, rre, rte, chamfer;
     /// sqrt of the mean mse_r / mse_t; the CI is the square root of the mean's bootstrap CI.
@@ -58,6 +61,9 @@ struct MethodSummary {
     double median_seconds = 0.0;
     Estimate mean_seconds;  ///< seconds per call over all pairs, with its bootstrap CI
     int threads = 1;
+    double ccd_clip = kCcdClip;     ///< the clip every row's ccd was measured with
+    double inlier_threshold = 0.0;  ///< > 0: the rows carry Open3D's fitness / inlier RMSE
+    double fitness = std::nan(""), inlier_rmse = std::nan("");  ///< their means
 };
 
 /// Rows computed on one pair file (same content) with one Euler convention.

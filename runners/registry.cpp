@@ -16,6 +16,7 @@
 #include "baselines/learned.hpp"
 #endif
 #include "baselines/svr.hpp"
+#include "core/suggest.hpp"
 
 namespace regbench {
 
@@ -42,8 +43,13 @@ const MethodInfo& FindMethod(const std::string& name) {
         if (m.name == name) return m;
     }
     std::string known;
-    for (const auto& m : AllMethods()) known += (known.empty() ? "" : ", ") + m.name;
-    throw std::invalid_argument("unknown method '" + name + "' (known: " + known + ")");
+    std::vector<std::string> names;
+    for (const auto& m : AllMethods()) {
+        known += (known.empty() ? "" : ", ") + m.name;
+        names.push_back(m.name);
+    }
+    throw std::invalid_argument("unknown method '" + name + "' (" + DidYouMean(name, names) +
+                                "known: " + known + ")");
 }
 
 std::unique_ptr<RegistrationMethod> CreateMethod(const std::string& name,

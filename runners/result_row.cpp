@@ -44,6 +44,14 @@ std::optional<double> OptionalNumber(const nlohmann::json& j, const char* key) {
 nlohmann::json MetricsToJson(const PairMetrics& m) {
     nlohmann::json j = {{"ccd_within_clip", m.ccd_within_clip}};
     for (const auto& f : PerPairMetrics()) j[f.name] = FiniteOrNull(m.*f.field);
+    // Keys only rows measured with non-default options carry (rows at the defaults keep
+    // their bytes): the CCD clip, and Open3D's fitness / inlier RMSE at their threshold.
+    if (m.ccd_clip != kCcdClip) j["ccd_clip"] = m.ccd_clip;
+    if (m.inlier_threshold > 0.0) {
+        j["inlier_threshold"] = m.inlier_threshold;
+        j["fitness"] = FiniteOrNull(m.fitness);
+        j["inlier_rmse"] = FiniteOrNull(m.inlier_rmse);
+    }
     return j;
 }
 
@@ -58,6 +66,12 @@ PairMetrics MetricsFromJson(const nlohmann::json& j, EulerConvention euler) {
         m.*f.field = old_row ? kNaN : NumberOrNaN(j, f.name);
     }
     m.ccd_within_clip = j.value("ccd_within_clip", true);
+    m.ccd_clip = OptionalNumber(j, "ccd_clip").value_or(kCcdClip);
+    m.inlier_threshold = OptionalNumber(j, "inlier_threshold").value_or(0.0);
+    if (m.inlier_threshold > 0.0) {
+        m.fitness = NumberOrNaN(j, "fitness");
+        m.inlier_rmse = NumberOrNaN(j, "inlier_rmse");
+    }
     return m;
 }
 

@@ -79,6 +79,13 @@ ResultRow CheckResultRow(const nlohmann::json& json, const RowExpectation& expec
         Refuse(where, "method '" + row.method + "' ran with other parameters " + row.params.dump() +
                           " (this run: " + spec->params.dump() + ")");
     }
+    if (row.metrics.ccd_clip != expect.metric_options.ccd_clip ||
+        row.metrics.inlier_threshold != expect.metric_options.inlier_threshold) {
+        Refuse(where, "row was measured with --ccd-clip " + std::to_string(row.metrics.ccd_clip) +
+                          " --inlier-threshold " + std::to_string(row.metrics.inlier_threshold) +
+                          ", this run with " + std::to_string(expect.metric_options.ccd_clip) +
+                          " and " + std::to_string(expect.metric_options.inlier_threshold));
+    }
     if (row.data.content_hash != expect.content_hash) {
         Refuse(where, "row comes from other pair data (content_hash '" + row.data.content_hash +
                           "', this run '" + expect.content_hash + "')");

@@ -21,6 +21,7 @@ struct RowExpectation {
     int shard_index = 0;        ///< only pairs k with k % shard_count == shard_index
     int shard_count = 1;
     std::vector<MethodSpec> methods;  ///< names and resolved parameters
+    MetricOptions metric_options;     ///< the CCD clip and inlier threshold of the metrics
 };
 
 /// Checks one row (at `where` = "file:line"): every required field with the right type, a

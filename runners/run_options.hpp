@@ -50,6 +50,7 @@ struct RunOptions {
     std::size_t max_points = 20000;
     bool downsample = false;  ///< guard: run on stride-downsampled clouds instead of refusing
     EulerConvention euler = EulerConvention::kZyx;  ///< Euler angles of mae_r / rmse_r
+    MetricOptions metric_options;  ///< CCD clip, Open3D fitness / inlier RMSE threshold
     /// Methods of `methods` that are not registered, by name (which must not be a registered
     /// method's). The scale guard asks their `cost`, and skips those without one.
     std::map<std::string, ExternalMethod> external_methods;

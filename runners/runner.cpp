@@ -190,8 +190,8 @@ ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSp
     row.source_overlap_ratio = pair.source_overlap_ratio;
     row.target_overlap_ratio = pair.target_overlap_ratio;
     row.euler = context.euler;
-    row.metrics =
-        ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target, context.euler);
+    row.metrics = ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target,
+                                 context.euler, context.metric_options);
     row.metrics.overlap_rmse =
         OverlapRmse(pair.T_gt, result.T_target_source, pair.source, pair.source_overlap);
     row.gt_transform = pair.T_gt;
@@ -241,6 +241,7 @@ void ValidateRunOptions(const RunOptions& options) {
         throw std::invalid_argument("--shard must be i/n with 0 <= i < n");
     }
     if (options.out_path.empty()) throw std::invalid_argument("--out is required");
+    CheckMetricOptions(options.metric_options);
     for (const auto& m : AllMethods()) {
         if (options.external_methods.count(m.name)) {
             throw std::invalid_argument(
@@ -490,6 +491,7 @@ RowContext RunRowContext(const RunOptions& options, const DataTag& data_tag) {
     RowContext context;
     context.threads = options.threads_per_call;
     context.euler = options.euler;
+    context.metric_options = options.metric_options;
     context.data = data_tag;
     context.machine = {{"loadavg", {load.load1, load.load5, load.load15}},
                        {"cores", load.cores},
@@ -498,6 +500,12 @@ RowContext RunRowContext(const RunOptions& options, const DataTag& data_tag) {
 }
 
 }  // namespace
+
+std::string PairScaleWarning(const PairSet& set, const MetricOptions& options) {
+    std::vector<const PointCloud*> targets;
+    for (const auto& p : set.pairs) targets.push_back(&p.target);
+    return ScaleWarning(MedianCloudRadius(targets), options);
+}
 
 RunSummary RunBenchmark(const RunOptions& options) {
     ValidateRunOptions(options);
@@ -509,6 +517,8 @@ RunSummary RunBenchmark(const RunOptions& options) {
     plan.indices = ShardPairs(set.pairs.size(), options);
     const std::string notice = CheckScale(set, plan.indices, options);
     if (!notice.empty()) std::fprintf(stderr, "[run] %s", notice.c_str());
+    const std::string scale = PairScaleWarning(set, options.metric_options);
+    if (!scale.empty()) std::fprintf(stderr, "[run] warning: %s\n", scale.c_str());
     const std::string part_path = options.out_path + ".part";
     CheckOutputPath(options.out_path, {options.pairs_path});
     CheckOutputPath(part_path, {options.pairs_path});
@@ -523,6 +533,7 @@ RunSummary RunBenchmark(const RunOptions& options) {
     expect.shard_index = options.shard_index;
     expect.shard_count = options.shard_count;
     expect.methods = options.methods;
+    expect.metric_options = options.metric_options;
     plan.benchmark_seed = BenchmarkSeed(set);
     plan.row_context = RunRowContext(options, data_tag);
 

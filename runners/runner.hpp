@@ -35,6 +35,7 @@ struct RowContext {
     std::optional<Status> status;  ///< runner-level status; unset: from the AlignResult
     int threads = 1;               ///< OpenMP threads of the call
     EulerConvention euler = EulerConvention::kZyx;
+    MetricOptions metric_options;  ///< CCD clip, inlier threshold
     DataTag data;
     /// Load and cores of the machine when the run started (`run`); empty when not recorded.
     nlohmann::json machine = nlohmann::json::object();
@@ -47,6 +48,9 @@ ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSp
 
 /// The `data` tag of rows computed on `set` read from `pairs_path`.
 DataTag DataTagOf(const std::string& pairs_path, const PairSet& set);
+
+/// ScaleWarning (core/metrics.hpp) for the median target radius of `set`'s pairs.
+std::string PairScaleWarning(const PairSet& set, const MetricOptions& options);
 
 /// The pair file's generation seed (0 when it has none): seeds the methods' per-pair streams.
 std::uint64_t BenchmarkSeed(const PairSet& set);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -74,9 +75,11 @@ std::size_t CheckedPair(double value, std::size_t num_pairs, const std::string& 
     return static_cast<std::size_t>(value);
 }
 
-/// Parses one JSONL line; false when it belongs to another method (rescoring a results file).
+/// Parses one JSONL line; false when it belongs to another method (rescoring a results file),
+/// whose name goes into `other_methods`.
 bool ParseJsonLine(const std::string& line, const std::string& where, std::size_t num_pairs,
-                   const std::string& method, ExternalTransform* out) {
+                   const std::string& method, ExternalTransform* out,
+                   std::set<std::string>* other_methods) {
     nlohmann::json j;
     try {
         j = ParseJsonBounded(line, where);
@@ -84,7 +87,10 @@ bool ParseJsonLine(const std::string& line, const std::string& where, std::size_
         throw std::runtime_error(where + ": not JSON: " + e.what());
     }
     if (!j.is_object()) throw std::runtime_error(where + ": not a JSON object");
-    if (j.contains("method") && j["method"].is_string() && j["method"] != method) return false;
+    if (j.contains("method") && j["method"].is_string() && j["method"] != method) {
+        other_methods->insert(j["method"].get<std::string>());
+        return false;
+    }
     if (!j.contains("pair") || !j["pair"].is_number()) {
         throw std::runtime_error(where + ": no numeric \"pair\"");
     }
@@ -152,7 +158,8 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size
     std::map<std::size_t, std::string> seen;  // pair -> file:line
     std::string line;
     std::size_t lineno = 0;
-    std::string file_hash;  // from a "# content_hash: H" comment
+    std::string file_hash;                // from a "# content_hash: H" comment
+    std::set<std::string> other_methods;  // "method" names of the JSONL rows skipped
     while (std::getline(in, line)) {
         ++lineno;
         const auto first = line.find_first_not_of(" \t\r");
@@ -173,7 +180,7 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size
         if (csv) {
             if (line.compare(first, 4, "pair") == 0) continue;  // header
             ParseCsvLine(line, where, num_pairs, &t);
-        } else if (!ParseJsonLine(line, where, num_pairs, method, &t)) {
+        } else if (!ParseJsonLine(line, where, num_pairs, method, &t, &other_methods)) {
             continue;
         }
         if (t.content_hash.empty()) t.content_hash = file_hash;
@@ -194,6 +201,14 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size
         }
         out.push_back(t);
     }
+    // Rows of other methods only: --method is most likely a typo or the wrong file, and scoring
+    // would turn every pair into a `missing` row scored as the identity.
+    if (out.empty() && !other_methods.empty()) {
+        std::string names;
+        for (const auto& m : other_methods) names += (names.empty() ? "'" : ", '") + m + "'";
+        throw std::runtime_error(path + ": no rows of method '" + method + "'; it holds rows of " +
+                                 names + " (pick one with --method)");
+    }
     return out;
 }
 
@@ -201,6 +216,7 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     if (o.method.empty()) throw std::invalid_argument("score: --method is required");
     if (o.out_path.empty()) throw std::invalid_argument("score: --out is required");
     if (!o.params.is_object()) throw std::invalid_argument("score: --params must be a JSON object");
+    CheckMetricOptions(o.metric_options);
     // Refused before any work: a directory, a device or one of the inputs as --out.
     CheckOutputPath(o.out_path, {o.pairs_path, o.transforms_path});
     // One writer per output for the whole scoring, as `run` (a second `score` or a `run` on
@@ -215,6 +231,7 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     RowContext context;
     context.threads = o.threads;
     context.euler = o.euler;
+    context.metric_options = o.metric_options;
     context.data = DataTagOf(o.pairs_path, set);
     // Transforms computed on other pairs would be scored against the wrong ground truth.
     for (const auto& t : given) {
@@ -226,7 +243,18 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
                                      context.data.content_hash +
                                      "); score it against the pair file it was computed on");
         }
+        if (t.content_hash.empty() && !o.allow_unhashed) {
+            throw std::runtime_error(
+                t.origin +
+                ": the transform records no content hash of the pair file it was computed "
+                "on, so nothing shows it belongs to " +
+                o.pairs_path + "; add a \"content_hash\" key (JSONL) or a '# content_hash: " +
+                context.data.content_hash +
+                "' line (the scored file's hash), or pass --allow-unhashed to score it anyway");
+        }
     }
+    const std::string scale = PairScaleWarning(set, o.metric_options);
+    if (!scale.empty()) std::fprintf(stderr, "[score] warning: %s\n", scale.c_str());
     const MethodSpec spec{o.method, o.params};
     ScoreSummary summary;
     std::vector<ResultRow> rows;

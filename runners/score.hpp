@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/metrics.hpp"
 #include "core/point_cloud.hpp"
 #include "core/transform.hpp"
 
@@ -27,6 +28,10 @@ struct ScoreOptions {
     /// dividing s = cbrt(det) out; the row's `scale` is s and the rotation metrics use R.
     bool allow_scale = false;
     int threads = 1;  ///< recorded in rows (threads the external method used)
+    /// Score transforms that record no content hash of their pair file (nothing can tell
+    /// whether they were computed on this one); refused by default.
+    bool allow_unhashed = false;
+    MetricOptions metric_options;  ///< CCD clip, Open3D fitness / inlier RMSE threshold
 };
 
 /// One transform of a transforms file.
@@ -44,7 +49,8 @@ struct ExternalTransform {
 
 /// Reads a transforms file and validates it: JSONL rows {"pair": k, "transform": 4x4,
 /// "seconds": s} (a row with a "method" key other than `method` is skipped, so a `run` result
-/// file can be rescored) or CSV `pair,t00,...,t23[,seconds]` (first three rows of the 4x4,
+/// file can be rescored; a file whose rows name methods but never `method` is refused naming
+/// the methods it holds) or CSV `pair,t00,...,t23[,seconds]` (first three rows of the 4x4,
 /// row-major; an optional header line starting with "pair"). Throws std::runtime_error naming
 /// file:line for a malformed line, a pair index outside [0, num_pairs), a pair given twice or
 /// a matrix that is not rigid (a similarity with `allow_scale`) within `rigid_tolerance`.
@@ -58,7 +64,9 @@ struct ScoreSummary {
 };
 
 /// Scores every pair of the pair file: a row per pair, `missing` for pairs the file lacks
-/// (identity transform, counted as failed by `report`). Nothing is written on bad input.
+/// (identity transform, counted as failed by `report`). Nothing is written on bad input:
+/// a transform recording another pair file's content hash, or (unless `allow_unhashed`) one
+/// recording none, is refused naming file:line.
 ScoreSummary ScoreTransforms(const ScoreOptions& options);
 
 }  // namespace regbench

@@ -14,6 +14,8 @@
 #   align       (fast) generate the embedded-corpus pairs, export pair 88 as PLY, align it
 #   score       (fast) transforms of Open3D's Python ICP scored and reported beside icp
 #   deepgmr_import (fast) DeepGMR stand-ins (scripts/deepgmr_standin.py): import, generate, run
+#   versus      (fast) fgr against icp on the same pairs: report --versus
+#   versus_python (fast) the same from Python: regbench.compare_methods
 #   python_run  (slow) Open3D's Python ICP beside icp and cpd in one regbench.run
 #   quick_run   (slow) the main job: reproduce --quick, its Tab. 1 and where the report is
 set -euo pipefail
@@ -32,7 +34,7 @@ outdir="$(mkdir -p "$1" && cd "$1" && pwd)"
 shift
 wanted=("$@")
 if [ ${#wanted[@]} -eq 0 ]; then
-  wanted=(align score deepgmr_import)
+  wanted=(align score deepgmr_import versus versus_python)
   [ "$fast" = 1 ] || wanted+=(python_run quick_run)
 fi
 bin="$build/app/regbench"
@@ -94,6 +96,27 @@ example_deepgmr_import() {
   show "regbench run --pairs noisy.h5 --methods deepgmr-noicp --params '{\"deepgmr-noicp\": \
 {\"checkpoint\": \"ck/deepgmr-noisy\"}}' --out noisy.jsonl -q"
   show "regbench report noisy.jsonl"
+}
+
+versus_rows() {  # icp and fgr on the embedded-corpus pairs
+  pairs
+  [ -f out/icp_fgr.jsonl ] || quiet "regbench run --pairs out/partial_cgal_test.h5 --methods icp,fgr \
+--out out/icp_fgr.jsonl -q"
+}
+
+example_versus() {
+  versus_rows
+  show "regbench report out/icp_fgr.jsonl --versus fgr,icp"
+}
+
+example_versus_python() {
+  versus_rows
+  show "PYTHONPATH=build/python /usr/bin/python3 -c '
+import regbench
+(r,) = regbench.compare_methods(\"out/icp_fgr.jsonl\", \"fgr\", \"icp\")
+for m in r[\"metrics\"]:
+    print(m[\"metric\"], round(m[\"diff_mean\"], 4), [round(m[\"ci_lo\"], 4), round(m[\"ci_hi\"], 4)],
+          \"p=%.2g\" % m[\"p_value\"], m[\"wins\"], m[\"ties\"], m[\"losses\"])'"
 }
 
 example_python_run() {

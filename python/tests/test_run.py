@@ -40,7 +40,8 @@ def test_callable_rows_equal_score_rows(pairs_path, pair_file, tmp_path):
     # The same transforms through `regbench score`.
     transforms = tmp_path / "T.jsonl"
     transforms.write_text("".join(
-        json.dumps({"pair": r["pair"], "transform": r["transform"]}) + "\n" for r in rows))
+        json.dumps({"pair": r["pair"], "transform": r["transform"],
+                    "content_hash": r["data"]["content_hash"]}) + "\n" for r in rows))
     cli("score", "--pairs", pairs_path, "--transforms", transforms, "--method", "py_icp",
         "--out", tmp_path / "scored.jsonl")
     scored = read_jsonl(tmp_path / "scored.jsonl")

@@ -123,6 +123,59 @@ TEST(CliContract, UsageErrorsExitTwoWithOneLine) {
         RunCli("compare " + (Dir() / "missing.jsonl").string() + " " + base.string()).exit_code, 1);
 }
 
+// Issue 41 item 5: unknown method and protocol names exited 1 (an input refusal) and `run
+// --method icp` said only that --methods is required; they are usage errors (exit 2, one line
+// before any work) naming the known names with the nearest one as a "did you mean".
+TEST(CliContract, UnknownNamesAreUsageErrorsWithADidYouMean) {
+    const fs::path out = Dir() / "names.jsonl";
+    fs::remove(out);
+    const std::string run =
+        "run --pairs " + (Dir() / "none.h5").string() + " --out " + out.string();
+    ExpectUsageError(RunCli(run + " --methods icpp"), "unknown method 'icpp' (did you mean 'icp'?");
+    ExpectUsageError(RunCli(run + " --methods icp,fgrr"), "did you mean 'fgr'?");
+    ExpectUsageError(RunCli(run + " --methods icp --params '{\"icp\": {\"max_iteration\": 3}}'"),
+                     "max_iteration");
+    ExpectUsageError(RunCli(run + " --method icp"), "did you mean --methods?");
+    EXPECT_FALSE(fs::exists(out));
+    ExpectUsageError(RunCli("align a.ply b.ply --method cdp"), "did you mean 'cpd'?");
+    const std::string generate =
+        "generate --dataset procedural --split test --pairs 1 --seed 1 "
+        "--out " +
+        (Dir() / "names.h5").string();
+    ExpectUsageError(RunCli(generate + " --protocol parital"),
+                     "unknown protocol 'parital' (did you mean 'partial'?");
+    ExpectUsageError(RunCli(generate + " --pairing share"), "did you mean 'shared'?");
+    EXPECT_FALSE(fs::exists(Dir() / "names.h5"));
+}
+
+// Issue 41 item 5: `generate --pairs N` above the split's items silently reused items.
+TEST(CliContract, GenerateSaysWhenPairsReuseItems) {
+    const fs::path out = Dir() / "reuse.h5";
+    fs::remove(out);
+    const std::string dir = Dir().string();
+    // Two stored pairs exported as files: a folder dataset of 4 items (2 sources, 2 targets).
+    const fs::path two = Dir() / "two.h5", files = Dir() / "two_xyz";
+    fs::remove(two);
+    fs::remove_all(files);
+    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 2 "
+                     "--points 64 --seed 1 --out " +
+                     two.string())
+                  .exit_code,
+              0);
+    ASSERT_EQ(RunCli("export " + two.string() + " --out " + files.string()).exit_code, 0);
+    const std::string generate = "generate --protocol partial --dataset " + files.string() +
+                                 " --split all --points 32 --seed 1 --out " + out.string();
+    const CliResult many = RunCli(generate + " --pairs 5");
+    EXPECT_EQ(many.exit_code, 0) << many.output;
+    EXPECT_NE(many.output.find("--pairs 5 is more than the 4 items"), std::string::npos)
+        << many.output;
+    EXPECT_NE(many.output.find("reuses items"), std::string::npos) << many.output;
+    fs::remove(out);
+    const CliResult few = RunCli(generate + " --pairs 4");
+    EXPECT_EQ(few.exit_code, 0) << few.output;
+    EXPECT_EQ(few.output.find("reuses items"), std::string::npos) << few.output;
+}
+
 // README command 1 failed in a fresh clone: `reproduce --out out/reproduce` stopped with
 // "out/reproduce.lock: cannot create lock file" because `out/` did not exist. A command whose
 // output is a folder creates the folder's missing parents (as `mkdir -p`); expected from that

@@ -255,7 +255,7 @@ xfsz)
     --split test --pairs 40 --seed 1 --out big.h5
   limited keep-xfsz run r.jsonl 4 "$bin" run --pairs pairs.h5 --methods identity,icp --out r.jsonl -q
   limited keep-xfsz score s.jsonl 4 "$bin" score --pairs pairs.h5 --transforms T.jsonl --method ext \
-    --out s.jsonl
+    --allow-unhashed --out s.jsonl
   limited keep-xfsz compare c.json 1 "$bin" compare base.jsonl base.jsonl --json c.json
   limited keep-xfsz merge m.jsonl 4 "$bin" merge base.jsonl --pairs pairs.h5 --methods identity --out m.jsonl
   if ls -a | grep -q '\.tmp\.'; then fail "temporary files left: $(ls -a)"; fi

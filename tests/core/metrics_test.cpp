@@ -185,3 +185,68 @@ TEST(Metrics, MaeRMatchesScipyAsEulerForRandomRotations) {
 
 }  // namespace
 }  // namespace regbench
+
+namespace regbench {
+namespace {
+
+// Issue 41 item 3: Open3D's evaluate_registration pair (fitness, inlier RMSE) at a threshold
+// the user sets. Expected values from Open3D 0.16.1 (Debian's, /usr/bin/python3):
+//   a, b = PointCloud(Vector3dVector(src)), PointCloud(Vector3dVector(tgt))
+//   r = o3d.pipelines.registration.evaluate_registration(a, b, threshold, T)
+//   threshold 0.3 -> fitness 0.875, inlier_rmse 0.18968461709614717 (7 correspondences)
+//   threshold 0.15 -> 0.25, 0.08944271909999163; threshold 0.01 -> 0.0, 0.0
+TEST(Metrics, FitnessAndInlierRmseMatchOpen3dEvaluateRegistration) {
+    PointCloud src(8, 3), tgt(10, 3);
+    src << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 0, 0.5, 0.5, 0.5, 2, 2, 2, -1, 0.5, 0.25;
+    tgt << 0.1, 0, 0, 1.2, 0.1, 0, 0, 1, 0.25, 0.05, 0.05, 1.1, 3, 3, 3, 0.5, 0.4, 0.6, 1.0, 1.0,
+        0.2, -0.9, 0.5, 0.5, 5, 5, 5, 0.2, 0.2, 0.2;
+    Transform T = Transform::Identity();
+    T.block<3, 3>(0, 0) << std::cos(0.1), -std::sin(0.1), 0, std::sin(0.1), std::cos(0.1), 0, 0, 0,
+        1;
+    T.block<3, 1>(0, 3) << 0.05, -0.02, 0.01;
+    const struct {
+        double threshold, fitness, rmse;
+    } cases[] = {
+        {0.3, 0.875, 0.18968461709614717}, {0.15, 0.25, 0.08944271909999163}, {0.01, 0.0, 0.0}};
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.threshold);
+        MetricOptions o;
+        o.inlier_threshold = c.threshold;
+        const PairMetrics m =
+            ComputeMetrics(Transform::Identity(), T, src, tgt, EulerConvention::kZyx, o);
+        EXPECT_DOUBLE_EQ(m.fitness, c.fitness);
+        EXPECT_NEAR(m.inlier_rmse, c.rmse, 1e-12);
+        EXPECT_EQ(m.inlier_threshold, c.threshold);
+    }
+    // Not asked for: not computed (rows at the defaults keep their keys).
+    EXPECT_TRUE(std::isnan(ComputeMetrics(Transform::Identity(), T, src, tgt).fitness));
+}
+
+// Issue 41 item 3: the CCD clip is a parameter; at the default the metric is the paper code's.
+TEST(Metrics, CcdClipIsAnOptionAndScaleWarns) {
+    PointCloud a(2, 3), b(2, 3);
+    a << 0, 0, 0, 10, 0, 0;
+    b << 0, 0, 3, 10, 0, 0.05;  // nearest distances 3 and 0.05 both ways
+    MetricOptions wide;
+    wide.ccd_clip = 5.0;
+    // Hand derivation: default clip 0.1: mean(min(3, .1), .05) twice = 2 * 0.075 = 0.15;
+    // clip 5: mean(3, 0.05) twice = 2 * 1.525 = 3.05.
+    EXPECT_NEAR(ComputeMetrics(Transform::Identity(), Transform::Identity(), a, b).ccd, 0.15,
+                1e-12);
+    const PairMetrics m = ComputeMetrics(Transform::Identity(), Transform::Identity(), a, b,
+                                         EulerConvention::kZyx, wide);
+    EXPECT_NEAR(m.ccd, 3.05, 1e-12);
+    EXPECT_EQ(m.ccd_clip, 5.0);
+    // Millimetre-sized objects (radius 100) under the default clip: warned, with a clip to use.
+    EXPECT_NE(ScaleWarning(100.0, MetricOptions{}).find("10% of the radius"), std::string::npos);
+    EXPECT_NE(ScaleWarning(100.0, MetricOptions{}).find("e.g. 10,"), std::string::npos);
+    EXPECT_EQ(ScaleWarning(1.0, MetricOptions{}), "");    // unit-sphere objects
+    EXPECT_EQ(ScaleWarning(100.0, wide), "");             // the user chose a clip
+    EXPECT_NE(ScaleWarning(0.001, MetricOptions{}), "");  // far below the clip
+    PointCloud ring(4, 3);
+    ring << 100, 0, 0, -100, 0, 0, 0, 100, 0, 0, -100, 0;
+    EXPECT_NEAR(MedianCloudRadius({&ring}), 100.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace regbench

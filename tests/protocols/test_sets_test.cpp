@@ -150,9 +150,21 @@ TEST(StoredPairing, ProvenanceSaysWhatWasUsed) {
     EXPECT_EQ(p.at("pairing"), "stored");
     EXPECT_EQ(p.at("noise_sigma"), 0.0);
     EXPECT_TRUE(p.contains("stored_pairs"));
+    // Issue 41: stored pairs said protocol "indoor" / "partial" with its keep 0.7 and noise
+    // 0.01, none of which was applied: they are labelled `stored`, with what was applied.
+    EXPECT_EQ(p.at("protocol"), "stored");
+    EXPECT_EQ(p.at("params"),
+              (nlohmann::json{{"points", o.points}, {"pairing", "stored"}, {"eta", o.eta}}));
+    // One noise_sigma: a protocol without noise carries no noise parameters in params.
+    const nlohmann::json partial = ProtocolProvenance(DefaultProtocolOptions(Protocol::kPartial));
+    EXPECT_EQ(partial.at("noise_sigma"), 0.0);
+    EXPECT_FALSE(partial.at("params").contains("noise_sigma"));
+    EXPECT_FALSE(partial.at("params").contains("noise_clip"));
+    EXPECT_EQ(partial.at("params").at("keep"), 0.7);
     const nlohmann::json jitter = ProtocolProvenance(DefaultProtocolOptions(Protocol::kJitter));
     EXPECT_EQ(jitter.at("pairing"), "independent");
-    EXPECT_EQ(jitter.at("noise_sigma"), 0.01);  // the protocol's default sigma
+    EXPECT_EQ(jitter.at("noise_sigma"), 0.01);               // the protocol's default sigma
+    EXPECT_EQ(jitter.at("params").at("noise_sigma"), 0.01);  // applied: the same one
     EXPECT_FALSE(jitter.contains("stored_pairs"));
 }
 

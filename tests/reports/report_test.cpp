@@ -346,5 +346,47 @@ TEST(Report, Recall3dmatchUsesOverlapRmseRreAndRte) {
     EXPECT_NEAR(Summarize(rows, o)[0].recall_3dmatch.mean, 1.0 / 3.0, 1e-12);
 }
 
+// Issue 41 item 6: `report` said how many calls failed, never why; and a checkpoint's row was
+// labelled by the method alone, whichever model and training step it ran.
+TEST(Report, SaysWhyCallsFailedAndWhichCheckpointRan) {
+    std::vector<ResultRow> rows =
+        Numbered({Row("icp", 1, 0, 1), Row("icp", 2, 0, 1, Status::kFailed),
+                  Row("icp", 3, 0, 1, Status::kTimeout)});
+    rows[1].result.message = "diverged: 7 correspondences";
+    rows[2].result.message = "killed after 5 s";
+    for (std::size_t k = 0; k < 3; ++k) {
+        ResultRow r = Row("ogmm", 1, 0, 1, Status::kOk, k);
+        r.result.extra = {{"checkpoint", "ck/ogmm-small/last"},
+                          {"checkpoint_label", "model ogmm-small, step 142"}};
+        rows.push_back(r);
+    }
+    const ReportOptions o;
+    const std::string md = TableToMarkdown(SummaryTable(BuildTables(rows, ReportOptions{})[0], o));
+    EXPECT_NE(md.find("Why calls failed (first message per method):"), std::string::npos) << md;
+    EXPECT_NE(md.find("- icp: 2 of 3 failed; first: pair 1: failed: diverged: 7 correspondences"),
+              std::string::npos)
+        << md;
+    EXPECT_EQ(md.find("killed after"), std::string::npos) << md;  // the first only
+    EXPECT_NE(md.find("| ogmm (model ogmm-small, step 142) |"), std::string::npos) << md;
+}
+
+// Issue 41 item 3: rows measured with another CCD clip or with Open3D's fitness say so.
+TEST(Report, ShowsTheCcdClipAndOpen3dFitnessWhenMeasured) {
+    std::vector<ResultRow> rows = Numbered({Row("icp", 1, 0, 1), Row("icp", 2, 0, 1)});
+    for (auto& r : rows) {
+        r.metrics.ccd_clip = 5.0;
+        r.metrics.inlier_threshold = 2.0;
+        r.metrics.fitness = r.pair == 0 ? 0.5 : 1.0;
+        r.metrics.inlier_rmse = 0.25;
+    }
+    const std::string md =
+        TableToMarkdown(SummaryTable(BuildTables(rows, ReportOptions{})[0], ReportOptions{}));
+    EXPECT_NE(md.find("ccd (clip 5)"), std::string::npos) << md;
+    EXPECT_NE(md.find("fitness@2"), std::string::npos) << md;
+    EXPECT_NE(md.find("0.750"), std::string::npos) << md;  // mean fitness (0.5 + 1) / 2
+    rows[1].metrics.ccd_clip = 0.1;                        // one row measured otherwise: refused
+    EXPECT_THROW(BuildTables(rows, ReportOptions{}), std::runtime_error);
+}
+
 }  // namespace
 }  // namespace regbench

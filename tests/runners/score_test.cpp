@@ -33,6 +33,9 @@ protected:
         o.transforms_path = Path(transforms);
         o.method = method;
         o.out_path = Path("scored.jsonl");
+        // Most files here are written by hand without a content hash; the refusal of such
+        // files is tested on its own (TransformsWithoutAHashAreRefusedUnlessAllowed).
+        o.allow_unhashed = true;
         return o;
     }
     /// Runs `method` with `run` and returns its rows.
@@ -125,14 +128,31 @@ TEST_F(ScoreTest, JsonlFromAnotherLanguageAndMissingPairs) {
     EXPECT_EQ(rows[1].euler, EulerConvention::kZyx);
 }
 
+/// Expects ScoreTransforms(o) to throw std::runtime_error containing `needle`, writing nothing.
+void ExpectError(const ScoreOptions& o, const std::string& needle);
+
 TEST_F(ScoreTest, RescoringARunResultFileKeepsOnlyTheNamedMethod) {
     RunRows("identity");
     std::filesystem::copy_file(Path("run.jsonl"), Path("old.jsonl"));
     ScoreOptions o = Options("old.jsonl", "identity");
     o.euler = EulerConvention::kXyz;
     EXPECT_EQ(ScoreTransforms(o).missing, 0u);
-    ScoreOptions other = Options("old.jsonl", "icp");  // no icp rows in that file
-    EXPECT_EQ(ScoreTransforms(other).missing, 4u);
+    std::filesystem::remove(Path("scored.jsonl"));
+    // Issue 41: a --method the file holds no rows of wrote 4 `missing` rows (scored as the
+    // identity), exit 0; it is refused naming the methods the file holds.
+    ExpectError(Options("old.jsonl", "icp"),
+                "old.jsonl: no rows of method 'icp'; it holds rows of 'identity'");
+}
+
+TEST_F(ScoreTest, TransformsWithoutAHashAreRefusedUnlessAllowed) {
+    // Issue 41: a transforms file that records no content hash scored against any pair file,
+    // silently measuring against another file's ground truth when it was not computed there.
+    Write("plain.csv", "0,1,0,0,0,0,1,0,0,0,0,1,0\n");
+    ScoreOptions strict = Options("plain.csv", "mine");
+    strict.allow_unhashed = false;
+    ExpectError(strict, "plain.csv:1: the transform records no content hash");
+    ExpectError(strict, "--allow-unhashed");
+    EXPECT_EQ(ScoreTransforms(Options("plain.csv", "mine")).missing, 3u);  // allowed
 }
 
 void ExpectError(const ScoreOptions& o, const std::string& needle) {

@@ -1,0 +1,60 @@
+"""regbench.compare_methods: method against method on common pairs (issue 41 item 1), checked
+against numpy and scipy.stats.wilcoxon on the same rows."""
+import numpy as np
+import pytest
+from scipy import stats
+
+import regbench
+from conftest import cli, read_jsonl
+
+
+@pytest.fixture(scope="module")
+def two_methods(tmp_path_factory):
+    d = tmp_path_factory.mktemp("versus")
+    pairs, out = d / "pairs12.h5", d / "r.jsonl"
+    cli("generate", "--protocol", "partial", "--dataset", "procedural", "--split", "test",
+        "--pairs", 12, "--points", 200, "--seed", 5, "--out", pairs)
+    cli("run", "--pairs", pairs, "--methods", "identity,icp", "--out", out, "-q")
+    return out
+
+
+def test_compare_methods_agrees_with_scipy(two_methods):
+    rows = read_jsonl(two_methods)
+    (result,) = regbench.compare_methods(two_methods, "icp", "identity")
+    assert (result["method_a"], result["method_b"], result["common"]) == ("icp", "identity", 12)
+    by = {m: {r["pair"]: r["metrics"] for r in rows if r["method"] == m}
+          for m in ("icp", "identity")}
+    for entry in result["metrics"]:
+        name = entry["metric"]
+        a = np.array([by["icp"][k][name] for k in range(12)])
+        b = np.array([by["identity"][k][name] for k in range(12)])
+        d = a - b
+        assert entry["pairs"] == 12
+        assert entry["diff_mean"] == pytest.approx(d.mean(), rel=1e-12, abs=1e-15)
+        assert entry["mean_a"] == pytest.approx(a.mean(), rel=1e-12)
+        assert (entry["wins"], entry["ties"], entry["losses"]) == \
+               ((d < 0).sum(), (d == 0).sum(), (d > 0).sum())
+        nonzero = d[d != 0]
+        ties = len(np.unique(np.abs(nonzero))) < len(nonzero)
+        # regbench: exact null distribution for <= 50 untied non-zero differences, else the
+        # tie-corrected normal approximation without continuity correction.
+        expected = stats.wilcoxon(nonzero, method="approx" if ties else "exact",
+                                  correction=False)
+        assert entry["statistic"] == pytest.approx(expected.statistic)
+        assert entry["p_value"] == pytest.approx(expected.pvalue, rel=1e-9)
+        assert entry["ci_lo"] <= entry["diff_mean"] <= entry["ci_hi"]
+    # The swapped comparison mirrors it; a method the file lacks is named with those it holds.
+    (swapped,) = regbench.compare_methods([two_methods], "identity", "icp")
+    assert swapped["metrics"][0]["diff_mean"] == pytest.approx(-result["metrics"][0]["diff_mean"])
+    with pytest.raises(ValueError, match="no rows of method 'ogmm'; the results hold"):
+        regbench.compare_methods(two_methods, "icp", "ogmm")
+
+
+def test_report_versus_prints_the_same_numbers(two_methods):
+    (result,) = regbench.compare_methods(two_methods, "icp", "identity")
+    text = cli("report", two_methods, "--versus", "icp,identity").stdout
+    assert "icp vs identity" in text
+    mae_r = result["metrics"][0]
+    assert f"| mae_r | 12 | {mae_r['mean_a']:.4f} |" in text
+    bad = cli("report", two_methods, "--versus", "icp", check=False)
+    assert bad.returncode == 2 and "--versus takes two" in bad.stderr

@@ -1,0 +1,187 @@
+#include "reports/versus.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+#include "reports/report.hpp"
+#include "reports/row_access.hpp"
+
+namespace regbench {
+namespace {
+
+/// Rows of one pair file and Euler convention (the groups `report` never pools).
+using GroupKey = std::pair<std::string, EulerConvention>;
+
+/// The rows of `method` by group and pair; a second row of one pair is refused.
+std::map<GroupKey, std::map<std::size_t, const ResultRow*>> IndexMethod(
+    const std::vector<ResultRow>& rows, const std::string& method) {
+    std::map<GroupKey, std::map<std::size_t, const ResultRow*>> index;
+    for (const ResultRow* r : RowsOf(rows, method)) {
+        auto& by_pair = index[{RowPairFileId(*r), r->euler}];
+        if (!by_pair.emplace(r->pair, r).second) {
+            throw std::runtime_error(
+                fmt::format("method '{}' has two rows of pair {} of {} (several parameter sets or "
+                            "unmerged shards; compare one set: report its file alone)",
+                            method, r->pair, r->data.pairs_file));
+        }
+    }
+    return index;
+}
+
+std::string MethodList(const std::vector<ResultRow>& rows) {
+    std::string list;
+    for (const auto& m : MethodOrder(rows)) list += (list.empty() ? "'" : ", '") + m + "'";
+    return list;
+}
+
+VersusMetric TestMetric(const std::vector<std::pair<const ResultRow*, const ResultRow*>>& matched,
+                        const std::string& metric, const std::string& stream,
+                        const VersusOptions& o) {
+    VersusMetric v;
+    v.metric = metric;
+    const MetricField& field = FindMetric(metric);
+    std::vector<double> a, b, d;
+    for (const auto& [ra, rb] : matched) {
+        const auto va = field.Of(ra->metrics);
+        const auto vb = field.Of(rb->metrics);
+        if (!va || !vb) continue;
+        a.push_back(*va);
+        b.push_back(*vb);
+        d.push_back(*va - *vb);
+        v.wins += *va < *vb;
+        v.ties += *va == *vb;
+        v.losses += *va > *vb;
+    }
+    v.pairs = d.size();
+    if (d.empty()) return v;
+    v.mean_a = SampleMean(a);
+    v.mean_b = SampleMean(b);
+    const BootstrapCi ci = BootstrapMean(d, o.bootstrap_samples, o.seed, StreamId(stream));
+    v.diff_mean = ci.mean;
+    v.ci_lo = ci.lo;
+    v.ci_hi = ci.hi;
+    const WilcoxonResult w = WilcoxonSignedRank(d);
+    v.p_value = w.p_value;
+    v.statistic = w.statistic;
+    return v;
+}
+
+}  // namespace
+
+std::vector<VersusResult> CompareMethods(const std::vector<ResultRow>& rows, const std::string& a,
+                                         const std::string& b, const VersusOptions& o) {
+    if (a == b) throw std::invalid_argument("--versus names method '" + a + "' twice");
+    const auto index_a = IndexMethod(rows, a);
+    const auto index_b = IndexMethod(rows, b);
+    for (const auto* m : {&a, &b}) {
+        if ((m == &a ? index_a : index_b).empty()) {
+            throw std::runtime_error("no rows of method '" + *m + "'; the results hold " +
+                                     MethodList(rows));
+        }
+    }
+    std::vector<VersusResult> out;
+    for (const auto& [key, pairs_a] : index_a) {
+        const auto it = index_b.find(key);
+        if (it == index_b.end()) continue;
+        VersusResult r;
+        r.method_a = a;
+        r.method_b = b;
+        r.data = pairs_a.begin()->second->data;
+        r.euler = key.second;
+        r.pairs_a = pairs_a.size();
+        r.pairs_b = it->second.size();
+        std::vector<std::pair<const ResultRow*, const ResultRow*>> matched;
+        for (const auto& [pair, row_a] : pairs_a) {
+            const auto row_b = it->second.find(pair);
+            if (row_b == it->second.end()) continue;
+            matched.emplace_back(row_a, row_b->second);
+            r.failed_a += row_a->status != Status::kOk;
+            r.failed_b += row_b->second->status != Status::kOk;
+        }
+        r.common = matched.size();
+        if (matched.empty()) continue;
+        for (const auto& metric : o.metrics) {
+            r.metrics.push_back(TestMetric(matched, metric, a + "/" + b + "/" + metric, o));
+        }
+        out.push_back(std::move(r));
+    }
+    if (out.empty()) {
+        throw std::runtime_error("methods '" + a + "' and '" + b +
+                                 "' share no pairs: no pair file and Euler convention holds rows "
+                                 "of both (compare rows measured on the same frozen pairs)");
+    }
+    return out;
+}
+
+Table VersusTable(const VersusResult& r) {
+    ReportTable described;
+    described.data = r.data;
+    described.euler = r.euler;
+    Table t("versus:" + r.method_a + ":" + r.method_b, r.method_a + " vs " + r.method_b,
+            fmt::format("Data: {}. Paired on the {} pairs both ran ({}: {} pairs, {}: {}; failed "
+                        "calls among them: {} {}, {} {}, scored with the transform they "
+                        "returned).",
+                        DescribeTable(described), r.common, r.method_a, r.pairs_a, r.method_b,
+                        r.pairs_b, r.method_a, r.failed_a, r.method_b, r.failed_b));
+    t.row_header = "metric";
+    const auto col = [](const std::string& key, const std::string& header, int decimals,
+                        CiStyle ci = CiStyle::kHidden) {
+        return Column{key, header, CellSource::kMeasured, Better::kNone, decimals, ci};
+    };
+    t.columns = {col("pairs", "pairs", 0),
+                 col("mean_a", r.method_a, 4),
+                 col("mean_b", r.method_b, 4),
+                 col("diff", r.method_a + " - " + r.method_b + " [95% CI]", 4, CiStyle::kInterval),
+                 col("diff_mean", "mean diff", 4),
+                 col("wilcoxon_p", "Wilcoxon p", 4),
+                 col("wins", r.method_a + " better", 0),
+                 col("ties", "ties", 0),
+                 col("losses", r.method_b + " better", 0)};
+    t.columns[4].shown = false;  // the interval column shows [lo, hi]; CSV/JSON keep the mean
+    int decimals = 0;            // one per column: the finest of the metrics' own
+    for (const auto& m : r.metrics) decimals = std::max(decimals, FindMetric(m.metric).decimals);
+    for (const std::size_t c : {1, 2, 3, 4}) t.columns[c].decimals = decimals;
+    for (const auto& m : r.metrics) {
+        TableRow row{m.metric, {}};
+        const auto cell = [&](double v) { return MeasuredCell(v, m.pairs); };
+        Cell diff = cell(m.diff_mean);
+        diff.ci_lo = m.ci_lo;
+        diff.ci_hi = m.ci_hi;
+        row.cells = {cell(static_cast<double>(m.pairs)),
+                     cell(m.mean_a),
+                     cell(m.mean_b),
+                     diff,
+                     cell(m.diff_mean),
+                     cell(m.p_value),
+                     cell(static_cast<double>(m.wins)),
+                     cell(static_cast<double>(m.ties)),
+                     cell(static_cast<double>(m.losses))};
+        if (m.pairs == 0) {
+            for (std::size_t c = 1; c < row.cells.size(); ++c) row.cells[c] = Cell{};
+        }
+        t.rows.push_back(std::move(row));
+    }
+    t.notes.push_back(
+        "Lower is better for every metric; " + r.method_a + " - " + r.method_b + " < 0 favours " +
+        r.method_a +
+        ". CI: percentile bootstrap of the mean paired difference; p: two-sided Wilcoxon "
+        "signed-rank test (zero differences dropped); ties: equal values.");
+    return t;
+}
+
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(VersusMetric, metric, pairs, mean_a, mean_b, diff_mean, ci_lo,
+                                   ci_hi, p_value, statistic, wins, ties, losses)
+
+nlohmann::json VersusToJson(const VersusResult& r) {
+    return {{"method_a", r.method_a},     {"method_b", r.method_b}, {"data", r.data},
+            {"euler", ToString(r.euler)}, {"pairs_a", r.pairs_a},   {"pairs_b", r.pairs_b},
+            {"common", r.common},         {"failed_a", r.failed_a}, {"failed_b", r.failed_b},
+            {"metrics", r.metrics}};
+}
+
+}  // namespace regbench
