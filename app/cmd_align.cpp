@@ -12,8 +12,8 @@
 #include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
 #include "core/metrics.hpp"
+#include "core/output_rule.hpp"
 #include "core/transform.hpp"
 #include "datasets/point_file.hpp"
 #include "protocols/xyz_io.hpp"
@@ -43,11 +43,13 @@ void SetupAlignCommand(CLI::App* cmd) {
     auto seed = std::make_shared<std::uint64_t>(0);
     auto threads = std::make_shared<int>(1);
     auto nan_points = std::make_shared<std::string>("drop");
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("source", *src, "Source point file (.ply .pcd .xyz .txt .off)")->required();
     cmd->add_option("target", *tgt, "Target point file")->required();
     cmd->add_option("--method", *method, "Method name (see `regbench methods`)")->required();
     cmd->add_option("--params", *params, "JSON object of the method's parameters");
     cmd->add_option("--out", *out, "Write the 4x4 (4 lines of 4 numbers) to this file");
+    cmd->add_flag("--force", *force, "Replace an existing --out");
     cmd->add_option("--gt", *gt, "Ground-truth 4x4 (same format): also print the metrics");
     cmd->add_flag("--normalize", *normalize,
                   "Move both clouds by the target's centroid and scale them by one factor into "
@@ -70,13 +72,10 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"drop", "refuse"}))
         ->capture_default_str();
     cmd->callback([=] {
-        std::optional<OutputLock> lock;  // one writer per --out, inputs refused before work
-        if (!out->empty()) {
-            std::vector<std::string> inputs{*src, *tgt};
-            if (!gt->empty()) inputs.push_back(*gt);
-            CheckOutputPath(*out, inputs);
-            lock.emplace(*out);
-        }
+        // One writer per --out, the one output rule (docs/usage.md, "Outputs") before work.
+        std::optional<ClaimedOutput> claim;
+        if (!out->empty())
+            claim.emplace(*out, std::vector<std::string>{*src, *tgt, *gt}, OutputRule{*force});
         const nlohmann::json p = ParseParamsOption(*params);
         const auto reg = CreateMethod(*method, p);  // validates name and params
         const NonFinitePoints non_finite =

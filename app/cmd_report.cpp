@@ -7,7 +7,7 @@
 
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
+#include "core/output_rule.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "runners/result_row.hpp"
@@ -25,11 +25,13 @@ void SetupReportCommand(CLI::App* cmd) {
     auto euler = std::make_shared<std::string>();
     auto paper = std::make_shared<std::string>();
     auto paper_file = std::make_shared<std::string>(DefaultPaperTablesPath());
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("results", *files, "One or more JSONL result files (e.g. shards)")->required();
     cmd->add_option("--format,-f", *format, "md | csv | json | latex")
         ->check(CLI::IsMember({"md", "csv", "json", "latex"}))
         ->capture_default_str();
     cmd->add_option("--out,-o", *out, "Write to this file (atomically) instead of stdout");
+    cmd->add_flag("--force", *force, "Replace an existing --out");
     cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r < r [deg]")
         ->capture_default_str();
     cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")->capture_default_str();
@@ -56,13 +58,10 @@ void SetupReportCommand(CLI::App* cmd) {
                   "instead of refusing");
     cmd->add_option("--paper-file", *paper_file, "The paper's tables (JSON)");
     cmd->callback([=] {
-        // Refused before reading anything: an input as --out, a directory, a device; then one
+        // The one output rule (docs/usage.md, "Outputs") before reading anything; then one
         // writer per --out until the report is in place.
-        std::optional<OutputLock> lock;
-        if (!out->empty()) {
-            CheckOutputPath(*out, *files);
-            lock.emplace(*out);
-        }
+        std::optional<ClaimedOutput> claim;
+        if (!out->empty()) claim.emplace(*out, *files, OutputRule{*force});
         std::vector<ResultRow> rows;
         for (const auto& f : *files) {
             auto part = ReadResultRows(f);  // throws naming file:line

@@ -16,8 +16,8 @@
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
+#include "core/output_rule.hpp"
 #include "experiments/training.hpp"
 #include "ogmm/train.hpp"
 #include "ogmm/zoo.hpp"
@@ -42,6 +42,7 @@ struct TrainArgs {
     bool val_icp = true;
     std::string ablation;
     std::string bundle;  ///< --write-bundle FILE: write the data and config, train nothing
+    bool force = false;  ///< --force: replace an existing --write-bundle file
 };
 
 /// The command as given, for checkpoints' provenance.
@@ -108,8 +109,7 @@ void WriteBundle(const TrainArgs& a, const std::string& command_line) {
     }
     // The file and the config are checked before the shapes are loaded (minutes on a real
     // dataset); the lock keeps a second writer off the file until it is renamed into place.
-    CheckOutputPath(a.bundle, {a.config_file});
-    const OutputLock lock(a.bundle);
+    const ClaimedOutput claim(a.bundle, {a.config_file, a.data.pairs_file}, OutputRule{a.force});
     const nlohmann::json config = BuildConfig(a, a.model, nlohmann::json::object());
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;
@@ -137,8 +137,12 @@ void Run(const TrainArgs& a, const std::string& command_line) {
         return;
     }
     if (a.out.empty()) throw std::invalid_argument("train: --out is required");
-    CreateParentFolders(a.out);
-    const OutputLock lock(a.out);
+    // The one output rule (docs/usage.md, "Outputs"): an existing run folder is the trainer's
+    // to judge (refused unless --resume), a link to another folder never followed.
+    OutputRule rule;
+    rule.folder = true;
+    rule.continues = true;
+    const ClaimedOutput claim(a.out, {a.config_file, a.data.pairs_file}, rule);
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;
     const ogmm::TrainData data = MakeTrainingData(data_options);
@@ -208,6 +212,7 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--write-bundle", a->bundle,
                     "Write the training data and config to FILE for regbench-train-portable "
                     "(a machine with LibTorch alone, e.g. a GPU node) instead of training");
+    cmd->add_flag("--force", a->force, "Replace an existing --write-bundle file");
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
 
