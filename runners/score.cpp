@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
+#include "core/input_file.hpp"
 #include "core/json_limits.hpp"
 #include "core/parse_number.hpp"
 #include "protocols/pair_file.hpp"
@@ -146,6 +147,7 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size
     if (!csv && !EndsWith(path, ".jsonl") && !EndsWith(path, ".json")) {
         throw std::runtime_error(path + ": transforms file must end in .jsonl or .csv");
     }
+    RequireRegularFile(path);
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open transforms file");
     std::vector<ExternalTransform> out;
