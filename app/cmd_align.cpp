@@ -64,7 +64,7 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(WholeNumber())
         ->capture_default_str();
     cmd->add_option("--threads", *threads, "Threads inside the method")
-        ->check(PositiveWholeNumber())
+        ->check(ThreadCount())
         ->capture_default_str();
     cmd->add_option("--nan-points", *nan_points,
                     "Points of a PLY/PCD with a NaN or Inf coordinate: drop (with a warning "

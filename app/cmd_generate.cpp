@@ -114,28 +114,43 @@ void SetupGenerateCommand(CLI::App* cmd) {
     cmd->add_flag("--force", a->force, "Replace an existing --out");
     cmd->add_option("--points", a->flags.points, "Points sampled per cloud (1024; indoor 2048)")
         ->check(WholeNumber());
-    cmd->add_option("--keep", a->flags.keep, "Crop keep ratio in (0, 1] (0.7)");
-    cmd->add_option("--noise-sigma", a->flags.noise_sigma, "Jitter sigma (0.01)");
-    cmd->add_option("--noise-clip", a->flags.noise_clip, "Jitter clip (0.05)");
+    // Every number is checked as text (an empty value, nan, inf, 1e400 are usage errors: an
+    // unset shell variable read as 0 made a benchmark without rotation), then its range by
+    // CheckGenerateRequest before any work.
+    cmd->add_option("--keep", a->flags.keep, "Crop keep ratio in (0, 1] (0.7)")
+        ->check(PositiveReal());
+    cmd->add_option("--noise-sigma", a->flags.noise_sigma, "Jitter sigma (0.01)")
+        ->check(NonNegativeReal());
+    cmd->add_option("--noise-clip", a->flags.noise_clip, "Jitter clip (0.05)")
+        ->check(NonNegativeReal());
     cmd->add_option("--motion", a->motion, "Motion convention: euler | axis-angle (euler)");
-    cmd->add_option("--max-rotation-deg", a->flags.max_rotation_deg, "Max rotation [deg] (45)");
-    cmd->add_option("--max-translation", a->flags.max_translation, "Max translation (0.5)");
+    cmd->add_option("--max-rotation-deg", a->flags.max_rotation_deg, "Max rotation [deg] (45)")
+        ->check(NonNegativeReal());
+    cmd->add_option("--max-translation", a->flags.max_translation, "Max translation (0.5)")
+        ->check(NonNegativeReal());
     cmd->add_option("--pairing", a->pairing,
                     "Pairing: independent | shared | stored (the file's own source/target/"
                     "transform, e.g. ICL-NUIM test) (independent)");
-    cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)");
-    cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)");
+    cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)")->check(PositiveReal());
+    cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)")
+        ->check(PositiveReal());
     cmd->add_option("--sweep-keeps", a->flags.sweep_keeps, "overlap-sweep: crop keep ratios")
-        ->delimiter(',');
+        ->delimiter(',')
+        ->check(PositiveReal());
     cmd->callback([cmd, a] {
         GenerateRequest request = a->request;
+        request.options = BuildOptions(*cmd, *a);
+        request.one_per_item = a->pairs == "all";
+        if (!request.one_per_item) request.num_pairs = std::stoull(a->pairs);  // validated digits
+        try {
+            CheckGenerateRequest(request);  // every number's range: a usage error, before work
+        } catch (const std::invalid_argument& e) {
+            throw CLI::ValidationError(e.what());
+        }
         // The one output rule (docs/usage.md, "Outputs"), then one writer per --out.
         OutputRule rule;
         rule.replace = a->force;
         const ClaimedOutput claim(request.out, DatasetInputs(request.dataset), rule);
-        request.options = BuildOptions(*cmd, *a);
-        request.one_per_item = a->pairs == "all";
-        if (!request.one_per_item) request.num_pairs = std::stoull(a->pairs);  // validated digits
         if (cmd->get_option("--split")->count() == 0) {
             request.split = DefaultSplit(request.dataset);
         }

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <optional>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/output_rule.hpp"
@@ -32,13 +33,20 @@ void SetupReportCommand(CLI::App* cmd) {
         ->capture_default_str();
     cmd->add_option("--out,-o", *out, "Write to this file (atomically) instead of stdout");
     cmd->add_flag("--force", *force, "Replace an existing --out");
+    // Thresholds and resamples checked as text (nan, inf, -1, 0 are usage errors: nan made
+    // every recall 0 silently).
     cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r < r [deg]")
-        ->capture_default_str();
-    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveReal());
+    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")
+        ->capture_default_str()
+        ->check(PositiveReal());
     cmd->add_option("--success-rre", o->success_rre_deg, "success: rre < this [deg] (and rte)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveReal());
     cmd->add_option("--success-rte", o->success_rte, "success: rte < this (and rre)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveReal());
     cmd->add_flag("--recall-3dmatch", o->recall_3dmatch,
                   "Add the 3DMatch-style recall: overlap RMSE < 0.2, rre < 15 deg, rte < 0.3");
     cmd->add_option("--euler", *euler,
@@ -47,7 +55,8 @@ void SetupReportCommand(CLI::App* cmd) {
                     "stored ground truth")
         ->check(CLI::IsMember({"zyx", "xyz"}));
     cmd->add_option("--bootstrap", o->bootstrap_samples, "Bootstrap resamples for the 95% CIs")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveWholeNumber());
     cmd->add_option("--paper", *paper,
                     "Also print the paper's cells side by side, with our pair counts: "
                     "TABLE[:GROUP], e.g. table1_modelnet_partial:same_category (every format: one "

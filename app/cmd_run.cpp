@@ -34,7 +34,7 @@ void SetupRunCommand(CLI::App* cmd) {
     cmd->add_option(
            "--threads", opts->threads_per_call,
            "OpenMP threads inside one method call (timings are single-threaded by default)")
-        ->check(PositiveWholeNumber());
+        ->check(ThreadCount());
     cmd->add_flag("--resume", opts->resume,
                   "Keep rows of an interrupted or finished run (OUT.part, else OUT) and skip "
                   "them");

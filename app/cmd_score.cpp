@@ -42,7 +42,7 @@ void SetupScoreCommand(CLI::App* cmd) {
                   "Accept similarities s R (uniform scale, e.g. CPD with scale): the rotation "
                   "metrics use R, the row's scale is s");
     cmd->add_option("--threads", o->threads, "Threads the method used (recorded in rows)")
-        ->check(PositiveWholeNumber())
+        ->check(ThreadCount())
         ->capture_default_str();
     cmd->add_flag("--force", *force, "Replace an existing --out");
     cmd->callback([=] {

@@ -199,7 +199,7 @@ void SetupTrainCommand(CLI::App* cmd) {
         ->check(PositiveWholeNumber());
     cmd->add_flag("--resume", a->train.resume, "Continue from OUT/last");
     cmd->add_option("--threads", a->train.threads, "Torch threads")
-        ->check(PositiveWholeNumber())
+        ->check(ThreadCount())
         ->capture_default_str();
     cmd->add_option("--seed", a->train.seed, "Seed (weights, pairs, per-step randomness)")
         ->check(WholeNumber())

@@ -128,7 +128,7 @@ void CheckMetricBounds(const nlohmann::json& metrics) {
 
 void CheckMatrix(const Transform& T, const char* name, bool rigid) {
     if (!T.allFinite()) throw std::invalid_argument(std::string(name) + " is not finite");
-    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > 2.0 * kMaxCoordinate) {
+    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxTranslation) {
         throw std::invalid_argument(std::string(name) +
                                     " translates beyond the coordinate limit (2e15)");
     }

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/coordinate_limit.hpp"
 #include "core/file_lock.hpp"
 #include "core/input_file.hpp"
 #include "core/json_limits.hpp"
@@ -31,6 +32,9 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
 /// *scale); otherwise what is wrong with it.
 std::string RigidProblem(const Transform& T, double tol, bool allow_scale, double* scale) {
     if (!T.allFinite()) return "has non-finite entries";
+    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxTranslation) {
+        return "translates beyond the coordinate limit (|t| <= 2e15)";
+    }
     Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
     char buf[200];
     *scale = 1.0;
