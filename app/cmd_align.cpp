@@ -31,6 +31,19 @@ std::string FormatTransform(const Transform& T) {
     return out;
 }
 
+/// No rigid transform is defined by fewer than 3 points or by points that all coincide: such a
+/// cloud is refused naming its file (a method used to fail on it, or return the identity as ok).
+void RefuseDegenerateCloud(const std::string& path, const PointCloud& cloud) {
+    if (cloud.rows() < 3) {
+        throw std::runtime_error(path + ": " + std::to_string(cloud.rows()) +
+                                 " point(s); align needs at least 3");
+    }
+    if ((cloud.colwise().maxCoeff() - cloud.colwise().minCoeff()).maxCoeff() == 0.0) {
+        throw std::runtime_error(path + ": all " + std::to_string(cloud.rows()) +
+                                 " points are identical; no transform is defined by them");
+    }
+}
+
 void SetupAlignCommand(CLI::App* cmd) {
     auto src = std::make_shared<std::string>();
     auto tgt = std::make_shared<std::string>();
@@ -82,6 +95,8 @@ void SetupAlignCommand(CLI::App* cmd) {
             *nan_points == "refuse" ? NonFinitePoints::kRefuse : NonFinitePoints::kDrop;
         const PointCloud source = ReadCloudFile(*src, non_finite);
         const PointCloud target = ReadCloudFile(*tgt, non_finite);
+        RefuseDegenerateCloud(*src, source);  // before any method runs; nothing is written
+        RefuseDegenerateCloud(*tgt, target);
         const Transform T_gt = gt->empty() ? Transform::Identity() : ReadTransformTxt(*gt);
         AlignContext context;
         context.seed = *seed;
