@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
+#include <vector>
 
 namespace regbench {
 namespace {
@@ -45,10 +47,8 @@ bool EqualOrInside(const fs::path& inner, const fs::path& outer) {
     return o == outer_end;
 }
 
+/// The kind of thing at `out` (never a link), then whether it may be replaced.
 void CheckExisting(const std::string& out, const struct stat& st, const OutputRule& rule) {
-    if (S_ISLNK(st.st_mode)) {
-        Refuse(out, "output is a symbolic link; refusing to write through it (give the real path)");
-    }
     if (rule.folder && !S_ISDIR(st.st_mode)) {
         Refuse(out, "output folder exists and is not a folder");
     }
@@ -61,21 +61,28 @@ void CheckExisting(const std::string& out, const struct stat& st, const OutputRu
     }
 }
 
+/// Equal to an input first (by inode, so hard links count, or by resolved path), then inside
+/// one, then (a folder to be replaced) holding one: the most direct reason is the one named.
 void CheckInputs(const std::string& out, bool exists, const struct stat& st,
                  const std::vector<std::string>& inputs, const OutputRule& rule) {
     const fs::path out_path = Resolved(out);
+    std::vector<std::pair<std::string, fs::path>> present;
     for (const auto& in : inputs) {
         struct stat ist {};
         if (in.empty() || ::stat(in.c_str(), &ist) != 0) continue;
-        if (exists && ist.st_dev == st.st_dev && ist.st_ino == st.st_ino) {
-            Refuse(out, "output is the input " + in);
-        }
         const fs::path in_path = Resolved(in);
-        if (EqualOrInside(out_path, in_path)) {
-            Refuse(out, out_path == in_path ? "output is the input " + in
-                                            : "output lies inside the input " + in);
+        if ((exists && ist.st_dev == st.st_dev && ist.st_ino == st.st_ino) ||
+            (!out_path.empty() && out_path == in_path)) {
+            Refuse(out, "output is the same file as the input " + in);
         }
-        if (rule.folder && !rule.continues && EqualOrInside(in_path, out_path)) {
+        present.emplace_back(in, in_path);
+    }
+    for (const auto& [in, in_path] : present) {
+        if (EqualOrInside(out_path, in_path)) Refuse(out, "output lies inside the input " + in);
+    }
+    if (!rule.folder || rule.continues) return;
+    for (const auto& [in, in_path] : present) {
+        if (EqualOrInside(in_path, out_path)) {
             Refuse(out, "output folder holds the input " + in +
                             "; replacing the folder would destroy it");
         }
@@ -95,8 +102,12 @@ void CheckOutputRule(const std::string& out_arg, const std::vector<std::string>&
     }
     struct stat st {};
     const bool exists = ::lstat(out.c_str(), &st) == 0;
-    if (exists) CheckExisting(out_arg, st, rule);
+    if (exists && S_ISLNK(st.st_mode)) {
+        Refuse(out_arg,
+               "output is a symbolic link; refusing to write through it (give the real path)");
+    }
     CheckInputs(out_arg, exists, st, inputs, rule);
+    if (exists) CheckExisting(out_arg, st, rule);
     if (!rule.folder) {
         const fs::path parent = fs::path(out).parent_path();
         const std::string dir = parent.empty() ? std::string(".") : parent.string();

@@ -104,8 +104,9 @@ TEST_F(CliOutputRule, ExistingOutputIsRefusedByEveryWriterWithoutForce) {
 
 TEST_F(CliOutputRule, OutputEqualToOrInsideAnInputIsRefusedEvenWithForce) {
     ExpectRefused("run --pairs " + pairs_ + " --methods identity -q --force --out " + pairs_,
-                  pairs_, "is the input", {pairs_});
-    ExpectRefused("report " + rows_ + " --force --out " + rows_, rows_, "is the input", {rows_});
+                  pairs_, "same file as the input", {pairs_});
+    ExpectRefused("report " + rows_ + " --force --out " + rows_, rows_, "same file as the input",
+                  {rows_});
     // A new file inside the folder being imported or generated from (the next import or
     // generate would read it back as data).
     const std::string inside = xyz_ + "/new.h5";
@@ -162,7 +163,7 @@ TEST_F(CliOutputRule, ImportCheckpointNeverReplacesItsInputOrARunFolder) {
         RunCli("import-checkpoint " + pth + " --from ogmm --out " + (dir_ / "probe").string());
     if (probe.output.find("no LibTorch") != std::string::npos) GTEST_SKIP() << probe.output;
     ExpectRefused("import-checkpoint " + pth + " --from ogmm --force --out " + pth, pth,
-                  "not a folder", {pth});
+                  "same file as the input", {pth});
     // A training run folder: best/, last/ and the metrics stay.
     const fs::path run = dir_ / "run";
     fs::create_directories(run / "best");
