@@ -57,7 +57,7 @@ void CheckExisting(const std::string& out, const struct stat& st, const OutputRu
         Refuse(out, "output exists and is not a regular file (refusing to replace it)");
     }
     if (!rule.replace && !rule.continues) {
-        Refuse(out, "output already exists; " + rule.how_to_replace);
+        Refuse(out, "already exists; " + rule.how_to_replace);
     }
 }
 
