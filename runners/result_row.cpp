@@ -266,6 +266,10 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     for (const char* key : {"pair", "method", "metrics"}) {
         if (!j.contains(key)) throw std::invalid_argument(std::string("row has no '") + key + "'");
     }
+    // A float (1e20) or negative pair would be cast out of range by get<size_t>.
+    if (!j.at("pair").is_number_unsigned()) {
+        throw std::invalid_argument("pair must be a whole number >= 0, got " + j.at("pair").dump());
+    }
     row.pair = j.at("pair").get<std::size_t>();
     row.method = j.at("method").get<std::string>();
     row.params = j.value("params", nlohmann::json::object());
