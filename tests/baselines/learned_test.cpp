@@ -6,8 +6,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <functional>
-#include <iterator>
 #include <string>
 #include <vector>
 
@@ -128,74 +126,6 @@ TEST(Learned, CheckpointJsonWithMistypedKeysIsRefusedNamingFileAndKey) {
             },
             json.string(), c.expected);
     }
-    fs::remove_all(dir);
-}
-
-// Issue 44 group 4: a checkpoint that cannot run (another format_version, a weights path
-// leaving the folder or naming a device, a missing, empty, truncated or garbage weights file)
-// ran, failed every row and exited 0. Expected: refused when the method is created (before the
-// run, as a wrong --params is), naming the file and the problem.
-TEST(Learned, DamagedCheckpointsAreRefusedWhenTheMethodIsCreated) {
-    const fs::path dir = SaveUntrainedCheckpoint("ogmm-tiny", 5);
-    const fs::path json = dir / "checkpoint.json";
-    const fs::path weights = dir / "weights.pt";
-    nlohmann::json good;
-    std::ifstream(json) >> good;
-    const std::string good_text = good.dump();
-    std::string weight_bytes;
-    {
-        std::ifstream in(weights, std::ios::binary);
-        weight_bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
-    ASSERT_GT(weight_bytes.size(), 100u);
-    ASSERT_NO_THROW(CreateMethod("ogmm", {{"checkpoint", dir.string()}}));
-    struct Case {
-        const char* name;
-        std::function<void()> damage;
-        std::string names;  ///< the file the refusal must name
-        const char* expected;
-    };
-    const auto with = [&](const char* key, nlohmann::json v) {
-        return [&, key, v] {
-            nlohmann::json j = good;
-            j[key] = v;
-            std::ofstream(json, std::ios::trunc) << j.dump();
-        };
-    };
-    const auto weights_as = [&](std::string bytes) {
-        return [&, bytes] { std::ofstream(weights, std::ios::binary | std::ios::trunc) << bytes; };
-    };
-    const std::vector<Case> cases = {
-        {"format_version 99", with("format_version", 99), json.string(),
-         "format_version 99 is not supported"},
-        {"weights ..", with("weights", "../weights.pt"), json.string(), "leaves the checkpoint"},
-        {"weights absolute", with("weights", "/dev/zero"), json.string(), "absolute path"},
-        {"weights missing", [&] { fs::remove(weights); }, weights.string(), "is missing"},
-        {"weights empty", weights_as(""), weights.string(), "is empty"},
-        {"weights truncated", weights_as(weight_bytes.substr(0, weight_bytes.size() / 2)),
-         weights.string(), "truncated"},
-        {"weights garbage", weights_as(std::string(weight_bytes.size(), 'x')), weights.string(),
-         "not a torch weights archive"},
-        {"weights a device",
-         [&] {
-             fs::remove(weights);
-             fs::create_symlink("/dev/zero", weights);
-         },
-         weights.string(), "not a regular file"},
-    };
-    for (const Case& c : cases) {
-        SCOPED_TRACE(c.name);
-        c.damage();
-        testing::ExpectThrowsWith<std::invalid_argument>(
-            [&] {
-                CreateMethod("ogmm", {{"checkpoint", dir.string()}});
-            },
-            c.names, c.expected);
-        std::ofstream(json, std::ios::trunc) << good_text;
-        fs::remove(weights);
-        std::ofstream(weights, std::ios::binary) << weight_bytes;
-    }
-    EXPECT_NO_THROW(CreateMethod("ogmm", {{"checkpoint", dir.string()}}));
     fs::remove_all(dir);
 }
 
