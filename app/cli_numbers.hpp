@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/parse_number.hpp"
+#include "core/threads.hpp"
 
 namespace regbench::app {
 
@@ -46,6 +47,17 @@ inline CLI::Validator PositiveWholeNumber() {
         const auto v = ParseNumber<std::uint64_t>(s);
         return v && *v > 0;
     });
+}
+
+/// An OpenMP thread count: a whole number in [1, kMaxThreads] (core/threads.hpp); 10^9 made
+/// libgomp kill the process.
+inline CLI::Validator ThreadCount() {
+    return detail::Expecting(
+        "THREADS", "a whole number in [1, " + std::to_string(kMaxThreads) + "]",
+        [](const std::string& s) {
+            const auto v = ParseNumber<std::uint64_t>(s);
+            return v && *v >= 1 && *v <= static_cast<std::uint64_t>(kMaxThreads);
+        });
 }
 
 /// A finite decimal number >= 0 ("-1", "nan", "inf", "1s" refused).

@@ -22,6 +22,9 @@ inline nlohmann::json ParseParamsOption(const std::string& text) {
         return ParseJsonBounded(text, "--params");
     } catch (const nlohmann::json::exception& e) {
         throw CLI::ValidationError(std::string("--params is not valid JSON: ") + e.what());
+    } catch (const std::runtime_error& e) {
+        // The depth limit (64 levels): a usage error like any other bad --params, not exit 1.
+        throw CLI::ValidationError(e.what());
     }
 }
 

@@ -12,8 +12,8 @@
 #include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
 #include "core/metrics.hpp"
+#include "core/output_rule.hpp"
 #include "core/transform.hpp"
 #include "datasets/point_file.hpp"
 #include "protocols/xyz_io.hpp"
@@ -31,6 +31,19 @@ std::string FormatTransform(const Transform& T) {
     return out;
 }
 
+/// No rigid transform is defined by fewer than 3 points or by points that all coincide: such a
+/// cloud is refused naming its file (a method used to fail on it, or return the identity as ok).
+void RefuseDegenerateCloud(const std::string& path, const PointCloud& cloud) {
+    if (cloud.rows() < 3) {
+        throw std::runtime_error(path + ": " + std::to_string(cloud.rows()) +
+                                 " point(s); align needs at least 3");
+    }
+    if ((cloud.colwise().maxCoeff() - cloud.colwise().minCoeff()).maxCoeff() == 0.0) {
+        throw std::runtime_error(path + ": all " + std::to_string(cloud.rows()) +
+                                 " points are identical; no transform is defined by them");
+    }
+}
+
 void SetupAlignCommand(CLI::App* cmd) {
     auto src = std::make_shared<std::string>();
     auto tgt = std::make_shared<std::string>();
@@ -44,6 +57,7 @@ void SetupAlignCommand(CLI::App* cmd) {
     auto seed = std::make_shared<std::uint64_t>(0);
     auto threads = std::make_shared<int>(1);
     auto nan_points = std::make_shared<std::string>("drop");
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("source", *src, "Source point file (.ply .pcd .xyz .txt .off)")->required();
     cmd->add_option("target", *tgt, "Target point file")->required();
     cmd->add_option("--method", *method, "Method name (see `regbench methods`)")->required();
@@ -52,6 +66,7 @@ void SetupAlignCommand(CLI::App* cmd) {
     cmd->add_option("--save-aligned", *save_aligned,
                     "Write the moved source (orange) and the target (blue) to this PLY file, to "
                     "open in any viewer (MeshLab, CloudCompare, Open3D)");
+    cmd->add_flag("--force", *force, "Replace an existing --out");
     cmd->add_option("--gt", *gt, "Ground-truth 4x4 (same format): also print the metrics");
     cmd->add_flag("--normalize", *normalize,
                   "Move both clouds by the target's centroid and scale them by one factor into "
@@ -66,7 +81,7 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(WholeNumber())
         ->capture_default_str();
     cmd->add_option("--threads", *threads, "Threads inside the method")
-        ->check(PositiveWholeNumber())
+        ->check(ThreadCount())
         ->capture_default_str();
     cmd->add_option("--nan-points", *nan_points,
                     "Points of a PLY/PCD with a NaN or Inf coordinate: drop (with a warning "
@@ -74,19 +89,20 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"drop", "refuse"}))
         ->capture_default_str();
     cmd->callback([=] {
-        // One writer per output file, inputs (and the other output) refused before work.
+        // One writer per output file, the one output rule (docs/usage.md, "Outputs") before
+        // work; the other output counts as an input of each.
         std::vector<std::string> inputs{*src, *tgt};
         if (!gt->empty()) inputs.push_back(*gt);
-        std::optional<OutputLock> lock, ply_lock;
+        std::optional<ClaimedOutput> claim, ply_claim;
         if (!out->empty()) {
-            CheckOutputPath(*out, inputs);
-            lock.emplace(*out);
+            std::vector<std::string> taken = inputs;
+            if (!save_aligned->empty()) taken.push_back(*save_aligned);
+            claim.emplace(*out, taken, OutputRule{*force});
         }
         if (!save_aligned->empty()) {
             std::vector<std::string> taken = inputs;
             if (!out->empty()) taken.push_back(*out);
-            CheckOutputPath(*save_aligned, taken);
-            ply_lock.emplace(*save_aligned);
+            ply_claim.emplace(*save_aligned, taken, OutputRule{*force});
         }
         const nlohmann::json p = ParseParamsOption(*params);
         // validates name and params (a usage error)
@@ -95,6 +111,8 @@ void SetupAlignCommand(CLI::App* cmd) {
             *nan_points == "refuse" ? NonFinitePoints::kRefuse : NonFinitePoints::kDrop;
         const PointCloud source = ReadCloudFile(*src, non_finite);
         const PointCloud target = ReadCloudFile(*tgt, non_finite);
+        RefuseDegenerateCloud(*src, source);  // before any method runs; nothing is written
+        RefuseDegenerateCloud(*tgt, target);
         const Transform T_gt = gt->empty() ? Transform::Identity() : ReadTransformTxt(*gt);
         AlignContext context;
         context.seed = *seed;

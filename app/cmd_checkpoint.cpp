@@ -9,7 +9,7 @@
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
+#include "core/output_rule.hpp"
 #include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "ogmm/authors_checkpoint.hpp"
@@ -23,6 +23,7 @@ namespace {
 struct ImportArgs {
     std::string file;
     std::string out;
+    bool force = false;
     ogmm::ImportOptions options;
 };
 
@@ -41,6 +42,9 @@ void SetupImport(CLI::App* cmd) {
         ->required()
         ->check(CLI::IsMember(ogmm::AuthorsFormats()));
     cmd->add_option("--out", a->out, "Checkpoint folder to write")->required();
+    cmd->add_flag("--force", a->force,
+                  "Replace an existing --out folder (all of it: a training run's best/, last/ "
+                  "and metrics too)");
     cmd->add_option("--rri-variant", a->options.rri_variant,
                     "DeepGMR RRI orientation at run time: cuda (GPU kernel; the released models) "
                     "| numpy (CPU fallback of the authors' test.py)")
@@ -63,8 +67,12 @@ void SetupImport(CLI::App* cmd) {
         if (!std::filesystem::is_regular_file(a->file)) {
             throw std::runtime_error(a->file + ": no such file");
         }
-        CreateParentFolders(a->out);
-        const OutputLock lock(a->out);  // one writer per checkpoint folder
+        // The one output rule (docs/usage.md, "Outputs"): `--out m.pth` given the input m.pth,
+        // or an existing training run folder, replaced them; one writer per checkpoint folder.
+        OutputRule rule;
+        rule.replace = a->force;
+        rule.folder = true;
+        const ClaimedOutput claim(a->out, {a->file}, rule);
         const nlohmann::json j = ogmm::ImportAuthorsCheckpoint(a->file, a->out, a->options);
         std::cout << "import-checkpoint: wrote " << a->out << " ("
                   << j.at("config").at("name").get<std::string>() << ", " << j.at("mapping").size()
@@ -79,6 +87,7 @@ struct ExportArgs {
     std::string dir;
     std::string to;
     std::string out;
+    bool force = false;
 };
 
 void SetupExport(CLI::App* cmd) {
@@ -89,9 +98,9 @@ void SetupExport(CLI::App* cmd) {
         ->check(CLI::IsMember(ogmm::AuthorsFormats()));
     cmd->add_option("--out", a->out, ".pth file to write (zip format, torch.load-able)")
         ->required();
+    cmd->add_flag("--force", a->force, "Replace an existing --out");
     cmd->callback([a] {
-        CheckOutputPath(a->out);
-        const OutputLock lock(a->out);
+        const ClaimedOutput claim(a->out, {a->dir}, OutputRule{a->force});
         const ogmm::AuthorsPth pth = ogmm::ExportAuthorsPth(a->dir, a->to);
         WriteFileAtomic(a->out, pth.bytes,
                         {(std::filesystem::path(a->dir) / "weights.pt").string(),

@@ -3,11 +3,13 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
+#include "core/output_rule.hpp"
 #include "reports/compare.hpp"
 #include "reports/row_access.hpp"
 #include "runners/result_row.hpp"
@@ -23,6 +25,7 @@ void SetupCompareCommand(CLI::App* cmd) {
     auto metrics = std::make_shared<std::vector<std::string>>(CompareOptions{}.metrics);
     auto json_out = std::make_shared<std::string>();
     auto o = std::make_shared<CompareOptions>();
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("base", *base, "Baseline JSONL results")->required();
     cmd->add_option("new", *candidate, "Candidate JSONL results (same pair file)")->required();
     cmd->add_option("--tolerance", *tolerance,
@@ -53,6 +56,7 @@ void SetupCompareCommand(CLI::App* cmd) {
                   "Do not fail when calls that were ok in the baseline failed, timed out or "
                   "crashed in the candidate");
     cmd->add_option("--json", *json_out, "Also write every comparison as JSON to this file");
+    cmd->add_flag("--force", *force, "Replace an existing --json file");
     cmd->footer(
         "Exit status: 0 PASS; 1 FAIL (a significant worsening beyond tolerance, or new failed "
         "calls) or unreadable input; 2 usage error; 3 INCONCLUSIVE (no regression found, but "
@@ -62,10 +66,10 @@ void SetupCompareCommand(CLI::App* cmd) {
         // --json onto one of the inputs (by inode, so links count) is refused before reading,
         // and the JSON is written under the output lock, atomically: a full disk or a file-size
         // limit leaves the previous file (or none), never a truncated one.
-        std::optional<OutputLock> lock;
+        std::optional<ClaimedOutput> claim;  // the one output rule (docs/usage.md, "Outputs")
         if (!json_out->empty()) {
-            CheckOutputPath(*json_out, {*base, *candidate});
-            lock.emplace(*json_out);
+            claim.emplace(*json_out, std::vector<std::string>{*base, *candidate},
+                          OutputRule{*force});
         }
         o->metrics = *metrics;
         if (!tolerance->empty()) {

@@ -14,7 +14,7 @@
 #include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
+#include "core/output_rule.hpp"
 #include "core/sha256.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
@@ -32,6 +32,7 @@ struct GenerateArgs {
     std::string motion = "euler";
     std::string pairing = "independent";
     std::string pairs;  ///< a whole number, or "all" (one pair per item of the split)
+    bool force = false;
 };
 
 /// Protocol defaults, overridden by every protocol flag the user gave.
@@ -93,29 +94,13 @@ ShapeLoader WarnOnLoad(ShapeLoader loader, const GenerateRequest& request) {
     };
 }
 
-/// `generate --out` onto a file of its own dataset replaced that input with the pair file, exit
-/// 0 (found by hand: --dataset plyd --out plyd/0000_src.ply). Refused when --out already exists
-/// and is a dataset file given as a path or lies inside a dataset folder given as a path. A new
-/// file there is allowed.
-void RefuseOutputInsideInputs(const std::string& out, const std::string& datasets) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (!fs::exists(fs::symlink_status(out, ec))) return;
-    const fs::path target = fs::weakly_canonical(out, ec);
-    std::vector<std::string> roots;
+/// The dataset given as a path (a file, or a folder of point files): an input --out may not be
+/// nor lie inside (`--dataset plyd --out plyd/0000_src.ply` replaced that input, exit 0).
+std::vector<std::string> DatasetInputs(const std::string& datasets) {
+    std::vector<std::string> inputs;
     std::stringstream list(datasets);
-    for (std::string item; std::getline(list, item, ',');) {
-        if (fs::exists(item, ec)) roots.push_back(item);
-    }
-    for (const auto& root : roots) {
-        const fs::path r = fs::weakly_canonical(root, ec);
-        if (ec) continue;
-        const auto [end, _] = std::mismatch(r.begin(), r.end(), target.begin(), target.end());
-        if (end == r.end() || fs::equivalent(r, target, ec)) {
-            throw std::runtime_error(out + ": output is an existing file of the input dataset " +
-                                     root + "; refusing to replace it (pick another --out)");
-        }
-    }
+    for (std::string item; std::getline(list, item, ',');) inputs.push_back(item);
+    return inputs;
 }
 
 void SetupGenerateCommand(CLI::App* cmd) {
@@ -141,31 +126,48 @@ void SetupGenerateCommand(CLI::App* cmd) {
         ->capture_default_str()
         ->check(WholeNumber());
     cmd->add_option("--out", a->request.out, "Output HDF5 file")->required();
+    cmd->add_flag("--force", a->force, "Replace an existing --out");
     cmd->add_option("--points", a->flags.points, "Points sampled per cloud (1024; indoor 2048)")
         ->check(WholeNumber());
-    cmd->add_option("--keep", a->flags.keep, "Crop keep ratio in (0, 1] (0.7)");
-    cmd->add_option("--noise-sigma", a->flags.noise_sigma, "Jitter sigma (0.01)");
-    cmd->add_option("--noise-clip", a->flags.noise_clip, "Jitter clip (0.05)");
+    // Every number is checked as text (an empty value, nan, inf, 1e400 are usage errors: an
+    // unset shell variable read as 0 made a benchmark without rotation), then its range by
+    // CheckGenerateRequest before any work.
+    cmd->add_option("--keep", a->flags.keep, "Crop keep ratio in (0, 1] (0.7)")
+        ->check(PositiveReal());
+    cmd->add_option("--noise-sigma", a->flags.noise_sigma, "Jitter sigma (0.01)")
+        ->check(NonNegativeReal());
+    cmd->add_option("--noise-clip", a->flags.noise_clip, "Jitter clip (0.05)")
+        ->check(NonNegativeReal());
     cmd->add_option("--motion", a->motion, "Motion convention: euler | axis-angle (euler)")
         ->check(ParsedBy(ParseMotionConvention, "MOTION"));
-    cmd->add_option("--max-rotation-deg", a->flags.max_rotation_deg, "Max rotation [deg] (45)");
-    cmd->add_option("--max-translation", a->flags.max_translation, "Max translation (0.5)");
+    cmd->add_option("--max-rotation-deg", a->flags.max_rotation_deg, "Max rotation [deg] (45)")
+        ->check(NonNegativeReal());
+    cmd->add_option("--max-translation", a->flags.max_translation, "Max translation (0.5)")
+        ->check(NonNegativeReal());
     cmd->add_option("--pairing", a->pairing,
                     "Pairing: independent | shared | stored (the file's own source/target/"
                     "transform, e.g. ICL-NUIM test) (independent)")
         ->check(ParsedBy(ParsePairing, "PAIRING"));
-    cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)");
-    cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)");
+    cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)")->check(PositiveReal());
+    cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)")
+        ->check(PositiveReal());
     cmd->add_option("--sweep-keeps", a->flags.sweep_keeps, "overlap-sweep: crop keep ratios")
-        ->delimiter(',');
+        ->delimiter(',')
+        ->check(PositiveReal());
     cmd->callback([cmd, a] {
         GenerateRequest request = a->request;
-        CheckOutputPath(request.out);  // a directory, a device: refused before any work
-        RefuseOutputInsideInputs(request.out, request.dataset);
-        const OutputLock lock(request.out);  // one writer per --out while generating
         request.options = BuildOptions(*cmd, *a);
         request.one_per_item = a->pairs == "all";
         if (!request.one_per_item) request.num_pairs = std::stoull(a->pairs);  // validated digits
+        try {
+            CheckGenerateRequest(request);  // every number's range: a usage error, before work
+        } catch (const std::invalid_argument& e) {
+            throw CLI::ValidationError(e.what());
+        }
+        // The one output rule (docs/usage.md, "Outputs"), then one writer per --out.
+        OutputRule rule;
+        rule.replace = a->force;
+        const ClaimedOutput claim(request.out, DatasetInputs(request.dataset), rule);
         if (cmd->get_option("--split")->count() == 0) {
             request.split = DefaultSplit(request.dataset);
         }

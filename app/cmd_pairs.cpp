@@ -8,7 +8,7 @@
 
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
+#include "core/output_rule.hpp"
 #include "core/version.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -52,8 +52,12 @@ void SetupExportCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"xyz", "ply"}))
         ->capture_default_str();
     cmd->callback([file, dir, format] {
-        CreateParentFolders(*dir);
-        const OutputLock lock(*dir);  // one export into a folder at a time
+        // The one output rule (docs/usage.md, "Outputs"); one export into a folder at a time.
+        // An existing empty folder is fine, a non-empty one is refused by the exporter.
+        OutputRule rule;
+        rule.folder = true;
+        rule.continues = true;
+        const ClaimedOutput claim(*dir, {*file}, rule);
         const PairSet set = ReadPairFile(*file);
         if (*format == "ply") {
             ExportPly(set, *dir);
@@ -76,19 +80,20 @@ void SetupImportCommand(CLI::App* cmd) {
     auto dir = std::make_shared<std::string>();
     auto out = std::make_shared<std::string>();
     auto eta = std::make_shared<double>(ProtocolOptions{}.eta);
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("--xyz-dir", *dir, "Directory with the xyz layout")->required();
     cmd->add_option("--out", *out, "Output HDF5 file")->required();
     cmd->add_option("--eta", *eta, "Overlap label radius")->capture_default_str();
-    cmd->callback([dir, out, eta] {
-        // --out may not be any file of the folder being imported (compared by device and
-        // inode, so ./a, a and links to a all count).
-        std::vector<std::string> inputs;
+    cmd->add_flag("--force", *force, "Replace an existing --out");
+    cmd->callback([dir, out, eta, force] {
+        // The one output rule (docs/usage.md, "Outputs"): --out may not lie inside the folder
+        // being imported nor be a hard link to any file of it (compared by device and inode).
+        std::vector<std::string> inputs{*dir};
         std::error_code ec;
         for (const auto& e : std::filesystem::recursive_directory_iterator(*dir, ec)) {
             if (e.is_regular_file(ec)) inputs.push_back(e.path().string());
         }
-        CheckOutputPath(*out, inputs);
-        const OutputLock lock(*out);
+        const ClaimedOutput claim(*out, inputs, OutputRule{*force});
         PairSet set = ImportXyzDir(*dir, *eta);
         set.provenance["regbench_version"] = RegbenchVersion();
         set.provenance["git_sha"] = RegbenchGitSha();

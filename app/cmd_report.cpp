@@ -5,9 +5,10 @@
 #include <iostream>
 #include <optional>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
+#include "core/output_rule.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "reports/versus.hpp"
@@ -27,18 +28,27 @@ void SetupReportCommand(CLI::App* cmd) {
     auto paper = std::make_shared<std::string>();
     auto paper_file = std::make_shared<std::string>(DefaultPaperTablesPath());
     auto full = std::make_shared<bool>(false);
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("results", *files, "One or more JSONL result files (e.g. shards)")->required();
     cmd->add_option("--format,-f", *format, "md | csv | json | latex")
         ->check(CLI::IsMember({"md", "csv", "json", "latex"}))
         ->capture_default_str();
     cmd->add_option("--out,-o", *out, "Write to this file (atomically) instead of stdout");
+    cmd->add_flag("--force", *force, "Replace an existing --out");
+    // Thresholds and resamples checked as text (nan, inf, -1, 0 are usage errors: nan made
+    // every recall 0 silently).
     cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r < r [deg]")
-        ->capture_default_str();
-    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveReal());
+    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")
+        ->capture_default_str()
+        ->check(PositiveReal());
     cmd->add_option("--success-rre", o->success_rre_deg, "success: rre < this [deg] (and rte)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveReal());
     cmd->add_option("--success-rte", o->success_rte, "success: rte < this (and rre)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveReal());
     cmd->add_flag("--recall-3dmatch", o->recall_3dmatch,
                   "Add the 3DMatch-style recall: overlap RMSE < 0.2, rre < 15 deg, rte < 0.3");
     cmd->add_option("--euler", *euler,
@@ -47,7 +57,8 @@ void SetupReportCommand(CLI::App* cmd) {
                     "stored ground truth")
         ->check(CLI::IsMember({"zyx", "xyz"}));
     cmd->add_option("--bootstrap", o->bootstrap_samples, "Bootstrap resamples for the 95% CIs")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(PositiveWholeNumber());
     cmd->add_option("--paper", *paper,
                     "Also print the paper's cells side by side, with our pair counts: "
                     "TABLE[:GROUP], e.g. table1_modelnet_partial:same_category (every format: one "
@@ -79,13 +90,10 @@ void SetupReportCommand(CLI::App* cmd) {
                 "--versus compares the rows as scored (their own Euler convention); it takes "
                 "neither --paper nor --euler");
         }
-        // Refused before reading anything: an input as --out, a directory, a device; then one
+        // The one output rule (docs/usage.md, "Outputs") before reading anything; then one
         // writer per --out until the report is in place.
-        std::optional<OutputLock> lock;
-        if (!out->empty()) {
-            CheckOutputPath(*out, *files);
-            lock.emplace(*out);
-        }
+        std::optional<ClaimedOutput> claim;
+        if (!out->empty()) claim.emplace(*out, *files, OutputRule{*force});
         std::vector<ResultRow> rows;
         for (const auto& f : *files) {
             auto part = ReadResultRows(f);  // throws naming file:line

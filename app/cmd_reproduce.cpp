@@ -3,6 +3,7 @@
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
+#include "core/output_rule.hpp"
 #include "experiments/reproduce.hpp"
 
 namespace regbench::app {
@@ -47,6 +48,16 @@ void SetupReproduceCommand(CLI::App* cmd) {
     cmd->add_option("--methods", o->methods, "Methods (default: every registered one)")
         ->delimiter(',');
     cmd->callback([o] {
+        // The one output rule (docs/usage.md, "Outputs"): the folder may exist (a second
+        // invocation continues it) but is never a link to another folder nor inside an input.
+        OutputRule rule;
+        rule.folder = true;
+        rule.continues = true;
+        std::vector<std::string> inputs = o->experiment_files;
+        for (const std::string* root : {&o->modelnet40, &o->sevenscenes, &o->icl_nuim}) {
+            inputs.push_back(*root);
+        }
+        CheckOutputRule(o->out_dir, inputs, rule);
         const ReproduceSummary s = Reproduce(*o, std::cerr);
         std::cout << "report folder: " << s.out_dir << "\n"
                   << "tables:        " << s.markdown_path << "\n"

@@ -1,7 +1,6 @@
 // `regbench run`: run methods over a frozen pair file, one JSONL row per pair and method.
 #include <fmt/format.h>
 
-#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 
@@ -9,6 +8,7 @@
 #include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/cpu_time.hpp"
+#include "core/output_rule.hpp"
 #include "runners/runner.hpp"
 
 namespace regbench::app {
@@ -44,7 +44,7 @@ void SetupRunCommand(CLI::App* cmd) {
     cmd->add_option(
            "--threads", opts->threads_per_call,
            "OpenMP threads inside one method call (timings are single-threaded by default)")
-        ->check(PositiveWholeNumber());
+        ->check(ThreadCount());
     cmd->add_flag("--resume", opts->resume,
                   "Keep rows of an interrupted or finished run (OUT.part, else OUT) and skip "
                   "them");
@@ -77,15 +77,12 @@ void SetupRunCommand(CLI::App* cmd) {
         if (o.resume && *force) {
             throw CLI::ValidationError("--resume and --force exclude each other");
         }
-        // A finished result file (often a baseline) is never replaced by accident.
-        // (--out naming the pair file or a folder is refused by the runner, with its reason.)
-        std::error_code ec;
-        if (!o.resume && !*force && std::filesystem::is_regular_file(o.out_path) &&
-            !std::filesystem::equivalent(o.out_path, o.pairs_path, ec)) {
-            throw std::runtime_error(o.out_path +
-                                     ": already exists; pass --resume to continue it or --force "
-                                     "to replace it");
-        }
+        // The one output rule (docs/usage.md, "Outputs"): a finished result file (often a
+        // baseline) is never replaced by accident, nor the pair file, nor through a link.
+        OutputRule rule;
+        rule.replace = o.resume || *force;
+        rule.how_to_replace = "pass --resume to continue it or --force to replace it";
+        CheckOutputRule(o.out_path, {o.pairs_path}, rule);
         o.methods = m->Specs();
         ParseShard(*shard, &o.shard_index, &o.shard_count);
         o.progress = !*quiet;

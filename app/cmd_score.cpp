@@ -7,6 +7,7 @@
 #include "app/cli_numbers.hpp"
 #include "app/cli_params.hpp"
 #include "app/commands.hpp"
+#include "core/output_rule.hpp"
 #include "runners/score.hpp"
 
 namespace regbench::app {
@@ -17,6 +18,7 @@ void SetupScoreCommand(CLI::App* cmd) {
     auto o = std::make_shared<ScoreOptions>();
     auto params = std::make_shared<std::string>();
     auto euler = std::make_shared<std::string>("zyx");
+    auto force = std::make_shared<bool>(false);
     cmd->add_option("--pairs", o->pairs_path, "Frozen HDF5 pair file the transforms belong to")
         ->required();
     cmd->add_option("--transforms", o->transforms_path,
@@ -44,9 +46,12 @@ void SetupScoreCommand(CLI::App* cmd) {
                   "(refused by default: nothing shows it was computed on --pairs)");
     AddMetricOptions(cmd, &o->metric_options);
     cmd->add_option("--threads", o->threads, "Threads the method used (recorded in rows)")
-        ->check(PositiveWholeNumber())
+        ->check(ThreadCount())
         ->capture_default_str();
+    cmd->add_flag("--force", *force, "Replace an existing --out");
     cmd->callback([=] {
+        // The one output rule (docs/usage.md, "Outputs"); the scorer takes the lock.
+        CheckOutputRule(o->out_path, {o->pairs_path, o->transforms_path}, OutputRule{*force});
         ScoreOptions opts = *o;
         opts.params = ParseParamsOption(*params);
         opts.euler = ParseEulerConvention(*euler);

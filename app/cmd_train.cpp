@@ -16,8 +16,8 @@
 #ifdef REGBENCH_HAVE_LEARNED
 #include "baselines/learned.hpp"
 #include "core/atomic_file.hpp"
-#include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
+#include "core/output_rule.hpp"
 #include "experiments/training.hpp"
 #include "ogmm/family.hpp"
 #include "ogmm/train.hpp"
@@ -44,6 +44,7 @@ struct TrainArgs {
     std::string ablation;
     std::string bundle;  ///< --write-bundle FILE: write the data and config, train nothing
     bool list_models = false;  ///< --list-models: print the families' models and stop
+    bool force = false;  ///< --force: replace an existing --write-bundle file
 };
 
 /// The command as given, for checkpoints' provenance.
@@ -110,8 +111,7 @@ void WriteBundle(const TrainArgs& a, const std::string& command_line) {
     }
     // The file and the config are checked before the shapes are loaded (minutes on a real
     // dataset); the lock keeps a second writer off the file until it is renamed into place.
-    CheckOutputPath(a.bundle, {a.config_file});
-    const OutputLock lock(a.bundle);
+    const ClaimedOutput claim(a.bundle, {a.config_file, a.data.pairs_file}, OutputRule{a.force});
     const nlohmann::json config = BuildConfig(a, a.model, nlohmann::json::object());
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;
@@ -169,8 +169,12 @@ void Run(const TrainArgs& a, const std::string& command_line) {
         return;
     }
     if (a.out.empty()) throw std::invalid_argument("train: --out is required");
-    CreateParentFolders(a.out);
-    const OutputLock lock(a.out);
+    // The one output rule (docs/usage.md, "Outputs"): an existing run folder is the trainer's
+    // to judge (refused unless --resume), a link to another folder never followed.
+    OutputRule rule;
+    rule.folder = true;
+    rule.continues = true;
+    const ClaimedOutput claim(a.out, {a.config_file, a.data.pairs_file}, rule);
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;
     const ogmm::TrainData data = MakeTrainingData(data_options);
@@ -229,7 +233,7 @@ void SetupTrainCommand(CLI::App* cmd) {
         ->check(PositiveWholeNumber());
     cmd->add_flag("--resume", a->train.resume, "Continue from OUT/last");
     cmd->add_option("--threads", a->train.threads, "Torch threads")
-        ->check(PositiveWholeNumber())
+        ->check(ThreadCount())
         ->capture_default_str();
     cmd->add_option("--seed", a->train.seed, "Seed (weights, pairs, per-step randomness)")
         ->check(WholeNumber())
@@ -242,6 +246,7 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--write-bundle", a->bundle,
                     "Write the training data and config to FILE for regbench-train-portable "
                     "(a machine with LibTorch alone, e.g. a GPU node) instead of training");
+    cmd->add_flag("--force", a->force, "Replace an existing --write-bundle file");
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
 

@@ -13,4 +13,9 @@ namespace regbench {
 /// stay below float's 3.4e38. No metric point cloud comes near it (1e15 m is 6,700 AU).
 inline constexpr double kMaxCoordinate = 1e15;
 
+/// The largest translation a transform may carry: one between two clouds within the coordinate
+/// limit moves a point by at most twice it. Beyond it a method's result is `failed` and a
+/// transform given to `score` is refused (a 1e300 translation was scored `ok`; issue 44).
+inline constexpr double kMaxTranslation = 2 * kMaxCoordinate;
+
 }  // namespace regbench

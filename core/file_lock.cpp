@@ -32,6 +32,24 @@ std::string WithoutTrailingSlashes(std::string path) {
     return path;
 }
 
+bool EndsWith(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+/// OUT, OUT.part and OUT.lock share one lock, OUT.lock: a writer given another run's OUT.part
+/// as its own output waits for (is refused by) that run instead of replacing its rows; OUT.lock
+/// itself is never an output.
+std::string LockPathOf(const std::string& path) {
+    std::string base = WithoutTrailingSlashes(path);
+    if (EndsWith(base, ".lock")) {
+        throw std::runtime_error(path +
+                                 ": output names a lock file (regbench keeps OUT.lock beside "
+                                 "every output it writes); pick another name");
+    }
+    if (EndsWith(base, ".part")) base.resize(base.size() - 5);
+    return base + ".lock";
+}
+
 }  // namespace
 
 void CreateParentFolders(const std::string& folder) {
@@ -61,8 +79,7 @@ void RequireRegularOrAbsent(const std::string& path, const std::string& what) {
     }
 }
 
-OutputLock::OutputLock(const std::string& path)
-    : lock_path_(WithoutTrailingSlashes(path) + ".lock"), owner_(::getpid()) {
+OutputLock::OutputLock(const std::string& path) : lock_path_(LockPathOf(path)), owner_(::getpid()) {
     // Retry when the file we locked was unlinked by a finishing holder between our open and
     // our flock: that inode no longer guards the path.
     for (int attempt = 0; attempt < 100; ++attempt) {

@@ -23,6 +23,8 @@ void RequireRegularOrAbsent(const std::string& path, const std::string& what);
 /// to the command. Commands that write one file keep refusing a missing directory.
 void CreateParentFolders(const std::string& folder);
 
+/// The lock of "OUT" and of "OUT.part" is "OUT.lock" (a run's partial file is covered by its
+/// lock); a path ending in ".lock" is refused.
 class OutputLock {
 public:
     explicit OutputLock(const std::string& path);

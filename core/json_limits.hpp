@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "core/input_file.hpp"
+
 namespace regbench {
 
 /// True when `text` is well-formed UTF-8 (no overlong forms, surrogates or code points above
@@ -70,6 +72,7 @@ inline nlohmann::json ParseJsonBounded(std::string_view text, const std::string&
 /// The JSON file `path`, parsed as ParseJsonBounded does. Throws std::runtime_error
 /// "<what>: cannot open" or "<what>: not valid JSON: <why>", `what` naming the file's role.
 inline nlohmann::json ReadJsonFileBounded(const std::string& path, const std::string& what) {
+    RequireRegularFile(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error(what + ": cannot open");
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -85,6 +85,10 @@ AlignResult RegistrationMethod::Align(const PointCloud& source, const PointCloud
         return Failed(Name() + ": produced a non-finite transform", result.seconds,
                       result.cpu_seconds);
     }
+    if (result.T_target_source.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxTranslation) {
+        return Failed(Name() + ": produced a translation beyond the coordinate limit (2e15)",
+                      result.seconds, result.cpu_seconds);
+    }
     const double s = AllowsScale() ? std::cbrt(sR.determinant()) : 1.0;
     constexpr double kRotationTol = 1e-6;
     if (!(s > 0.0) || !IsRotation(sR / s, kRotationTol)) {

@@ -6,6 +6,8 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "core/input_file.hpp"
+
 namespace regbench {
 namespace {
 
@@ -77,6 +79,7 @@ std::string Sha256Hex(const std::string& bytes) {
 }
 
 std::string Sha256File(const std::string& path) {
+    RequireRegularFile(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error(path + ": cannot be opened");
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

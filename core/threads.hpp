@@ -8,6 +8,11 @@
 
 namespace regbench {
 
+/// The most OpenMP threads one call may ask for: far above any machine regbench runs on, and far
+/// below the count at which libgomp cannot allocate its team and kills the process (10^9 threads
+/// ended the Python interpreter; issue 44).
+inline constexpr int kMaxThreads = 1024;
+
 /// Sets the OpenMP thread count for parallel regions started by the calling thread.
 ///
 /// Also sets the OMP_NUM_THREADS environment variable, because Open3D 0.16's
@@ -21,8 +26,9 @@ namespace regbench {
 /// default (OMP_NUM_THREADS at start-up, else all cores) and must call this itself.
 /// setenv is not thread-safe: call this while no other thread runs a method.
 inline void SetOmpThreads(int threads) {
-    if (threads < 1) {
-        throw std::invalid_argument("threads must be >= 1, got " + std::to_string(threads));
+    if (threads < 1 || threads > kMaxThreads) {
+        throw std::invalid_argument("threads must be in [1, " + std::to_string(kMaxThreads) +
+                                    "], got " + std::to_string(threads));
     }
     setenv("OMP_NUM_THREADS", std::to_string(threads).c_str(), /*overwrite=*/1);
     omp_set_num_threads(threads);

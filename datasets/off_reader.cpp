@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "core/input_file.hpp"
+
 namespace regbench {
 namespace {
 
@@ -121,6 +123,7 @@ std::vector<Eigen::Vector3i> ReadOffFaces(std::istream& in, const std::string& p
 // OFF and its variants in one pass over the file (header keyword, counts, vertices, faces),
 // each step refusing bad input with the file and line: long because every field is checked.
 Mesh ReadOff(const std::string& path) {
+    RequireRegularFile(path);
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open OFF file");
     std::string line;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -148,6 +149,7 @@ std::uintmax_t ReadHeader(const std::string& path, const char* last, OnLine on_l
 DeclaredCloud ReadPlyHeader(const std::string& path) {
     DeclaredCloud d;
     bool in_vertex = false;
+    std::set<std::string> vertex_properties;  // a name twice: which one is x?
     d.body_offset = ReadHeader(path, "end_header", [&](int n, const std::vector<std::string>& w) {
         if (w.size() >= 2 && w[0] == "format") d.ascii = w[1] == "ascii";
         if (w.size() >= 3 && w[0] == "element") {
@@ -162,6 +164,10 @@ DeclaredCloud ReadPlyHeader(const std::string& path) {
         if (!w.empty() && w[0] == "property" && w.size() < 3) {
             throw std::runtime_error(path + ":" + std::to_string(n) +
                                      ": PLY property line needs a type and a name");
+        }
+        if (in_vertex && w.size() >= 3 && w[0] == "property" &&
+            !vertex_properties.insert(w.back()).second) {
+            HeaderError(path, n, "PLY vertex property '" + w.back() + "' is declared twice");
         }
         if (in_vertex && w.size() >= 3 && w[0] == "property") {
             // A list takes at least its count (an empty list): the bytes per point are then a
@@ -182,12 +188,25 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
     std::size_t fields = 0, types = 0;
     int fields_line = 0;
     bool have_points = false;
+    double width = -1, height = -1;  // -1: no such line
+    int width_line = 0;
     d.body_offset = ReadHeader(path, "DATA", [&](int n, const std::vector<std::string>& w) {
         if (w.empty()) return;
         if (w[0] == "FIELDS") {
             fields = w.size() - 1;
             fields_line = n;
+            std::set<std::string> names;
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                if (!names.insert(w[i]).second && w[i] != "_") {
+                    HeaderError(path, n, "PCD field '" + w[i] + "' is declared twice");
+                }
+            }
         }
+        if (w[0] == "WIDTH" && w.size() >= 2) {
+            width = HeaderCount(path, n, w[1]);
+            width_line = n;
+        }
+        if (w[0] == "HEIGHT" && w.size() >= 2) height = HeaderCount(path, n, w[1]);
         if (w[0] == "TYPE") {
             types = w.size() - 1;
             for (std::size_t i = 1; i < w.size(); ++i) {
@@ -247,6 +266,14 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
     // Open3D takes the point count from POINTS only and reads garbage without one (fuzz_pcd: a
     // 33 GB allocation), so the line is required, as the PCD v0.7 format says.
     if (!have_points) throw std::runtime_error(path + ": PCD header has no POINTS line");
+    // WIDTH x HEIGHT is the point count too; a header where they disagree is damaged, and
+    // which count is meant cannot be told.
+    if (width >= 0 && d.points != width * (height >= 0 ? height : 1.0)) {
+        HeaderError(path, width_line,
+                    "PCD WIDTH x HEIGHT (" + std::to_string(static_cast<long long>(width)) + " x " +
+                        std::to_string(static_cast<long long>(height >= 0 ? height : 1.0)) +
+                        ") does not match POINTS " + d.points_text);
+    }
     for (std::size_t i = 0; i < sizes.size(); ++i) {
         d.point_bytes += sizes[i] * (i < counts.size() ? counts[i] : 1.0);
     }
@@ -282,8 +309,21 @@ void CheckDeclaredCloud(const std::string& path, const DeclaredCloud& d) {
         in.seekg(static_cast<std::streamoff>(d.body_offset));
         std::string line;
         double lines = 0;
+        std::size_t line_no = 0;
         while (lines < d.points && std::getline(in, line)) {
-            if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+            ++line_no;
+            if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+            ++lines;
+            // Every token of a point line is a number (nan and inf included: --nan-points
+            // judges those); text there was read as zeros.
+            std::istringstream words(line);
+            for (std::string t; words >> t;) {
+                if (!ParseNumber<double>(t)) {
+                    throw std::runtime_error(path + ": body line " + std::to_string(line_no) +
+                                             " after the header holds '" + t.substr(0, 40) +
+                                             "', not a number (garbage or a damaged file)");
+                }
+            }
         }
         if (lines < d.points) {
             refuse("the body has only " + std::to_string(static_cast<long long>(lines)) +

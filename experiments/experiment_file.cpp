@@ -12,6 +12,7 @@
 #include "core/params.hpp"
 #include "protocols/pair_protocols.hpp"
 #include "reports/paper_report.hpp"
+#include "runners/registry.hpp"
 
 namespace regbench {
 
@@ -38,6 +39,21 @@ void Check(const std::string& what, const char* key, F&& check) {
     } catch (const std::exception& e) {
         Require(false, what, key, std::string("is not valid: ") + e.what());
     }
+}
+
+/// A name used as a file stem (tables/<table>.md, pairs/<id>.h5): no folder separator, no
+/// leading '.', no "..": `"table": "../../x"` wrote outside the report folder.
+bool IsFileStem(const std::string& name) {
+    return !name.empty() && name.find_first_of("/\\") == std::string::npos && name[0] != '.' &&
+           name.find("..") == std::string::npos;
+}
+
+/// A method name a file may list: registered in this build, or one of its `learned` methods
+/// (left out with a note when this build or its checkpoints cannot run them).
+void CheckMethodName(const ExperimentFile& f, const std::string& what, const char* key,
+                     const std::string& name) {
+    if (std::find(f.learned.begin(), f.learned.end(), name) != f.learned.end()) return;
+    Check(what, key, [&] { (void)FindMethod(name); });
 }
 
 /// ParseConfig of `j` without its keys `nested` (their values are parsed on their own, so a
@@ -72,8 +88,8 @@ ExperimentSpec ReadExperiment(const nlohmann::json& j, const std::string& what) 
                                      {"dataset", s.dataset}}) {
         Require(!value.empty(), what, key, "is required");
     }
-    Require(s.id.find_first_of("/\\") == std::string::npos && s.id[0] != '.', what, "id",
-            "must be a file stem (no '/', no leading '.'), got '" + s.id + "'");
+    Require(IsFileStem(s.id), what, "id",
+            "must be a file stem (no '/', no leading '.', no '..'), got '" + s.id + "'");
     Check(what, "protocol", [&] { (void)ParseProtocol(s.protocol); });
     Require(s.root.empty() || s.root == "modelnet40" || s.root == "7scenes" || s.root == "icl-nuim",
             what, "root", "must be modelnet40, 7scenes or icl-nuim, got '" + s.root + "'");
@@ -82,6 +98,10 @@ ExperimentSpec ReadExperiment(const nlohmann::json& j, const std::string& what) 
         Check(what, "root_pairing", [&] { (void)ParsePairing(s.root_pairing); });
     Require(s.pairs.scale > 0.0 && s.pairs.scale <= 1e6, what + ": pairs", "scale",
             "must be in (0, 1e6], got " + nlohmann::json(s.pairs.scale).dump());
+    // max(min, floor(scale * n)) must be at least 1 for every n >= 1: 0 pairs made `generate`
+    // fail mid-run without naming the file.
+    Require(s.pairs.count > 0 || s.pairs.min > 0 || s.pairs.scale >= 1.0, what + ": pairs", "min",
+            "must be >= 1 when scale < 1 (else a small --pairs gives the experiment 0 pairs)");
     Require(s.sweep.empty() || s.group.empty(), what, "group",
             "must be absent for a sweep (its groups are the sweep's levels)");
     Check(what, "protocol_options", [&] { (void)ProtocolOptionsOf(s); });
@@ -127,12 +147,22 @@ ExperimentFile ParseExperimentFile(const nlohmann::json& j, const std::string& f
         ParseWithout<ExperimentFile>(j, what, {"experiments", "variants", "timing_variants"});
     f.file = file;
     Require(!f.table.empty(), what, "table", "is required");
+    Require(IsFileStem(f.table), what, "table",
+            "must be a file stem (no '/', no leading '.', no '..'), got '" + f.table + "'");
     Require(!f.title.empty(), what, "title", "is required");
     f.experiments = ReadList<ExperimentSpec>(j, what, "experiments", ReadExperiment);
     f.timing_variants = ReadList<TimingVariant>(j, what, "timing_variants", ReadTimingVariant);
     Require(f.timing_variants.empty() || !f.timing_of.empty(), what, "timing_variants",
             "needs timing_of (the experiment whose pairs they run on)");
     if (j.contains("variants")) f.variants = ReadVariants(j["variants"], what + ": variants");
+    for (const auto& m : f.methods) CheckMethodName(f, what, "methods", m);
+    for (std::size_t i = 0; i < f.timing_variants.size(); ++i) {
+        CheckMethodName(f, what + ": timing_variants[" + std::to_string(i) + "]", "method",
+                        f.timing_variants[i].method);
+    }
+    if (!f.variants.method.empty()) {
+        CheckMethodName(f, what + ": variants", "method", f.variants.method);
+    }
     Require(!f.experiments.empty() || !f.variants.rows.empty() || !f.timing_of.empty() ||
                 IsPaperTable(f.table),
             what, "experiments",

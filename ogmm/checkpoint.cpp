@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "core/atomic_file.hpp"
+#include "core/input_file.hpp"
 #include "core/version.hpp"
 #include "ogmm/checkpoint_json.hpp"
 #include "ogmm/family.hpp"
@@ -106,12 +107,40 @@ void SaveCheckpointInto(const fs::path& tmp, RegistrationNet& net, const nlohman
                      j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
+namespace {
+
+/// The weights file's size, first bytes and last bytes, for CheckWeightsBytes: never the whole
+/// file (megabytes) at method creation. A missing file, a link to a device or a FIFO is refused
+/// by name.
+void CheckWeightsFile(const fs::path& path, const nlohmann::json& checkpoint) {
+    if (!fs::exists(fs::symlink_status(path))) {
+        throw std::runtime_error("weights file " + path.string() + " is missing");
+    }
+    RequireRegularFile(path.string());
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("weights file " + path.string() + " cannot be opened");
+    const std::uint64_t size = fs::file_size(path);
+    std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(size, 4)), '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    const std::uint64_t tail_size = std::min<std::uint64_t>(size, kWeightsTailBytes);
+    std::string tail(static_cast<std::size_t>(tail_size), '\0');
+    in.seekg(static_cast<std::streamoff>(size - tail_size));
+    in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
+    if (!in) throw std::runtime_error("weights file " + path.string() + " cannot be read");
+    CheckWeightsBytes(head, tail, size, checkpoint, path.string());
+}
+
+}  // namespace
+
 nlohmann::json ReadCheckpointJson(const std::string& dir) {
     const fs::path path = fs::path(dir) / kCheckpointJson;
+    RequireRegularFile(path.string());
     std::ifstream in(path);
     if (!in) throw std::runtime_error("checkpoint file " + path.string() + " cannot be opened");
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return ParseCheckpointJson(text, path.string());  // every check, torch-free (fuzzed)
+    nlohmann::json j = ParseCheckpointJson(text, path.string());  // torch-free (fuzzed)
+    CheckWeightsFile(fs::path(dir) / kWeightsFile, j);
+    return j;
 }
 
 namespace {

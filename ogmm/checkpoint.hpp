@@ -31,8 +31,10 @@ std::string BuildGitSha();
 void SaveCheckpoint(const std::string& dir, RegistrationNet& net, const nlohmann::json& meta,
                     torch::optim::Optimizer* optimizer = nullptr);
 
-/// Reads and checks dir/checkpoint.json. Throws std::runtime_error naming the file when it is
-/// missing, not JSON or not a regbench checkpoint.
+/// Reads and checks dir/checkpoint.json (ParseCheckpointJson) and its weights file
+/// (CheckWeightsBytes: present, a regular file, not empty, of the recorded size, a whole zip
+/// archive). Throws std::runtime_error naming the file when either is missing, not JSON, not a
+/// regbench checkpoint, of another format_version, or damaged.
 nlohmann::json ReadCheckpointJson(const std::string& dir);
 
 /// Loads weights (and the optimizer state when `optimizer` is given) into `net`. Refuses, with a

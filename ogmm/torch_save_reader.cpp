@@ -13,6 +13,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/input_file.hpp"
+
 namespace regbench::ogmm {
 namespace {
 
@@ -705,6 +707,7 @@ TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string
 }
 
 TorchSaveContents ReadTorchSaveFile(const std::string& path) {
+    RequireRegularFile(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) Fail(path, "cannot be opened");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

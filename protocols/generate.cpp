@@ -9,20 +9,20 @@
 
 namespace regbench {
 
-constexpr std::size_t kMaxGeneratedPairs = 10000000;
-
-void GenerateToFile(const GenerateRequest& request, const ShapeLoader& load_shapes,
-                    const ProgressCallback& progress) {
+void CheckGenerateRequest(const GenerateRequest& request) {
     ValidateProtocolOptions(request.options);
     if (!request.one_per_item && request.num_pairs < 1)
         throw std::invalid_argument("generate: --pairs must be >= 1");
-    // A pair file is held in memory while it is written; 10 million 1024-point pairs are
-    // already ~330 GB, so more is a typo, not a benchmark.
     if (request.num_pairs > kMaxGeneratedPairs) {
         throw std::invalid_argument("generate: --pairs " + std::to_string(request.num_pairs) +
                                     " is more than the supported " +
                                     std::to_string(kMaxGeneratedPairs));
     }
+}
+
+void GenerateToFile(const GenerateRequest& request, const ShapeLoader& load_shapes,
+                    const ProgressCallback& progress) {
+    CheckGenerateRequest(request);
     if (request.out.empty()) throw std::invalid_argument("generate: --out is required");
     const std::filesystem::path out(request.out);
     const std::filesystem::path dir = out.has_parent_path() ? out.parent_path() : ".";

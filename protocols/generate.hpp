@@ -30,6 +30,15 @@ struct GenerateRequest {
     nlohmann::json extra_provenance = nlohmann::json::object();
 };
 
+/// The most pairs one file may hold: a pair file is held in memory while it is written, and 10
+/// million 1024-point pairs are already ~330 GB, so more is a typo, not a benchmark.
+inline constexpr std::size_t kMaxGeneratedPairs = 10000000;
+
+/// The request's numbers, before any work: ValidateProtocolOptions and --pairs in
+/// [1, kMaxGeneratedPairs] (unless one_per_item). Throws std::invalid_argument naming the value;
+/// `regbench generate` reports it as a usage error.
+void CheckGenerateRequest(const GenerateRequest& request);
+
 /// Checks the request (options, num_pairs >= 1, output directory exists) before any work, then
 /// loads the shapes, generates the pairs and writes `out` atomically. On any failure nothing is
 /// left at `out` (an existing file there is not replaced). Provenance: ProtocolProvenance plus

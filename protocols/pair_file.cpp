@@ -169,12 +169,47 @@ std::vector<hsize_t> DatasetDims(const std::string& where, hid_t ds, int rank, c
     return dims;
 }
 
+/// Pair files hold hard links only: an external link names another file (a FIFO there hung
+/// `run` and `inspect` for ever, a device or any local file was read as coordinates) and a soft
+/// link another object; neither is ever written by regbench. Checked without traversing it.
+void RequireHardLink(const std::string& where, hid_t loc, const std::string& name) {
+    H5L_info_t info{};
+    if (H5Lget_info(loc, name.c_str(), &info, H5P_DEFAULT) < 0) {
+        Fail(where, "cannot read the link '" + name + "'");
+    }
+    if (info.type != H5L_TYPE_HARD) {
+        Fail(where, "'" + name + "' is " +
+                        (info.type == H5L_TYPE_EXTERNAL ? "an external link (to another file)"
+                                                        : std::string("a soft or user link")) +
+                        "; pair files may hold no links to other objects or files");
+    }
+}
+
+/// A dataset's bytes must live in the pair file: external storage (raw data in other files,
+/// H5Pset_external) or a virtual dataset (mapped from other files) is refused by name.
+void RequireStoredInFile(const std::string& where, hid_t ds, const char* name) {
+    Handle dcpl(H5Dget_create_plist(ds), H5Pclose);
+    if (!dcpl.ok()) Fail(where, std::string("cannot read the storage of '") + name + "'");
+    if (H5Pget_external_count(dcpl.get()) != 0) {
+        Fail(where, std::string("dataset '") + name +
+                        "' uses external storage (its data in other files); pair files must "
+                        "hold their data");
+    }
+    if (H5Pget_layout(dcpl.get()) == H5D_VIRTUAL) {
+        Fail(where, std::string("dataset '") + name +
+                        "' is a virtual dataset (mapped from other files); pair files must hold "
+                        "their data");
+    }
+}
+
 Handle OpenH5Dataset(const std::string& where, hid_t group, const char* name) {
     if (H5Lexists(group, name, H5P_DEFAULT) <= 0) {
         Fail(where, std::string("missing dataset '") + name + "'");
     }
+    RequireHardLink(where, group, name);
     Handle ds(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose);
     if (!ds.ok()) Fail(where, std::string("cannot open dataset '") + name + "'");
+    RequireStoredInFile(where, ds.get(), name);
     return ds;
 }
 
@@ -294,6 +329,7 @@ Pair ReadPair(const std::string& path, hid_t file, std::size_t k, std::uintmax_t
     const std::string where = path + ": pair " + std::to_string(k);
     const std::string name = PairGroupName(k);
     if (H5Lexists(file, name.c_str(), H5P_DEFAULT) <= 0) Fail(where, "missing group " + name);
+    RequireHardLink(where, file, name);
     Handle g(H5Gopen2(file, name.c_str(), H5P_DEFAULT), H5Gclose);
     if (!g.ok()) Fail(where, "cannot open group " + name);
     Pair p;
@@ -359,6 +395,7 @@ std::size_t CheckedPairCount(const std::string& path, hid_t file) {
         Fail(path, "num_pairs = " + std::to_string(n) + " is not a whole number >= 0");
     }
     if (H5Lexists(file, "pairs", H5P_DEFAULT) <= 0) Fail(path, "missing group /pairs");
+    RequireHardLink(path, file, "pairs");
     Handle pairs(H5Gopen2(file, "pairs", H5P_DEFAULT), H5Gclose);
     H5G_info_t info{};
     if (!pairs.ok() || H5Gget_info(pairs.get(), &info) < 0) Fail(path, "cannot open /pairs");

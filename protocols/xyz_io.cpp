@@ -19,6 +19,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/coordinate_limit.hpp"
+#include "core/input_file.hpp"
 #include "core/transform.hpp"
 #include "protocols/pair_protocols.hpp"
 
@@ -74,7 +75,7 @@ bool SkipLine(const std::string& line) {
 }
 
 std::ifstream OpenText(const std::string& path) {
-    if (!fs::exists(path)) throw std::runtime_error(path + ": no such file");
+    RequireRegularFile(path);
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open");
     return in;

@@ -9,7 +9,17 @@ namespace regbench::python {
 
 void PendingInterrupt::Store(const py::error_already_set& e) {
     std::lock_guard<std::mutex> guard(mutex_);
-    if (!error_) error_.emplace(e);
+    if (error_) return;
+    if (!e.matches(PyExc_SystemExit)) {
+        error_.emplace(e);
+        return;
+    }
+    // docs/python.md: a SystemExit raised in a callable stops the run like Ctrl-C, raising
+    // KeyboardInterrupt; rethrown as itself it left run() as SystemExit, which ends the
+    // interpreter unless caught (issue 44). Called with the interpreter lock held.
+    PyErr_SetString(PyExc_KeyboardInterrupt,
+                    ("SystemExit raised in a callable: " + DescribePythonError(e)).c_str());
+    error_.emplace();  // fetches the KeyboardInterrupt just set
 }
 
 void PendingInterrupt::RethrowIfAny() {
@@ -50,7 +60,8 @@ void ReadCallableResult(const py::object& out, AlignResult* r) {
                 }
                 r->stop_reason = value.cast<std::string>();
             } else {
-                r->extra[key] = PyToJson(value, "returned \"" + key + "\"");
+                // Inside the row and its "extra" object: 2 levels of the row's 64.
+                r->extra[key] = PyToJson(value, "returned \"" + key + "\"", /*enclosing=*/2);
             }
         }
     }

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/json_limits.hpp"
 #include "core/registration.hpp"
 
 namespace regbench::python {
@@ -36,7 +37,13 @@ py::object JsonToPy(const nlohmann::json& j) {
     }
 }
 
-nlohmann::json PyToJson(py::handle value, const std::string& what) {
+nlohmann::json PyToJson(py::handle value, const std::string& what, int enclosing) {
+    const bool container = py::isinstance<py::dict>(value) || py::isinstance<py::list>(value) ||
+                           py::isinstance<py::tuple>(value) || py::isinstance<py::array>(value);
+    if (container && enclosing + 1 > kMaxJsonDepth) {
+        throw py::value_error(what + ": nested deeper than " + std::to_string(kMaxJsonDepth) +
+                              " levels in its result row (no reader would take the row back)");
+    }
     if (value.is_none()) return nullptr;
     if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
     if (py::isinstance<py::int_>(value)) {
@@ -53,10 +60,12 @@ nlohmann::json PyToJson(py::handle value, const std::string& what) {
     }
     if (py::isinstance<py::float_>(value)) return value.cast<double>();
     if (py::isinstance<py::str>(value)) return value.cast<std::string>();
-    if (py::isinstance<py::array>(value)) return PyToJson(value.attr("tolist")(), what);
+    if (py::isinstance<py::array>(value)) {
+        return PyToJson(value.attr("tolist")(), what, enclosing);
+    }
     // NumPy scalars (numpy.float32, numpy.int64, numpy.bool_): their Python value.
     if (py::hasattr(value, "dtype") && py::hasattr(value, "item")) {
-        return PyToJson(value.attr("item")(), what);
+        return PyToJson(value.attr("item")(), what, enclosing);
     }
     if (py::isinstance<py::dict>(value)) {
         nlohmann::json out = nlohmann::json::object();
@@ -66,13 +75,13 @@ nlohmann::json PyToJson(py::handle value, const std::string& what) {
                                      py::repr(item.first).cast<std::string>());
             }
             const std::string key = item.first.cast<std::string>();
-            out[key] = PyToJson(item.second, what + "." + key);
+            out[key] = PyToJson(item.second, what + "." + key, enclosing + 1);
         }
         return out;
     }
     if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
         nlohmann::json out = nlohmann::json::array();
-        for (const auto& v : value) out.push_back(PyToJson(v, what));
+        for (const auto& v : value) out.push_back(PyToJson(v, what, enclosing + 1));
         return out;
     }
     throw py::type_error(what + ": cannot store a value of type " +
@@ -105,7 +114,7 @@ nlohmann::json ParamsToJson(py::handle params, const std::string& what) {
         throw py::value_error(what + " must be a dict (or None), got " +
                               py::str(params.get_type().attr("__name__")).cast<std::string>());
     }
-    nlohmann::json j = PyToJson(params, what);
+    nlohmann::json j = PyToJson(params, what, /*enclosing=*/1);  // a row's "params"
     RefuseNonFinite(j, what);
     return j;
 }

@@ -17,8 +17,11 @@ namespace py = pybind11;
 py::object JsonToPy(const nlohmann::json& j);
 
 /// A Python value (dict with str keys, list, tuple, str, int, float, bool, None, NumPy scalars
-/// and arrays) as JSON; anything else raises TypeError naming `what`.
-nlohmann::json PyToJson(py::handle value, const std::string& what);
+/// and arrays) as JSON; anything else raises TypeError naming `what`. `enclosing` is how many
+/// JSON containers will hold the value in its result row: a dict or list nesting deeper than
+/// kMaxJsonDepth levels in all raises ValueError, as no reader would take the row back (a
+/// callable's extras 100 levels deep were written, then refused on read-back; issue 44).
+nlohmann::json PyToJson(py::handle value, const std::string& what, int enclosing = 0);
 
 /// A method's parameters: None is {}, otherwise a dict (ValueError naming `what` if not, or
 /// naming the key of a NaN or infinite number, which a row's JSON cannot record).

@@ -232,9 +232,10 @@ CompareResult CompareResults(const std::vector<ResultRow>& base,
 void ParseTolerance(const std::string& text, CompareOptions* o) {
     const auto number = [&](const std::string& s) {
         const std::optional<double> v = ParseNumber<double>(s);
-        if (!v || !(*v >= 0.0)) {
+        // inf would switch the gate off (an identity candidate PASSed): finite only.
+        if (!v || !std::isfinite(*v) || !(*v >= 0.0)) {
             throw std::invalid_argument("--tolerance: '" + s +
-                                        "' is not a non-negative number (use e.g. 0.5 or "
+                                        "' is not a finite non-negative number (use e.g. 0.5 or "
                                         "mae_r=0.5,ccd=0.001)");
         }
         return *v;

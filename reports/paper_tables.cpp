@@ -7,11 +7,13 @@
 #include <stdexcept>
 
 #include "core/data_dir.hpp"
+#include "core/input_file.hpp"
 #include "reports/row_access.hpp"
 
 namespace regbench {
 
 nlohmann::json LoadPaperTables(const std::string& path) {
+    RequireRegularFile(path);
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open the paper's tables");
     try {

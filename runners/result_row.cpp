@@ -6,8 +6,11 @@
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/coordinate_limit.hpp"
 #include "core/enum_names.hpp"
+#include "core/input_file.hpp"
 #include "core/json_limits.hpp"
+#include "core/transform.hpp"
 
 namespace regbench {
 namespace {
@@ -107,7 +110,63 @@ bool IsKnownKey(const std::string& key) {
     return false;
 }
 
+/// The largest metric a writer can produce: coordinates are limited to 1e15
+/// (core/coordinate_limit.hpp), so squared distances stay near 1e31; far above is damage.
+constexpr double kMaxMetric = 1e35;
+/// mae_r averages three Euler-angle differences of at most 360 deg each; rre is an angle in
+/// [0, 180]; mse_r squares the former (a hair of slack for round-off).
+constexpr double kAngleSlack = 1e-6;
+
+void CheckMetricBounds(const nlohmann::json& metrics) {
+    for (const auto& f : PerPairMetrics()) {
+        const auto it = metrics.find(f.name);
+        if (it == metrics.end() || it->is_null()) {
+            // overlap_rmse alone may be absent or null (rows from before it existed); every
+            // other metric is computed from a finite transform and written as a number.
+            if (std::string(f.name) == "overlap_rmse") continue;
+            throw std::invalid_argument(std::string("metrics.") + f.name +
+                                        " is missing or null (a writer always gives a number)");
+        }
+        const double v = it->get<double>();
+        double most = kMaxMetric;
+        if (std::string(f.name) == "mae_r") most = 360.0 + kAngleSlack;
+        if (std::string(f.name) == "mse_r") most = 360.0 * 360.0 + kAngleSlack;
+        if (std::string(f.name) == "rre") most = 180.0 + kAngleSlack;
+        if (!(v >= 0.0 && v <= most)) {
+            throw std::invalid_argument(std::string("metrics.") + f.name + " = " +
+                                        nlohmann::json(v).dump() + " is outside [0, " +
+                                        nlohmann::json(most).dump() + "]");
+        }
+    }
+}
+
+void CheckMatrix(const Transform& T, const char* name, bool rigid) {
+    if (!T.allFinite()) throw std::invalid_argument(std::string(name) + " is not finite");
+    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxTranslation) {
+        throw std::invalid_argument(std::string(name) +
+                                    " translates beyond the coordinate limit (2e15)");
+    }
+    const bool last_row = T(3, 0) == 0.0 && T(3, 1) == 0.0 && T(3, 2) == 0.0 && T(3, 3) == 1.0;
+    if (rigid && (!last_row || !IsRotation(T.topLeftCorner<3, 3>(), 1e-6))) {
+        throw std::invalid_argument(std::string(name) + " is not a rigid transform");
+    }
+}
+
 }  // namespace
+
+void CheckRowAsWritten(const nlohmann::json& j, const ResultRow& row) {
+    const auto pair = j.find("pair");
+    if (pair == j.end() || !pair->is_number_unsigned() || row.pair > kMaxPairIndex) {
+        throw std::invalid_argument("pair must be a whole number in [0, " +
+                                    std::to_string(kMaxPairIndex) + "], got " +
+                                    (pair == j.end() ? std::string("none") : pair->dump()));
+    }
+    if (row.method.empty()) throw std::invalid_argument("method is empty");
+    CheckMetricBounds(j.at("metrics"));
+    CheckMatrix(row.result.T_target_source, "transform", false);
+    if (row.gt_transform) CheckMatrix(*row.gt_transform, "gt_transform", true);
+    if (!std::isfinite(row.result.seconds)) throw std::invalid_argument("seconds is not finite");
+}
 
 const char* ToString(Status status) { return EnumToString(kStatusNames, status); }
 
@@ -221,6 +280,10 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     for (const char* key : {"pair", "method", "metrics"}) {
         if (!j.contains(key)) throw std::invalid_argument(std::string("row has no '") + key + "'");
     }
+    // A float (1e20) or negative pair would be cast out of range by get<size_t>.
+    if (!j.at("pair").is_number_unsigned()) {
+        throw std::invalid_argument("pair must be a whole number >= 0, got " + j.at("pair").dump());
+    }
     row.pair = j.at("pair").get<std::size_t>();
     row.method = j.at("method").get<std::string>();
     row.params = j.value("params", nlohmann::json::object());
@@ -254,6 +317,7 @@ std::string ToJsonLine(const ResultRow& row) {
 void ForEachJsonlLine(
     const std::string& path, TornLastLine torn,
     const std::function<void(const std::string& where, const nlohmann::json& value)>& visit) {
+    RequireRegularFile(path);
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open results file");
     std::string line;
@@ -262,6 +326,12 @@ void ForEachJsonlLine(
         ++lineno;
         if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
         const std::string where = path + ":" + std::to_string(lineno);
+        // nlohmann skips a byte-order mark; no regbench writer puts one on any line.
+        if (line.rfind("\xEF\xBB\xBF", 0) == 0) {
+            throw std::runtime_error(where +
+                                     ": starts with a byte-order mark (not a line any "
+                                     "regbench writer wrote)");
+        }
         nlohmann::json value;
         try {
             value = ParseJsonBounded(line, where);  // depth-limited: no stack overflow later
@@ -292,6 +362,7 @@ std::vector<ResultRow> ReadResultRows(const std::string& path) {
                      [&](const std::string& where, const nlohmann::json& value) {
                          try {
                              rows.push_back(value.get<ResultRow>());
+                             CheckRowAsWritten(value, rows.back());
                          } catch (const std::exception& e) {
                              throw std::runtime_error(where + ": not a result row: " + e.what());
                          }

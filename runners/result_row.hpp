@@ -61,8 +61,8 @@ struct ResultRow {
     /// Its ok/failed `status` follows `status` below when a row is read back.
     AlignResult result;
     Status status = Status::kOk;  ///< the runner's verdict (adds timeouts and crashes)
-    int threads = 1;                                  ///< OpenMP threads of the call
-    std::string shape;                                ///< the pair's mesh / scan name
+    int threads = 1;              ///< OpenMP threads of the call
+    std::string shape;            ///< the pair's mesh / scan name
     std::string category;
     /// From the pair file (fraction labelled overlapping); absent in rows written before rows
     /// recorded them (and then not written back).
@@ -112,7 +112,19 @@ void ForEachJsonlLine(
 
 /// Reads a JSONL file of objects (blank lines skipped). Throws naming file and line.
 std::vector<nlohmann::json> ReadJsonl(const std::string& path);
-/// Reads and types every row; a row that does not parse throws naming file:line and the key.
+/// The largest pair index a row may hold (no pair file holds more pairs).
+inline constexpr std::size_t kMaxPairIndex = 2147483647;
+
+/// Refuses (std::invalid_argument naming the key) a row no regbench writer would have written:
+/// `pair` not a whole number in [0, kMaxPairIndex] (-1, 2.5, 1e20), an empty method, a metric
+/// that is null (overlap_rmse excepted), negative or beyond what coordinates within the limit
+/// give (mae_r <= 360, rre <= 180 deg, others <= 1e35), a non-finite transform or one
+/// translating beyond 2e15, a non-rigid gt_transform, non-finite seconds. `j` is the
+/// row's JSON, `row` what from_json made of it. Every file reader calls it (issue 44).
+void CheckRowAsWritten(const nlohmann::json& j, const ResultRow& row);
+
+/// Reads and types every row; a row that does not parse or fails CheckRowAsWritten throws
+/// naming file:line and the key.
 /// Each row's `origin` is set to "path:line".
 std::vector<ResultRow> ReadResultRows(const std::string& path);
 /// Writes rows (one per line) to path atomically and checked (core/atomic_file): readers never

@@ -55,7 +55,8 @@ ResultRow CheckResultRow(const nlohmann::json& json, const RowExpectation& expec
     CheckRequiredFields(json, where);
     ResultRow row;
     try {
-        row = json.get<ResultRow>();  // types every field; an unknown status is refused here
+        row = json.get<ResultRow>();   // types every field; an unknown status is refused here
+        CheckRowAsWritten(json, row);  // values a writer can give (null, -1, 1e308 refused)
     } catch (const std::exception& e) {
         Refuse(where, std::string("not a result row: ") + e.what());
     }

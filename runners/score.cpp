@@ -12,7 +12,9 @@
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/coordinate_limit.hpp"
 #include "core/file_lock.hpp"
+#include "core/input_file.hpp"
 #include "core/json_limits.hpp"
 #include "core/parse_number.hpp"
 #include "protocols/pair_file.hpp"
@@ -31,6 +33,9 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
 /// *scale); otherwise what is wrong with it.
 std::string RigidProblem(const Transform& T, double tol, bool allow_scale, double* scale) {
     if (!T.allFinite()) return "has non-finite entries";
+    if (T.topRightCorner<3, 1>().cwiseAbs().maxCoeff() > kMaxTranslation) {
+        return "translates beyond the coordinate limit (|t| <= 2e15)";
+    }
     Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
     char buf[200];
     *scale = 1.0;
@@ -152,6 +157,7 @@ std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size
     if (!csv && !EndsWith(path, ".jsonl") && !EndsWith(path, ".json")) {
         throw std::runtime_error(path + ": transforms file must end in .jsonl or .csv");
     }
+    RequireRegularFile(path);
     std::ifstream in(path);
     if (!in) throw std::runtime_error(path + ": cannot open transforms file");
     std::vector<ExternalTransform> out;

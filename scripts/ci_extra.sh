@@ -52,7 +52,7 @@ t_tests=$(date +%s)
 
 artifacts="$build/fuzz-artifacts"
 mkdir -p "$artifacts"
-for name in off ply pcd xyz xyz_import pair_file result_rows checkpoint_json pair_attributes torch_save; do
+for name in off ply pcd xyz xyz_import pair_file result_rows checkpoint_json pair_attributes torch_save experiment_file; do
   corpus="$(mktemp -d)"
   cp -r "$root/fuzz/corpus/$name/." "$corpus/"
   # pair_attributes writes an HDF5 file and reads it in a forked child for every input (about

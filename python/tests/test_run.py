@@ -271,3 +271,50 @@ def test_read_results_and_report(pairs_path, pair_file, tmp_path):
     bad.write_text(open(out).readline() + "{not json\n")
     with pytest.raises(ValueError, match=f"{bad}:2"):
         regbench.read_results(bad)
+
+
+# Issue 44 group 7.
+def test_absurd_thread_counts_raise_instead_of_killing_the_interpreter(pair_file, tmp_path):
+    pair = pair_file[0]
+    for threads in (10**9, 1025):
+        with pytest.raises(ValueError, match=r"threads must be in \[1, 1024\]"):
+            regbench.align(pair.source, pair.target, "icp", threads=threads)
+        with pytest.raises(ValueError, match=r"threads must be in \[1, 1024\]"):
+            regbench.run(pair_file, ["icp"], tmp_path / "t.jsonl", threads=threads)
+    assert not (tmp_path / "t.jsonl").exists()
+
+
+def test_extras_too_deep_for_a_row_fail_the_call_not_the_run(pair_file, tmp_path):
+    def deep(source, target):
+        extra = []
+        for _ in range(100):
+            extra = [extra]
+        return {"transform": np.eye(4), "trace": extra}
+
+    def shallow(source, target):
+        extra = []
+        for _ in range(61):  # 62 nested lists inside the row and its extra: 64 levels, the limit
+            extra = [extra]
+        return {"transform": np.eye(4), "trace": extra}
+
+    out = tmp_path / "deep.jsonl"
+    summary = regbench.run(pair_file, [deep, shallow], out)
+    assert summary["failures"] == len(pair_file)
+    rows = regbench.read_results(out, as_frame=False)  # the run's own rows read back
+    by_method = {}
+    for r in rows:
+        by_method.setdefault(r["method"], []).append(r)
+    assert all(r["status"] == "failed" for r in by_method["deep"])
+    assert "nested deeper than 64 levels" in by_method["deep"][0]["message"]
+    assert all(r["status"] == "ok" for r in by_method["shallow"])
+
+
+def test_system_exit_in_a_callable_stops_the_run_as_keyboard_interrupt(pair_file, tmp_path):
+    def leaves(source, target):
+        raise SystemExit(3)
+
+    out = tmp_path / "exit.jsonl"
+    with pytest.raises(KeyboardInterrupt, match="SystemExit"):
+        regbench.run(pair_file, ["icp", leaves], out)
+    assert not out.exists()
+    assert os.path.exists(str(out) + ".part")  # the finished rows stay for resume

@@ -213,7 +213,7 @@ writers)
   cp plyd/0000_src.ply ply.before
   "$bin" generate --protocol partial --dataset plyd --split all --pairs 2 --seed 1 --points 500 \
     --out plyd/0000_src.ply >gen.out 2>&1 && fail "generate onto its dataset accepted"
-  grep -q "existing file of the input dataset" gen.out || fail "generate: $(cat gen.out)"
+  grep -q "lies inside the input plyd" gen.out || fail "generate: $(cat gen.out)"
   cmp -s plyd/0000_src.ply ply.before || fail "generate replaced a file of its dataset"
   # Every writer beside a running `run` on the same path is refused naming its pid.
   "$bin" run --pairs pairs.h5 --methods cpd --params "$slow" --out busy.jsonl -q 2>first.err &

@@ -13,9 +13,8 @@ struct CliResult {
     std::string output;  ///< stdout and stderr
 };
 
-/// `regbench ARGS 2>&1`; ARGS is passed to the shell as written.
-inline CliResult RunCli(const std::string& args) {
-    const std::string cmd = std::string(REGBENCH_CLI) + " " + args + " 2>&1";
+/// Runs the shell command `cmd` and captures what it prints.
+inline CliResult RunShell(const std::string& cmd) {
     CliResult r;
     FILE* p = popen(cmd.c_str(), "r");
     if (p == nullptr) return r;
@@ -25,6 +24,17 @@ inline CliResult RunCli(const std::string& args) {
     const int status = pclose(p);
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+/// `regbench ARGS 2>&1`; ARGS is passed to the shell as written.
+inline CliResult RunCli(const std::string& args) {
+    return RunShell(std::string(REGBENCH_CLI) + " " + args + " 2>&1");
+}
+
+/// RunCli under `timeout SECONDS`: a hang ends with exit 124 instead of hanging the test.
+inline CliResult RunCliWithin(int seconds, const std::string& args) {
+    return RunShell("timeout " + std::to_string(seconds) + " " + std::string(REGBENCH_CLI) + " " +
+                    args + " 2>&1");
 }
 
 }  // namespace regbench::testing

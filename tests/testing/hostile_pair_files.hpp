@@ -129,6 +129,32 @@ inline std::vector<HostileCase> HostileCases() {
          [](hid_t f) {
              SetStringAttr(f, "provenance", std::string(100, '[') + std::string(100, ']'));
          }},
+        // Issue 44: links and storage outside the file. An external link to a FIFO hung `run`
+        // and `inspect` for ever; external storage read any local file as coordinates.
+        {"source_external_link", "external link",
+         [](hid_t f) {
+             H5Ldelete(f, "/pairs/000001/source", H5P_DEFAULT);
+             H5Lcreate_external("/nonexistent/other.h5", "/x", f, "/pairs/000001/source",
+                                H5P_DEFAULT, H5P_DEFAULT);
+         }},
+        {"pair_soft_link", "soft or user link",
+         [](hid_t f) {
+             H5Ldelete(f, "/pairs/000001", H5P_DEFAULT);
+             H5Lcreate_soft("/pairs/000000", f, "/pairs/000001", H5P_DEFAULT, H5P_DEFAULT);
+         }},
+        {"source_external_storage", "external storage",
+         [](hid_t f) {
+             H5Ldelete(f, "/pairs/000001/source", H5P_DEFAULT);
+             const hsize_t dims[2] = {20, 3};
+             const hid_t space = H5Screate_simple(2, dims, nullptr);
+             const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+             H5Pset_external(dcpl, "/dev/zero", 0, 20 * 3 * sizeof(double));
+             const hid_t ds = H5Dcreate2(f, "/pairs/000001/source", H5T_IEEE_F64LE, space,
+                                         H5P_DEFAULT, dcpl, H5P_DEFAULT);
+             H5Dclose(ds);
+             H5Pclose(dcpl);
+             H5Sclose(space);
+         }},
     };
 }
 
