@@ -147,24 +147,23 @@ Table VersusTable(const VersusResult& r) {
     for (const auto& m : r.metrics) decimals = std::max(decimals, FindMetric(m.metric).decimals);
     for (const std::size_t c : {1, 2, 3, 4}) t.columns[c].decimals = decimals;
     for (const auto& m : r.metrics) {
-        TableRow row{m.metric, {}};
-        const auto cell = [&](double v) { return MeasuredCell(v, m.pairs); };
+        const auto cell = [&](double v) {
+            return m.pairs == 0 ? Cell{} : MeasuredCell(v, m.pairs);
+        };
         Cell diff = cell(m.diff_mean);
-        diff.ci_lo = m.ci_lo;
-        diff.ci_hi = m.ci_hi;
-        row.cells = {cell(static_cast<double>(m.pairs)),
-                     cell(m.mean_a),
-                     cell(m.mean_b),
-                     diff,
-                     cell(m.diff_mean),
-                     cell(m.p_value),
-                     cell(static_cast<double>(m.wins)),
-                     cell(static_cast<double>(m.ties)),
-                     cell(static_cast<double>(m.losses))};
-        if (m.pairs == 0) {
-            for (std::size_t c = 1; c < row.cells.size(); ++c) row.cells[c] = Cell{};
+        if (m.pairs != 0) {
+            diff.ci_lo = m.ci_lo;
+            diff.ci_hi = m.ci_hi;
         }
-        t.rows.push_back(std::move(row));
+        t.AddRow(m.metric, {{"pairs", MeasuredCell(static_cast<double>(m.pairs), m.pairs)},
+                            {"mean_a", cell(m.mean_a)},
+                            {"mean_b", cell(m.mean_b)},
+                            {"diff", diff},
+                            {"diff_mean", cell(m.diff_mean)},
+                            {"wilcoxon_p", cell(m.p_value)},
+                            {"wins", cell(static_cast<double>(m.wins))},
+                            {"ties", cell(static_cast<double>(m.ties))},
+                            {"losses", cell(static_cast<double>(m.losses))}});
     }
     t.notes.push_back(
         "Lower is better for every metric; " + r.method_a + " - " + r.method_b + " < 0 favours " +
