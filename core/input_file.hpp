@@ -11,11 +11,14 @@
 
 namespace regbench {
 
-/// Throws std::runtime_error "<path>: ..." unless `path` (links followed) is an existing
+/// Throws std::runtime_error "<what> <path>: ..." unless `path` (links followed) is an existing
 /// regular file: a missing file, a folder, a FIFO, a socket or a device is refused by name.
-inline void RequireRegularFile(const std::string& path) {
+/// `what` names the kind of input ("training bundle"), when the caller's message would.
+inline void RequireRegularFile(std::string path, const std::string& what = "") {
     struct stat st {};
-    if (::stat(path.c_str(), &st) != 0) {
+    const std::string file = path;
+    if (!what.empty()) path = what + " " + path;
+    if (::stat(file.c_str(), &st) != 0) {
         throw std::runtime_error(path + ": " +
                                  (errno == ENOENT
                                       ? std::string("no such file")

@@ -9,22 +9,27 @@
 
 namespace regbench {
 
-/// Levenshtein distance (insert, delete, substitute one character), case-insensitive.
+/// Edit distance with transpositions (optimal string alignment: insert, delete, substitute or
+/// swap two adjacent characters, each one edit), case-insensitive: "cdp" is one edit from "cpd".
 inline std::size_t EditDistance(const std::string& a, const std::string& b) {
-    std::vector<std::size_t> row(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    const auto same = [&](std::size_t i, std::size_t j) {  // a[i - 1] == b[j - 1]
+        return std::tolower(static_cast<unsigned char>(a[i - 1])) ==
+               std::tolower(static_cast<unsigned char>(b[j - 1]));
+    };
+    const std::size_t w = b.size() + 1;
+    std::vector<std::size_t> d((a.size() + 1) * w);
+    for (std::size_t i = 0; i <= a.size(); ++i) d[i * w] = i;
+    for (std::size_t j = 0; j <= b.size(); ++j) d[j] = j;
     for (std::size_t i = 1; i <= a.size(); ++i) {
-        std::size_t diagonal = row[0];
-        row[0] = i;
         for (std::size_t j = 1; j <= b.size(); ++j) {
-            const bool same = std::tolower(static_cast<unsigned char>(a[i - 1])) ==
-                              std::tolower(static_cast<unsigned char>(b[j - 1]));
-            const std::size_t next = std::min({row[j] + 1, row[j - 1] + 1, diagonal + !same});
-            diagonal = row[j];
-            row[j] = next;
+            std::size_t v = std::min({d[(i - 1) * w + j] + 1, d[i * w + j - 1] + 1,
+                                      d[(i - 1) * w + j - 1] + !same(i, j)});
+            if (i > 1 && j > 1 && same(i, j - 1) && same(i - 1, j))
+                v = std::min(v, d[(i - 2) * w + j - 2] + 1);
+            d[i * w + j] = v;
         }
     }
-    return row[b.size()];
+    return d.back();
 }
 
 /// The known name nearest to `name` when at most max(2, |name| / 3) edits away (the first of

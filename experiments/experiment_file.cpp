@@ -98,10 +98,6 @@ ExperimentSpec ReadExperiment(const nlohmann::json& j, const std::string& what) 
         Check(what, "root_pairing", [&] { (void)ParsePairing(s.root_pairing); });
     Require(s.pairs.scale > 0.0 && s.pairs.scale <= 1e6, what + ": pairs", "scale",
             "must be in (0, 1e6], got " + nlohmann::json(s.pairs.scale).dump());
-    // max(min, floor(scale * n)) must be at least 1 for every n >= 1: 0 pairs made `generate`
-    // fail mid-run without naming the file.
-    Require(s.pairs.count > 0 || s.pairs.min > 0 || s.pairs.scale >= 1.0, what + ": pairs", "min",
-            "must be >= 1 when scale < 1 (else a small --pairs gives the experiment 0 pairs)");
     Require(s.sweep.empty() || s.group.empty(), what, "group",
             "must be absent for a sweep (its groups are the sweep's levels)");
     Check(what, "protocol_options", [&] { (void)ProtocolOptionsOf(s); });

@@ -13,6 +13,7 @@
 #include <memory>
 #include <ostream>
 #include <set>
+#include <stdexcept>
 #include <utility>
 
 #include "core/atomic_file.hpp"
@@ -92,8 +93,15 @@ std::vector<PlannedExperiment> PlanExperiments(const std::vector<ExperimentFile>
     std::vector<PlannedExperiment> out;
     for (const auto& f : files) {
         for (const auto& s : f.experiments) {
-            if (Wanted(o.tables, f.table) || used.count(s.id))
-                out.push_back(Resolve(s, f.table, o));
+            if (!Wanted(o.tables, f.table) && !used.count(s.id)) continue;
+            out.push_back(Resolve(s, f.table, o));
+            // Refused before any work, by name: 0 pairs made `generate` fail mid-run.
+            if (out.back().pairs == 0) {
+                throw std::invalid_argument(
+                    "experiment file " + f.file + ": experiment '" + s.id +
+                    "' gets 0 pairs at this --pairs (max(min, floor(scale * n)) = 0): give "
+                    "its \"pairs\" a \"min\" >= 1 or run with a larger --pairs");
+            }
         }
     }
     return out;
@@ -576,6 +584,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     if (files.empty()) files = PaperPlan();
     CheckExperimentFiles(files);
     ValidateOptions(o, files);
+    const std::vector<PlannedExperiment> experiments = PlanExperiments(files, o);
     ReproduceSummary summary;
     const fs::path out = fs::absolute(o.out_dir);
     // One reproduce per folder (OUT.lock beside it): a second one, or any regbench writer on
@@ -589,7 +598,6 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     summary.out_dir = out.string();
     std::map<std::string, std::string> unavailable;
     const auto methods = ChooseAllMethods(files, o, &unavailable, log);
-    const std::vector<PlannedExperiment> experiments = PlanExperiments(files, o);
     summary.experiments = experiments.size();
 
     ExperimentOutputs x = RunExperiments(experiments, methods, o, out, summary, log);

@@ -127,7 +127,7 @@ void WriteTrainingBundle(const std::string& path, const TrainingBundle& b) {
 }
 
 TrainingBundle ReadTrainingBundle(const std::string& path) {
-    RequireRegularFile(path);
+    RequireRegularFile(path, "training bundle");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error("training bundle " + path + " cannot be opened");
     const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),

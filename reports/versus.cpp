@@ -136,14 +136,13 @@ Table VersusTable(const VersusResult& r) {
     t.columns = {col("pairs", "pairs", 0),
                  col("mean_a", r.method_a, 4),
                  col("mean_b", r.method_b, 4),
-                 col("diff", r.method_a + " - " + r.method_b + " [95% CI]", 4, CiStyle::kInterval),
-                 col("diff_mean", "mean diff", 4),
+                 col("diff_mean", r.method_a + " - " + r.method_b, 4),
+                 col("diff", "95% CI", 4, CiStyle::kInterval),
                  col("wilcoxon_p", "Wilcoxon p", 4),
                  col("wins", r.method_a + " better", 0),
                  col("ties", "ties", 0),
                  col("losses", r.method_b + " better", 0)};
-    t.columns[4].shown = false;  // the interval column shows [lo, hi]; CSV/JSON keep the mean
-    int decimals = 0;            // one per column: the finest of the metrics' own
+    int decimals = 0;  // one per column: the finest of the metrics' own
     for (const auto& m : r.metrics) decimals = std::max(decimals, FindMetric(m.metric).decimals);
     for (const std::size_t c : {1, 2, 3, 4}) t.columns[c].decimals = decimals;
     for (const auto& m : r.metrics) {

@@ -93,7 +93,7 @@ TEST(CliNamedFiles, ExperimentFilesThatCannotRunAreRefusedByName) {
     const std::string experiment = R"({"id": "e1", "protocol": "partial", "split": "test",
                                        "dataset": "procedural")";
     const std::vector<FileCase> cases = {
-        {"zero_pairs.json", "", "must be >= 1 when scale < 1"},
+        {"zero_pairs.json", "", "experiment 'e1' gets 0 pairs at this --pairs"},
         {"table_dots.json", "", "'table' must be a file stem"},
         {"unknown_method.json", "", "no_such_method"},
     };

@@ -34,7 +34,7 @@ expect_refused() {  # expect_refused TEXT ARGS...: exit 1 and TEXT in stderr
     "$portable" "$@" 2> err.txt && fail "accepted: $*"
     grep -q -- "$text" err.txt || fail "'$*' did not say '$text': $(cat err.txt)"
 }
-expect_refused "training bundle missing.cbor cannot be opened" missing.cbor --out x
+expect_refused "training bundle missing.cbor: no such file" missing.cbor --out x
 echo '{"a": 1}' > not.cbor
 expect_refused "training bundle not.cbor" not.cbor --out x
 expect_refused "unknown argument '--bogus'" b.cbor --out x --bogus
