@@ -24,11 +24,6 @@ namespace fs = std::filesystem;
 using testing::CliResult;
 using testing::RunCli;
 
-std::string Slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 TEST(CliCheckpointRefusal, DamagedCheckpointsAreRefusedBeforeTheRun) {
     const char* src = std::getenv("REGBENCH_SOURCE_DIR");
     ASSERT_NE(src, nullptr);
@@ -37,15 +32,10 @@ TEST(CliCheckpointRefusal, DamagedCheckpointsAreRefusedBeforeTheRun) {
     fs::copy(fs::path(src) / "data" / "models" / "deepgmr", ck);
     const fs::path json = ck / "checkpoint.json";
     const fs::path weights = ck / "weights.pt";
-    const std::string good_json = Slurp(json);
-    const std::string good_weights = Slurp(weights);
+    const std::string good_json = testing::ReadBytes(json);
+    const std::string good_weights = testing::ReadBytes(weights);
     ASSERT_GT(good_weights.size(), 100u);
-    const std::string pairs = (dir / "p.h5").string();
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --pairs 1 --points 64 "
-                     "--out " +
-                     pairs)
-                  .exit_code,
-              0);
+    const std::string pairs = testing::SmallPairFile((dir / "p.h5").string(), 1);
     const std::string out = (dir / "r.jsonl").string();
     const std::string run = "run --pairs " + pairs + " --methods deepgmr-noicp -q --params " +
                             "'{\"deepgmr-noicp\": {\"checkpoint\": \"" + ck.string() +

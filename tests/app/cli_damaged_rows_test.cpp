@@ -36,14 +36,9 @@ std::vector<std::string> Lines(const std::string& path) {
 
 TEST(CliDamagedRows, EveryReaderRefusesRowsNoWriterWrites) {
     const fs::path dir = testing::FreshTempDir("damaged_rows");
-    const std::string pairs = (dir / "p.h5").string();
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --pairs 2 --points 64 "
-                     "--out " +
-                     pairs)
-                  .exit_code,
-              0);
+    const std::string pairs = testing::SmallPairFile((dir / "p.h5").string(), 2);
     const std::string good = (dir / "good.jsonl").string();
-    ASSERT_EQ(RunCli("run --pairs " + pairs + " --methods identity -q --out " + good).exit_code, 0);
+    testing::RunCliOk("run --pairs " + pairs + " --methods identity -q --out " + good);
     const std::vector<std::string> lines = Lines(good);
     ASSERT_EQ(lines.size(), 2u);
     const auto set = [](const char* key, nlohmann::json v) {

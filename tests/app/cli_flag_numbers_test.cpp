@@ -21,14 +21,9 @@ using testing::RunCli;
 
 TEST(CliFlagNumbers, InvalidNumbersAreUsageErrorsBeforeAnyWork) {
     const fs::path dir = testing::FreshTempDir("flag_numbers");
-    const std::string pairs = (dir / "p.h5").string();
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --pairs 2 --points 64 "
-                     "--out " +
-                     pairs)
-                  .exit_code,
-              0);
+    const std::string pairs = testing::SmallPairFile((dir / "p.h5").string(), 2);
     const std::string rows = (dir / "r.jsonl").string();
-    ASSERT_EQ(RunCli("run --pairs " + pairs + " --methods identity -q --out " + rows).exit_code, 0);
+    testing::RunCliOk("run --pairs " + pairs + " --methods identity -q --out " + rows);
     const std::string out = (dir / "out").string();
     const std::string gen = "generate --protocol partial --dataset procedural --out " + out + " ";
     const std::string deep = std::string(1000, '[') + std::string(1000, ']');
@@ -81,12 +76,7 @@ TEST(CliFlagNumbers, InvalidNumbersAreUsageErrorsBeforeAnyWork) {
 
 TEST(CliFlagNumbers, ScoreRefusesTranslationsBeyondTheCoordinateLimit) {
     const fs::path dir = testing::FreshTempDir("flag_numbers_score");
-    const std::string pairs = (dir / "p.h5").string();
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --pairs 1 --points 64 "
-                     "--out " +
-                     pairs)
-                  .exit_code,
-              0);
+    const std::string pairs = testing::SmallPairFile((dir / "p.h5").string(), 1);
     const std::string t = (dir / "t.jsonl").string();
     std::ofstream(t) << R"({"pair": 0, "transform": [[1, 0, 0, 1e300], [0, 1, 0, 0], )"
                      << R"([0, 0, 1, 0], [0, 0, 0, 1]]})"

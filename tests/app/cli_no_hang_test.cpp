@@ -28,14 +28,9 @@ TEST(CliNoHang, FifoInputsAreRefusedByName) {
     const fs::path dir = testing::FreshTempDir("no_hang");
     const std::string fifo = (dir / "in.fifo").string();
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-    const std::string pairs = (dir / "p.h5").string();
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --pairs 1 --points 64 "
-                     "--out " +
-                     pairs)
-                  .exit_code,
-              0);
+    const std::string pairs = testing::SmallPairFile((dir / "p.h5").string(), 1);
     const std::string rows = (dir / "r.jsonl").string();
-    ASSERT_EQ(RunCli("run --pairs " + pairs + " --methods identity -q --out " + rows).exit_code, 0);
+    testing::RunCliOk("run --pairs " + pairs + " --methods identity -q --out " + rows);
     const std::string xyz = (dir / "xyz").string();
     ASSERT_EQ(RunCli("export " + pairs + " --out " + xyz).exit_code, 0);
     const std::string src = xyz + "/0000_src.xyz";

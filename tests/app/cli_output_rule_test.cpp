@@ -24,13 +24,6 @@ namespace fs = std::filesystem;
 using testing::CliResult;
 using testing::RunCli;
 
-std::string Slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 void Put(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
 class CliOutputRule : public ::testing::Test {
@@ -57,14 +50,14 @@ protected:
                        const std::vector<std::string>& kept) {
         SCOPED_TRACE(args);
         std::vector<std::string> before;
-        for (const auto& k : kept) before.push_back(Slurp(k));
+        for (const auto& k : kept) before.push_back(testing::ReadBytes(k));
         const CliResult r = RunCli(args);
         EXPECT_EQ(r.exit_code, 1) << r.output;
         EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
         EXPECT_NE(r.output.find(why), std::string::npos) << r.output;
         for (std::size_t i = 0; i < kept.size(); ++i) {
             EXPECT_TRUE(fs::exists(kept[i])) << kept[i];
-            EXPECT_EQ(Slurp(kept[i]), before[i]) << kept[i];
+            EXPECT_EQ(testing::ReadBytes(kept[i]), before[i]) << kept[i];
         }
     }
 
@@ -94,12 +87,12 @@ TEST_F(CliOutputRule, ExistingOutputIsRefusedByEveryWriterWithoutForce) {
     }
     // --force replaces it (two writers suffice: the rule is one function).
     ASSERT_EQ(RunCli("report " + rows_ + " --out " + old + " --force").exit_code, 0);
-    EXPECT_NE(Slurp(old), "precious\n");
+    EXPECT_NE(testing::ReadBytes(old), "precious\n");
     Put(old, "precious\n");
     ASSERT_EQ(
         RunCli("align " + src + " " + tgt + " --method identity --force --out " + old).exit_code,
         0);
-    EXPECT_NE(Slurp(old), "precious\n");
+    EXPECT_NE(testing::ReadBytes(old), "precious\n");
 }
 
 TEST_F(CliOutputRule, OutputEqualToOrInsideAnInputIsRefusedEvenWithForce) {

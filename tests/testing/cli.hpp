@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 namespace regbench::testing {
@@ -35,6 +36,19 @@ inline CliResult RunCli(const std::string& args) {
 inline CliResult RunCliWithin(int seconds, const std::string& args) {
     return RunShell("timeout " + std::to_string(seconds) + " " + std::string(REGBENCH_CLI) + " " +
                     args + " 2>&1");
+}
+
+/// `regbench ARGS`, which must succeed: throws (failing the calling test) with what it printed.
+inline void RunCliOk(const std::string& args) {
+    const CliResult r = RunCli(args);
+    if (r.exit_code != 0) throw std::runtime_error("regbench " + args + ": " + r.output);
+}
+
+/// A small pair file (`pairs` procedural partial pairs of 64 points) written to `path`.
+inline std::string SmallPairFile(const std::string& path, int pairs) {
+    RunCliOk("generate --protocol partial --dataset procedural --pairs " + std::to_string(pairs) +
+             " --points 64 --out " + path);
+    return path;
 }
 
 }  // namespace regbench::testing
