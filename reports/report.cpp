@@ -339,14 +339,12 @@ Column RateCol(const std::string& key, const std::string& header) {
     return Col(key, header, kFractionDecimals, CiStyle::kValueInterval);
 }
 
-}  // namespace
-
-Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
-    Table t;
-    t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
-    t.caption = "Data: " + DescribeTable(rt);
+/// The summary table's columns; `inlier_threshold` gets the largest one the rows used
+/// (0: Open3D's fitness pair was not measured).
+std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o,
+                                   double* inlier_threshold) {
     // Every number with its 95% CI: means by bootstrap, rates by Wilson (docs/reports.md).
-    t.columns = {
+    std::vector<Column> columns = {
         Col("pairs", "pairs", 0), Col("failed", "failed", 0),
         MetricCol("mae_r", "mae_r", "mae_r [deg]"),
         // The interval's bounds at 3 decimals, as the documented table has always shown them.
@@ -358,10 +356,11 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
         RateCol("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t)),
         RateCol("success",
                 fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte))};
-    if (o.recall_3dmatch) t.columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
+    if (o.recall_3dmatch) columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
     // A clip other than the paper's is in the header; Open3D's pair only when measured.
     const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
-    double threshold = 0.0;
+    double& threshold = *inlier_threshold;
+    threshold = 0.0;
     for (const auto& s : rt.methods) {
         if (s.ccd_clip != clip) {
             throw std::runtime_error(fmt::format(
@@ -371,24 +370,52 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
         }
         threshold = std::max(threshold, s.inlier_threshold);
     }
-    for (Column& c : t.columns) {
+    for (Column& c : columns) {
         if (c.key == "ccd" && clip != kCcdClip) c.header = fmt::format("ccd (clip {:g})", clip);
     }
     if (threshold > 0.0) {
-        t.columns.push_back(
+        columns.push_back(
             Col("fitness", fmt::format("fitness@{:g}", threshold), kFractionDecimals));
-        t.columns.push_back(Col("inlier_rmse", fmt::format("inlier rmse@{:g}", threshold), 4));
+        columns.push_back(Col("inlier_rmse", fmt::format("inlier rmse@{:g}", threshold), 4));
     }
-    t.columns.push_back(Col("median_seconds", "median s", kSecondsDecimals));
-    t.columns.push_back(Col("mean_seconds", "mean s", kSecondsDecimals, CiStyle::kPlusMinus));
-    t.columns.back().compact = false;
+    columns.push_back(Col("median_seconds", "median s", kSecondsDecimals));
+    columns.push_back(Col("mean_seconds", "mean s", kSecondsDecimals, CiStyle::kPlusMinus));
+    columns.back().compact = false;
     // Data columns, in CSV and JSON only (the interval column: mae_r shows its CI itself).
-    t.columns[3].shown = false;
-    t.columns.push_back(MetricCol("chamfer", "chamfer", "chamfer"));
-    t.columns.push_back(Col("threads", "threads", 0));
-    t.columns.push_back(Col("params", "params", 0));
-    for (std::size_t c = t.columns.size() - 3; c < t.columns.size(); ++c)
-        t.columns[c].shown = false;
+    columns[3].shown = false;
+    columns.push_back(MetricCol("chamfer", "chamfer", "chamfer"));
+    columns.push_back(Col("threads", "threads", 0));
+    columns.push_back(Col("params", "params", 0));
+    for (std::size_t c = columns.size() - 3; c < columns.size(); ++c)
+        columns[c].shown = false;
+    return columns;
+}
+
+/// Why rows failed: the first message per method, and the rows counted as failed.
+void AddFailureNotes(const ReportTable& rt, Table& t) {
+    std::string why;  // the first message per method whose calls failed
+    for (const MethodSummary& m : rt.methods) {
+        if (!m.first_failure.empty()) {
+            why += fmt::format("\n- {}: {} of {} failed; first: {}", m.label, m.failed, m.pairs,
+                               OneLineMessage(m.first_failure));
+        }
+    }
+    if (!why.empty()) t.notes.push_back("Why calls failed (first message per method):" + why);
+    if (!rt.notes.empty()) {
+        std::string failed = "Rows counted as failed:";
+        for (const auto& n : rt.notes) failed += "\n- " + n;
+        t.notes.push_back(failed);
+    }
+}
+
+}  // namespace
+
+Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
+    Table t;
+    t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
+    t.caption = "Data: " + DescribeTable(rt);
+    double threshold = 0.0;
+    t.columns = SummaryColumns(rt, o, &threshold);
     for (const auto& s : rt.methods) {
         const std::size_t n = s.pairs;
         RowCells cells = {{"pairs", MeasuredCell(static_cast<double>(n), n)},
@@ -426,19 +453,7 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     p.pairing = rt.data.pairing;
     p.seed = rt.data.seed;
     t.provenance = {p};
-    std::string why;  // the first message per method whose calls failed
-    for (const MethodSummary& m : rt.methods) {
-        if (!m.first_failure.empty()) {
-            why += fmt::format("\n- {}: {} of {} failed; first: {}", m.label, m.failed, m.pairs,
-                               OneLineMessage(m.first_failure));
-        }
-    }
-    if (!why.empty()) t.notes.push_back("Why calls failed (first message per method):" + why);
-    if (!rt.notes.empty()) {
-        std::string failed = "Rows counted as failed:";
-        for (const auto& n : rt.notes) failed += "\n- " + n;
-        t.notes.push_back(failed);
-    }
+    AddFailureNotes(rt, t);
     return t;
 }
 
