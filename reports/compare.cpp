@@ -263,6 +263,44 @@ void ParseTolerance(const std::string& text, CompareOptions* o) {
     }
 }
 
+namespace {
+
+/// One line per comparison that could not have found a worsening as large as its tolerance
+/// (MAE(R), the paper's headline metric, first), and per method below --min-pairs.
+std::string UnderpoweredLines(const CompareResult& r, const CompareOptions& o) {
+    std::vector<const MetricChange*> order;
+    for (const auto& c : r.changes) {
+        if (c.metric == "mae_r") order.push_back(&c);
+    }
+    for (const auto& c : r.changes) {
+        if (c.metric != "mae_r") order.push_back(&c);
+    }
+    std::string weak;
+    for (const MetricChange* change : order) {
+        const MetricChange& c = *change;
+        if (!c.underpowered) continue;
+        weak += std::isinf(c.detectable)
+                    ? fmt::format(
+                          "- {} {}: {} pairs; the exact Wilcoxon test cannot reach "
+                          "p < {:g} with so few pairs (smallest p: {:.3g})\n",
+                          c.method, c.metric, c.pairs, o.alpha,
+                          c.pairs == 0 ? 1.0 : std::ldexp(2.0, -int(c.pairs)))
+                    : fmt::format(
+                          "- {} {}: {} pairs detect a worsening of {:.4g} (power {:g}), "
+                          "not the tolerance {:g}\n",
+                          c.method, c.metric, c.pairs, c.detectable, o.power, c.tolerance);
+    }
+    for (const auto& m : r.calls) {
+        if (m.pairs < r.min_pairs) {
+            weak += fmt::format("- {}: {} matched pairs, fewer than --min-pairs {}\n", m.method,
+                                m.pairs, r.min_pairs);
+        }
+    }
+    return weak;
+}
+
+}  // namespace
+
 std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& o) {
     std::string out = fmt::format(
         "{} matched rows ({} only in the baseline, {} only in the candidate); failed calls: "
@@ -296,35 +334,7 @@ std::string FormatCompareMarkdown(const CompareResult& r, const CompareOptions& 
                             "excluding 0) in any method or metric.\n",
                             o.alpha)
                       : table;
-    // MAE(R), the paper's headline metric, first; then the others in their order.
-    std::vector<const MetricChange*> order;
-    for (const auto& c : r.changes) {
-        if (c.metric == "mae_r") order.push_back(&c);
-    }
-    for (const auto& c : r.changes) {
-        if (c.metric != "mae_r") order.push_back(&c);
-    }
-    std::string weak;
-    for (const MetricChange* change : order) {
-        const MetricChange& c = *change;
-        if (!c.underpowered) continue;
-        weak += std::isinf(c.detectable)
-                    ? fmt::format(
-                          "- {} {}: {} pairs; the exact Wilcoxon test cannot reach "
-                          "p < {:g} with so few pairs (smallest p: {:.3g})\n",
-                          c.method, c.metric, c.pairs, o.alpha,
-                          c.pairs == 0 ? 1.0 : std::ldexp(2.0, -int(c.pairs)))
-                    : fmt::format(
-                          "- {} {}: {} pairs detect a worsening of {:.4g} (power {:g}), "
-                          "not the tolerance {:g}\n",
-                          c.method, c.metric, c.pairs, c.detectable, o.power, c.tolerance);
-    }
-    for (const auto& m : r.calls) {
-        if (m.pairs < r.min_pairs) {
-            weak += fmt::format("- {}: {} matched pairs, fewer than --min-pairs {}\n", m.method,
-                                m.pairs, r.min_pairs);
-        }
-    }
+    const std::string weak = UnderpoweredLines(r, o);
     switch (r.Verdict()) {
         case CompareVerdict::kFail:
             // What could not be tested is still said: a FAIL on new failures says nothing
