@@ -3,6 +3,8 @@
 // every row and exited 0. Expected: refused before the run, when the method is created (as a
 // wrong --params is), naming the file and the problem, with no rows written. The checkpoint is a
 // copy of the shipped data/models/deepgmr, damaged one way per case.
+// Also the checkpoint writers under the output rule (import-checkpoint never replaces its input
+// or a training run folder). Built only with LibTorch (tests/CMakeLists.txt).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -16,6 +18,7 @@
 
 #include "tests/testing/cli.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/app/expect_refused.hpp"
 
 namespace regbench {
 namespace {
@@ -23,6 +26,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::CliResult;
 using testing::RunCli;
+using testing::ExpectRefused;
+using testing::Put;
 
 TEST(CliCheckpointRefusal, DamagedCheckpointsAreRefusedBeforeTheRun) {
     const char* src = std::getenv("REGBENCH_SOURCE_DIR");
@@ -41,10 +46,6 @@ TEST(CliCheckpointRefusal, DamagedCheckpointsAreRefusedBeforeTheRun) {
                             "'{\"deepgmr-noicp\": {\"checkpoint\": \"" + ck.string() +
                             "\"}}' --out " + out;
     const CliResult intact = RunCli(run);
-    if (intact.output.find("deepgmr-noicp") != std::string::npos &&
-        intact.output.find("unknown method") != std::string::npos) {
-        GTEST_SKIP() << "a build without LibTorch: " << intact.output;
-    }
     ASSERT_EQ(intact.exit_code, 0) << intact.output;  // the copy itself runs
     fs::remove(out);
     const auto with = [&](const char* key, nlohmann::json v) {
@@ -96,6 +97,31 @@ TEST(CliCheckpointRefusal, DamagedCheckpointsAreRefusedBeforeTheRun) {
         std::ofstream(weights, std::ios::binary) << good_weights;
     }
     fs::remove_all(dir);
+}
+
+TEST(CliCheckpointRefusal, ImportCheckpointNeverReplacesItsInputOrARunFolder) {
+    const fs::path dir_ = testing::FreshTempDir("import_output_rule");
+    const std::string pth = (dir_ / "m.pth").string();
+    Put(pth, "not read: refused before");
+    ExpectRefused("import-checkpoint " + pth + " --from ogmm --force --out " + pth, pth,
+                  "same file as the input", {pth});
+    // A training run folder: best/, last/ and the metrics stay.
+    const fs::path run = dir_ / "run";
+    fs::create_directories(run / "best");
+    Put(run / "best" / "checkpoint.json", "{}");
+    Put(run / "metrics.csv", "step\n");
+    ExpectRefused("import-checkpoint " + pth + " --from ogmm --out " + run.string(), run.string(),
+                  "already exists",
+                  {(run / "best" / "checkpoint.json").string(), (run / "metrics.csv").string()});
+    const std::string inner = (run / "m.pth").string();
+    Put(inner, "weights");
+    ExpectRefused("import-checkpoint " + inner + " --from ogmm --force --out " + run.string(),
+                  run.string(), "holds the input", {inner, (run / "metrics.csv").string()});
+    const std::string exported = (dir_ / "e.pth").string();
+    Put(exported, "precious");
+    ExpectRefused("export-checkpoint " + run.string() + " --to ogmm --out " + exported, exported,
+                  "already exists", {exported});
+    fs::remove_all(dir_);
 }
 
 }  // namespace

@@ -16,6 +16,7 @@
 
 #include "tests/testing/cli.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/app/expect_refused.hpp"
 
 namespace regbench {
 namespace {
@@ -23,8 +24,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::CliResult;
 using testing::RunCli;
-
-void Put(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+using testing::ExpectRefused;
+using testing::Put;
 
 class CliOutputRule : public ::testing::Test {
 protected:
@@ -43,23 +44,6 @@ protected:
         ASSERT_EQ(RunCli("export " + pairs_ + " --out " + xyz_).exit_code, 0);
     }
     void TearDown() override { fs::remove_all(dir_); }
-
-    /// `args` exits 1 (not a usage error, not a signal), names `name` and says `why`; every
-    /// file in `kept` has the bytes it had before.
-    void ExpectRefused(const std::string& args, const std::string& name, const std::string& why,
-                       const std::vector<std::string>& kept) {
-        SCOPED_TRACE(args);
-        std::vector<std::string> before;
-        for (const auto& k : kept) before.push_back(testing::ReadBytes(k));
-        const CliResult r = RunCli(args);
-        EXPECT_EQ(r.exit_code, 1) << r.output;
-        EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
-        EXPECT_NE(r.output.find(why), std::string::npos) << r.output;
-        for (std::size_t i = 0; i < kept.size(); ++i) {
-            EXPECT_TRUE(fs::exists(kept[i])) << kept[i];
-            EXPECT_EQ(testing::ReadBytes(kept[i]), before[i]) << kept[i];
-        }
-    }
 
     fs::path dir_;
     std::string pairs_, rows_, xyz_;
@@ -147,32 +131,6 @@ TEST_F(CliOutputRule, PartAndLockFilesOfAnotherRunAreCoveredByItsLock) {
     ExpectRefused("report " + rows_ + " --force --out " + out + ".lock", out + ".lock", "lock file",
                   {});
     ::close(fd);
-}
-
-TEST_F(CliOutputRule, ImportCheckpointNeverReplacesItsInputOrARunFolder) {
-    const std::string pth = (dir_ / "m.pth").string();
-    Put(pth, "not read: refused before");
-    const CliResult probe =
-        RunCli("import-checkpoint " + pth + " --from ogmm --out " + (dir_ / "probe").string());
-    if (probe.output.find("no LibTorch") != std::string::npos) GTEST_SKIP() << probe.output;
-    ExpectRefused("import-checkpoint " + pth + " --from ogmm --force --out " + pth, pth,
-                  "same file as the input", {pth});
-    // A training run folder: best/, last/ and the metrics stay.
-    const fs::path run = dir_ / "run";
-    fs::create_directories(run / "best");
-    Put(run / "best" / "checkpoint.json", "{}");
-    Put(run / "metrics.csv", "step\n");
-    ExpectRefused("import-checkpoint " + pth + " --from ogmm --out " + run.string(), run.string(),
-                  "already exists",
-                  {(run / "best" / "checkpoint.json").string(), (run / "metrics.csv").string()});
-    const std::string inner = (run / "m.pth").string();
-    Put(inner, "weights");
-    ExpectRefused("import-checkpoint " + inner + " --from ogmm --force --out " + run.string(),
-                  run.string(), "holds the input", {inner, (run / "metrics.csv").string()});
-    const std::string exported = (dir_ / "e.pth").string();
-    Put(exported, "precious");
-    ExpectRefused("export-checkpoint " + run.string() + " --to ogmm --out " + exported, exported,
-                  "already exists", {exported});
 }
 
 }  // namespace
