@@ -14,19 +14,18 @@ namespace regbench {
 /// Throws std::runtime_error "<what> <path>: ..." unless `path` (links followed) is an existing
 /// regular file: a missing file, a folder, a FIFO, a socket or a device is refused by name.
 /// `what` names the kind of input ("training bundle"), when the caller's message would.
-inline void RequireRegularFile(std::string path, const std::string& what = "") {
+inline void RequireRegularFile(const std::string& path, const std::string& what = "") {
+    const std::string name = what.empty() ? path : what + " " + path;
     struct stat st {};
-    const std::string file = path;
-    if (!what.empty()) path = what + " " + path;
-    if (::stat(file.c_str(), &st) != 0) {
-        throw std::runtime_error(path + ": " +
+    if (::stat(path.c_str(), &st) != 0) {
+        throw std::runtime_error(name + ": " +
                                  (errno == ENOENT
                                       ? std::string("no such file")
                                       : "cannot open: " + std::string(std::strerror(errno))));
     }
-    if (S_ISDIR(st.st_mode)) throw std::runtime_error(path + ": is a directory, not a file");
+    if (S_ISDIR(st.st_mode)) throw std::runtime_error(name + ": is a directory, not a file");
     if (!S_ISREG(st.st_mode)) {
-        throw std::runtime_error(path +
+        throw std::runtime_error(name +
                                  ": not a regular file (a FIFO, socket or device); regbench reads "
                                  "inputs from regular files only");
     }

@@ -339,10 +339,16 @@ Column RateCol(const std::string& key, const std::string& header) {
     return Col(key, header, kFractionDecimals, CiStyle::kValueInterval);
 }
 
-/// The summary table's columns; `inlier_threshold` gets the largest one the rows used
-/// (0: Open3D's fitness pair was not measured).
+/// The largest inlier threshold the rows used (0: Open3D's fitness pair was not measured).
+double InlierThreshold(const ReportTable& rt) {
+    double threshold = 0.0;
+    for (const auto& s : rt.methods) threshold = std::max(threshold, s.inlier_threshold);
+    return threshold;
+}
+
+/// The summary table's columns (Open3D's fitness pair at `threshold` when it is > 0).
 std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o,
-                                   double* inlier_threshold) {
+                                   double threshold) {
     // Every number with its 95% CI: means by bootstrap, rates by Wilson (docs/reports.md).
     std::vector<Column> columns = {
         Col("pairs", "pairs", 0), Col("failed", "failed", 0),
@@ -359,8 +365,6 @@ std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o
     if (o.recall_3dmatch) columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
     // A clip other than the paper's is in the header; Open3D's pair only when measured.
     const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
-    double& threshold = *inlier_threshold;
-    threshold = 0.0;
     for (const auto& s : rt.methods) {
         if (s.ccd_clip != clip) {
             throw std::runtime_error(fmt::format(
@@ -368,7 +372,6 @@ std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o
                 "them with one --ccd-clip",
                 rt.data.pairs_file, clip, rt.methods.front().label, s.ccd_clip, s.label));
         }
-        threshold = std::max(threshold, s.inlier_threshold);
     }
     for (Column& c : columns) {
         if (c.key == "ccd" && clip != kCcdClip) c.header = fmt::format("ccd (clip {:g})", clip);
@@ -414,8 +417,8 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     Table t;
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
     t.caption = "Data: " + DescribeTable(rt);
-    double threshold = 0.0;
-    t.columns = SummaryColumns(rt, o, &threshold);
+    const double threshold = InlierThreshold(rt);
+    t.columns = SummaryColumns(rt, o, threshold);
     for (const auto& s : rt.methods) {
         const std::size_t n = s.pairs;
         RowCells cells = {{"pairs", MeasuredCell(static_cast<double>(n), n)},
