@@ -110,13 +110,6 @@ void SetupExport(CLI::App* cmd) {
     });
 }
 #else
-/// The network families with an authors' checkpoint format (ogmm/family.hpp), "a | b".
-std::string Formats() {
-    std::string list;
-    for (const auto& f : ogmm::AuthorsFormats()) list += (list.empty() ? "" : " | ") + f;
-    return list;
-}
-
 void SetupImport(CLI::App* cmd) {
     cmd->callback(
         [] { throw std::runtime_error("import-checkpoint: this build has no LibTorch"); });
