@@ -39,8 +39,8 @@ Table DistributionTable(const std::vector<ResultRow>& rows, const BreakdownOptio
             for (const ResultRow* r : group) {
                 if (const auto x = metric.Of(r->metrics)) v.push_back(*x);
             }
-            const BootstrapCi ci =
-                BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
+            // Streams named by the metric alone: every method draws the same resamples.
+            const BootstrapCi ci = BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(m));
             Cell mean = MeasuredCell(ci.mean, v.size());
             if (v.size() >= 2) {
                 mean.ci_lo = ci.lo;
@@ -141,7 +141,7 @@ void AddMeanRows(Table& t, const std::vector<ResultRow>& rows, const BreakdownOp
             if (cells[c].size() >= 2) {
                 const BootstrapCi ci =
                     BootstrapMean(cells[c], o.bootstrap_samples, o.seed,
-                                  StreamId(method + "/" + o.key_metric + "/" + t.columns[c].key));
+                                  StreamId(o.key_metric + "/" + t.columns[c].key));
                 cell.ci_lo = ci.lo;
                 cell.ci_hi = ci.hi;
             }

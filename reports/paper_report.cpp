@@ -91,6 +91,7 @@ void AddFloorNotes(const std::vector<ResultSet>& sets, Table* t) {
 /// Per group and metric a measured column and (for a table the paper has) the paper's.
 void AddColumns(const PaperTableSpec& spec, bool published, Table* t) {
     for (const auto& g : spec.groups) {
+        if (!g.empty()) t->column_groups.push_back(g);
         for (const auto& m : spec.metrics) {
             const std::string key = g.empty() ? m : g + "." + m;
             const std::string head = g.empty() ? MetricHeader(m) : MetricHeader(m) + " " + g;
@@ -251,19 +252,16 @@ Cell MeasuredCell(const ResultSet& set, const std::string& label, const std::str
     const MetricField& metric = FindMetric(m);
     std::vector<double> v;
     std::size_t n = 0;
-    std::string method;  // the rows' own method name, as the breakdowns use
     for (const auto& r : set.rows) {
         if (PaperRowOf(r, set) != label) continue;
         ++n;
-        if (method.empty()) method = r.method;
         // Null metrics are failures: they keep the pair count honest but no
         // number can stand in for them, so the cell says how many.
         if (const auto x = metric.Of(r.metrics)) v.push_back(*x);
     }
-    // The stream of the breakdowns (reports/breakdown.cpp): one CI per
-    // (method, metric) on the same pairs, so a report never shows two.
-    const BootstrapCi ci =
-        BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(method + "/" + m));
+    // The stream of the breakdowns (reports/breakdown.cpp), named by the metric alone: one CI
+    // per mean, and every method on the same pairs draws the same resamples (paired).
+    const BootstrapCi ci = BootstrapMean(v, o.bootstrap_samples, o.seed, StreamId(m));
     measured.value = ci.mean;
     if (v.size() >= 2) {
         measured.ci_lo = ci.lo;

@@ -136,9 +136,10 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
             }
         }
     }
-    // The stream names what is estimated (pair file, method, params, metric) and the values
-    // are in pair order, so a CI does not depend on row order or table position.
-    const std::string id = data_key + "\n" + s.method + "\n" + s.params.dump() + "\n";
+    // The stream names the pair file and the metric, not the method: every method on the same
+    // pairs draws the same resamples (a paired bootstrap), so two methods with equal values
+    // get equal CIs. The values are in pair order, so a CI does not depend on row order.
+    const std::string id = data_key + "\n";
     const auto column = [&](const char* name) {
         const auto field = FindMetric(name).field;
         std::vector<double> v;

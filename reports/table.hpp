@@ -116,6 +116,10 @@ struct Table {
     std::string caption;  ///< names the data each side came from and the pairing
     std::string row_header = "method";
     std::vector<Column> columns;
+    /// Column groups, e.g. "same_category": a column whose key (less "paper:") starts with
+    /// "<group>." is in it, its header names it. A compact Markdown table too wide for 120
+    /// columns is shown one group at a time.
+    std::vector<std::string> column_groups;
     std::vector<TableRow> rows;
     std::vector<Provenance> provenance;
     std::vector<std::string> notes;  ///< extra lines printed under the table
@@ -140,6 +144,7 @@ struct ShownTable {
         std::string header;
         bool left = false;   ///< left-aligned (an interval column)
         bool paper = false;  ///< the paper's numbers
+        std::string group;   ///< its Table::column_groups entry, "" for none
     };
     std::vector<ShownColumn> columns;
     std::vector<std::string> labels;              ///< one per row

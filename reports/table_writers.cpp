@@ -122,14 +122,16 @@ TableRow& Table::AddRow(std::string label, const RowCells& cells) {
 
 namespace {
 
-/// Decimals of a compact cell: the CI's half-width to two significant digits, at most the
-/// column's decimals; the column's without a CI (or a zero-width one).
+/// Decimals of a compact cell, at most the column's: the CI's half-width to two significant
+/// digits; without a CI (or with a zero-width one) the value to three (0.00539 s, 21.1 deg).
 int CompactDecimals(const Cell& c, const Column& col) {
     // A rate (fraction of pairs) at percent resolution: its Wilson interval is wide anyway.
     if (col.ci == CiStyle::kValueInterval) return std::min(2, col.decimals);
     const double hw = c.HalfWidth();
-    if (!std::isfinite(hw) || hw <= 0.0) return col.decimals;
-    const int d = 1 - static_cast<int>(std::floor(std::log10(hw)));
+    const bool ci = std::isfinite(hw) && hw > 0.0;
+    const double v = ci ? hw : std::abs(c.value);
+    if (!std::isfinite(v) || v <= 0.0) return col.decimals;
+    const int d = (ci ? 1 : 2) - static_cast<int>(std::floor(std::log10(v)));
     return std::clamp(d, 0, col.decimals);
 }
 
@@ -154,6 +156,19 @@ std::string CellText(const Cell& c, const Column& col, const char* pm, TableForm
     return s;
 }
 
+namespace {
+
+/// The entry of t.column_groups that column `key` is in, "" for none.
+std::string ColumnGroup(const Table& t, std::string key) {
+    if (key.rfind("paper:", 0) == 0) key.erase(0, 6);
+    for (const auto& g : t.column_groups) {
+        if (key.rfind(g + ".", 0) == 0) return g;
+    }
+    return "";
+}
+
+}  // namespace
+
 ShownTable ShowTable(const Table& t, TableForm form, const char* pm) {
     const bool compact = form == TableForm::kCompact;
     // Per shown column: the table's column and (compact) the paper column merged into it.
@@ -173,7 +188,8 @@ ShownTable ShowTable(const Table& t, TableForm form, const char* pm) {
     for (const auto& [c, paper] : shown) {
         const Column& col = t.columns[c];
         out.columns.push_back({col.header + (paper >= 0 ? " (paper)" : ""),
-                               col.ci == CiStyle::kInterval, col.source == CellSource::kPaper});
+                               col.ci == CiStyle::kInterval, col.source == CellSource::kPaper,
+                               ColumnGroup(t, col.key)});
     }
     std::vector<int> best(t.columns.size());
     for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);
@@ -225,26 +241,74 @@ std::vector<std::string> DataSources(const Table& t) {
     return out;
 }
 
+namespace {
+
+/// The widest line a compact Markdown table may take: a 120-column terminal or editor.
+constexpr std::size_t kMarkdownWidth = 120;
+
+/// The Markdown grid (header, rule, rows) of the shown columns `cols`; a header naming
+/// `group` loses the name (the grid's heading says it instead).
+std::string MarkdownGrid(const ShownTable& s, const std::string& row_header,
+                         const std::vector<std::size_t>& cols, const std::string& group) {
+    std::string out = "| " + row_header + " |";
+    std::string rule = "|---|";
+    for (const std::size_t c : cols) {
+        std::string header = s.columns[c].header;
+        if (const auto at = header.find(" " + group); !group.empty() && at != std::string::npos)
+            header.erase(at, group.size() + 1);
+        out += " " + header + " |";
+        rule += s.columns[c].left ? "---|" : "---:|";
+    }
+    out += "\n" + rule + "\n";
+    for (std::size_t r = 0; r < s.labels.size(); ++r) {
+        out += "| " + s.labels[r] + " |";
+        for (const std::size_t c : cols)
+            out += " " + (s.best[r][c] ? "**" + s.cells[r][c] + "**" : s.cells[r][c]) + " |";
+        out += "\n";
+    }
+    return out;
+}
+
+std::size_t LongestLine(const std::string& text) {
+    std::size_t longest = 0;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) longest = std::max(longest, line.size());
+    return longest;
+}
+
+/// Compact and wider than kMarkdownWidth with two or more column groups: one grid per group,
+/// under the group's name (ungrouped columns in each); otherwise the one grid.
+std::string MarkdownGrids(const ShownTable& s, const std::string& row_header, TableForm form) {
+    std::vector<std::size_t> all(s.columns.size());
+    for (std::size_t c = 0; c < all.size(); ++c) all[c] = c;
+    const std::string whole = MarkdownGrid(s, row_header, all, "");
+    std::vector<std::string> groups;
+    for (const auto& c : s.columns) {
+        if (!c.group.empty() && std::find(groups.begin(), groups.end(), c.group) == groups.end())
+            groups.push_back(c.group);
+    }
+    if (form != TableForm::kCompact || groups.size() < 2 || LongestLine(whole) <= kMarkdownWidth)
+        return whole;
+    std::string out;
+    for (const auto& g : groups) {
+        std::vector<std::size_t> cols;
+        for (const std::size_t c : all) {
+            if (s.columns[c].group.empty() || s.columns[c].group == g) cols.push_back(c);
+        }
+        out += (out.empty() ? "" : "\n") + ("*" + g + "*\n\n") + MarkdownGrid(s, row_header, cols, g);
+    }
+    return out;
+}
+
+}  // namespace
+
 std::string TableToMarkdown(const Table& t, TableForm form) {
     std::string out = t.title.empty() ? "" : "### " + t.title + "\n\n";
     if (!t.caption.empty()) out += t.caption + "\n\n";
     for (const auto& src : DataSources(t)) out += "**Data source: " + src + "**\n\n";
     // Compact: "1.2±0.3", the paper's way, two characters a cell narrower than " ± ".
     const ShownTable s = ShowTable(t, form, form == TableForm::kCompact ? "±" : " ± ");
-    out += "| " + t.row_header + " |";
-    std::string rule = "|---|";
-    for (const auto& c : s.columns) {
-        out += " " + c.header + " |";
-        rule += c.left ? "---|" : "---:|";
-    }
-    out += "\n" + rule + "\n";
-    for (std::size_t r = 0; r < s.labels.size(); ++r) {
-        out += "| " + s.labels[r] + " |";
-        for (std::size_t c = 0; c < s.columns.size(); ++c) {
-            out += " " + (s.best[r][c] ? "**" + s.cells[r][c] + "**" : s.cells[r][c]) + " |";
-        }
-        out += "\n";
-    }
+    out += MarkdownGrids(s, t.row_header, form);
     for (const auto& n : t.notes) out += "\n" + n + "\n";
     return out;
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "reports/breakdown.hpp"
 #include "reports/paper_tables.hpp"
@@ -108,7 +109,7 @@ TEST(PaperReport, Tab1MeansArePlainAveragesAndPaperCellsAreTheJsonNumbers) {
 TEST(PaperReport, CiIsTheBreakdownsCiForTheSameRows) {
     // Issue 26: one HTML report showed Tab. 1 ICP "15.4925 ± 9.7854" and its breakdown
     // "± 10.6347" (two bootstrap streams for one mean). Both now resample with the stream of
-    // (method, metric), 1000 resamples, seed 20230103: the independent computation is the
+    // the metric, 1000 resamples, seed 20230103: the independent computation is the
     // breakdown's DistributionTable over the same rows.
     const std::vector<ResultRow> rows = {Row(0, "icp", 4.0), Row(1, "icp", 5.0), Row(2, "icp", 9.0),
                                          Row(3, "icp", 30.0), Row(4, "icp", 1.5)};
@@ -125,6 +126,64 @@ TEST(PaperReport, CiIsTheBreakdownsCiForTheSameRows) {
     EXPECT_DOUBLE_EQ(ours.value, breakdown.value);
     EXPECT_GT(ours.HalfWidth(), 0.0);
     EXPECT_DOUBLE_EQ(ours.HalfWidth(), breakdown.HalfWidth());
+}
+
+TEST(PaperReport, MethodsOnTheSamePairsGetPairedCis) {
+    // Issue 41: equal per-pair values gave two different CIs (one stream per method). The
+    // stream is now the metric's alone, so ICP and CPD here, equal on every pair, show one CI,
+    // and the breakdown of the same rows agrees.
+    std::vector<ResultRow> rows;
+    for (int k = 0; k < 12; ++k) {
+        const double v = 1.0 + (k * 7) % 9;
+        rows.push_back(Row(k, "icp", v));
+        rows.push_back(Row(k, "cpd", v));
+    }
+    const Table paper = BuildPaperTable(FindPaperTableSpec("table1_modelnet_partial"),
+                                        {ResultSet{"same_category", rows, Prov("same.h5"), ""}},
+                                        LoadPaperTables(DefaultPaperTablesPath()),
+                                        PaperTableOptions{});
+    const Cell& icp = RowNamed(paper, "ICP").Get("same_category.mae_r");
+    const Cell& cpd = RowNamed(paper, "CPD").Get("same_category.mae_r");
+    EXPECT_GT(icp.HalfWidth(), 0.0);
+    EXPECT_EQ(icp.ci_lo, cpd.ci_lo);
+    EXPECT_EQ(icp.ci_hi, cpd.ci_hi);
+    BreakdownOptions b;
+    b.metrics = {"mae_r"};
+    const Table dist = DistributionTable(rows, b);
+    ASSERT_EQ(dist.rows.size(), 2u);
+    EXPECT_EQ(dist.rows[0].Get("mae_r.mean").ci_lo, dist.rows[1].Get("mae_r.mean").ci_lo);
+    EXPECT_EQ(dist.rows[0].Get("mae_r.mean").ci_hi, icp.ci_hi);
+}
+
+TEST(PaperReport, CompactMarkdownFitsOneHundredTwentyColumns) {
+    // Issue 41 item 4: Tab. 1's compact table was 193 columns wide ("MAE(R) same_category
+    // (paper)" six times). Too wide for 120 columns, it is shown one column group at a time,
+    // the group named above its grid and not in every header; the full table stays one grid.
+    const Table t = Tab1();
+    const std::string md = TableToMarkdown(t);
+    std::istringstream in(md);
+    for (std::string line; std::getline(in, line);) {
+        if (line.rfind("|", 0) == 0) {
+            EXPECT_LE(line.size(), 120u) << line;
+        }
+    }
+    const std::size_t same = md.find("*same_category*\n\n| method | MAE(R) (paper) | MAE(t) (paper) |");
+    const std::size_t cross = md.find("*cross_category*\n\n| method | MAE(R) (paper) |");
+    ASSERT_NE(same, std::string::npos) << md;
+    ASSERT_NE(cross, std::string::npos) << md;
+    EXPECT_LT(same, cross);
+    // The paper's Tab. 1 CPD same_category MAE(R) 11.033 beside ours (mean 3 of 1, 2, 6), and
+    // cross_category 12.681 beside ours (mean 15 of 10, 20) in the second grid; CPD is the
+    // best measured cell of both MAE(R) columns, so bold.
+    const std::size_t cpd_same = md.find("| CPD | **3.0±", same);
+    ASSERT_LT(cpd_same, cross) << md;
+    EXPECT_EQ(md.find("(11.033)** |", cpd_same), md.find("(11.033)", same) + 0) << md;
+    const std::size_t cpd_cross = md.find("| CPD | **15.0±", cross);
+    ASSERT_NE(cpd_cross, std::string::npos) << md;
+    EXPECT_NE(md.find("(12.681)** |", cpd_cross), std::string::npos) << md;
+    const std::string full = TableToMarkdown(t, TableForm::kFull);
+    EXPECT_EQ(full.find("*same_category*"), std::string::npos);
+    EXPECT_NE(full.find("MAE(R) same_category"), std::string::npos);
 }
 
 TEST(PaperReport, SweepTableReadsTransposedPaperCells) {

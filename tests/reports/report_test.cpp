@@ -262,8 +262,8 @@ TEST(Report, BootstrapDoesNotDependOnRowOrderOrTablePosition) {
 
 TEST(Report, CiIsTheOneBootstrapMeanOfThePairValues) {
     // The table's CI is BootstrapMean (reports/statistics.hpp, checked against numpy there) of
-    // the method's values in pair order, seed 20230103, stream named by what is estimated:
-    // "hash:<content hash>\n<method>\n<params>\n<metric>" (docs/metrics.md).
+    // the method's values in pair order, seed 20230103, stream named by the pair file and the
+    // metric: "hash:<content hash>\n<metric>" (docs/metrics.md).
     std::vector<ResultRow> rows;
     std::vector<double> values;
     for (std::size_t k = 0; k < 30; ++k) {
@@ -273,11 +273,32 @@ TEST(Report, CiIsTheOneBootstrapMeanOfThePairValues) {
     std::reverse(rows.begin(), rows.end());  // read in any order: sorted by pair first
     const MethodSummary s = BuildTables(rows, ReportOptions{})[0].methods[0];
     const BootstrapCi expected = BootstrapMean(values, 1000, kDefaultBootstrapSeed,
-                                               StreamId("hash:fnv1a64:aaaa\na\n{}\nmae_r"));
+                                               StreamId("hash:fnv1a64:aaaa\nmae_r"));
     EXPECT_DOUBLE_EQ(s.mae_r.mean, expected.mean);
     EXPECT_EQ(s.mae_r.lo, expected.lo);
     EXPECT_EQ(s.mae_r.hi, expected.hi);
     EXPECT_LT(s.mae_r.lo, s.mae_r.hi);
+}
+
+TEST(Report, MethodsOnTheSamePairsDrawTheSameResamples) {
+    // Issue 41: icp and open3d-py-icp, equal on every pair, showed 14.6±2.5 and 14.6±2.7 (one
+    // bootstrap stream per method). With one stream per (pair file, metric) the resamples are
+    // paired: equal values give equal CIs, and a method that is b = a + 1 on every pair has
+    // every resampled mean, so both ends, shifted by exactly 1 (hand derivation).
+    std::vector<ResultRow> rows;
+    for (std::size_t k = 0; k < 25; ++k) {
+        const double v = 0.3 + static_cast<double>(k * 5 % 13);
+        rows.push_back(Row("a", v, 0.01, 1, Status::kOk, k));
+        rows.push_back(Row("b", v, 0.01, 1, Status::kOk, k));
+        rows.push_back(Row("c", v + 1.0, 0.01, 1, Status::kOk, k));
+    }
+    const auto methods = BuildTables(rows, ReportOptions{})[0].methods;
+    ASSERT_EQ(methods.size(), 3u);
+    EXPECT_EQ(methods[0].mae_r.lo, methods[1].mae_r.lo);
+    EXPECT_EQ(methods[0].mae_r.hi, methods[1].mae_r.hi);
+    EXPECT_LT(methods[0].mae_r.lo, methods[0].mae_r.hi);
+    EXPECT_NEAR(methods[2].mae_r.lo, methods[0].mae_r.lo + 1.0, 1e-12);
+    EXPECT_NEAR(methods[2].mae_r.hi, methods[0].mae_r.hi + 1.0, 1e-12);
 }
 
 TEST(Report, EulerOptionRecomputesFromStoredGroundTruth) {
