@@ -93,7 +93,10 @@ int main(int argc, char** argv) {
             name == "CallForAllHelp" || name == "CallForVersion") {
             return app.exit(e);
         }
-        std::cerr << "regbench: usage error: " << regbench::app::OneLine(e.what())
+        // CLI11 names a hidden option (run's --method) as "", leaving ": " before its message.
+        std::string what = e.what();
+        if (what.rfind(": ", 0) == 0) what.erase(0, 2);
+        std::cerr << "regbench: usage error: " << regbench::app::OneLine(what)
                   << " (see regbench --help)\n";
         return 2;
     } catch (const std::exception& e) {

@@ -135,7 +135,7 @@ TEST(CliContract, UnknownNamesAreUsageErrorsWithADidYouMean) {
     ExpectUsageError(RunCli(run + " --methods icp,fgrr"), "did you mean 'fgr'?");
     ExpectUsageError(RunCli(run + " --methods icp --params '{\"icp\": {\"max_iteration\": 3}}'"),
                      "max_iteration");
-    ExpectUsageError(RunCli(run + " --method icp"), "did you mean --methods?");
+    ExpectUsageError(RunCli(run + " --method icp"), "usage error: run takes --methods NAME");
     EXPECT_FALSE(fs::exists(out));
     ExpectUsageError(RunCli("align a.ply b.ply --method cdp"), "did you mean 'cpd'?");
     const std::string generate =
