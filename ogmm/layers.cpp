@@ -1,6 +1,8 @@
 #include "ogmm/layers.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -376,6 +378,37 @@ int64_t CountParameters(const torch::nn::Module& module) {
     int64_t count = 0;
     for (const auto& p : module.parameters()) count += p.numel();
     return count;
+}
+
+void LoadStrictStateDict(torch::nn::Module& module,
+                         const std::vector<std::pair<std::string, torch::Tensor>>& tensors,
+                         const std::string& file, const std::string& network) {
+    std::vector<std::pair<std::string, torch::Tensor>> own;
+    for (const auto& p : module.named_parameters()) own.emplace_back(p.key(), p.value());
+    for (const auto& b : module.named_buffers()) own.emplace_back(b.key(), b.value());
+    std::set<std::string> known;
+    for (const auto& kv : own) known.insert(kv.first);
+    for (const auto& kv : tensors) {
+        if (known.count(kv.first) == 0) {
+            throw std::runtime_error(file + ": tensor " + kv.first + " is not in " + network +
+                                     "'s state dict");
+        }
+    }
+    torch::NoGradGuard no_grad;
+    for (auto& [key, value] : own) {
+        const auto found = std::find_if(tensors.begin(), tensors.end(),
+                                        [&key = key](const auto& kv) { return kv.first == key; });
+        if (found == tensors.end()) {
+            throw std::runtime_error(file + ": has no tensor " + key + " (" + network +
+                                     " state dict)");
+        }
+        if (found->second.sizes() != value.sizes()) {
+            throw std::runtime_error(file + ": tensor " + key + " has shape " +
+                                     c10::str(found->second.sizes()) + ", " + network + "'s is " +
+                                     c10::str(value.sizes()));
+        }
+        value.copy_(found->second.to(value.dtype()));
+    }
 }
 
 }  // namespace regbench::ogmm

@@ -6,6 +6,7 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -142,5 +143,12 @@ TORCH_MODULE(SphericalEncoding);
 
 /// Number of trainable scalars of a module (what the paper's parameter counts count).
 int64_t CountParameters(const torch::nn::Module& module);
+
+/// Copies `tensors` (name, tensor) into the parameters and buffers of `module` of the same
+/// names: every one must be present with its shape, and no other may be; throws
+/// std::runtime_error "<file>: ..." naming the first offending key and `network`.
+void LoadStrictStateDict(torch::nn::Module& module,
+                         const std::vector<std::pair<std::string, torch::Tensor>>& tensors,
+                         const std::string& file, const std::string& network);
 
 }  // namespace regbench::ogmm

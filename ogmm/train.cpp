@@ -510,7 +510,9 @@ void Trainer::PlanForBudget() {
             for (double m : recipe_.milestones) {
                 const double f =
                     static_cast<double>(state_.planned_steps) / static_cast<double>(recipe_steps);
-                log_ << " " << std::ceil((1.0 - (1.0 - m) * f) * state_.planned_steps);
+                log_ << " "
+                     << std::ceil((1.0 - (1.0 - m) * f) *
+                                  static_cast<double>(state_.planned_steps));
             }
         }
         log_ << "\n";
