@@ -33,6 +33,32 @@ nn::Sequential FcBlock(int64_t in, int64_t out) {
     return nn::Sequential(nn::Linear(in, out), nn::BatchNorm1d(out), nn::ReLU());
 }
 
+/// W x + b for a weight [out, in], points [B, in, N] and a bias [out]: one GEMM (the bias
+/// broadcast into it) per cloud. LibTorch's Conv1d takes a slower path for 1x1 kernels.
+torch::Tensor Affine(const torch::Tensor& W, const torch::Tensor& b, const torch::Tensor& x) {
+    if (x.size(0) == 1) return torch::addmm(b.view({-1, 1}), W, x[0]).unsqueeze(0);
+    return torch::matmul(W, x) + b.view({-1, 1});
+}
+
+/// An eval-mode BatchNorm as y = scale x + shift (per channel).
+std::pair<torch::Tensor, torch::Tensor> FoldedBatchNorm(const nn::BatchNorm1dImpl& bn) {
+    const torch::Tensor scale = bn.weight / torch::sqrt(bn.running_var + bn.options.eps());
+    return {scale, bn.bias - bn.running_mean * scale};
+}
+
+/// A conv_block (Conv1d, BN, ReLU) or a bare Conv1d block on points [B, in, N]. In eval mode
+/// the BatchNorm is folded into the convolution (its running statistics are constants): one
+/// GEMM and one ReLU pass instead of GEMM, bias, normalisation and ReLU passes.
+torch::Tensor Pointwise(const nn::Sequential& block, const torch::Tensor& x) {
+    const auto conv = std::dynamic_pointer_cast<nn::Conv1dImpl>(block->ptr(0));
+    const torch::Tensor W = conv->weight.squeeze(2);
+    if (block->size() == 1) return Affine(W, conv->bias, x);
+    const auto bn = std::dynamic_pointer_cast<nn::BatchNorm1dImpl>(block->ptr(1));
+    if (bn->is_training()) return bn->forward(Affine(W, conv->bias, x)).relu();
+    const auto [scale, shift] = FoldedBatchNorm(*bn);
+    return Affine(W * scale.unsqueeze(1), conv->bias * scale + shift, x).relu_();
+}
+
 /// Registers `blocks` on `m` as <prefix>1, <prefix>2, ... and returns their handles.
 std::vector<nn::Sequential> RegisterBlocks(nn::Module& m, const std::string& prefix,
                                            std::vector<nn::Sequential> blocks) {
@@ -112,8 +138,9 @@ OmnetEncoderImpl::OmnetEncoderImpl(const OmnetWidths& w)
 
 std::pair<torch::Tensor, torch::Tensor> OmnetEncoderImpl::forward(const torch::Tensor& x,
                                                                   const torch::Tensor& mask) {
-    const torch::Tensor f64 = blocks_[1]->forward(blocks_[0]->forward(x));
-    const torch::Tensor f1024 = blocks_[4]->forward(blocks_[3]->forward(blocks_[2]->forward(f64)));
+    const torch::Tensor f64 = Pointwise(blocks_[1], Pointwise(blocks_[0], x));
+    const torch::Tensor f1024 =
+        Pointwise(blocks_[4], Pointwise(blocks_[3], Pointwise(blocks_[2], f64)));
     return {f64 * mask, std::get<0>((f1024 * mask).max(2, true))};
 }
 
@@ -131,16 +158,24 @@ torch::Tensor OmnetFusionImpl::forward(const torch::Tensor& local, const torch::
     const auto conv = std::dynamic_pointer_cast<nn::Conv1dImpl>(blocks_[0]->ptr(0));
     const torch::Tensor W = conv->weight.squeeze(2);  // [out, 64 + 2 x 1024]
     const int64_t g = own_global.size(1);
-    const torch::Tensor per_cloud =
+    torch::Tensor per_cloud =
         torch::matmul(W.index({Slice(), Slice(local_width_, local_width_ + g)}), own_global) +
         torch::matmul(W.index({Slice(), Slice(local_width_ + g, torch::indexing::None)}),
                       other_global) +
-        conv->bias.view({1, -1, 1});
-    const torch::Tensor pre =
-        torch::matmul(W.index({Slice(), Slice(0, local_width_)}), local) + per_cloud;
+        conv->bias.view({1, -1, 1});  // [B, out, 1]
+    torch::Tensor W_local = W.index({Slice(), Slice(0, local_width_)});
     const auto bn = std::dynamic_pointer_cast<nn::BatchNorm1dImpl>(blocks_[0]->ptr(1));
-    torch::Tensor h = bn->forward(pre).relu();
-    h = blocks_[2]->forward(blocks_[1]->forward(h));
+    const bool folded = !bn->is_training();
+    if (folded) {  // as Pointwise: the eval-mode BatchNorm folded into the convolution
+        const auto [scale, shift] = FoldedBatchNorm(*bn);
+        W_local = W_local * scale.unsqueeze(1);
+        per_cloud = per_cloud * scale.view({1, -1, 1}) + shift.view({1, -1, 1});
+    }
+    const torch::Tensor pre = local.size(0) == 1
+                                  ? torch::addmm(per_cloud[0], W_local, local[0]).unsqueeze(0)
+                                  : torch::matmul(W_local, local) + per_cloud;
+    torch::Tensor h = folded ? pre.relu_() : bn->forward(pre).relu();
+    h = Pointwise(blocks_[2], Pointwise(blocks_[1], h));
     return h * mask;
 }
 
@@ -151,10 +186,10 @@ OmnetDecoderImpl::OmnetDecoderImpl(const OmnetWidths& w)
            nn::Sequential(nn::Conv1d(nn::Conv1dOptions(w.w256, 2, 1)))})) {}
 
 std::pair<torch::Tensor, torch::Tensor> OmnetDecoderImpl::forward(const torch::Tensor& fused) {
-    const torch::Tensor a = blocks_[0]->forward(fused);
-    const torch::Tensor b = blocks_[1]->forward(a);
-    const torch::Tensor c = blocks_[2]->forward(b);
-    return {torch::cat({a, b, c}, 1), blocks_[3]->forward(c)};
+    const torch::Tensor a = Pointwise(blocks_[0], fused);
+    const torch::Tensor b = Pointwise(blocks_[1], a);
+    const torch::Tensor c = Pointwise(blocks_[2], b);
+    return {torch::cat({a, b, c}, 1), Pointwise(blocks_[3], c)};
 }
 
 OmnetRegressionImpl::OmnetRegressionImpl(const OmnetWidths& w) {

@@ -2,7 +2,8 @@
 // BM_OgmmForward / BM_DeepGmrForward: one batch-1 forward (no gradient, eval mode) per
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
 // BM_RienetForward: RIENet (ogmm/rienet.hpp, the authors' ModelNet40 config), the same way; its
-// MACs from RienetForwardMacs (not yet in ogmm/cost.hpp).
+// MACs from RienetForwardMacs (not yet in ogmm/cost.hpp). BM_OmnetForward: OMNet
+// (ogmm/omnet.hpp) at the authors' widths and omnet-small's.
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
 // backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
 // Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
@@ -128,7 +129,8 @@ void BM_OgmmForward(benchmark::State& state, const std::string& name,
     TimeForward(state, *ogmm::MakeOgmmNet(config), config);
 }
 
-void BM_DeepGmrForward(benchmark::State& state, const std::string& name) {
+/// A zoo model's forward (DeepGMR, OMNet: any family whose config NamedConfig knows).
+void BM_ZooForward(benchmark::State& state, const std::string& name) {
     torch::set_num_threads(static_cast<int>(state.range(1)));
     const nlohmann::json config = ogmm::NamedConfig(name);
     TimeForward(state, *ogmm::MakeNetFromConfig(config), config);
@@ -194,7 +196,13 @@ const bool kRegistered = [] {
     };
     for (const auto& [label, config] : deepgmr_cases) {
         Configure(benchmark::RegisterBenchmark(("BM_DeepGmrForward/" + std::string(label)).c_str(),
-                                               BM_DeepGmrForward, std::string(config)));
+                                               BM_ZooForward, std::string(config)));
+    }
+    // OMNet: the authors' widths (53.7 M parameters) and the shipped omnet-small (width / 4).
+    for (const auto& [label, config] :
+         {std::pair{"omnet", "omnet"}, {"omnet_small", "omnet-small"}}) {
+        Configure(benchmark::RegisterBenchmark(("BM_OmnetForward/" + std::string(label)).c_str(),
+                                               BM_ZooForward, std::string(config)));
     }
     Configure(benchmark::RegisterBenchmark("BM_RienetForward/rienet", BM_RienetForward));
     Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,

@@ -30,7 +30,7 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FamilyOfConfig(nlohmann::json{{"arch", "deepgmr"}}).arch, "deepgmr");
     EXPECT_THROW(FamilyOfConfig(nlohmann::json{{"arch", 3}}), std::invalid_argument);
     EXPECT_THROW(FamilyOfConfig(nlohmann::json::array()), std::invalid_argument);
-    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr"}));
+    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr", "omnet"}));
 }
 
 TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
@@ -46,7 +46,7 @@ TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
     copy.methods.clear();
     copy.build = nullptr;
     testing::ExpectThrowsWith<std::invalid_argument>([&] { RegisterFamily(copy); }, "required");
-    EXPECT_EQ(Families().size(), 2u);
+    EXPECT_EQ(Families().size(), 3u);
 }
 
 // Every family documents exactly its config keys: each key of each model's config (but arch,
