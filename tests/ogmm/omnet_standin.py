@@ -31,8 +31,9 @@ Not a dependency of the product; run by hand with Debian's python3-torch:
       POINTS (717) uniform random points, five runs after a warm-up.
   omnet_standin.py save FILE DIVISOR
       the authors' checkpoint layout at width / DIVISOR, formula weights: torch.save (zip) of
-      {"state_dict": {"module." + key: tensor}, "optimizer": {...}, "scheduler": {...},
-      "step": 7}, as their train.py saves it.
+      {"state_dict": {"module." + key: tensor}, "optimizer": ..., "scheduler": ...,
+      "step", "epoch", "best_val_score", "best_test_score"}, as their common/manager.py saves
+      it (the optimizer's and scheduler's state of one Adam step).
 """
 import json
 import os
@@ -337,10 +338,23 @@ def timing(authors_dir, points):
 
 
 def save(path, divisor):
+    """The authors' Manager.check_best_save_last_checkpoints layout, with the optimizer and
+    scheduler state of one real Adam step under their ExponentialLR (so the file holds what
+    theirs holds: tensors, ints, floats, bools, None, tuples)."""
     net = make_net(divisor, torch.float32)
-    state = {"module." + k: v for k, v in net.state_dict().items()}
-    torch.save({"state_dict": state, "optimizer": {"state": {}, "param_groups": []},
-                "scheduler": {"last_epoch": 3}, "step": 7}, path)
+    optimizer = torch.optim.Adam(net.parameters(), lr=1e-4)
+    scheduler = torch.optim.lr_scheduler.ExponentialLR(optimizer, gamma=1)
+    net.train()
+    src, tgt, _ = case_pair(2, 30, 30)
+    T, _ = forward(net, src.float(), tgt.float())
+    T.sum().backward()
+    optimizer.zero_grad(set_to_none=False)  # a step that leaves the weights as they are
+    optimizer.step()
+    scheduler.step()
+    state = {"module." + k: v for k, v in make_net(divisor, torch.float32).state_dict().items()}
+    torch.save({"state_dict": state, "optimizer": optimizer.state_dict(),
+                "scheduler": scheduler.state_dict(), "step": 7, "epoch": 1,
+                "best_val_score": float("inf"), "best_test_score": 0.5}, path)
 
 
 if __name__ == "__main__":

@@ -3,13 +3,19 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "ogmm/authors_checkpoint.hpp"
+#include "ogmm/checkpoint.hpp"
 #include "ogmm/layers.hpp"
 #include "tests/ogmm/formula_fixture.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -280,8 +286,8 @@ TEST_F(OmnetTest, LossTrainsEveryIterationsRegressor) {
     total.backward();
     for (const auto& p : net.named_parameters()) {
         const std::string& key = p.key();
-        const bool early_decoder = key == "decoder.0.conv_block4.0.weight" ||
-                                   key == "decoder.1.conv_block4.0.weight";
+        const bool early_decoder =
+            key == "decoder.0.conv_block4.0.weight" || key == "decoder.1.conv_block4.0.weight";
         if (key.find("final_fc.0.bias") == std::string::npos && !early_decoder) continue;
         ASSERT_TRUE(p.value().grad().defined()) << key;
         EXPECT_GT(p.value().grad().abs().sum().item<double>(), 0.0) << key;
@@ -309,6 +315,78 @@ TEST_F(OmnetTest, StateDictOfAnotherShapeIsRefusedNamingTheKey) {
     sd.pop_back();
     OmnetNet same(eighth);
     EXPECT_THROW(LoadOmnetStateDict(same, sd, "short.pth"), std::runtime_error);
+}
+
+// ---- the authors' checkpoint file ----------------------------------------------------------
+
+/// Runs a shell command; its stdout and exit status.
+std::pair<std::string, int> Shell(const std::string& command) {
+    std::string out;
+    FILE* p = ::popen(command.c_str(), "r");
+    if (p == nullptr) return {"", -1};
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+    const int status = ::pclose(p);
+    return {out, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+}
+
+TEST_F(OmnetTest, TheAuthorsCheckpointLayoutImportsAndRefusesOthersByName) {
+    // Written at test time by Debian's python3-torch: `omnet_standin.py save FILE 8`, the
+    // authors' checkpoint dict (state_dict under DataParallel's "module." prefix, Adam and
+    // ExponentialLR state of a real step, step, epoch, scores) with the formula weights at
+    // width / 8, which tests/ogmm/formula_fixture.hpp computes here independently.
+    const char* env = std::getenv("REGBENCH_SOURCE_DIR");
+    const std::string source = env != nullptr ? env : ".";
+    const std::filesystem::path dir = regbench::testing::FreshTempDir("omnet_ckpt");
+    const std::filesystem::path pth = dir / "model_best.pth";
+    const auto [out, rc] = Shell("/usr/bin/python3 " + source +
+                                 "/tests/ogmm/omnet_standin.py save " + pth.string() + " 8 2>&1");
+    ASSERT_EQ(rc, 0) << out;
+    ImportOptions options;
+    options.from = "omnet";
+    ImportAuthorsCheckpoint(pth.string(), (dir / "imported").string(), options);
+    const auto imported = LoadNetFromCheckpoint((dir / "imported").string());
+    EXPECT_EQ(imported->Config().at("width_divisor"), 8);
+    OmnetConfig eighth;
+    eighth.width_divisor = 8;
+    OmnetNet formula(eighth);
+    testing::FormulaFill(formula);
+    formula.eval();
+    std::map<std::string, torch::Tensor> theirs;
+    for (const auto& p : imported->named_parameters()) theirs[p.key()] = p.value();
+    for (const auto& b : imported->named_buffers()) theirs[b.key()] = b.value();
+    for (const auto& p : formula.named_parameters()) {
+        ASSERT_TRUE(theirs.count(p.key())) << p.key();
+        EXPECT_TRUE(torch::allclose(theirs.at(p.key()), p.value(), 1e-6, 1e-7)) << p.key();
+    }
+    {
+        torch::NoGradGuard no_grad;
+        PairBatch pair;
+        pair.source = testing::FormulaCloud(1, 50, 0.0);
+        pair.target = testing::FormulaCloud(1, 41, 1.0);
+        EXPECT_TRUE(
+            torch::allclose(imported->Forward(pair).T, formula.Forward(pair).T, 1e-5, 1e-6));
+    }
+    // Refused by name: the file cut short, and a DeepGMR state dict.
+    const std::string bytes = regbench::testing::ReadBytes(pth);
+    const std::filesystem::path cut = dir / "cut.pth";
+    regbench::testing::WriteBytes(cut, bytes.substr(0, bytes.size() / 2));
+    const std::string e1 = regbench::testing::ErrorOf(
+        [&] { ImportAuthorsCheckpoint(cut.string(), (dir / "no1").string(), options); });
+    EXPECT_NE(e1.find(cut.string()), std::string::npos) << e1;
+    const std::filesystem::path other = dir / "deepgmr.pth";
+    regbench::testing::WriteBytes(
+        other, WriteTorchSaveZip({{"backbone.encoder.0.0.weight", torch::zeros({64, 3, 1})}}));
+    const std::string e2 = regbench::testing::ErrorOf(
+        [&] { ImportAuthorsCheckpoint(other.string(), (dir / "no2").string(), options); });
+    EXPECT_NE(e2.find(other.string() + ": has no tensor encoder.0.conv_block1.0.weight: not an "
+                                       "OMNet state dict"),
+              std::string::npos)
+        << e2;
+    EXPECT_FALSE(std::filesystem::exists(dir / "no1"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "no2"));
+    std::filesystem::remove_all(dir);
 }
 
 TEST_F(OmnetTest, MacsAreTheLayersProductsCountedByHand) {
