@@ -9,13 +9,14 @@ namespace regbench::ogmm {
 // and list it in TreeFamilies (docs/adding-a-learned-method.md).
 NetworkFamily OgmmFamily();     // ogmm/ogmm_family.cpp
 NetworkFamily DeepGmrFamily();  // ogmm/deepgmr_family.cpp
+NetworkFamily RienetFamily();   // ogmm/rienet_family.cpp
 
 namespace {
 
 /// Checkpoints written before configs recorded "arch" hold this family's networks.
 constexpr char kArchBeforeArchKey[] = "ogmm";
 
-std::vector<NetworkFamily> TreeFamilies() { return {OgmmFamily(), DeepGmrFamily()}; }
+std::vector<NetworkFamily> TreeFamilies() { return {OgmmFamily(), DeepGmrFamily(), RienetFamily()}; }
 
 std::vector<NetworkFamily>& Registry() {
     static std::vector<NetworkFamily> families = TreeFamilies();

@@ -153,6 +153,18 @@ RienetConfig RienetConfigFromJson(const nlohmann::json& j) {
             "k and k_nc >= 2, nn_margin >= 0: " +
             ToJson(c).dump());
     }
+    // Issue 44: a checkpoint's absurd sizes are refused before anything is built.
+    const std::pair<const char*, int64_t> limits[] = {
+        {"emb_dims", 1 << 16}, {"dim", 1 << 16}, {"keypoints", 1 << 16},
+        {"k", 1 << 10},        {"k_nc", 1 << 10}, {"iterations", 1000}};
+    const nlohmann::json parsed = ToJson(c);
+    for (const auto& [key, limit] : limits) {
+        if (parsed.at(key).get<int64_t>() > limit) {
+            throw std::invalid_argument("rienet config: " + std::string(key) + " must be <= " +
+                                        std::to_string(limit) + ", got " +
+                                        parsed.at(key).dump());
+        }
+    }
     return c;
 }
 
