@@ -40,7 +40,7 @@ std::optional<std::string> PaperRowName(const std::string& method) {
     static const std::map<std::string, std::string> kNames = {
         {"icp", "ICP"},         {"fgr", "FGR"},  {"cpd", "CPD"},
         {"gmmreg", "GMMReg"},   {"svr", "SVR"},  {"filterreg", "FilterReg"},
-        {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}};
+        {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"},  {"rienet", "RIENet"}};
     const auto it = kNames.find(method);
     if (it == kNames.end()) return std::nullopt;
     return it->second;
