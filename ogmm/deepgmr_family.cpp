@@ -44,10 +44,7 @@ nlohmann::json Named(const std::string& name) {
             c.clusters = 32;
             c.emb_dims = 128;
             c.head_hidden = 128;
-            train["lr"] = 1e-3;
-            train["batch"] = 8;
-            train["pairs_per_epoch"] = 512;
-            train["epochs"] = 40;
+            train = CampaignTrainingRecipe();
         }
     } else {
         throw std::invalid_argument("deepgmr: unknown model '" + name + "'");

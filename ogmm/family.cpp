@@ -10,13 +10,16 @@ namespace regbench::ogmm {
 NetworkFamily OgmmFamily();     // ogmm/ogmm_family.cpp
 NetworkFamily DeepGmrFamily();  // ogmm/deepgmr_family.cpp
 NetworkFamily OmnetFamily();    // ogmm/omnet_family.cpp
+NetworkFamily RienetFamily();   // ogmm/rienet_family.cpp
 
 namespace {
 
 /// Checkpoints written before configs recorded "arch" hold this family's networks.
 constexpr char kArchBeforeArchKey[] = "ogmm";
 
-std::vector<NetworkFamily> TreeFamilies() { return {OgmmFamily(), DeepGmrFamily(), OmnetFamily()}; }
+std::vector<NetworkFamily> TreeFamilies() {
+    return {OgmmFamily(), DeepGmrFamily(), OmnetFamily(), RienetFamily()};
+}
 
 std::vector<NetworkFamily>& Registry() {
     static std::vector<NetworkFamily> families = TreeFamilies();

@@ -23,6 +23,15 @@ nlohmann::json OgmmTrainingRecipe() {
             {"lr_gamma", 0.1}};
 }
 
+nlohmann::json CampaignTrainingRecipe() {
+    nlohmann::json train = OgmmTrainingRecipe();
+    train["lr"] = 1e-3;
+    train["batch"] = 8;
+    train["pairs_per_epoch"] = 512;
+    train["epochs"] = 40;
+    return train;
+}
+
 namespace {
 
 using Int = std::int64_t;
@@ -33,13 +42,7 @@ nlohmann::json Named(const std::string& name) {
     nlohmann::json j = OgmmConfigToJson(ParseOgmmConfig(OgmmNamedConfig(name)));
     j["arch"] = "ogmm";
     j["name"] = name;
-    j["train"] = OgmmTrainingRecipe();
-    if (name != "ogmm") {
-        j["train"]["lr"] = 1e-3;
-        j["train"]["batch"] = 8;
-        j["train"]["pairs_per_epoch"] = 512;
-        j["train"]["epochs"] = 40;
-    }
+    j["train"] = name == "ogmm" ? OgmmTrainingRecipe() : CampaignTrainingRecipe();
     return j;
 }
 

@@ -9,11 +9,10 @@
 #include "ogmm/authors_state_dict.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/family.hpp"
+#include "ogmm/ogmm_net.hpp"  // CampaignTrainingRecipe
 #include "ogmm/omnet.hpp"
 
 namespace regbench::ogmm {
-
-nlohmann::json OgmmTrainingRecipe();  // ogmm/ogmm_family.cpp
 
 namespace {
 
@@ -30,11 +29,7 @@ nlohmann::json Named(const std::string& name) {
                  {"epochs", 100}, {"pairs_per_epoch", 4096}, {"schedule", "constant"}};
     } else if (name == "omnet-small") {
         c.width_divisor = 4;
-        train = OgmmTrainingRecipe();
-        train["lr"] = 1e-3;
-        train["batch"] = 8;
-        train["pairs_per_epoch"] = 512;
-        train["epochs"] = 40;
+        train = CampaignTrainingRecipe();
     } else {
         throw std::invalid_argument("omnet: unknown model '" + name + "'");
     }

@@ -153,6 +153,18 @@ RienetConfig RienetConfigFromJson(const nlohmann::json& j) {
             "k and k_nc >= 2, nn_margin >= 0: " +
             ToJson(c).dump());
     }
+    // Issue 44: a checkpoint's absurd sizes are refused before anything is built.
+    const std::pair<const char*, int64_t> limits[] = {
+        {"emb_dims", 1 << 16}, {"dim", 1 << 16}, {"keypoints", 1 << 16},
+        {"k", 1 << 10},        {"k_nc", 1 << 10}, {"iterations", 1000}};
+    const nlohmann::json parsed = ToJson(c);
+    for (const auto& [key, limit] : limits) {
+        if (parsed.at(key).get<int64_t>() > limit) {
+            throw std::invalid_argument("rienet config: " + std::string(key) + " must be <= " +
+                                        std::to_string(limit) + ", got " +
+                                        parsed.at(key).dump());
+        }
+    }
     return c;
 }
 
@@ -292,30 +304,7 @@ LossTerms RienetNet::Loss(const PairBatch& /*batch*/, const NetOutput& output) {
 }
 
 void LoadRienetStateDict(RienetNet& net, const StateDict& tensors, const std::string& file) {
-    std::vector<std::pair<std::string, torch::Tensor>> own;
-    for (const auto& p : net.named_parameters()) own.emplace_back(p.key(), p.value());
-    for (const auto& p : net.named_buffers()) own.emplace_back(p.key(), p.value());
-    std::set<std::string> known;
-    for (const auto& [key, value] : own) known.insert(key);
-    for (const auto& [key, value] : tensors) {
-        if (known.count(key) == 0) {
-            throw std::runtime_error(file + ": tensor " + key + " is not in RIENet's state dict");
-        }
-    }
-    torch::NoGradGuard no_grad;
-    for (auto& [key, value] : own) {
-        const auto found = std::find_if(tensors.begin(), tensors.end(),
-                                        [&key](const auto& kv) { return kv.first == key; });
-        if (found == tensors.end()) {
-            throw std::runtime_error(file + ": has no tensor " + key + " (RIENet state dict)");
-        }
-        if (found->second.sizes() != value.sizes()) {
-            throw std::runtime_error(file + ": tensor " + key + " has shape " +
-                                     c10::str(found->second.sizes()) + ", RIENet's is " +
-                                     c10::str(value.sizes()));
-        }
-        value.copy_(found->second.to(value.dtype()));
-    }
+    LoadStrictStateDict(net, tensors, file, "RIENet");
 }
 
 std::map<std::string, int64_t> RienetForwardMacs(const nlohmann::json& config, int64_t n,

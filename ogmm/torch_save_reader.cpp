@@ -38,7 +38,9 @@ enum class Kind {
     kGlobal,
     kStorageType,
     kStorage,
-    kTensor
+    kTensor,
+    kNumpyDtype,  // numpy.dtype(str, False, True): s = the dtype string ("f8")
+    kNumpyScalar  // numpy scalar (a training checkpoint's metric): s = its raw bytes, unread
 };
 
 struct Obj {
@@ -261,8 +263,10 @@ public:
                 case 'b': {  // BUILD
                     Pop();   // state: only OrderedDict's _metadata, which a state dict may carry
                     const int o = Top();
-                    if (at(o).kind != Kind::kDict && at(o).kind != Kind::kTensor) {
-                        Bad("pickle sets the state of an object other than a dict or tensor");
+                    if (at(o).kind != Kind::kDict && at(o).kind != Kind::kTensor &&
+                        at(o).kind != Kind::kNumpyDtype) {
+                        Bad("pickle sets the state of an object other than a dict, tensor or "
+                            "numpy dtype");
                     }
                     break;
                 }
@@ -379,7 +383,8 @@ private:
             return o;
         }
         if (g == "collections.OrderedDict" || g == "torch._utils._rebuild_tensor_v2" ||
-            g == "torch._utils._rebuild_tensor" || g == "torch._utils._rebuild_parameter") {
+            g == "torch._utils._rebuild_tensor" || g == "torch._utils._rebuild_parameter" ||
+            IsNumpyScalarGlobal(g)) {
             const int o = New(Kind::kGlobal);
             arena_[o].s = g;
             return o;
@@ -397,6 +402,59 @@ private:
         }
         return v;
     }
+    /// The globals a training checkpoint's numpy scalar (e.g. {"best_result": np.float64})
+    /// pickles: numpy's scalar and dtype constructors, and _codecs.encode, which protocol 2
+    /// uses for the scalar's bytes. None of them runs: the reader builds inert objects.
+    static bool IsNumpyScalarGlobal(const std::string& g) {
+        return g == "numpy.core.multiarray.scalar" || g == "numpy._core.multiarray.scalar" ||
+               g == "numpy.dtype" || g == "_codecs.encode";
+    }
+    /// numpy.dtype(str, False, True) -> kNumpyDtype; _codecs.encode(str, "latin1") -> kBytes;
+    /// scalar(dtype, bytes) -> kNumpyScalar (kept, never converted: no state dict holds one).
+    int NumpyScalarPart(const std::string& g, const std::vector<int>& a) {
+        const auto is = [&](size_t j, Kind k) { return j < a.size() && at(a[j]).kind == k; };
+        if (g == "numpy.dtype") {
+            if (a.size() != 3 || !is(0, Kind::kStr) || at(a[0]).s.size() > 16) {
+                Bad("numpy.dtype with unexpected arguments");
+            }
+            const int o = New(Kind::kNumpyDtype);
+            arena_[o].s = at(a[0]).s;
+            return o;
+        }
+        if (g == "_codecs.encode") {
+            if (a.size() != 2 || !is(0, Kind::kStr) || !is(1, Kind::kStr) ||
+                at(a[1]).s != "latin1") {
+                Bad("_codecs.encode other than of a string to latin1");
+            }
+            const int o = New(Kind::kBytes);
+            arena_[o].s = Latin1(at(a[0]).s);
+            return o;
+        }
+        if (a.size() != 2 || !is(0, Kind::kNumpyDtype) || !is(1, Kind::kBytes)) {
+            Bad(g + " with arguments other than a numpy dtype and bytes");
+        }
+        const int o = New(Kind::kNumpyScalar);
+        arena_[o].s = at(a[1]).s;
+        return o;
+    }
+    /// The latin-1 bytes of the UTF-8 string `utf8` (code points below 256 only).
+    std::string Latin1(const std::string& utf8) const {
+        std::string out;
+        for (size_t j = 0; j < utf8.size(); ++j) {
+            const auto c = static_cast<uint8_t>(utf8[j]);
+            if (c < 0x80) {
+                out.push_back(static_cast<char>(c));
+            } else if ((c == 0xc2 || c == 0xc3) && j + 1 < utf8.size() &&
+                       (static_cast<uint8_t>(utf8[j + 1]) & 0xc0) == 0x80) {
+                out.push_back(static_cast<char>(((c & 0x03) << 6) |
+                                                (static_cast<uint8_t>(utf8[j + 1]) & 0x3f)));
+                ++j;
+            } else {
+                Bad("_codecs.encode of a string that is not latin-1");
+            }
+        }
+        return out;
+    }
     int Reduce(int fn, int args) {
         if (at(fn).kind != Kind::kGlobal || at(args).kind != Kind::kTuple) {
             Bad("pickle calls something other than a known global");
@@ -407,6 +465,7 @@ private:
             if (!a.empty()) Bad("OrderedDict built from arguments");
             return New(Kind::kDict);
         }
+        if (IsNumpyScalarGlobal(g)) return NumpyScalarPart(g, a);
         if (g == "torch._utils._rebuild_parameter") {
             if (a.empty() || at(a[0]).kind != Kind::kTensor)
                 Bad("_rebuild_parameter of a non-tensor");

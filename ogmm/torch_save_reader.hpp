@@ -7,7 +7,10 @@
 // The pickle is run by a small restricted interpreter written for this format: it knows the
 // opcodes pickle protocols 2-4 use for a state dict and accepts only the globals a plain state
 // dict needs (collections.OrderedDict, torch._utils._rebuild_tensor{,_v2}, _rebuild_parameter,
-// torch.*Storage). Anything else (a pickled class, a TorchScript archive, a truncated or
+// torch.*Storage), plus the numpy scalar a training checkpoint may hold beside its state dict
+// (numpy.core.multiarray.scalar, numpy.dtype, _codecs.encode: read as inert bytes, never
+// called; RIENet's files store {"model", "optimizer", "epoch", "best_result": np.float64}).
+// Anything else (a pickled class, a TorchScript archive, a truncated or
 // corrupt file) is refused with a std::runtime_error naming the file; it never executes code.
 // Objects live in one arena (indices, no owning pointers), so hostile nesting cannot overflow
 // the stack. Also a zip-format writer of a

@@ -38,9 +38,10 @@ std::string DefaultPaperTablesPath() { return DataDir() + "/paper/ogmm_wacv2023_
 
 std::optional<std::string> PaperRowName(const std::string& method) {
     static const std::map<std::string, std::string> kNames = {
-        {"icp", "ICP"},         {"fgr", "FGR"},  {"cpd", "CPD"},
-        {"gmmreg", "GMMReg"},   {"svr", "SVR"},  {"filterreg", "FilterReg"},
-        {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}, {"omnet", "OMNET"}};
+        {"icp", "ICP"},         {"fgr", "FGR"},   {"cpd", "CPD"},
+        {"gmmreg", "GMMReg"},   {"svr", "SVR"},   {"filterreg", "FilterReg"},
+        {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}, {"omnet", "OMNET"},
+        {"rienet", "RIENet"}};
     const auto it = kNames.find(method);
     if (it == kNames.end()) return std::nullopt;
     return it->second;

@@ -27,7 +27,7 @@ TEST(Learned, MissingCheckpointIsRefusedWhenTheMethodIsCreated) {
     // Issue 26: a wrong path used to fail every pair of the run, which then exited 0; it is
     // now refused before any pair runs, naming the path.
     const std::string missing = regbench::testing::TempPath("no_such_ckpt").string();
-    for (const char* name : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp"}) {
+    for (const char* name : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp", "rienet"}) {
         testing::ExpectThrowsWith<std::invalid_argument>(
             [&] {
                 CreateMethod(name, {{"checkpoint", missing}});
@@ -55,6 +55,23 @@ fs::path SaveUntrainedCheckpoint(const std::string& model, std::uint64_t seed) {
     ogmm::SaveCheckpoint(dir.string(), *net,
                          {{"model", model}, {"config", ogmm::NamedConfig(model)}});
     return dir;
+}
+
+// RIENet (issue 42) through the registry: an untrained checkpoint gives a proper rotation,
+// the same twice; the method has no ICP, so the icp_* parameters are refused.
+TEST(Learned, RienetRunsThroughTheRegistryWithoutIcp) {
+    const fs::path dir = SaveUntrainedCheckpoint("rienet", 5);
+    const auto pair = testing::CleanCompletePair(20.0);
+    AlignContext context;
+    auto method = CreateMethod("rienet", {{"checkpoint", dir.string()}});
+    const AlignResult a = method->Align(pair.source, pair.target, context);
+    const AlignResult b = method->Align(pair.source, pair.target, context);
+    ASSERT_EQ(a.status, AlignStatus::kOk) << a.message;
+    EXPECT_TRUE(IsRotation(a.T_target_source.topLeftCorner<3, 3>(), 1e-4));
+    EXPECT_EQ(a.T_target_source, b.T_target_source);
+    EXPECT_THROW(CreateMethod("rienet", {{"checkpoint", dir.string()}, {"icp_max_iterations", 3}}),
+                 std::invalid_argument);
+    fs::remove_all(dir);
 }
 
 TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {

@@ -287,5 +287,89 @@ TEST(TorchSaveReader, ViewsOffsetsAndWrappersReadAsTorchWroteThem) {
     EXPECT_NE(e.find("plain.pickle"), std::string::npos) << e;
 }
 
+// ---- RIENet (issue 42) --------------------------------------------------------------------
+
+/// The fixtures above plus tests/ogmm/rienet_standin.py's `checkpoint`: rienet_authors.pth in
+/// the layout of the authors' published files ({"model", "optimizer", "epoch", "best_result":
+/// np.float64}) with formula weights, and rienet_reference.json, the stand-in's float64
+/// forward with those weights on its two cases.
+class RienetAuthorsCheckpoint : public AuthorsCheckpoint {
+protected:
+    static void SetUpTestSuite() {
+        AuthorsCheckpoint::SetUpTestSuite();
+        if (!missing_.empty() || dir_ == nullptr) return;
+        const auto [out, rc] =
+            Shell(kPython + " " + SourceDir() + "/tests/ogmm/rienet_standin.py checkpoint " +
+                  dir_->string() + " 2>&1");
+        ASSERT_EQ(rc, 0) << out;
+        std::ifstream in(*dir_ / "rienet_reference.json");
+        rienet_ref_ = new nlohmann::json(nlohmann::json::parse(in));
+    }
+    static void TearDownTestSuite() {
+        AuthorsCheckpoint::TearDownTestSuite();
+        delete rienet_ref_;
+        rienet_ref_ = nullptr;
+    }
+    static ImportOptions FromRienet() {
+        ImportOptions o;
+        o.from = "rienet";
+        return o;
+    }
+    static inline nlohmann::json* rienet_ref_ = nullptr;
+};
+
+// The numpy scalar beside the state dict is read, not refused; the weights import into the
+// authors' ModelNet40 config, and the imported network, run in float64 as the stand-in, gives
+// its rotation and translation within 1e-4 on both cases (N == M and N != M).
+TEST_F(RienetAuthorsCheckpoint, ImportedForwardMatchesTheStandIn) {
+    const fs::path pth = File("rienet_authors.pth");
+    EXPECT_EQ(ReadTorchSaveFile(pth.string()).wrapper, "model");
+    const fs::path ck = File("ck_rienet");
+    const nlohmann::json j = ImportAuthorsCheckpoint(pth.string(), ck.string(), FromRienet());
+    EXPECT_EQ(j.at("config").at("name"), "rienet");
+    EXPECT_EQ(j.at("imported_from").at("wrapper_key"), "model");
+    EXPECT_EQ(j.at("mapping").size(), rienet_ref_->at("tensors").get<size_t>());
+    const auto net = LoadNetFromCheckpoint(ck.string());
+    net->to(torch::kDouble);
+    net->eval();
+    torch::NoGradGuard no_grad;
+    for (const auto& [name, c] : rienet_ref_->at("cases").items()) {
+        SCOPED_TRACE(name);
+        PairBatch batch;
+        batch.source = FromJson(c.at("source"));
+        batch.target = FromJson(c.at("target"));
+        const torch::Tensor T = net->Forward(batch).T;
+        const torch::Tensor want = FromJson(c.at("T"));
+        using torch::indexing::Slice;
+        EXPECT_LT(MaxAbs(T.index({Slice(), Slice(0, 3), Slice(0, 3)}),
+                         want.index({Slice(), Slice(0, 3), Slice(0, 3)})),
+                  1e-4);
+        EXPECT_LT(MaxAbs(T.index({Slice(), Slice(0, 3), 3}), want.index({Slice(), Slice(0, 3), 3})),
+                  1e-4);
+    }
+}
+
+// A DeepGMR checkpoint and truncated copies of the RIENet file are refused, naming the file and
+// the problem, and leave no checkpoint folder behind.
+TEST_F(RienetAuthorsCheckpoint, DeepGmrAndTruncatedFilesAreRefusedByName) {
+    const auto refused = [&](const fs::path& f) {
+        const std::string e = ErrorOf(
+            [&] { ImportAuthorsCheckpoint(f.string(), File("refused").string(), FromRienet()); });
+        EXPECT_FALSE(fs::exists(File("refused"))) << f;
+        EXPECT_NE(e.find(f.string()), std::string::npos) << e;
+        return e;
+    };
+    const std::string deepgmr = refused(File("deepgmr_xyz_zip.pth"));
+    EXPECT_NE(deepgmr.find("has no tensor emb_nn.model.conv5.weight: not a RIENet state dict"),
+              std::string::npos)
+        << deepgmr;
+    const std::string bytes = testing::ReadBytes(File("rienet_authors.pth"));
+    for (const size_t cut : {size_t{1}, size_t{300}, bytes.size() / 2, bytes.size() - 9}) {
+        const fs::path t = File("cut_rienet.pth");
+        testing::WriteBytes(t, bytes.substr(0, cut));
+        refused(t);
+    }
+}
+
 }  // namespace
 }  // namespace regbench::ogmm

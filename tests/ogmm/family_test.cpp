@@ -20,8 +20,10 @@ namespace {
 TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FindFamily("ogmm").arch, "ogmm");
     EXPECT_EQ(FindFamily("deepgmr").arch, "deepgmr");
+    EXPECT_EQ(FindFamily("rienet").arch, "rienet");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FindFamily("rgm"); }, "'rgm'",
-                                                     "ogmm, deepgmr");
+                                                     "ogmm, deepgmr, rienet");
+    EXPECT_EQ(FamilyOfModel("rienet").arch, "rienet");
     EXPECT_EQ(FamilyOfModel("deepgmr-orig-xyz").arch, "deepgmr");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FamilyOfModel("ogmm-huge"); },
                                                      "unknown model 'ogmm-huge'", "ogmm-tiny");
@@ -30,7 +32,7 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FamilyOfConfig(nlohmann::json{{"arch", "deepgmr"}}).arch, "deepgmr");
     EXPECT_THROW(FamilyOfConfig(nlohmann::json{{"arch", 3}}), std::invalid_argument);
     EXPECT_THROW(FamilyOfConfig(nlohmann::json::array()), std::invalid_argument);
-    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr", "omnet"}));
+    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr", "omnet", "rienet"}));
 }
 
 TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
@@ -46,7 +48,7 @@ TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
     copy.methods.clear();
     copy.build = nullptr;
     testing::ExpectThrowsWith<std::invalid_argument>([&] { RegisterFamily(copy); }, "required");
-    EXPECT_EQ(Families().size(), 3u);
+    EXPECT_EQ(Families().size(), 4u);
 }
 
 // Every family documents exactly its config keys: each key of each model's config (but arch,
@@ -103,7 +105,11 @@ TEST(Family, AbsurdSizesAreRefusedBeforeAnythingIsBuilt) {
              {"deepgmr-small", "clusters", 1e9},
              {"deepgmr-orig", "d_model", 1e6},
              {"deepgmr-orig", "d_model", 1e12},
-             {"deepgmr-orig", "rri_k", 1e5}}) {
+             {"deepgmr-orig", "rri_k", 1e5},
+             {"rienet", "k", 1},
+             {"rienet", "k", 5000},
+             {"rienet", "emb_dims", 1e6},
+             {"rienet", "keypoints", 1e9}}) {
         nlohmann::json c = NamedConfig(model);
         c.erase("train");
         c[key] = value;

@@ -34,6 +34,12 @@ Not a dependency of the product; run by hand with Debian's python3-torch:
       computes the losses, as regbench's does.
   rienet_standin.py save FILE
       torch.save of the formula-filled state dict (zip format), for regbench's reader.
+  rienet_standin.py checkpoint DIR
+      DIR/rienet_authors.pth in the layout of the authors' published files ({"model": state
+      dict, "optimizer": Adam's state dict after one step, "epoch": int, "best_result": a numpy
+      float64}), with formula weights, and DIR/rienet_reference.json: the cases' clouds and the
+      stand-in's float64 transforms with those (float32-stored) weights, for
+      tests/ogmm/authors_checkpoint_test.cpp.
 """
 import json
 import os
@@ -295,6 +301,27 @@ def authors(path):
             (T[:, :3, :3] - r).abs().max(), (T[:, :3, 3] - t).abs().max()))
 
 
+def checkpoint(out):
+    import numpy as np
+    os.makedirs(out, exist_ok=True)
+    net = make_net(CONFIG, torch.float32).train()
+    optimizer = torch.optim.Adam(net.parameters(), lr=1e-3)
+    sum(p.square().sum() for p in net.parameters()).backward()
+    optimizer.step()  # so the optimizer state holds tensors, as the authors' files do
+    formula_fill(net)  # the weights the reference uses; Adam's state stays
+    net.eval()
+    torch.save({"model": net.state_dict(), "optimizer": optimizer.state_dict(), "epoch": 41,
+                "best_result": np.float64(0.0123)}, os.path.join(out, "rienet_authors.pth"))
+    net64 = make_net(CONFIG, torch.float32).double()  # float32-stored weights, run in float64
+    ref = {"tensors": len(net.state_dict()), "cases": {}}
+    for name, src, tgt in cases():
+        with torch.no_grad():
+            T, _ = run(net64, src, tgt, CONFIG)
+        ref["cases"][name] = {"source": src.tolist(), "target": tgt.tolist(), "T": T.tolist()}
+    with open(os.path.join(out, "rienet_reference.json"), "w") as f:
+        json.dump(ref, f)
+
+
 if __name__ == "__main__":
     if len(sys.argv) == 2 and sys.argv[1] == "expected":
         expected()
@@ -304,5 +331,7 @@ if __name__ == "__main__":
         time_authors(sys.argv[2], int(sys.argv[3]) if len(sys.argv) == 4 else 717)
     elif len(sys.argv) == 3 and sys.argv[1] == "save":
         torch.save(make_net(CONFIG, torch.float32).state_dict(), sys.argv[2])
+    elif len(sys.argv) == 3 and sys.argv[1] == "checkpoint":
+        checkpoint(sys.argv[2])
     else:
         sys.exit(__doc__)
