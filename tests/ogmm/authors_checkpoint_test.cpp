@@ -18,6 +18,7 @@
 #include "ogmm/net.hpp"
 #include "ogmm/torch_save_reader.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/shell.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -30,34 +31,23 @@ std::string SourceDir() {
     return env != nullptr ? env : ".";
 }
 
-/// Runs a shell command, returns its stdout and exit status.
-std::pair<std::string, int> Shell(const std::string& command) {
-    std::string out;
-    FILE* p = ::popen(command.c_str(), "r");
-    if (p == nullptr) return {"", -1};
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-    const int status = ::pclose(p);
-    return {out, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-}
-
 const std::string kPython = "/usr/bin/python3";
 
 class AuthorsCheckpoint : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
         torch::set_num_threads(1);
-        if (Shell(kPython + " -c 'import torch' 2>/dev/null").second != 0) {
+        if (regbench::testing::RunShell(kPython + " -c 'import torch' 2>/dev/null").exit_code !=
+            0) {
             missing_ = kPython +
                        " cannot import torch (scripts/install_deps.sh installs "
                        "python3-torch); the parity fixtures are written by it";
             return;
         }
         dir_ = new fs::path(testing::FreshTempDir("authors_ckpt"));
-        const auto [out, rc] =
-            Shell(kPython + " " + SourceDir() + "/tests/ogmm/authors_parity.py make " +
-                  dir_->string() + " 2>&1");
+        const auto [rc, out] = regbench::testing::RunShell(kPython + " " + SourceDir() +
+                                                           "/tests/ogmm/authors_parity.py make " +
+                                                           dir_->string() + " 2>&1");
         ASSERT_EQ(rc, 0) << out;
         std::ifstream in(*dir_ / "reference.json");
         ref_ = new nlohmann::json(nlohmann::json::parse(in));
@@ -151,7 +141,7 @@ TEST_P(AuthorsParity, ImportedForwardMatchesPyTorch) {
                                  : ComputeGmmParams(out.aux.at("gamma_source"), batch.source).mu[0];
     EXPECT_LT(MaxAbs(mu, FromJson(r.at("mu"))), 1e-5);
     // The checks above must see a non-degenerate assignment.
-    EXPECT_GT(gamma.max().item<double>(), 1.5 / gamma.size(1));
+    EXPECT_GT(gamma.max().item<double>(), 1.5 / static_cast<double>(gamma.size(1)));
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -172,9 +162,9 @@ TEST_F(AuthorsCheckpoint, RoundTripIsBitIdenticalAndLoadsStrictly) {
             const fs::path back = File("rt_" + name + "_" + format + ".pth");
             testing::WriteBytes(back,
                                 WriteTorchSaveZip(ExportAuthorsStateDict(ck.string(), o.from)));
-            const auto [out, rc] =
-                Shell(kPython + " " + SourceDir() + "/tests/ogmm/authors_parity.py compare " +
-                      pth.string() + " " + back.string() + " " + o.from + " 2>&1");
+            const auto [rc, out] = regbench::testing::RunShell(
+                kPython + " " + SourceDir() + "/tests/ogmm/authors_parity.py compare " +
+                pth.string() + " " + back.string() + " " + o.from + " 2>&1");
             EXPECT_EQ(rc, 0) << name << " " << format << ": " << out;
             EXPECT_NE(out.find("identical"), std::string::npos) << out;
         }
@@ -298,9 +288,9 @@ protected:
     static void SetUpTestSuite() {
         AuthorsCheckpoint::SetUpTestSuite();
         if (!missing_.empty() || dir_ == nullptr) return;
-        const auto [out, rc] =
-            Shell(kPython + " " + SourceDir() + "/tests/ogmm/rienet_standin.py checkpoint " +
-                  dir_->string() + " 2>&1");
+        const auto [rc, out] = regbench::testing::RunShell(
+            kPython + " " + SourceDir() + "/tests/ogmm/rienet_standin.py checkpoint " +
+            dir_->string() + " 2>&1");
         ASSERT_EQ(rc, 0) << out;
         std::ifstream in(*dir_ / "rienet_reference.json");
         rienet_ref_ = new nlohmann::json(nlohmann::json::parse(in));

@@ -21,8 +21,9 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FindFamily("ogmm").arch, "ogmm");
     EXPECT_EQ(FindFamily("deepgmr").arch, "deepgmr");
     EXPECT_EQ(FindFamily("rienet").arch, "rienet");
+    EXPECT_EQ(FindFamily("omnet").arch, "omnet");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FindFamily("rgm"); }, "'rgm'",
-                                                     "ogmm, deepgmr, rienet");
+                                                     "ogmm, deepgmr, omnet, rienet");
     EXPECT_EQ(FamilyOfModel("rienet").arch, "rienet");
     EXPECT_EQ(FamilyOfModel("deepgmr-orig-xyz").arch, "deepgmr");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FamilyOfModel("ogmm-huge"); },

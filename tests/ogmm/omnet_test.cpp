@@ -16,6 +16,7 @@
 #include "ogmm/layers.hpp"
 #include "tests/ogmm/formula_fixture.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/shell.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -319,18 +320,6 @@ TEST_F(OmnetTest, StateDictOfAnotherShapeIsRefusedNamingTheKey) {
 
 // ---- the authors' checkpoint file ----------------------------------------------------------
 
-/// Runs a shell command; its stdout and exit status.
-std::pair<std::string, int> Shell(const std::string& command) {
-    std::string out;
-    FILE* p = ::popen(command.c_str(), "r");
-    if (p == nullptr) return {"", -1};
-    char buf[4096];
-    size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-    const int status = ::pclose(p);
-    return {out, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
-}
-
 TEST_F(OmnetTest, TheAuthorsCheckpointLayoutImportsAndRefusesOthersByName) {
     // Written at test time by Debian's python3-torch: `omnet_standin.py save FILE 8`, the
     // authors' checkpoint dict (state_dict under DataParallel's "module." prefix, Adam and
@@ -340,8 +329,9 @@ TEST_F(OmnetTest, TheAuthorsCheckpointLayoutImportsAndRefusesOthersByName) {
     const std::string source = env != nullptr ? env : ".";
     const std::filesystem::path dir = regbench::testing::FreshTempDir("omnet_ckpt");
     const std::filesystem::path pth = dir / "model_best.pth";
-    const auto [out, rc] = Shell("/usr/bin/python3 " + source +
-                                 "/tests/ogmm/omnet_standin.py save " + pth.string() + " 8 2>&1");
+    const auto [rc, out] = regbench::testing::RunShell("/usr/bin/python3 " + source +
+                                                       "/tests/ogmm/omnet_standin.py save " +
+                                                       pth.string() + " 8 2>&1");
     ASSERT_EQ(rc, 0) << out;
     ImportOptions options;
     options.from = "omnet";
