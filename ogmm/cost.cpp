@@ -31,7 +31,18 @@ ForwardCost ComputeForwardCost(const nlohmann::json& config, std::int64_t source
                                     std::to_string(source_points) + " and " +
                                     std::to_string(target_points));
     }
-    return FamilyOfConfig(config).forward_cost(config, source_points, target_points);
+    // A zoo config carries its training recipe under "train": not a network key, no cost.
+    nlohmann::json net = config;
+    if (net.is_object()) net.erase("train");
+    return FamilyOfConfig(net).forward_cost(net, source_points, target_points);
+}
+
+ForwardCost CostOfParts(const std::map<std::string, std::int64_t>& parts) {
+    ForwardCost cost;
+    for (const auto& [part, macs] : parts) {
+        if (part != "total") AddMacs(cost, part, macs);
+    }
+    return cost;
 }
 
 }  // namespace regbench::ogmm

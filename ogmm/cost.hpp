@@ -31,6 +31,8 @@ ForwardCost ComputeForwardCost(const nlohmann::json& config, std::int64_t source
 std::int64_t CostKey(const nlohmann::json& config, const char* key);
 /// Adds `macs` to `cost.parts[part]` and to the total.
 void AddMacs(ForwardCost& cost, const std::string& part, std::int64_t macs);
+/// A ForwardCost from MACs by part (a "total" entry, if any, is recomputed, not added).
+ForwardCost CostOfParts(const std::map<std::string, std::int64_t>& parts);
 /// Static DGCNN on n points with k neighbours and output width d: edge convs 6->64->64->128->256
 /// on n k edges, the 512 -> d conv per point, and the kNN Gram matrix (3 n^2).
 std::int64_t DgcnnMacs(std::int64_t n, std::int64_t k, std::int64_t d);

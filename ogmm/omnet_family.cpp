@@ -61,11 +61,7 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file, const I
 }
 
 ForwardCost Cost(const nlohmann::json& c, std::int64_t n, std::int64_t m) {
-    nlohmann::json net = c;
-    if (net.is_object()) net.erase("train");  // a zoo config's recipe: no cost
-    ForwardCost cost;
-    for (const auto& [part, macs] : OmnetForwardMacs(net, n, m)) AddMacs(cost, part, macs);
-    return cost;
+    return CostOfParts(OmnetForwardMacs(c, n, m));
 }
 
 }  // namespace

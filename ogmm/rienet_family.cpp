@@ -33,22 +33,15 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
     nlohmann::json c = Named("rienet");
     c["emb_dims"] =
         RequireAuthorsTensor(sd, "emb_nn.model.conv5.weight", 4, file, "a RIENet").size(0);
-    c["dim"] = RequireAuthorsTensor(sd, "forwards.weight_function.model1.0.weight", 4, file,
-                                    "a RIENet")
-                   .size(0);
+    c["dim"] =
+        RequireAuthorsTensor(sd, "forwards.weight_function.model1.0.weight", 4, file, "a RIENet")
+            .size(0);
     if (c["emb_dims"] != 256 || c["dim"] != 8) c["name"] = "rienet-authors";
     return c;
 }
 
-/// RienetForwardMacs on a zoo config (its "train" recipe is not a network key).
 ForwardCost Cost(const nlohmann::json& c, std::int64_t n, std::int64_t m) {
-    nlohmann::json net = c;
-    if (net.is_object()) net.erase("train");
-    ForwardCost cost;
-    for (const auto& [part, macs] : RienetForwardMacs(net, n, m)) {
-        if (part != "total") AddMacs(cost, part, macs);
-    }
-    return cost;
+    return CostOfParts(RienetForwardMacs(c, n, m));
 }
 
 }  // namespace
