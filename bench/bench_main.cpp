@@ -2,10 +2,12 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <string>
 #include <thread>
 
+#include "core/memory_policy.hpp"
 #include "core/version.hpp"
 
 namespace {
@@ -20,6 +22,12 @@ std::string CpuModel() {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // As `regbench` runs: freed memory kept for reuse (core/memory_policy.hpp); REGBENCH_MALLOC=
+    // default keeps glibc's (for A/B runs).
+    const char* malloc_mode = std::getenv("REGBENCH_MALLOC");
+    if (malloc_mode == nullptr || std::string(malloc_mode) != "default") {
+        regbench::RetainFreedMemory();
+    }
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::AddCustomContext("cpu_model", CpuModel());

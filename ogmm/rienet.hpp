@@ -86,12 +86,14 @@ TORCH_MODULE(InlierDiscriminator);
 class RienetNet : public RegistrationNet {
 public:
     explicit RienetNet(const RienetConfig& config);
-    /// aux (scalars, summed over the iterations as the authors' forward returns them):
-    /// "global_alignment" (Huber chamfer), "consensus" (neighbourhood consensus),
-    /// "spatial_consistency". Throws std::invalid_argument on clouds of other shapes or with
-    /// fewer points than k or k_nc.
+    /// T, and in aux what the loss needs per iteration i (moved_i, corr_i, pseudo_local_i,
+    /// weight_i, neighbours_i, matching_i). The authors' forward also computes the loss terms;
+    /// here Loss does, so inference skips them. Throws std::invalid_argument on clouds of other
+    /// shapes or with fewer points than k or k_nc.
     NetOutput Forward(const PairBatch& batch) override;
-    /// "total" = the sum of the three terms (the authors' training loss); needs no ground truth.
+    /// "global_alignment" (Huber chamfer), "consensus" (neighbourhood consensus),
+    /// "spatial_consistency" (each summed over the iterations, as the authors' forward returns
+    /// them) and "total", their sum (the authors' training loss); needs no ground truth.
     LossTerms Loss(const PairBatch& batch, const NetOutput& output) override;
     nlohmann::json Config() const override { return ToJson(config_); }
 
@@ -110,8 +112,8 @@ void LoadRienetStateDict(RienetNet& net, const StateDict& tensors, const std::st
 /// (config: a RienetConfig in JSON). Counted like ogmm/cost.hpp: every convolution and matrix
 /// product; element-wise work, softmax, the consensus sums and kd-tree searches are not.
 /// "dgcnn" (the source every iteration, the target once: eval mode), "matching" (feature
-/// distances and the pseudo correspondences), "discriminator", "svd" (the weighted covariance),
-/// "loss" (the chamfer distances and keypoint transforms the forward also computes).
+/// distances and the pseudo correspondences), "discriminator", "svd" (the weighted covariance).
+/// The loss terms are not part of a forward (RienetNet::Loss computes them).
 std::map<std::string, int64_t> RienetForwardMacs(const nlohmann::json& config, int64_t n,
                                                  int64_t m);
 

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include "core/memory_policy.hpp"
 #include "ogmm/train_batch.hpp"
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -421,7 +422,7 @@ Trainer::Trainer(const nlohmann::json& config, const TrainData& data, const Trai
     if (!data.train_pair) throw std::invalid_argument("Train: no training data source");
     if (options.out_dir.empty()) throw std::invalid_argument("Train: no output directory");
     torch::set_num_threads(std::max(1, options.threads));
-    RetainFreedMemoryForTraining();
+    RetainFreedMemory();
     torch::manual_seed(options.seed);  // deterministic initial weights
     net_ = MakeNetFromConfig(config);
     net_->to(device_);
@@ -711,13 +712,6 @@ double MultistepLearningRate(const TrainConfig& c, std::int64_t step, std::int64
         if (progress >= (f < 1.0 ? 1.0 - (1.0 - m) * f : m)) lr *= c.lr_gamma;
     }
     return lr;
-}
-
-void RetainFreedMemoryForTraining() {
-#if defined(__GLIBC__)
-    mallopt(M_MMAP_MAX, 0);         // large blocks from the heap, where freed ones are reused
-    mallopt(M_TRIM_THRESHOLD, -1);  // and the heap's top is never given back (mallopt(3))
-#endif
 }
 
 TrainSummary Train(const nlohmann::json& config, const TrainData& data,

@@ -128,14 +128,5 @@ struct TrainSummary {
 TrainSummary Train(const nlohmann::json& config, const TrainData& data,
                    const TrainOptions& options);
 
-/// Makes the process keep the memory it frees for its next allocations (glibc: no mmap for
-/// large blocks, no trimming of the heap); Train() calls it. A training step allocates and
-/// frees the same sizes every step, many of them the 30-120 MB edge maps of the DGCNN (batch 8,
-/// 717 points, k 20), above glibc's largest mmap threshold (32 MB): by default each came from
-/// a fresh mmap and every 4 KiB page of it was a page fault with the kernel zeroing it (210,000
-/// to 590,000 faults a step; on the shared 2-vCPU VM that was 60-80% of a step's CPU time,
-/// docs/performance.md, section 6). The cost: the process's heap stays at its peak. No effect
-/// without glibc.
-void RetainFreedMemoryForTraining();
 
 }  // namespace regbench::ogmm

@@ -2,7 +2,7 @@
 // BM_OgmmForward / BM_DeepGmrForward: one batch-1 forward (no gradient, eval mode) per
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
 // BM_RienetForward: RIENet (ogmm/rienet.hpp, the authors' ModelNet40 config), the same way; its
-// MACs from RienetForwardMacs (not yet in ogmm/cost.hpp). BM_OmnetForward: OMNet
+// MACs from RienetForwardMacs. BM_OmnetForward: OMNet
 // (ogmm/omnet.hpp) at the authors' widths and omnet-small's.
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
 // backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "core/cpu_time.hpp"
+#include "core/memory_policy.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/net.hpp"
 #include "ogmm/train.hpp"
@@ -107,12 +108,11 @@ int main(int argc, char** argv) {
         return 2;
     }
     torch::set_num_threads(1);
-    // A training step runs with the allocator setting `regbench train` uses; REGBENCH_MALLOC=
+    // Forward and training step run with the allocator setting `regbench` uses; REGBENCH_MALLOC=
     // default keeps glibc's (for A/B runs).
     const char* malloc_mode = std::getenv("REGBENCH_MALLOC");
-    const bool retain =
-        mode == "train" && !(malloc_mode != nullptr && std::string(malloc_mode) == "default");
-    if (retain) regbench::ogmm::RetainFreedMemoryForTraining();
+    const bool retain = !(malloc_mode != nullptr && std::string(malloc_mode) == "default");
+    if (retain) regbench::RetainFreedMemory();
     torch::manual_seed(0);
     const nlohmann::json config = regbench::ogmm::NamedConfig(name);
     const auto net = regbench::ogmm::MakeNetFromConfig(config);
@@ -171,7 +171,7 @@ int main(int argc, char** argv) {
         std::printf("%s %s: %lld points, batch %lld, 1 thread, %d repetitions%s\n", name.c_str(),
                     full_mode.c_str(), static_cast<long long>(points),
                     static_cast<long long>(batch), repetitions,
-                    retain ? ", freed memory retained (as regbench train)" : "");
+                    retain ? ", freed memory retained (as regbench)" : "");
         std::printf(
             "cpu_s %.4f  GMAC %.3f  GMAC_per_s %.2f  floor_s %.4f  ratio %.3f  "
             "pairs_per_cpu_s %.3f  minflt %.0f\n",
