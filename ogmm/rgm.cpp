@@ -347,11 +347,13 @@ torch::Tensor AssignInliers(const torch::Tensor& s, double threshold) {
     return perm;
 }
 
-torch::Tensor RgmNet::Direction(const torch::Tensor& source, const torch::Tensor& target) {
+torch::Tensor RgmNet::Direction(const torch::Tensor& source, const torch::Tensor& target,
+                                torch::Tensor* first) {
     torch::Tensor moved = source;
     torch::Tensor perm;
     for (int it = 0; it < config_.estimate_iterations; ++it) {
         const torch::Tensor s = Match(moved, target);
+        if (it == 0 && first != nullptr) *first = s;
         std::vector<torch::Tensor> perms;
         for (int64_t b = 0; b < s.size(0); ++b) {
             perms.push_back(AssignInliers(s[b], config_.inlier_threshold));
@@ -382,11 +384,13 @@ NetOutput RgmNet::Forward(const PairBatch& batch) {
         return out;
     }
     torch::NoGradGuard no_grad;
-    torch::Tensor perm = Direction(src, tgt);
+    torch::Tensor first;
+    torch::Tensor perm = Direction(src, tgt, &first);
     if (config_.cycle) perm = perm * Direction(tgt, src).transpose(1, 2);
     const torch::Tensor w = perm.sum(2);
     out.T = IdentityWhereFew(WeightedRigid(src, torch::bmm(perm, tgt), w), w.sum(1));
     out.aux["correspondence"] = perm;
+    out.aux["s"] = first;
     return out;
 }
 
@@ -435,8 +439,7 @@ torch::Tensor GroundTruthCorrespondence(const torch::Tensor& moved, const torch:
 LossTerms RgmNet::Loss(const PairBatch& batch, const NetOutput& output) {
     if (!batch.T_gt.defined()) throw std::invalid_argument("rgm loss: the batch has no T_gt");
     if (!output.aux.count("s")) {
-        throw std::invalid_argument("rgm loss: the output has no soft correspondence (training "
-                                    "mode forward)");
+        throw std::invalid_argument("rgm loss: the output has no soft correspondence \"s\"");
     }
     const torch::Tensor& s = output.aux.at("s");
     const torch::Tensor moved = Move(batch.source, batch.T_gt.to(batch.source.dtype())).detach();

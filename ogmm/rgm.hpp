@@ -133,7 +133,7 @@ public:
     /// One match: the soft correspondence S [B, N, M] of the last graph-matching layer.
     torch::Tensor Match(const torch::Tensor& source, const torch::Tensor& target);
     /// Eval mode: the test-time pipeline (header comment); aux "correspondence" [B, N, M] the
-    /// final 0/1 pairs. Training mode: one match, aux "s" [B, N, M], T a soft weighted SVD.
+    /// final 0/1 pairs and "s" the first match's soft correspondence (what Loss scores). Training mode: one match, aux "s" [B, N, M], T a soft weighted SVD.
     /// Throws std::invalid_argument on clouds of other shapes.
     NetOutput Forward(const PairBatch& batch) override;
     /// "perm": the authors' PermLoss, binary cross-entropy of S against the ground-truth
@@ -148,8 +148,10 @@ public:
 private:
     /// DGCNN: points [B, P, 3] -> [node, edge] embeddings [B, P, node + edge].
     torch::Tensor Features(const torch::Tensor& points);
-    /// One direction of the test-time pipeline: the 0/1 correspondence [B, N, M].
-    torch::Tensor Direction(const torch::Tensor& source, const torch::Tensor& target);
+    /// One direction of the test-time pipeline: the 0/1 correspondence [B, N, M]; `first`,
+    /// when given, receives the first round's soft correspondence.
+    torch::Tensor Direction(const torch::Tensor& source, const torch::Tensor& target,
+                            torch::Tensor* first = nullptr);
 
     RgmConfig config_;
     std::vector<torch::nn::Conv2d> convs_;
