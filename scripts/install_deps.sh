@@ -9,7 +9,8 @@
 # sanitizer + libFuzzer stage of the test command (scripts/ci_extra.sh); ccache makes rebuilds
 # (that stage, worktrees, re-runs) cheap.
 # --main installs only what the `regbench` binary and its data need (README command 1,
-# scripts/main_job.sh): about 860 MB fewer to fetch and unpack than the full list.
+# scripts/main_job.sh): about 860 MB fewer to fetch and unpack than the full list. libdlib-dev:
+# dlib's linear assignment (max_cost_assignment) for RGM's test time (ogmm/rgm_assignment.cpp).
 set -euo pipefail
 
 PACKAGES=(
@@ -17,7 +18,7 @@ PACKAGES=(
   libeigen3-dev libnanoflann-dev libhdf5-dev nlohmann-json3-dev libcli11-dev
   libfmt-dev libspdlog-dev
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
-  libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev zlib1g-dev
+  libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev zlib1g-dev libdlib-dev
 )
 if [ "${1:-}" != "--main" ]; then
   PACKAGES+=(

@@ -3,7 +3,10 @@
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
 // BM_RienetForward: RIENet (ogmm/rienet.hpp, the authors' ModelNet40 config), the same way; its
 // MACs from RienetForwardMacs. BM_OmnetForward: OMNet
-// (ogmm/omnet.hpp) at the authors' widths and omnet-small's.
+// (ogmm/omnet.hpp) at the authors' widths and omnet-small's. BM_RgmForward: RGM (ogmm/rgm.hpp)
+// at the authors' widths and rgm-small's, the whole test-time pipeline (four matches, their
+// assignments and SVDs); BM_RgmAssignment: dlib's assignment alone on a points x points matrix
+// (not in the MACs: the part of the pipeline the GEMM floor does not bound).
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
 // backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
 // Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
@@ -23,6 +26,7 @@
 #include "core/cpu_time.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/ogmm_net.hpp"
+#include "ogmm/rgm_assignment.hpp"
 #include "ogmm/rienet.hpp"
 #include "ogmm/zoo.hpp"
 
@@ -152,6 +156,16 @@ void BM_RienetForward(benchmark::State& state) {
     state.counters["parameters"] = static_cast<double>(ogmm::CountParameters(net));
 }
 
+void BM_RgmAssignment(benchmark::State& state) {
+    const int64_t points = state.range(0);
+    torch::manual_seed(0);
+    const torch::Tensor w = torch::rand({points, points}, torch::kDouble).contiguous();
+    const std::vector<double> weights(w.data_ptr<double>(), w.data_ptr<double>() + w.numel());
+    for (auto _ : state) {
+        benchmark::DoNotOptimize(ogmm::MaxWeightAssignment(weights, points, points));
+    }
+}
+
 void BM_OgmmTrainStep(benchmark::State& state, const std::string& name) {
     torch::set_num_threads(static_cast<int>(state.range(1)));
     const nlohmann::json config = OgmmConfig(name, "clustered");
@@ -205,6 +219,12 @@ const bool kRegistered = [] {
                                                BM_ZooForward, std::string(config)));
     }
     Configure(benchmark::RegisterBenchmark("BM_RienetForward/rienet", BM_RienetForward));
+    // RGM: the authors' widths (25.0 M parameters) and rgm-small (width / 8).
+    for (const auto& [label, config] : {std::pair{"rgm", "rgm"}, {"rgm_small", "rgm-small"}}) {
+        Configure(benchmark::RegisterBenchmark(("BM_RgmForward/" + std::string(label)).c_str(),
+                                               BM_ZooForward, std::string(config)));
+    }
+    Configure(benchmark::RegisterBenchmark("BM_RgmAssignment", BM_RgmAssignment));
     Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,
                                            std::string("ogmm-small")));
     Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small", BM_DeepGmrTrainStep,
