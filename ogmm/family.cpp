@@ -11,6 +11,7 @@ NetworkFamily OgmmFamily();     // ogmm/ogmm_family.cpp
 NetworkFamily DeepGmrFamily();  // ogmm/deepgmr_family.cpp
 NetworkFamily OmnetFamily();    // ogmm/omnet_family.cpp
 NetworkFamily RienetFamily();   // ogmm/rienet_family.cpp
+NetworkFamily RegtrFamily();    // ogmm/regtr_family.cpp
 
 namespace {
 
@@ -18,7 +19,7 @@ namespace {
 constexpr char kArchBeforeArchKey[] = "ogmm";
 
 std::vector<NetworkFamily> TreeFamilies() {
-    return {OgmmFamily(), DeepGmrFamily(), OmnetFamily(), RienetFamily()};
+    return {OgmmFamily(), DeepGmrFamily(), OmnetFamily(), RienetFamily(), RegtrFamily()};
 }
 
 std::vector<NetworkFamily>& Registry() {

@@ -22,8 +22,9 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FindFamily("deepgmr").arch, "deepgmr");
     EXPECT_EQ(FindFamily("rienet").arch, "rienet");
     EXPECT_EQ(FindFamily("omnet").arch, "omnet");
+    EXPECT_EQ(FindFamily("regtr").arch, "regtr");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FindFamily("rgm"); }, "'rgm'",
-                                                     "ogmm, deepgmr, omnet, rienet");
+                                                     "ogmm, deepgmr, omnet, rienet, regtr");
     EXPECT_EQ(FamilyOfModel("rienet").arch, "rienet");
     EXPECT_EQ(FamilyOfModel("deepgmr-orig-xyz").arch, "deepgmr");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FamilyOfModel("ogmm-huge"); },
@@ -33,7 +34,7 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FamilyOfConfig(nlohmann::json{{"arch", "deepgmr"}}).arch, "deepgmr");
     EXPECT_THROW(FamilyOfConfig(nlohmann::json{{"arch", 3}}), std::invalid_argument);
     EXPECT_THROW(FamilyOfConfig(nlohmann::json::array()), std::invalid_argument);
-    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr", "omnet", "rienet"}));
+    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr", "omnet", "rienet", "regtr"}));
 }
 
 TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
@@ -49,7 +50,7 @@ TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
     copy.methods.clear();
     copy.build = nullptr;
     testing::ExpectThrowsWith<std::invalid_argument>([&] { RegisterFamily(copy); }, "required");
-    EXPECT_EQ(Families().size(), 4u);
+    EXPECT_EQ(Families().size(), 5u);
 }
 
 // Every family documents exactly its config keys: each key of each model's config (but arch,
