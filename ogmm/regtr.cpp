@@ -67,8 +67,8 @@ torch::Tensor DefaultKernelPoints(double radius) {
 /// Source overlap labels: 1 where T moves a point of src [N, 3] nearer than r to tgt [M, 3].
 torch::Tensor OverlapLabels(const torch::Tensor& src, const torch::Tensor& tgt,
                             const torch::Tensor& T, double r) {
-    const torch::Tensor moved = torch::matmul(src, T.index({Slice(0, 3), Slice(0, 3)}).t()) +
-                                T.index({Slice(0, 3), 3});
+    const torch::Tensor moved =
+        torch::matmul(src, T.index({Slice(0, 3), Slice(0, 3)}).t()) + T.index({Slice(0, 3), 3});
     return (std::get<0>(torch::cdist(moved, tgt).min(1)) < r).to(src.scalar_type());
 }
 
@@ -172,22 +172,31 @@ torch::Tensor RadiusNeighbors(const torch::Tensor& queries, const torch::Tensor&
     PointCloud cloud(ns, 3);
     std::copy(s.data_ptr<double>(), s.data_ptr<double>() + 3 * ns, cloud.data());
     const KdTree tree(cloud);
-    torch::Tensor out = torch::full({nq, limit}, ns, torch::kLong);
-    int64_t* o = out.data_ptr<int64_t>();
+    std::vector<std::vector<int64_t>> rows(static_cast<size_t>(nq));
     const double* qd = q.data_ptr<double>();
     std::vector<std::pair<Eigen::Index, double>> found;
-    std::vector<int64_t> keep;
     const double r2 = radius * radius;
+    int64_t widest = 0;
     for (int64_t i = 0; i < nq; ++i) {
         found.clear();
         tree.Radius(Eigen::Vector3d(qd[3 * i], qd[3 * i + 1], qd[3 * i + 2]), radius, found);
-        keep.clear();
+        auto& keep = rows[static_cast<size_t>(i)];
         for (const auto& [j, sq] : found) {
             if (sq < r2) keep.push_back(j);
         }
         std::sort(keep.begin(), keep.end());
-        const int64_t k = std::min<int64_t>(limit, static_cast<int64_t>(keep.size()));
-        std::copy(keep.begin(), keep.begin() + k, o + i * limit);
+        if (static_cast<int64_t>(keep.size()) > limit) keep.resize(static_cast<size_t>(limit));
+        widest = std::max<int64_t>(widest, static_cast<int64_t>(keep.size()));
+    }
+    // Columns that are shadow in every row contribute nothing (zero influence, zero features,
+    // not counted): drop them, keeping one whenever a row is not full, so a max-pool over a
+    // row that is not full still sees the shadow's zero as the authors' 50 columns do.
+    const int64_t width = std::min(limit, widest + 1);
+    torch::Tensor out = torch::full({nq, width}, ns, torch::kLong);
+    int64_t* o = out.data_ptr<int64_t>();
+    for (int64_t i = 0; i < nq; ++i) {
+        const auto& keep = rows[static_cast<size_t>(i)];
+        std::copy(keep.begin(), keep.end(), o + i * width);
     }
     return out.to(queries.device());
 }
@@ -230,8 +239,8 @@ torch::Tensor RegtrUnaryImpl::forward(const torch::Tensor& x) {
     return relu ? Leaky(y) : y;
 }
 
-RegtrBlockImpl::RegtrBlockImpl(bool simple_, bool strided_, int64_t in, int64_t out,
-                               double radius, double extent)
+RegtrBlockImpl::RegtrBlockImpl(bool simple_, bool strided_, int64_t in, int64_t out, double radius,
+                               double extent)
     : simple(simple_), strided(strided_) {
     if (simple) {
         kpconv = register_module("KPConv", RegtrKpconv(in, out / 2, radius, extent));
@@ -272,9 +281,8 @@ torch::Tensor RegtrAttentionImpl::forward(const torch::Tensor& query, const torc
     const auto proj = [&](const torch::Tensor& x, int64_t i) {
         return F::linear(x, in_proj_weight.narrow(0, i * d, d), in_proj_bias.narrow(0, i * d, d));
     };
-    const torch::Tensor q = (proj(query, 0) / std::sqrt(static_cast<double>(hd)))
-                                .view({L, heads, hd})
-                                .transpose(0, 1);
+    const torch::Tensor q =
+        (proj(query, 0) / std::sqrt(static_cast<double>(hd))).view({L, heads, hd}).transpose(0, 1);
     const torch::Tensor k = proj(key, 1).view({S, heads, hd}).transpose(0, 1);
     const torch::Tensor v = proj(value, 2).view({S, heads, hd}).transpose(0, 1);
     const torch::Tensor a = torch::softmax(torch::bmm(q, k.transpose(1, 2)), -1);
@@ -318,8 +326,7 @@ torch::Tensor RegtrPositionEncoding(const torch::Tensor& xyz, int64_t d) {
     // dim_t computed in float32 like the authors' (torch.arange float32).
     const torch::Tensor i = torch::arange(f, torch::kFloat);
     const torch::Tensor dim_t =
-        torch::pow(10000.0, 2 * torch::div(i, 2, "trunc") / static_cast<double>(f))
-            .to(xyz.dtype());
+        torch::pow(10000.0, 2 * torch::div(i, 2, "trunc") / static_cast<double>(f)).to(xyz.dtype());
     const torch::Tensor div = (xyz * (2 * M_PI)).unsqueeze(-1) / dim_t;  // [P, 3, f]
     const torch::Tensor pe =
         torch::stack({div.index({Slice(), Slice(), Slice(0, torch::indexing::None, 2)}).sin(),
@@ -370,8 +377,8 @@ RegtrNet::RegtrNet(const RegtrConfig& config) : config_(config) {
     for (int i = 0; i < config.num_encoder_layers; ++i) {
         layers_->push_back(RegtrCrossLayer(config.d_embed, config.nhead, config.d_feedforward));
     }
-    final_norm_ = transformer->register_module(
-        "norm", nn::LayerNorm(nn::LayerNormOptions({config.d_embed})));
+    final_norm_ =
+        transformer->register_module("norm", nn::LayerNorm(nn::LayerNormOptions({config.d_embed})));
     auto decoder = register_module("correspondence_decoder", std::make_shared<nn::Module>());
     const int64_t d = config.d_embed;
     coor_mlp_ = decoder->register_module(
@@ -468,8 +475,7 @@ LossTerms RegtrNet::Loss(const PairBatch& batch, const NetOutput& output) {
                                      : OverlapLabels(pt, ps, Tinv, config_.overlap_radius);
         const auto pooled = [&](const torch::Tensor& o, const torch::Tensor& pool) {
             const torch::Tensor valid = (pool < o.size(0)).to(dtype);
-            const torch::Tensor g =
-                GatherShadow(o.unsqueeze(1), pool, 0.0).squeeze(2) * valid;
+            const torch::Tensor g = GatherShadow(o.unsqueeze(1), pool, 0.0).squeeze(2) * valid;
             return torch::clamp(g.sum(1) / valid.sum(1), 0.0, 1.0);
         };
         const torch::Tensor gs = pooled(os, output.aux.at("src_pool" + n));
@@ -485,8 +491,8 @@ LossTerms RegtrNet::Loss(const PairBatch& batch, const NetOutput& output) {
         err_t.push_back((output.aux.at("tgt_corr" + n) - Transform(Tinv, kp_t)).abs().sum(1));
         w_t.push_back(gt);
         feat.push_back(InfoNce(feature_W_, output.aux.at("src_feat" + n),
-                               output.aux.at("tgt_feat" + n), Transform(T, kp_s), kp_t,
-                               config_.r_p, config_.r_n));
+                               output.aux.at("tgt_feat" + n), Transform(T, kp_s), kp_t, config_.r_p,
+                               config_.r_n));
     }
     const auto weighted = [](const std::vector<torch::Tensor>& e,
                              const std::vector<torch::Tensor>& w) {
@@ -494,8 +500,8 @@ LossTerms RegtrNet::Loss(const PairBatch& batch, const NetOutput& output) {
         return (ww * torch::cat(e)).sum() / torch::clamp_min(ww.sum(), kKabschEps);
     };
     LossTerms terms;
-    terms["overlap"] = config_.wt_overlap * F::binary_cross_entropy_with_logits(
-                                                torch::cat(logits), torch::cat(labels));
+    terms["overlap"] = config_.wt_overlap *
+                       F::binary_cross_entropy_with_logits(torch::cat(logits), torch::cat(labels));
     terms["feature"] = config_.wt_feature * torch::stack(feat).mean();
     terms["corr"] = config_.wt_corr * (weighted(err_s, w_s) + weighted(err_t, w_t));
     terms["total"] = terms["overlap"] + terms["feature"] + terms["corr"];
@@ -517,7 +523,9 @@ std::map<std::string, int64_t> RegtrForwardMacs(const nlohmann::json& config, in
     std::map<std::string, int64_t> parts{
         {"kpconv", 0}, {"unary", 0}, {"attention", 0}, {"feedforward", 0}, {"heads", 0}};
     // KPConv on Q queries, C -> O: the influence-weighted sums (K H C) and the kernel (K C O).
-    const auto kp = [&](int64_t q, int64_t ci, int64_t co) { return q * (K * H * ci + K * ci * co); };
+    const auto kp = [&](int64_t q, int64_t ci, int64_t co) {
+        return q * (K * H * ci + K * ci * co);
+    };
     for (const int64_t p : {n, m}) {
         const int64_t v = super(p);
         parts["kpconv"] += kp(p, 1, F0 / 2) + 2 * kp(p, F0 / 4, F0 / 4) + kp(v, F0 / 4, F0 / 4) +

@@ -72,7 +72,9 @@ RegtrConfig RegtrConfigFromJson(const nlohmann::json& j);
 torch::Tensor GridSubsample(const torch::Tensor& points, double dl);
 /// For each query [Q, 3] the indices of the support points [S, 3] strictly nearer than
 /// `radius`, in increasing index order, at most `limit` of them; the rest of the row is S (the
-/// "shadow" point). Returns [Q, limit] int64.
+/// "shadow" point). Returns [Q, W] int64, W = min(limit, most found + 1): the authors' [Q,
+/// limit] less columns that are shadow in every row (exact: they add nothing), one kept while a
+/// row is not full (a max-pool still sees the shadow's zero).
 torch::Tensor RadiusNeighbors(const torch::Tensor& queries, const torch::Tensor& supports,
                               double radius, int64_t limit);
 

@@ -25,7 +25,7 @@ nlohmann::json Named(const std::string& name) {
     c.name = name;
     nlohmann::json train;
     if (name == "regtr") {
-        train = {{"lr", 1e-4},    {"weight_decay", 1e-4},     {"batch", 4},
+        train = {{"lr", 1e-4},    {"weight_decay", 1e-4},    {"batch", 4},
                  {"epochs", 400}, {"pairs_per_epoch", 4096}, {"schedule", "constant"}};
     } else if (name == "regtr-small") {
         c.first_feats_dim = 64;
@@ -50,11 +50,12 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file, const I
     const torch::Tensor& first =
         RequireAuthorsTensor(sd, "kpf_encoder.encoder_blocks.0.KPConv.weights", 3, file, "a REGTR");
     const torch::Tensor& proj = RequireAuthorsTensor(sd, "feat_proj.weight", 2, file, "a REGTR");
-    const torch::Tensor& ff = RequireAuthorsTensor(
-        sd, "transformer_encoder.layers.0.linear1.weight", 2, file, "a REGTR");
+    const torch::Tensor& ff =
+        RequireAuthorsTensor(sd, "transformer_encoder.layers.0.linear1.weight", 2, file, "a REGTR");
     if (first.size(0) != 15 || first.size(1) != 1) {
-        RefuseAuthorsFile(file, "tensor kpf_encoder.encoder_blocks.0.KPConv.weights is not a "
-                                "15-point KPConv of the 1-wide input feature");
+        RefuseAuthorsFile(file,
+                          "tensor kpf_encoder.encoder_blocks.0.KPConv.weights is not a "
+                          "15-point KPConv of the 1-wide input feature");
     }
     std::set<std::string> layers;
     const std::string prefix = "transformer_encoder.layers.";
@@ -94,7 +95,8 @@ NetworkFamily RegtrFamily() {
         {"d_embed", "transformer width (the authors' 256)"},
         {"nhead", "attention heads (the authors' 8); divides d_embed"},
         {"d_feedforward", "transformer feed-forward width (the authors' 1024)"},
-        {"num_encoder_layers", "cross-encoder layers (the authors' 6); the last one's output is used"},
+        {"num_encoder_layers",
+         "cross-encoder layers (the authors' 6); the last one's output is used"},
         {"first_feats_dim",
          "KPConv encoder width: the first block outputs half of it, the last twice it (512)"},
         {"first_subsampling_dl",

@@ -3,7 +3,8 @@
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
 // BM_RienetForward: RIENet (ogmm/rienet.hpp, the authors' ModelNet40 config), the same way; its
 // MACs from RienetForwardMacs (not yet in ogmm/cost.hpp). BM_OmnetForward: OMNet
-// (ogmm/omnet.hpp) at the authors' widths and omnet-small's.
+// (ogmm/omnet.hpp) at the authors' widths and omnet-small's. BM_RegtrForward: REGTR
+// (ogmm/regtr.hpp) with the authors' ModelNet config and regtr-small's.
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
 // backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
 // Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
@@ -205,6 +206,12 @@ const bool kRegistered = [] {
                                                BM_ZooForward, std::string(config)));
     }
     Configure(benchmark::RegisterBenchmark("BM_RienetForward/rienet", BM_RienetForward));
+    // REGTR: the authors' ModelNet model (11.5 M parameters) and the shipped regtr-small.
+    for (const auto& [label, config] :
+         {std::pair{"regtr", "regtr"}, {"regtr_small", "regtr-small"}}) {
+        Configure(benchmark::RegisterBenchmark(("BM_RegtrForward/" + std::string(label)).c_str(),
+                                               BM_ZooForward, std::string(config)));
+    }
     Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,
                                            std::string("ogmm-small")));
     Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small", BM_DeepGmrTrainStep,

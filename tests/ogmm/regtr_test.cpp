@@ -104,16 +104,15 @@ TEST_F(RegtrTest, RadiusNeighboursAreStrictInIndexOrderAndCapped) {
     // Supports on the x axis at 0, 1, 2, 3, 0.5; query at 0, radius 1.5: 0 (0), 1 (1), 4
     // (0.5) are within, 2 and 3 are not; in index order 0, 1, 4; capped at 2: 0, 1. Radius
     // exactly 1 excludes the point at 1 (strict).
-    const torch::Tensor s =
-        torch::tensor({{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {2.0, 0.0, 0.0}, {3.0, 0.0, 0.0},
-                       {0.5, 0.0, 0.0}},
-                      torch::kDouble);
+    const torch::Tensor s = torch::tensor(
+        {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {2.0, 0.0, 0.0}, {3.0, 0.0, 0.0}, {0.5, 0.0, 0.0}},
+        torch::kDouble);
     const torch::Tensor q = torch::zeros({1, 3}, torch::kDouble);
-    EXPECT_TRUE(torch::equal(RadiusNeighbors(q, s, 1.5, 4),
-                             torch::tensor({{0, 1, 4, 5}}, torch::kLong)));
+    EXPECT_TRUE(
+        torch::equal(RadiusNeighbors(q, s, 1.5, 4), torch::tensor({{0, 1, 4, 5}}, torch::kLong)));
     EXPECT_TRUE(torch::equal(RadiusNeighbors(q, s, 1.5, 2), torch::tensor({{0, 1}}, torch::kLong)));
-    EXPECT_TRUE(torch::equal(RadiusNeighbors(q, s, 1.0, 3),
-                             torch::tensor({{0, 4, 5}}, torch::kLong)));
+    EXPECT_TRUE(
+        torch::equal(RadiusNeighbors(q, s, 1.0, 3), torch::tensor({{0, 4, 5}}, torch::kLong)));
 }
 
 TEST_F(RegtrTest, WeightedKabschRecoversAMotionAndIgnoresZeroWeights) {
@@ -141,9 +140,9 @@ TEST_F(RegtrTest, ForwardMatchesTheStandInAndTheImportReadsTheirFile) {
     // through, loaded strictly into a float64 RegtrNet, same clouds; and the import command's
     // path (float32 checkpoint) on the N != M case.
     const std::filesystem::path dir = testing::FreshTempDir("regtr_parity");
-    const auto [rc, out] = testing::RunShell("/usr/bin/python3 " + SourceDir() +
-                                             "/tests/ogmm/regtr_standin.py write " +
-                                             dir.string() + " 2>&1");
+    const auto [rc, out] =
+        testing::RunShell("/usr/bin/python3 " + SourceDir() +
+                          "/tests/ogmm/regtr_standin.py write " + dir.string() + " 2>&1");
     ASSERT_EQ(rc, 0) << out;
     const nlohmann::json cases = nlohmann::json::parse(testing::ReadBytes(dir / "cases.json"));
     for (const auto& [name, c] : cases.items()) {
@@ -175,8 +174,10 @@ TEST_F(RegtrTest, ForwardMatchesTheStandInAndTheImportReadsTheirFile) {
                 .abs()
                 .max()
                 .item<double>();
-        const double trans_err =
-            (o.T[0].index({Slice(0, 3), 3}) - want.index({Slice(0, 3), 3})).abs().max().item<double>();
+        const double trans_err = (o.T[0].index({Slice(0, 3), 3}) - want.index({Slice(0, 3), 3}))
+                                     .abs()
+                                     .max()
+                                     .item<double>();
         EXPECT_LT(rot_err, 1e-4);
         EXPECT_LT(trans_err, 1e-4);
         // A non-trivial pose: the random network's estimate is far from the identity.
@@ -207,8 +208,9 @@ TEST_F(RegtrTest, ForwardMatchesTheStandInAndTheImportReadsTheirFile) {
             [&] { ImportAuthorsCheckpoint(cut.string(), (dir / "no1").string(), options); });
         EXPECT_NE(e1.find(cut.string()), std::string::npos) << e1;
         const std::filesystem::path other = dir / "omnet.pth";
-        testing::WriteBytes(other, WriteTorchSaveZip({{"encoder.0.conv_block1.0.weight",
-                                                       torch::zeros({64, 3, 1})}}));
+        testing::WriteBytes(
+            other,
+            WriteTorchSaveZip({{"encoder.0.conv_block1.0.weight", torch::zeros({64, 3, 1})}}));
         const std::string e2 = testing::ErrorOf(
             [&] { ImportAuthorsCheckpoint(other.string(), (dir / "no2").string(), options); });
         EXPECT_NE(e2.find(other.string() + ": has no tensor "
