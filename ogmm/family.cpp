@@ -12,6 +12,7 @@ NetworkFamily DeepGmrFamily();  // ogmm/deepgmr_family.cpp
 NetworkFamily OmnetFamily();    // ogmm/omnet_family.cpp
 NetworkFamily RienetFamily();   // ogmm/rienet_family.cpp
 NetworkFamily RgmFamily();      // ogmm/rgm_family.cpp
+NetworkFamily RegtrFamily();    // ogmm/regtr_family.cpp
 
 namespace {
 
@@ -19,7 +20,8 @@ namespace {
 constexpr char kArchBeforeArchKey[] = "ogmm";
 
 std::vector<NetworkFamily> TreeFamilies() {
-    return {OgmmFamily(), DeepGmrFamily(), OmnetFamily(), RienetFamily(), RgmFamily()};
+    return {OgmmFamily(), DeepGmrFamily(), OmnetFamily(), RienetFamily(), RgmFamily(),
+            RegtrFamily()};
 }
 
 std::vector<NetworkFamily>& Registry() {

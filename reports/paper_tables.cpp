@@ -41,7 +41,8 @@ std::optional<std::string> PaperRowName(const std::string& method) {
         {"icp", "ICP"},         {"fgr", "FGR"},   {"cpd", "CPD"},
         {"gmmreg", "GMMReg"},   {"svr", "SVR"},   {"filterreg", "FilterReg"},
         {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}, {"omnet", "OMNET"},
-        {"rienet", "RIENet"},   {"rgm", "RGM"}};
+        {"rienet", "RIENet"},   {"rgm", "RGM"},
+        {"regtr", "REGTR"}};
     const auto it = kNames.find(method);
     if (it == kNames.end()) return std::nullopt;
     return it->second;

@@ -7,6 +7,7 @@
 // at the authors' widths and rgm-small's, the whole test-time pipeline (four matches, their
 // assignments and SVDs); BM_RgmAssignment: dlib's assignment alone on a points x points matrix
 // (not in the MACs: the part of the pipeline the GEMM floor does not bound).
+// BM_RegtrForward: REGTR (ogmm/regtr.hpp) with the authors' ModelNet config and regtr-small's.
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
 // backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
 // Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
@@ -225,6 +226,12 @@ const bool kRegistered = [] {
                                                BM_ZooForward, std::string(config)));
     }
     Configure(benchmark::RegisterBenchmark("BM_RgmAssignment", BM_RgmAssignment));
+    // REGTR: the authors' ModelNet model (11.5 M parameters) and the shipped regtr-small.
+    for (const auto& [label, config] :
+         {std::pair{"regtr", "regtr"}, {"regtr_small", "regtr-small"}}) {
+        Configure(benchmark::RegisterBenchmark(("BM_RegtrForward/" + std::string(label)).c_str(),
+                                               BM_ZooForward, std::string(config)));
+    }
     Configure(benchmark::RegisterBenchmark("BM_OgmmTrainStep/ogmm_small", BM_OgmmTrainStep,
                                            std::string("ogmm-small")));
     Configure(benchmark::RegisterBenchmark("BM_DeepGmrTrainStep/deepgmr_small", BM_DeepGmrTrainStep,

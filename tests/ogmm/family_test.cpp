@@ -23,8 +23,9 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FindFamily("rienet").arch, "rienet");
     EXPECT_EQ(FindFamily("omnet").arch, "omnet");
     EXPECT_EQ(FindFamily("rgm").arch, "rgm");
+    EXPECT_EQ(FindFamily("regtr").arch, "regtr");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FindFamily("dcp"); }, "'dcp'",
-                                                     "ogmm, deepgmr, omnet, rienet, rgm");
+                                                     "ogmm, deepgmr, omnet, rienet, rgm, regtr");
     EXPECT_EQ(FamilyOfModel("rienet").arch, "rienet");
     EXPECT_EQ(FamilyOfModel("deepgmr-orig-xyz").arch, "deepgmr");
     testing::ExpectThrowsWith<std::invalid_argument>([] { FamilyOfModel("ogmm-huge"); },
@@ -34,8 +35,8 @@ TEST(Family, LookupsNameWhatIsKnown) {
     EXPECT_EQ(FamilyOfConfig(nlohmann::json{{"arch", "deepgmr"}}).arch, "deepgmr");
     EXPECT_THROW(FamilyOfConfig(nlohmann::json{{"arch", 3}}), std::invalid_argument);
     EXPECT_THROW(FamilyOfConfig(nlohmann::json::array()), std::invalid_argument);
-    EXPECT_EQ(AuthorsFormats(),
-              (std::vector<std::string>{"ogmm", "deepgmr", "omnet", "rienet", "rgm"}));
+    EXPECT_EQ(AuthorsFormats(), (std::vector<std::string>{"ogmm", "deepgmr", "omnet", "rienet",
+                                                          "rgm", "regtr"}));
 }
 
 TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
@@ -51,7 +52,7 @@ TEST(Family, ATakenNameOrAnIncompleteFamilyIsRefused) {
     copy.methods.clear();
     copy.build = nullptr;
     testing::ExpectThrowsWith<std::invalid_argument>([&] { RegisterFamily(copy); }, "required");
-    EXPECT_EQ(Families().size(), 5u);
+    EXPECT_EQ(Families().size(), 6u);
 }
 
 // Every family documents exactly its config keys: each key of each model's config (but arch,
