@@ -509,4 +509,18 @@ Config ParseConfig(const nlohmann::json& j, const std::string& what) {
     return c;
 }
 
+/// ParseConfig of a network family's config: an "arch" key, when present, must be `arch` and
+/// is dropped first (zoo configs and checkpoints name their family); errors name "ARCH config".
+template <class Config>
+Config ParseNetworkConfig(const nlohmann::json& j, const std::string& arch) {
+    nlohmann::json fields = j;
+    if (j.is_object() && j.contains("arch")) {
+        if (j.at("arch") != arch) {
+            throw std::invalid_argument(arch + " config: arch is " + j.at("arch").dump());
+        }
+        fields.erase("arch");
+    }
+    return ParseConfig<Config>(fields, arch + " config");
+}
+
 }  // namespace regbench

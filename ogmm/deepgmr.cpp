@@ -92,14 +92,7 @@ nlohmann::json ToJson(const DeepGmrConfig& c) {
 }
 
 DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
-    nlohmann::json fields = j;
-    if (j.is_object() && j.contains("arch")) {
-        if (j.at("arch") != "deepgmr") {
-            throw std::invalid_argument("deepgmr config: arch is " + j.at("arch").dump());
-        }
-        fields.erase("arch");
-    }
-    const auto c = ParseConfig<DeepGmrConfig>(fields, "deepgmr config");
+    const auto c = ParseNetworkConfig<DeepGmrConfig>(j, "deepgmr");
     if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1 ||
         c.d_model < 1) {
         throw std::invalid_argument(

@@ -99,14 +99,7 @@ nlohmann::json ToJson(const OmnetConfig& c) {
 }
 
 OmnetConfig OmnetConfigFromJson(const nlohmann::json& j) {
-    nlohmann::json fields = j;
-    if (j.is_object() && j.contains("arch")) {
-        if (j.at("arch") != "omnet") {
-            throw std::invalid_argument("omnet config: arch is " + j.at("arch").dump());
-        }
-        fields.erase("arch");
-    }
-    const auto c = ParseConfig<OmnetConfig>(fields, "omnet config");
+    const auto c = ParseNetworkConfig<OmnetConfig>(j, "omnet");
     if (c.iterations < 1 || c.mask_delay < 0 || !(c.overlap_dist > 0) || !(c.quat_weight >= 0) ||
         !(c.trans_weight >= 0)) {
         throw std::invalid_argument(

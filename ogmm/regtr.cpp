@@ -109,14 +109,7 @@ nlohmann::json ToJson(const RegtrConfig& c) {
 }
 
 RegtrConfig RegtrConfigFromJson(const nlohmann::json& j) {
-    nlohmann::json fields = j;
-    if (j.is_object() && j.contains("arch")) {
-        if (j.at("arch") != "regtr") {
-            throw std::invalid_argument("regtr config: arch is " + j.at("arch").dump());
-        }
-        fields.erase("arch");
-    }
-    const auto c = ParseConfig<RegtrConfig>(fields, "regtr config");
+    const auto c = ParseNetworkConfig<RegtrConfig>(j, "regtr");
     const auto bad = [&](const std::string& what) {
         throw std::invalid_argument("regtr config: " + what + ": " + ToJson(c).dump());
     };

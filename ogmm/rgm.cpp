@@ -76,14 +76,7 @@ nlohmann::json ToJson(const RgmConfig& c) {
 }
 
 RgmConfig RgmConfigFromJson(const nlohmann::json& j) {
-    nlohmann::json fields = j;
-    if (j.is_object() && j.contains("arch")) {
-        if (j.at("arch") != "rgm") {
-            throw std::invalid_argument("rgm config: arch is " + j.at("arch").dump());
-        }
-        fields.erase("arch");
-    }
-    const auto c = ParseConfig<RgmConfig>(fields, "rgm config");
+    const auto c = ParseNetworkConfig<RgmConfig>(j, "rgm");
     if (c.width_divisor < 1 || 64 % c.width_divisor != 0) {
         throw std::invalid_argument("rgm config: width_divisor must divide 64 (1, 2, ..., 64), got " +
                                     std::to_string(c.width_divisor));

@@ -147,14 +147,7 @@ nlohmann::json ToJson(const RienetConfig& c) {
 }
 
 RienetConfig RienetConfigFromJson(const nlohmann::json& j) {
-    nlohmann::json fields = j;
-    if (j.is_object() && j.contains("arch")) {
-        if (j.at("arch") != "rienet") {
-            throw std::invalid_argument("rienet config: arch is " + j.at("arch").dump());
-        }
-        fields.erase("arch");
-    }
-    const auto c = ParseConfig<RienetConfig>(fields, "rienet config");
+    const auto c = ParseNetworkConfig<RienetConfig>(j, "rienet");
     if (c.emb_dims < 1 || c.dim < 1 || c.iterations < 1 || c.k < 2 || c.k_nc < 2 ||
         c.keypoints < 1 || !(c.nn_margin >= 0) || !(c.loss_margin > 0)) {
         throw std::invalid_argument(

@@ -11,7 +11,8 @@ out="${1:?usage: scripts/eval_learned.sh OUT [PAIRS] [run arguments]}"
 pairs="${2:-200}"
 shift $(( $# < 2 ? $# : 2 ))
 mkdir -p "$out"
-methods=identity,icp,deepgmr,deepgmr-noicp,ogmm,ogmm-noicp,omnet
+# rgm (seconds a pair: its four-match pipeline) is run separately when needed.
+methods=identity,icp,deepgmr,deepgmr-noicp,ogmm,ogmm-noicp,omnet,rienet,regtr
 for set in partial:independent partial:shared jitter:independent; do
     protocol="${set%%:*}" pairing="${set##*:}"
     name="${protocol}_${pairing}"

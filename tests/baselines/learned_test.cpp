@@ -27,7 +27,8 @@ TEST(Learned, MissingCheckpointIsRefusedWhenTheMethodIsCreated) {
     // Issue 26: a wrong path used to fail every pair of the run, which then exited 0; it is
     // now refused before any pair runs, naming the path.
     const std::string missing = regbench::testing::TempPath("no_such_ckpt").string();
-    for (const char* name : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp", "rienet"}) {
+    for (const char* name :
+         {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp", "rienet", "omnet", "rgm", "regtr"}) {
         testing::ExpectThrowsWith<std::invalid_argument>(
             [&] {
                 CreateMethod(name, {{"checkpoint", missing}});
