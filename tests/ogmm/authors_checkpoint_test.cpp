@@ -17,6 +17,7 @@
 #include "ogmm/gmm_head.hpp"
 #include "ogmm/net.hpp"
 #include "ogmm/torch_save_reader.hpp"
+#include "tests/ogmm/state_fixture.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
 
@@ -71,26 +72,6 @@ protected:
     static inline std::string missing_;
 };
 
-torch::Tensor FromJson(const nlohmann::json& j) {
-    std::vector<double> flat;
-    std::vector<int64_t> shape;
-    const nlohmann::json* level = &j;
-    while (level->is_array()) {
-        shape.push_back(static_cast<int64_t>(level->size()));
-        if (level->empty()) break;
-        level = &(*level)[0];
-    }
-    std::function<void(const nlohmann::json&)> walk = [&](const nlohmann::json& v) {
-        if (v.is_array()) {
-            for (const auto& x : v) walk(x);
-        } else {
-            flat.push_back(v.get<double>());
-        }
-    };
-    walk(j);
-    return torch::tensor(flat, torch::kDouble).view(shape);
-}
-
 double MaxAbs(const torch::Tensor& a, const torch::Tensor& b) {
     return (a.to(torch::kDouble) - b.to(torch::kDouble)).abs().max().item<double>();
 }
@@ -128,18 +109,18 @@ TEST_P(AuthorsParity, ImportedForwardMatchesPyTorch) {
     const auto net = LoadNetFromCheckpoint(ck.string());
     torch::NoGradGuard no_grad;
     PairBatch batch;
-    batch.source = FromJson(Ref().at("source")).to(torch::kFloat).unsqueeze(0);
-    batch.target = FromJson(Ref().at("target")).to(torch::kFloat).unsqueeze(0);
+    batch.source = TensorFromJson(Ref().at("source")).to(torch::kFloat).unsqueeze(0);
+    batch.target = TensorFromJson(Ref().at("target")).to(torch::kFloat).unsqueeze(0);
     torch::manual_seed(Ref().at("ogmm_seed").get<uint64_t>());  // FPS starts, as the script
     const NetOutput out = net->Forward(batch);
-    EXPECT_LT(MaxAbs(out.T[0], FromJson(r.at("T"))), 1e-4);
+    EXPECT_LT(MaxAbs(out.T[0], TensorFromJson(r.at("T"))), 1e-4);
     const torch::Tensor gamma = out.aux.at("gamma_source")[0];
-    EXPECT_LT(MaxAbs(gamma, FromJson(r.at("gamma"))), 1e-5);
-    EXPECT_LT(MaxAbs(out.aux.at("pi_source")[0], FromJson(r.at("pi"))), 1e-5);
+    EXPECT_LT(MaxAbs(gamma, TensorFromJson(r.at("gamma"))), 1e-5);
+    EXPECT_LT(MaxAbs(out.aux.at("pi_source")[0], TensorFromJson(r.at("pi"))), 1e-5);
     const torch::Tensor mu = out.aux.count("mu_source") != 0
                                  ? out.aux.at("mu_source")[0]
                                  : ComputeGmmParams(out.aux.at("gamma_source"), batch.source).mu[0];
-    EXPECT_LT(MaxAbs(mu, FromJson(r.at("mu"))), 1e-5);
+    EXPECT_LT(MaxAbs(mu, TensorFromJson(r.at("mu"))), 1e-5);
     // The checks above must see a non-degenerate assignment.
     EXPECT_GT(gamma.max().item<double>(), 1.5 / static_cast<double>(gamma.size(1)));
 }
@@ -326,10 +307,10 @@ TEST_F(RienetAuthorsCheckpoint, ImportedForwardMatchesTheStandIn) {
     for (const auto& [name, c] : rienet_ref_->at("cases").items()) {
         SCOPED_TRACE(name);
         PairBatch batch;
-        batch.source = FromJson(c.at("source"));
-        batch.target = FromJson(c.at("target"));
+        batch.source = TensorFromJson(c.at("source"));
+        batch.target = TensorFromJson(c.at("target"));
         const torch::Tensor T = net->Forward(batch).T;
-        const torch::Tensor want = FromJson(c.at("T"));
+        const torch::Tensor want = TensorFromJson(c.at("T"));
         using torch::indexing::Slice;
         EXPECT_LT(MaxAbs(T.index({Slice(), Slice(0, 3), Slice(0, 3)}),
                          want.index({Slice(), Slice(0, 3), Slice(0, 3)})),

@@ -15,6 +15,7 @@
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/layers.hpp"
 #include "tests/ogmm/formula_fixture.hpp"
+#include "tests/ogmm/state_fixture.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
 
@@ -36,9 +37,7 @@ TEST_F(OmnetTest, ParameterCountAndKeysAreTheAuthors) {
     // iteration, 53,658,148 in all; their state dict holds 109 tensors per iteration.
     OmnetNet net(OmnetConfig{});
     EXPECT_EQ(CountParameters(net), 53658148);
-    std::map<std::string, std::vector<int64_t>> shapes;
-    for (const auto& p : net.named_parameters()) shapes[p.key()] = p.value().sizes().vec();
-    for (const auto& b : net.named_buffers()) shapes[b.key()] = b.value().sizes().vec();
+    const std::map<std::string, std::vector<int64_t>> shapes = StateShapes(net);
     EXPECT_EQ(shapes.size(), 4u * 109u);
     const std::map<std::string, std::vector<int64_t>> theirs = {
         {"encoder.0.conv_block1.0.weight", {64, 3, 1}},
@@ -58,9 +57,10 @@ TEST_F(OmnetTest, ParameterCountAndKeysAreTheAuthors) {
     OmnetConfig small;
     small.width_divisor = 8;
     OmnetNet eighth(small);
-    for (const auto& p : eighth.named_parameters()) shapes[p.key()] = p.value().sizes().vec();
-    EXPECT_EQ(shapes.at("fusion.1.conv_block1.0.weight"), (std::vector<int64_t>{128, 264, 1}));
-    EXPECT_EQ(shapes.at("regression.0.final_fc.0.weight"), (std::vector<int64_t>{7, 32}));
+    const auto eighth_shapes = StateShapes(eighth);
+    EXPECT_EQ(eighth_shapes.at("fusion.1.conv_block1.0.weight"),
+              (std::vector<int64_t>{128, 264, 1}));
+    EXPECT_EQ(eighth_shapes.at("regression.0.final_fc.0.weight"), (std::vector<int64_t>{7, 32}));
 }
 
 TEST_F(OmnetTest, ConfigRefusesBadValuesByName) {

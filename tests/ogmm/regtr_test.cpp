@@ -13,6 +13,7 @@
 #include "ogmm/authors_checkpoint.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/layers.hpp"
+#include "tests/ogmm/state_fixture.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
 
@@ -47,9 +48,7 @@ TEST_F(RegtrTest, ParameterCountAndKeysAreTheAuthors) {
     // config, random weights, gives about 11.5 M).
     RegtrNet net(RegtrConfig{});
     EXPECT_EQ(CountParameters(net) + 6 * 15 * 3, 11488018);  // kernel points: buffers here
-    std::map<std::string, std::vector<int64_t>> shapes;
-    for (const auto& p : net.named_parameters()) shapes[p.key()] = p.value().sizes().vec();
-    for (const auto& b : net.named_buffers()) shapes[b.key()] = b.value().sizes().vec();
+    const std::map<std::string, std::vector<int64_t>> shapes = StateShapes(net);
     const std::map<std::string, std::vector<int64_t>> theirs = {
         {"kpf_encoder.encoder_blocks.0.KPConv.weights", {15, 1, 256}},
         {"kpf_encoder.encoder_blocks.0.KPConv.kernel_points", {15, 3}},

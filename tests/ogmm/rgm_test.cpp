@@ -16,6 +16,7 @@
 #include "ogmm/family.hpp"
 #include "ogmm/layers.hpp"
 #include "ogmm/rgm_assignment.hpp"
+#include "tests/ogmm/state_fixture.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
 
@@ -36,9 +37,7 @@ TEST_F(RgmTest, ParameterCountAndKeysAreTheAuthors) {
     // 25,000,836 parameters and 138 state-dict tensors at their widths, 396,340 at width / 8.
     RgmNet net(RgmConfig{});
     EXPECT_EQ(CountParameters(net), 25000836);
-    std::map<std::string, std::vector<int64_t>> shapes;
-    for (const auto& p : net.named_parameters()) shapes[p.key()] = p.value().sizes().vec();
-    for (const auto& b : net.named_buffers()) shapes[b.key()] = b.value().sizes().vec();
+    const std::map<std::string, std::vector<int64_t>> shapes = StateShapes(net);
     EXPECT_EQ(shapes.size(), 138u);
     // Shapes by hand from the authors' constructors (models/Net.py with the ModelNet40 yaml).
     const std::map<std::string, std::vector<int64_t>> theirs = {
@@ -127,19 +126,6 @@ TEST_F(RgmTest, WeightedRigidRecoversAMotionExactly) {
 
 // ---- parity with the PyTorch stand-in --------------------------------------------------------
 
-torch::Tensor FromJson(const nlohmann::json& j, std::vector<int64_t> shape) {
-    std::vector<double> flat;
-    const std::function<void(const nlohmann::json&)> walk = [&](const nlohmann::json& v) {
-        if (v.is_array()) {
-            for (const auto& x : v) walk(x);
-        } else {
-            flat.push_back(v.get<double>());
-        }
-    };
-    walk(j);
-    return torch::tensor(flat, torch::kDouble).view(shape);
-}
-
 TEST_F(RgmTest, ImportedStandInMatchesItsForwardPipelineAndLoss) {
     // Written at test time by Debian's python3-torch and python3-scipy (`rgm_standin.py write
     // DIR 8`): the authors' file layout (torch.save of the state dict, zip) at width / 8 with
@@ -171,11 +157,11 @@ TEST_F(RgmTest, ImportedStandInMatchesItsForwardPipelineAndLoss) {
         const int64_t n = static_cast<int64_t>(c.at("source").size());
         const int64_t m = static_cast<int64_t>(c.at("target").size());
         PairBatch pair;
-        pair.source = FromJson(c.at("source"), {1, n, 3});
-        pair.target = FromJson(c.at("target"), {1, m, 3});
-        pair.T_gt = FromJson(c.at("T_gt"), {1, 4, 4});
+        pair.source = TensorFromJson(c.at("source")).view({1, n, 3});
+        pair.target = TensorFromJson(c.at("target")).view({1, m, 3});
+        pair.T_gt = TensorFromJson(c.at("T_gt")).view({1, 4, 4});
         const torch::Tensor s = net->Match(pair.source, pair.target);
-        const torch::Tensor want_s = FromJson(c.at("s"), {1, n, m});
+        const torch::Tensor want_s = TensorFromJson(c.at("s")).view({1, n, m});
         EXPECT_LT((s - want_s).abs().max().item<double>(), 1e-9);
         NetOutput soft;
         soft.aux["s"] = s;
@@ -183,7 +169,7 @@ TEST_F(RgmTest, ImportedStandInMatchesItsForwardPipelineAndLoss) {
                     1e-8);
         const NetOutput result = net->Forward(pair);
         EXPECT_EQ(result.aux.at("correspondence").sum().item<double>(), c.at("pairs").get<double>());
-        const torch::Tensor want_T = FromJson(c.at("T"), {1, 4, 4});
+        const torch::Tensor want_T = TensorFromJson(c.at("T")).view({1, 4, 4});
         // Rotation and translation: the parity bound asked for is 1e-4; they agree to 1e-9.
         EXPECT_LT((result.T - want_T).abs().max().item<double>(), 1e-9)
             << result.T << "\n"

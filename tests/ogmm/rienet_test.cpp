@@ -11,6 +11,7 @@
 
 #include "ogmm/layers.hpp"
 #include "tests/ogmm/formula_fixture.hpp"
+#include "tests/ogmm/state_fixture.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -47,9 +48,7 @@ TEST_F(RienetTest, ParameterCountsMatchTheAuthorsCheckpoints) {
 
 TEST_F(RienetTest, StateDictHasTheAuthorsKeysAndShapes) {
     RienetNet net(RienetConfig{});
-    std::map<std::string, std::vector<int64_t>> shapes;
-    for (const auto& p : net.named_parameters()) shapes[p.key()] = p.value().sizes().vec();
-    for (const auto& b : net.named_buffers()) shapes[b.key()] = b.value().sizes().vec();
+    const std::map<std::string, std::vector<int64_t>> shapes = StateShapes(net);
     // The authors' modelnet checkpoint holds 129 tensors; a sample of their keys and shapes.
     EXPECT_EQ(shapes.size(), 129u);
     const std::map<std::string, std::vector<int64_t>> theirs = {
