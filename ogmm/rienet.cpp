@@ -6,6 +6,7 @@
 
 #include "core/params.hpp"
 #include "ogmm/layers.hpp"
+#include "ogmm/rienet_matching.hpp"
 
 namespace regbench::ogmm {
 
@@ -74,26 +75,72 @@ torch::Tensor FeatureDistance(const torch::Tensor& f, const torch::Tensor& g) {
                         torch::sqrt(torch::where(zero, torch::ones_like(d2), d2)));
 }
 
+/// Sums of the non-self neighbours' rows: out[b, i, :] = sum over l = 1 .. k - 1 of
+/// x[b, idx[b, i, l], :]. embedding_bag (mode sum) adds each bag's rows without materialising
+/// the [N, k - 1, M] gather (index_select + sum was 2.6x slower).
+torch::Tensor NeighbourRowSums(const torch::Tensor& x, const torch::Tensor& idx, int64_t k) {
+    const int64_t batch = x.size(0), rows = x.size(1);
+    const torch::Tensor base = torch::arange(batch, idx.options()).view({-1, 1, 1}) * rows;
+    const torch::Tensor bags = (idx.index({Slice(), Slice(), Slice(1, k)}) + base).reshape(-1);
+    const torch::Tensor offsets = torch::arange(0, bags.size(0), k - 1, idx.options());
+    return std::get<0>(torch::embedding_bag(x.reshape({batch * rows, x.size(2)}), bags, offsets,
+                                            false, /*mode=sum*/ 0))
+        .view({batch, idx.size(1), x.size(2)});
+}
+
 /// Neighbourhood consensus nc[i, j] = sum over the non-self neighbours a of source point i and
 /// l of target point j (the first k - 1 after the point itself) of scores[a, l], / (k - 1).
+/// The column side runs on the transpose.
 torch::Tensor Consensus(const torch::Tensor& scores, const torch::Tensor& idx_s,
                         const torch::Tensor& idx_t, int64_t k) {
-    const int64_t batch = scores.size(0);
-    // Sums of whole rows by index: embedding_bag (mode sum) adds each bag's rows without
-    // materialising the [N, k - 1, M] gather (index_select + sum was 2.6x slower); the column
-    // side runs on the transpose.
-    const auto bag_sums = [batch](const torch::Tensor& x, const torch::Tensor& idx, int64_t k) {
-        const int64_t rows = x.size(1);
-        const torch::Tensor base = torch::arange(batch, idx.options()).view({-1, 1, 1}) * rows;
-        const torch::Tensor bags = (idx.index({Slice(), Slice(), Slice(1, k)}) + base).reshape(-1);
-        const torch::Tensor offsets = torch::arange(0, bags.size(0), k - 1, idx.options());
-        return std::get<0>(torch::embedding_bag(x.reshape({batch * rows, x.size(2)}), bags,
-                                                offsets, false, /*mode=sum*/ 0))
-            .view({batch, idx.size(1), x.size(2)});
-    };
-    const torch::Tensor rows = bag_sums(scores, idx_s, k);                        // [B, N, M]
-    const torch::Tensor cols = bag_sums(rows.transpose(1, 2).contiguous(), idx_t, k);  // [B, M, N]
+    const torch::Tensor rows = NeighbourRowSums(scores, idx_s, k);                   // [B, N, M]
+    const torch::Tensor cols = NeighbourRowSums(rows.transpose(1, 2).contiguous(), idx_t, k);
     return cols.div_(static_cast<double>(k - 1)).transpose(1, 2).contiguous();
+}
+
+/// The refined matching map softmax_j(-exp(margin - nc) d) from the feature distances d
+/// [B, N, M]: with autograd the LibTorch composition; without, the fused row kernel
+/// (ogmm/rienet_matching.hpp) over d's own storage, which it overwrites.
+torch::Tensor RefinedMatching(torch::Tensor distance, const torch::Tensor& idx_s,
+                              const torch::Tensor& idx_t, int64_t k_nc, double margin) {
+    if (torch::GradMode::is_enabled()) {
+        const torch::Tensor nc = Consensus(torch::softmax(-distance, 2), idx_s, idx_t, k_nc);
+        return torch::softmax(-torch::exp(margin - nc) * distance, 2);
+    }
+    distance = distance.contiguous();
+    const int64_t batch = distance.size(0), n = distance.size(1), m = distance.size(2);
+    // Runs `kernel(item, first row, rows)` over the batch's rows, split across LibTorch's threads.
+    const auto over_rows = [batch, n](const auto& kernel) {
+        at::parallel_for(0, batch * n, 64, [&](int64_t begin, int64_t end) {
+            while (begin < end) {  // row runs within one batch item
+                const int64_t row = begin % n, count = std::min(end - begin, n - row);
+                kernel(begin / n, begin, count);
+                begin += count;
+            }
+        });
+    };
+    torch::Tensor scores = torch::empty_like(distance);
+    AT_DISPATCH_FLOATING_TYPES(distance.scalar_type(), "rienet_scores", [&] {
+        const scalar_t* d = distance.data_ptr<scalar_t>();
+        scalar_t* s = scores.data_ptr<scalar_t>();
+        over_rows([&](int64_t, int64_t first, int64_t count) {
+            MatchingScoreRows(d + first * m, s + first * m, count, m);
+        });
+    });
+    const torch::Tensor rows = NeighbourRowSums(scores, idx_s, k_nc).contiguous();
+    scores = torch::Tensor();  // its memory is free for the next allocation
+    const torch::Tensor cols = idx_t.contiguous();
+    const int64_t stride = cols.size(2);
+    AT_DISPATCH_FLOATING_TYPES(distance.scalar_type(), "rienet_refine", [&] {
+        scalar_t* d = distance.data_ptr<scalar_t>();
+        const scalar_t* r = rows.data_ptr<scalar_t>();
+        const int64_t* c = cols.data_ptr<int64_t>();
+        over_rows([&](int64_t item, int64_t first, int64_t count) {
+            RefineMatchingRows(d + first * m, r + first * m, c + item * m * stride, count, m,
+                               stride, k_nc, margin);
+        });
+    });
+    return distance;
 }
 
 /// Weighted Kabsch: rows src, dst [B, N, 3], weights w [B, N] -> {R [B, 3, 3], t [B, 3]} with
@@ -260,13 +307,8 @@ NetOutput RienetNet::Forward(const PairBatch& batch) {
         }
         // Matching map refinement: point-wise map, neighbourhood consensus, refined map.
         const torch::Tensor distance = FeatureDistance(source_features, target_features);
-        torch::Tensor nc = Consensus(torch::softmax(-distance, 2), idx_s, idx_t, k_nc);
-        // Refined logits -exp(margin - nc) d; without autograd in place, the same values.
-        const torch::Tensor logits =
-            torch::GradMode::is_enabled()
-                ? -torch::exp(config_.nn_margin - nc) * distance
-                : nc.neg_().add_(config_.nn_margin).exp_().mul_(distance).neg_();
-        const torch::Tensor matching = torch::softmax(logits, 2);
+        const torch::Tensor matching =
+            RefinedMatching(distance, idx_s, idx_t, k_nc, config_.nn_margin);
         const torch::Tensor corr = torch::bmm(matching, target);  // pseudo targets [B, N, 3]
         // Inlier evaluation on the two neighbourhoods, then the weighted SVD.
         const torch::Tensor pseudo_local = CentreMinusNeighbours(corr, nbr_s);

@@ -155,10 +155,13 @@ PairBatch ParityPair(const ParityCase& c, torch::Dtype dtype) {
     return batch;
 }
 
-void ExpectParity(RienetNet& net, const ParityCase& c, torch::Dtype dtype, double tol) {
+/// `autograd` runs the forward with gradients on: the LibTorch composition of the refined
+/// matching map instead of the fused inference kernel (ogmm/rienet_matching.hpp).
+void ExpectParity(RienetNet& net, const ParityCase& c, torch::Dtype dtype, double tol,
+                  bool autograd = false) {
     SCOPED_TRACE(c.name);
     net.eval();
-    torch::NoGradGuard no_grad;
+    torch::AutoGradMode grad_mode(autograd);
     const PairBatch batch = ParityPair(c, dtype);
     const NetOutput out = net.Forward(batch);
     const torch::Tensor T = out.T.to(torch::kDouble).contiguous().view({-1});
@@ -194,6 +197,12 @@ std::unique_ptr<RienetNet> FormulaNetThroughTorchSave() {
 TEST_F(RienetTest, ForwardMatchesTheStandInOnSharedPoints) {
     auto net = FormulaNetThroughTorchSave();
     ExpectParity(*net, kSharedPoints, torch::kDouble, 1e-4);
+}
+
+TEST_F(RienetTest, ForwardWithAutogradMatchesTheStandInAsWithout) {
+    auto net = FormulaNetThroughTorchSave();
+    ExpectParity(*net, kSharedPoints, torch::kDouble, 1e-4, /*autograd=*/true);
+    ExpectParity(*net, kDifferentSizes, torch::kDouble, 1e-4, /*autograd=*/true);
 }
 
 TEST_F(RienetTest, ForwardRunsOnCloudsOfDifferentSizesAsTheStandIn) {
