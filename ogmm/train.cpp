@@ -365,6 +365,7 @@ public:
 private:
     void Start();
     void Resume();
+    void RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const fs::path& last) const;
     std::future<PairBatch> Prefetch(std::int64_t step) const;
     double Step(const PairBatch& batch);
     void EndEpoch();
@@ -442,6 +443,31 @@ void Trainer::Start() {
     state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
 }
 
+/// The pairs a run learns from are part of its curve: resuming a noise-free run without
+/// `--no-jitter`, or on another dataset, would carry on silently on other data. The checkpoint's
+/// `data` (the provenance it was trained with) must agree on the datasets, the splits and the
+/// pair protocol; the first difference is named with both values.
+void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const fs::path& last) const {
+    if (!checkpoint.contains("data") || !checkpoint.at("data").is_object()) return;
+    for (const char* key : {"dataset", "split", "val_split", "protocol"}) {
+        const nlohmann::json was = checkpoint.at("data").value(key, nlohmann::json());
+        const nlohmann::json now = data_.provenance.value(key, nlohmann::json());
+        if (was == now) continue;
+        const nlohmann::json patch = nlohmann::json::diff(was, now);
+        std::string path = std::string("data.") + key, was_text = was.dump(), now_text = now.dump();
+        if (!patch.empty() && patch[0].at("path").get<std::string>() != "") {
+            const nlohmann::json::json_pointer at(patch[0].at("path").get<std::string>());
+            path += patch[0].at("path").get<std::string>();
+            was_text = was.contains(at) ? was.at(at).dump() : "absent";
+            now_text = now.contains(at) ? now.at(at).dump() : "absent";
+        }
+        throw std::runtime_error("--resume: " + last.string() + " was trained on other pairs (" +
+                                 path + " was " + was_text + ", now " + now_text +
+                                 "): pass the data options the run started with (its "
+                                 "checkpoint.json 'data'; e.g. --no-jitter, --pairing)");
+    }
+}
+
 void Trainer::Resume() {
     const fs::path last = dir_ / "last";
     if (!fs::exists(last))
@@ -452,6 +478,7 @@ void Trainer::Resume() {
         log_ << "train: note: the training recipe differs from the one in " << last.string()
              << "; continuing with the new one\n";
     }
+    RefuseOtherTrainingPairs(j, last);
     try {
         state_ = TrainerStateFromJson(j.at("trainer"));
     } catch (const std::exception& e) {

@@ -223,6 +223,29 @@ TEST_F(SmallTrain, ResumeRefusesACheckpointWithCountersOutOfRange) {
     fs::remove_all(dir);
 }
 
+// `train --resume` without the run's `--no-jitter` carried on a noise-free RIENet run on
+// jittered pairs, silently (2026-12-06). Expected: --resume refuses pairs other than the
+// checkpoint's (its `data` provenance), naming the directory, the key and both values.
+TEST_F(SmallTrain, ResumeRefusesOtherTrainingPairs) {
+    const fs::path dir = TempDir("pairs");
+    TrainData clean = data;
+    clean.provenance = {{"dataset", "cgal"}, {"protocol", {{"noise_sigma", 0.0}, {"pairing", "shared"}}}};
+    Train(config, clean, Options(dir, log, 2));
+    TrainData jittered = clean;
+    jittered.provenance["protocol"]["noise_sigma"] = 0.01;
+    std::string err;
+    try {
+        Train(config, jittered, Options(dir, log, 0, kResume));
+    } catch (const std::exception& e) {
+        err = e.what();
+    }
+    EXPECT_NE(err.find((dir / "last").string()), std::string::npos) << err;
+    EXPECT_NE(err.find("data.protocol/noise_sigma was 0.0, now 0.01"), std::string::npos) << err;
+    // The same pairs resume.
+    EXPECT_NO_THROW(Train(config, clean, Options(dir, log, 3, kResume)));
+    fs::remove_all(dir);
+}
+
 // Issue 27: `train --resume` appended onto a torn metrics.csv line (a kill mid-append). The
 // expected file is what an uninterrupted run writes (SameSeedGivesTheSameLossCurve: a header
 // and one line per epoch, 2 epochs here), every line with the header's number of columns.
