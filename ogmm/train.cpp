@@ -449,23 +449,21 @@ void Trainer::Start() {
 /// pair protocol; the first difference is named with both values.
 void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const fs::path& last) const {
     if (!checkpoint.contains("data") || !checkpoint.at("data").is_object()) return;
+    nlohmann::json was, now;
     for (const char* key : {"dataset", "split", "val_split", "protocol"}) {
-        const nlohmann::json was = checkpoint.at("data").value(key, nlohmann::json());
-        const nlohmann::json now = data_.provenance.value(key, nlohmann::json());
-        if (was == now) continue;
-        const nlohmann::json patch = nlohmann::json::diff(was, now);
-        std::string path = std::string("data.") + key, was_text = was.dump(), now_text = now.dump();
-        if (!patch.empty() && patch[0].at("path").get<std::string>() != "") {
-            const nlohmann::json::json_pointer at(patch[0].at("path").get<std::string>());
-            path += patch[0].at("path").get<std::string>();
-            was_text = was.contains(at) ? was.at(at).dump() : "absent";
-            now_text = now.contains(at) ? now.at(at).dump() : "absent";
-        }
-        throw std::runtime_error("--resume: " + last.string() + " was trained on other pairs (" +
-                                 path + " was " + was_text + ", now " + now_text +
-                                 "): pass the data options the run started with (its "
-                                 "checkpoint.json 'data'; e.g. --no-jitter, --pairing)");
+        was[key] = checkpoint.at("data").value(key, nlohmann::json());
+        now[key] = data_.provenance.value(key, nlohmann::json());
     }
+    const nlohmann::json patch = nlohmann::json::diff(was, now);
+    if (patch.empty()) return;
+    const std::string path = patch[0].at("path").get<std::string>();  // "/protocol/noise_sigma"
+    const nlohmann::json::json_pointer at(path);
+    throw std::runtime_error("--resume: " + last.string() + " was trained on other pairs (data." +
+                             path.substr(1) + " was " +
+                             (was.contains(at) ? was.at(at).dump() : "absent") + ", now " +
+                             (now.contains(at) ? now.at(at).dump() : "absent") +
+                             "): pass the data options the run started with (its "
+                             "checkpoint.json 'data'; e.g. --no-jitter, --pairing)");
 }
 
 void Trainer::Resume() {
