@@ -11,7 +11,7 @@ out="${1:?usage: scripts/eval_learned.sh OUT [PAIRS] [run arguments]}"
 pairs="${2:-200}"
 shift $(( $# < 2 ? $# : 2 ))
 mkdir -p "$out"
-# rgm takes about 2 s a pair (its four-match pipeline): about half of the script's time.
+# rgm takes about 2 s a pair (its four-match pipeline): most of the script's time.
 methods=identity,icp,deepgmr,deepgmr-noicp,ogmm,ogmm-noicp,omnet,rienet,rgm,regtr
 for set in partial:independent partial:shared jitter:independent; do
     protocol="${set%%:*}" pairing="${set##*:}"
