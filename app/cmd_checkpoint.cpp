@@ -1,10 +1,11 @@
-// `regbench import-checkpoint` / `export-checkpoint`: the DeepGMR and OGMM authors' PyTorch
-// state dicts (.pth, zip or legacy format) to and from regbench checkpoint folders
-// (ogmm/authors_checkpoint.hpp).
+// `regbench import-checkpoint` / `export-checkpoint`: the authors' PyTorch state dicts of every
+// network family with an authors' format (DeepGMR, OGMM, OMNet, RIENet, RGM, REGTR; .pth, zip
+// or legacy format) to and from regbench checkpoint folders (ogmm/authors_checkpoint.hpp).
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
@@ -25,7 +26,44 @@ struct ImportArgs {
     std::string out;
     bool force = false;
     ogmm::ImportOptions options;
+    std::vector<std::string> settings;  ///< --setting KEY=VALUE
 };
+
+/// `--setting KEY=VALUE` as a JSON object: VALUE is read as JSON when it parses (numbers,
+/// true/false), else taken as a string. A later KEY wins; no '=' is refused naming the flag.
+nlohmann::json ParseSettings(const std::vector<std::string>& items) {
+    nlohmann::json out = nlohmann::json::object();
+    for (const auto& item : items) {
+        const auto eq = item.find('=');
+        if (eq == std::string::npos || eq == 0) {
+            throw CLI::ValidationError("--setting", "expected KEY=VALUE, got '" + item + "'");
+        }
+        const std::string value = item.substr(eq + 1);
+        nlohmann::json v = nlohmann::json::parse(value, nullptr, false);
+        if (v.is_discarded() || v.is_object() || v.is_array() || v.is_null()) v = value;
+        out[item.substr(0, eq)] = v;
+    }
+    return out;
+}
+
+/// The --help footer: every family's import settings (defaults, meaning) and presets.
+std::string SettingsHelp() {
+    std::string out =
+        "Settings no tensor fixes (--setting KEY=VALUE; defaults: the authors' ModelNet40 "
+        "configs), and presets (--preset NAME), per --from family:\n";
+    for (const auto& from : ogmm::AuthorsFormats()) {
+        const auto settings = ogmm::AuthorsImportSettings(from);
+        out += "  " + from + (settings.empty() ? ": none, its tensors fix the whole network\n"
+                                               : ":\n");
+        for (const auto& s : settings) {
+            out += "    " + s.key + " = " + s.default_value.dump() + "  " + s.doc + "\n";
+        }
+        for (const auto& p : ogmm::AuthorsImportPresets(from)) {
+            out += "    --preset " + p.name + ": " + p.values.dump() + " (" + p.doc + ")\n";
+        }
+    }
+    return out;
+}
 
 /// The network families with an authors' checkpoint format (ogmm/family.hpp), "a | b".
 std::string Formats() {
@@ -45,25 +83,18 @@ void SetupImport(CLI::App* cmd) {
     cmd->add_flag("--force", a->force,
                   "Replace an existing --out folder (all of it: a training run's best/, last/ "
                   "and metrics too)");
-    cmd->add_option("--rri-variant", a->options.rri_variant,
-                    "DeepGMR RRI orientation at run time: cuda (GPU kernel; the released models) "
-                    "| numpy (CPU fallback of the authors' test.py)")
-        ->capture_default_str()
-        ->check(CLI::IsMember({"cuda", "numpy"}));
-    cmd->add_option("--clusters", a->options.ogmm_clusters,
-                    "OGMM: GMM components J (n_clusters; no tensor fixes it)")
-        ->capture_default_str()
-        ->check(PositiveWholeNumber());
-    cmd->add_option("--anchors", a->options.ogmm_anchors, "OGMM: attention anchors (km_clusters)")
-        ->capture_default_str()
-        ->check(PositiveWholeNumber());
-    cmd->add_option("--heads", a->options.ogmm_heads, "OGMM: attention heads (num_heads)")
-        ->capture_default_str()
-        ->check(PositiveWholeNumber());
-    cmd->add_option("--k", a->options.ogmm_k, "OGMM: DGCNN neighbours (gnn_k)")
-        ->capture_default_str()
-        ->check(PositiveWholeNumber());
+    cmd->add_option("--preset", a->options.preset,
+                    "One of the authors' named configs of the --from family (its settings no "
+                    "tensor fixes, e.g. rienet: modelnet40 | 7scenes | icl_nuim | kitti); "
+                    "listed below");
+    cmd->add_option("--setting", a->settings,
+                    "KEY=VALUE over the preset: a setting no tensor of the file fixes (e.g. "
+                    "deepgmr rri_variant=numpy, ogmm clusters=64, rienet k=8); repeatable");
+    cmd->footer(SettingsHelp());
     cmd->callback([a] {
+        a->options.settings = ParseSettings(a->settings);
+        // Refused before the file is read: an unknown preset or key, a value of the wrong type.
+        const ogmm::ResolvedImportSettings resolved = ogmm::ResolveImportSettings(a->options);
         if (!std::filesystem::is_regular_file(a->file)) {
             throw std::runtime_error(a->file + ": no such file");
         }
@@ -80,6 +111,15 @@ void SetupImport(CLI::App* cmd) {
                   << " file, sha256 " << j.at("imported_from").at("sha256").get<std::string>()
                   << ")\n"
                   << "  config: " << j.at("model_config").dump() << "\n";
+        if (!resolved.assumed.empty()) {
+            std::string assumed;
+            for (const auto& k : resolved.assumed) {
+                assumed += (assumed.empty() ? "" : ", ") + k + "=" + resolved.values.at(k).dump();
+            }
+            std::cout << "  assumed (no tensor, --preset or --setting gave them; the authors' "
+                         "defaults): "
+                      << assumed << "\n";
+        }
     });
 }
 
@@ -122,11 +162,11 @@ void SetupExport(CLI::App* cmd) {
 
 [[maybe_unused]] const bool kImportRegistered = RegisterCommand(
     {"import-checkpoint",
-     "Import the DeepGMR / OGMM authors' PyTorch weights (.pth) as a checkpoint folder",
+     "Import the authors' PyTorch weights (.pth) of a learned method as a checkpoint folder",
      SetupImport});
 [[maybe_unused]] const bool kExportRegistered = RegisterCommand(
     {"export-checkpoint",
-     "Export a checkpoint folder as a .pth the DeepGMR / OGMM authors' code loads", SetupExport});
+     "Export a checkpoint folder as a .pth the authors' code of its family loads", SetupExport});
 }  // namespace
 
 }  // namespace regbench::app

@@ -1,5 +1,7 @@
-// `regbench inspect`, `regbench export`, `regbench import`: look into and convert pair files.
+// `regbench inspect`, `regbench export`, `regbench import`: look into and convert pair files;
+// `inspect` also summarises a checkpoint folder.
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -20,12 +22,46 @@ namespace regbench::app {
 
 namespace {
 
+/// What `inspect DIR` shows of a checkpoint folder's checkpoint.json: the model and its
+/// config, how it was made (training steps and data, or the authors' file it was imported
+/// from, with the preset and the import settings no tensor fixed, and which were assumed).
+nlohmann::json CheckpointSummary(const std::string& dir) {
+    const std::string path = (std::filesystem::path(dir) / "checkpoint.json").string();
+    std::ifstream in(path);
+    nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (!in || j.is_discarded() || !j.is_object()) {
+        throw std::runtime_error(path + ": not a readable checkpoint.json (JSON object)");
+    }
+    nlohmann::json out = {{"checkpoint", dir}};
+    for (const char* key : {"model", "steps", "pairs_seen", "data", "worse_than_identity",
+                            "imported_from", "model_config"}) {
+        if (j.contains(key)) out[key] = j[key];
+    }
+    if (!out.contains("model_config") && j.contains("config")) out["model_config"] = j["config"];
+    return out;
+}
+
 void SetupInspectCommand(CLI::App* cmd) {
     auto file = std::make_shared<std::string>();
     auto json_out = std::make_shared<bool>(false);
-    cmd->add_option("file", *file, "Pair file (.h5)")->required();
+    cmd->add_option("file", *file, "Pair file (.h5), or a checkpoint folder")->required();
     cmd->add_flag("--json", *json_out, "Print as JSON");
     cmd->callback([file, json_out] {
+        if (std::filesystem::is_directory(*file)) {
+            const nlohmann::json c = CheckpointSummary(*file);
+            if (*json_out) {
+                std::cout << c.dump(2) << "\n";
+                return;
+            }
+            std::cout << "checkpoint: " << *file << "\n";
+            for (const auto& [key, value] : c.items()) {
+                if (key == "checkpoint") continue;
+                std::cout << key << ": " << (value.is_string() ? value.get<std::string>()
+                                                                : value.dump())
+                          << "\n";
+            }
+            return;
+        }
         const PairSet set = ReadPairFile(*file);
         const PairSetSummary summary = SummarizePairSet(set);
         if (*json_out) {
@@ -104,7 +140,9 @@ void SetupImportCommand(CLI::App* cmd) {
 }
 
 [[maybe_unused]] const bool kInspectRegistered =
-    RegisterCommand({"inspect", "Summarise a pair file (counts, overlap, motions, CCD floor)",
+    RegisterCommand({"inspect",
+                     "Summarise a pair file (counts, overlap, motions, CCD floor) or a "
+                     "checkpoint folder (model, config, training or import settings)",
                      SetupInspectCommand});
 [[maybe_unused]] const bool kExportRegistered = RegisterCommand(
     {"export", "Write a pair file's pairs as xyz or PLY files", SetupExportCommand});

@@ -10,7 +10,6 @@
 #include "ogmm/authors_state_dict.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/family.hpp"
-#include "ogmm/rri.hpp"
 #include "ogmm/net.hpp"
 #include "ogmm/zoo.hpp"
 
@@ -101,9 +100,69 @@ std::vector<std::pair<std::string, std::string>> AuthorsKeyMapping(const std::st
     return out;
 }
 
+std::vector<ImportSetting> AuthorsImportSettings(const std::string& from) {
+    return AuthorsFamily(from, "--from").authors->settings;
+}
+
+std::vector<ImportPreset> AuthorsImportPresets(const std::string& from) {
+    return AuthorsFamily(from, "--from").authors->presets;
+}
+
+ResolvedImportSettings ResolveImportSettings(const ImportOptions& options) {
+    const AuthorsFormat& format = *AuthorsFamily(options.from, "--from").authors;
+    const std::string who = options.from + " import";
+    std::string keys;
+    for (const auto& s : format.settings) keys += (keys.empty() ? "" : ", ") + s.key;
+    if (keys.empty()) keys = "none: its tensors fix the whole network";
+    ResolvedImportSettings out;
+    std::set<std::string> given;
+    const auto set = [&](const std::string& key, const nlohmann::json& value,
+                         const std::string& where) {
+        const auto it = std::find_if(format.settings.begin(), format.settings.end(),
+                                     [&](const ImportSetting& s) { return s.key == key; });
+        if (it == format.settings.end()) {
+            throw std::invalid_argument(who + ": " + where + " names unknown setting '" + key +
+                                        "' (" + options.from + " settings: " + keys + ")");
+        }
+        const nlohmann::json& d = it->default_value;
+        const bool same_type = (d.is_number() && value.is_number()) ||
+                               (d.is_string() && value.is_string()) ||
+                               (d.is_boolean() && value.is_boolean());
+        if (!same_type || (d.is_number_integer() && !value.is_number_integer())) {
+            throw std::invalid_argument(who + ": " + where + " setting " + key + " = " +
+                                        value.dump() + " is not of the type of its default " +
+                                        d.dump());
+        }
+        out.values[key] = value;
+        given.insert(key);
+    };
+    for (const auto& s : format.settings) out.values[s.key] = s.default_value;
+    if (!options.preset.empty()) {
+        const auto it = std::find_if(format.presets.begin(), format.presets.end(),
+                                     [&](const ImportPreset& p) { return p.name == options.preset; });
+        if (it == format.presets.end()) {
+            std::string names;
+            for (const auto& p : format.presets) names += (names.empty() ? "" : ", ") + p.name;
+            throw std::invalid_argument(who + ": unknown preset '" + options.preset + "' (" +
+                                        options.from + " presets: " +
+                                        (names.empty() ? "none" : names) + ")");
+        }
+        for (const auto& [k, v] : it->values.items()) set(k, v, "preset " + it->name);
+    }
+    if (!options.settings.is_object()) {
+        throw std::invalid_argument(who + ": settings must be a JSON object");
+    }
+    for (const auto& [k, v] : options.settings.items()) set(k, v, "--setting");
+    for (const auto& s : format.settings) {
+        if (!given.count(s.key)) out.assumed.push_back(s.key);
+    }
+    return out;
+}
+
 nlohmann::json InferAuthorsConfig(const StateDict& sd, const std::string& file,
                                   const ImportOptions& options) {
-    return AuthorsFamily(options.from, "--from").authors->infer_config(sd, file, options);
+    return AuthorsFamily(options.from, "--from")
+        .authors->infer_config(sd, file, ResolveImportSettings(options).values);
 }
 
 // Long on purpose: the import is one checked sequence (read, strip "module.", map every tensor,
@@ -112,7 +171,7 @@ nlohmann::json InferAuthorsConfig(const StateDict& sd, const std::string& file,
 nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string& out_dir,
                                        const ImportOptions& options) {
     const AuthorsFormat& format = *AuthorsFamily(options.from, "--from").authors;
-    ParseRriVariant(options.rri_variant);
+    const ResolvedImportSettings settings = ResolveImportSettings(options);  // before reading
     TorchSaveContents contents = ReadTorchSaveFile(pth);
     StateDict& sd = contents.tensors;
     // nn.DataParallel saves every key under "module.".
@@ -121,7 +180,7 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
     if (data_parallel) {
         for (auto& kv : sd) kv.first = kv.first.substr(7);
     }
-    const nlohmann::json config = InferAuthorsConfig(sd, pth, options);
+    const nlohmann::json config = format.infer_config(sd, pth, settings.values);
     const auto net = MakeNetFromConfig(config);
     std::map<std::string, torch::Tensor> rb;
     for (const auto& [k, v] : RegbenchTensors(*net)) rb[k] = v;
@@ -184,6 +243,9 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
         {"wrapper_key", contents.wrapper},
         {"stripped_prefix", data_parallel ? "module." : ""},
         {"defaulted_to_zero", defaulted},
+        {"preset", options.preset},
+        {"settings", settings.values},
+        {"assumed_settings", settings.assumed},
     };
     meta["mapping"] = map_json;
     SaveCheckpoint(out_dir, *net, meta);

@@ -18,15 +18,42 @@
 namespace regbench::ogmm {
 
 struct ImportOptions {
-    std::string from;                  ///< "deepgmr" or "ogmm"
-    std::string rri_variant = "cuda";  ///< DeepGMR RRI: "cuda" (released models) or "numpy"
-    /// OGMM settings that no tensor shape fixes (the authors' mnet() defaults): GMM clusters J
-    /// (n_clusters), attention anchors (km_clusters), heads (num_heads), DGCNN k (gnn_k).
-    int64_t ogmm_clusters = 128;
-    int64_t ogmm_anchors = 128;
-    int64_t ogmm_heads = 4;
-    int64_t ogmm_k = 20;
+    std::string from;  ///< the family whose authors saved the file, e.g. "deepgmr"
+    /// A named preset of the family's import settings (the authors' per-dataset configs, e.g.
+    /// RIENet's "7scenes"); "" = none.
+    std::string preset;
+    /// Import settings over the preset (`--setting key=value`): what no tensor of the file
+    /// fixes. A JSON object; every key must be one the family declares.
+    nlohmann::json settings = nlohmann::json::object();
 };
+
+/// One import setting a family declares: what no tensor of the authors' file fixes.
+struct ImportSetting {
+    std::string key;
+    nlohmann::json default_value;  ///< the authors' default (their ModelNet40 config)
+    std::string doc;
+};
+
+/// A named set of import settings: one of the authors' configs (e.g. their per-dataset YAML).
+struct ImportPreset {
+    std::string name;
+    std::string doc;  ///< where it comes from and what it is for
+    nlohmann::json values;
+};
+
+/// The settings an import runs with: the family's defaults, then the preset's values, then
+/// options.settings. `assumed` lists the keys neither the preset nor the user gave (defaults
+/// the command reports it assumed). Throws std::invalid_argument naming an unknown family,
+/// preset or key (listing the known ones) or a value of the wrong type.
+struct ResolvedImportSettings {
+    nlohmann::json values = nlohmann::json::object();
+    std::vector<std::string> assumed;
+};
+ResolvedImportSettings ResolveImportSettings(const ImportOptions& options);
+
+/// The import settings and presets family `from` declares (for --help, inspect and docs).
+std::vector<ImportSetting> AuthorsImportSettings(const std::string& from);
+std::vector<ImportPreset> AuthorsImportPresets(const std::string& from);
 
 /// Pairs (authors' state-dict key, regbench parameter/buffer name) for a regbench config, in
 /// the authors' module order. `from`: "deepgmr" or "ogmm".

@@ -16,11 +16,17 @@ struct AuthorsFormat {
     /// The authors' module and file, recorded in an imported checkpoint.json.
     std::string module;
     /// The regbench config (zoo form, with "arch", "name" and "train") the authors' state dict
-    /// `tensors` of file `file` holds, read from its tensor names and shapes (and `options`
-    /// for what no shape fixes). Throws std::runtime_error naming the file and tensor.
+    /// `tensors` of file `file` holds, read from its tensor names and shapes, and from
+    /// `settings` (ResolveImportSettings: every key of `settings` below, checked for type) for
+    /// what no shape fixes. Throws std::runtime_error naming the file and tensor.
     std::function<nlohmann::json(const StateDict& tensors, const std::string& file,
-                                 const ImportOptions& options)>
+                                 const nlohmann::json& settings)>
         infer_config;
+    /// What no tensor of the authors' file fixes (their defaults: the ModelNet40 config), the
+    /// keys of `import-checkpoint --setting KEY=VALUE`; empty when the tensors fix everything.
+    std::vector<ImportSetting> settings;
+    /// The authors' named configs (`import-checkpoint --preset NAME`), e.g. per dataset.
+    std::vector<ImportPreset> presets;
     /// The authors' key of regbench tensor `name`; unset: the same name.
     std::function<std::string(const std::string& name)> authors_name;
     /// Rank of an authors' key in their state_dict order (keys sort by it, stably); unset:
@@ -32,8 +38,8 @@ struct AuthorsFormat {
 };
 
 /// The regbench model config (zoo form, with "arch", "name" and "train") the state dict
-/// `tensors` of file `file` describes, as the family options.from reads it. Throws
-/// std::runtime_error naming the file and tensor.
+/// `tensors` of file `file` describes, as the family options.from reads it under the resolved
+/// import settings of `options`. Throws std::runtime_error naming the file and tensor.
 nlohmann::json InferAuthorsConfig(const StateDict& tensors, const std::string& file,
                                   const ImportOptions& options);
 

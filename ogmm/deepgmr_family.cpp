@@ -57,7 +57,7 @@ nlohmann::json Named(const std::string& name) {
 /// The original's DeepGMR(args): xyz or RRI input from the first conv's channels, d_model and J
 /// from their layers. Its T-Net (--use_tnet) is not part of regbench's deepgmr-orig.
 nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
-                           const ImportOptions& options) {
+                           const nlohmann::json& settings) {
     for (const auto& [k, v] : sd) {
         (void)v;
         if (k.rfind("backbone.tnet.", 0) == 0) {
@@ -75,7 +75,8 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
     } else if (d_in >= 8 && d_in % 4 == 0) {
         c = Named("deepgmr-orig");
         c["rri_k"] = d_in / 4;
-        c["rri_variant"] = ToString(ParseRriVariant(options.rri_variant));
+        c["rri_variant"] =
+            ToString(ParseRriVariant(settings.at("rri_variant").get<std::string>()));
     } else {
         RefuseAuthorsFile(file, "tensor backbone.encoder.0.0.weight has " + std::to_string(d_in) +
                                     " input channels: neither xyz (3) nor RRI (4k)");
@@ -154,6 +155,12 @@ NetworkFamily DeepGmrFamily() {
     authors->module = "DeepGMR (wentaoyuan/deepgmr model.py)";
     authors->infer_config = InferConfig;
     authors->check_export = CheckExport;
+    // The released checkpoints (modelnet_clean, modelnet_noisy, modelnet_unseen, icl_nuim) were
+    // all trained with the GPU RRI kernel; the weights fix everything else.
+    authors->settings = {{"rri_variant", "cuda",
+                          "RRI orientation at run time: \"cuda\" (the GPU kernel the released "
+                          "models were trained with) or \"numpy\" (the CPU fallback of the "
+                          "authors' test.py)"}};
     f.authors = std::move(authors);
     return f;
 }

@@ -156,25 +156,23 @@ std::string OgmmAuthorsName(const std::string& rb) {
 
 /// The authors' GMMReg: emb_dims from emd.conv5; what no shape fixes from the import options.
 nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
-                           const ImportOptions& options) {
+                           const nlohmann::json& settings) {
     const torch::Tensor& conv5 =
         RequireAuthorsTensor(sd, "emd.conv5.weight", 4, file, "an OGMM GMMReg");
     const int64_t emb = conv5.size(0);
-    if (emb % 2 != 0 || emb % options.ogmm_heads != 0) {
+    const int64_t heads = settings.at("heads").get<int64_t>();
+    if (heads < 1 || emb % 2 != 0 || emb % heads != 0) {
         RefuseAuthorsFile(file, "tensor emd.conv5.weight gives emb_dims " + std::to_string(emb) +
                                     ", which is not even or not divisible by " +
-                                    std::to_string(options.ogmm_heads) + " heads");
+                                    std::to_string(heads) + " heads");
     }
     nlohmann::json c = Named("ogmm");
-    const bool authors_defaults = emb == 512 && options.ogmm_clusters == 128 &&
-                                  options.ogmm_anchors == 128 && options.ogmm_heads == 4 &&
-                                  options.ogmm_k == 20;
+    const bool authors_defaults = emb == 512 && settings.at("clusters") == 128 &&
+                                  settings.at("anchors") == 128 && heads == 4 &&
+                                  settings.at("k") == 20;
     c["name"] = authors_defaults ? "ogmm" : "ogmm-authors";
     c["emb_dims"] = emb;
-    c["clusters"] = options.ogmm_clusters;
-    c["anchors"] = options.ogmm_anchors;
-    c["heads"] = options.ogmm_heads;
-    c["k"] = options.ogmm_k;
+    for (const char* key : {"clusters", "anchors", "heads", "k"}) c[key] = settings.at(key);
     return c;
 }
 
@@ -232,6 +230,12 @@ NetworkFamily OgmmFamily() {
     authors->authors_name = OgmmAuthorsName;
     authors->module_rank = OgmmModuleRank;
     authors->check_export = CheckExport;
+    // The authors' mnet() defaults; no tensor shape fixes them.
+    authors->settings = {
+        {"clusters", 128, "GMM components J (the authors' n_clusters)"},
+        {"anchors", 128, "FPS anchors of the clustered attention (km_clusters)"},
+        {"heads", 4, "attention heads (num_heads)"},
+        {"k", 20, "DGCNN neighbours (gnn_k)"}};
     f.authors = std::move(authors);
     return f;
 }

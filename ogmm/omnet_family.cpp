@@ -40,7 +40,8 @@ nlohmann::json Named(const std::string& name) {
 
 /// The authors' OMNet: the width from the first encoder convolution (64 / divisor output
 /// channels), the iterations from the encoders present.
-nlohmann::json InferConfig(const StateDict& sd, const std::string& file, const ImportOptions&) {
+nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
+                           const nlohmann::json& /*settings*/) {
     const torch::Tensor& first =
         RequireAuthorsTensor(sd, "encoder.0.conv_block1.0.weight", 3, file, "an OMNet");
     const int64_t w = first.size(0);

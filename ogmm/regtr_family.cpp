@@ -52,10 +52,10 @@ nlohmann::json Named(const std::string& name) {
 }
 
 /// The authors' REGTR: the KPConv width from the first block (first_feats_dim / 2 outputs), the
-/// embedding from feat_proj, the layers from those present, the heads from the file cannot be
-/// read (nn.MultiheadAttention stores none): their 8 when d_embed is 256, else the largest of
-/// 8, 4, 2, 1 that divides it.
-nlohmann::json InferConfig(const StateDict& sd, const std::string& file, const ImportOptions&) {
+/// embedding from feat_proj, the layers from those present; the heads cannot be read from the
+/// file (nn.MultiheadAttention stores none): the import setting nhead (their 8).
+nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
+                           const nlohmann::json& settings) {
     const torch::Tensor& first =
         RequireAuthorsTensor(sd, "kpf_encoder.encoder_blocks.0.KPConv.weights", 3, file, "a REGTR");
     const torch::Tensor& proj = RequireAuthorsTensor(sd, "feat_proj.weight", 2, file, "a REGTR");
@@ -79,8 +79,12 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file, const I
     c["d_embed"] = proj.size(0);
     c["d_feedforward"] = ff.size(0);
     c["num_encoder_layers"] = static_cast<int>(layers.size());
-    int heads = 8;
-    while (proj.size(0) % heads != 0) heads /= 2;
+    const int64_t heads = settings.at("nhead").get<int64_t>();
+    if (heads < 1 || proj.size(0) % heads != 0) {
+        RefuseAuthorsFile(file, "setting nhead = " + std::to_string(heads) +
+                                    " does not divide d_embed " + std::to_string(proj.size(0)) +
+                                    " (tensor feat_proj.weight): give --setting nhead=H");
+    }
     c["nhead"] = heads;
     return c;
 }
@@ -134,6 +138,7 @@ NetworkFamily RegtrFamily() {
     auto authors = std::make_shared<AuthorsFormat>();
     authors->module = "RegTR (yewzijian/RegTR src/models/regtr.py)";
     authors->infer_config = InferConfig;
+    authors->settings = {{"nhead", 8, "attention heads (their nhead; no tensor stores it)"}};
     f.authors = std::move(authors);
     return f;
 }

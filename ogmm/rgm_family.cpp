@@ -44,7 +44,8 @@ nlohmann::json Named(const std::string& name) {
 
 /// The authors' RGM: the width from the first DGCNN convolution (64 / divisor outputs, 6
 /// inputs: their xyz + gxyz features); the rest of the layout is checked by the strict load.
-nlohmann::json InferConfig(const StateDict& sd, const std::string& file, const ImportOptions&) {
+nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
+                           const nlohmann::json& /*settings*/) {
     const torch::Tensor& first =
         RequireAuthorsTensor(sd, "pointfeaturer.conv1.weight", 4, file, "an RGM");
     const int64_t w = first.size(0);

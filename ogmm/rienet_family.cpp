@@ -26,17 +26,22 @@ nlohmann::json Named(const std::string& name) {
 }
 
 /// The authors' RIENET: emb_dims from the DGCNN's last conv, dim from the discriminator's
-/// first conv; the rest (k, k_nc, iterations, margins, keypoints) has no tensor and is the
-/// authors' ModelNet40 config.
+/// first conv; the rest (k, k_nc, iterations, margins, keypoints) has no tensor and comes from
+/// the import settings (the authors' per-dataset configs are the presets).
 nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
-                           const ImportOptions& /*options*/) {
+                           const nlohmann::json& settings) {
     nlohmann::json c = Named("rienet");
+    for (const auto& [key, value] : settings.items()) c[key] = value;
     c["emb_dims"] =
         RequireAuthorsTensor(sd, "emb_nn.model.conv5.weight", 4, file, "a RIENet").size(0);
     c["dim"] =
         RequireAuthorsTensor(sd, "forwards.weight_function.model1.0.weight", 4, file, "a RIENet")
             .size(0);
-    if (c["emb_dims"] != 256 || c["dim"] != 8) c["name"] = "rienet-authors";
+    // "rienet" is the zoo model: the ModelNet40 config at the authors' widths.
+    const nlohmann::json zoo = Named("rienet");
+    bool zoo_config = c["emb_dims"] == 256 && c["dim"] == 8;
+    for (const auto& [key, value] : settings.items()) zoo_config &= zoo.at(key) == value;
+    if (!zoo_config) c["name"] = "rienet-authors";
     return c;
 }
 
@@ -74,6 +79,28 @@ NetworkFamily RienetFamily() {
     auto authors = std::make_shared<AuthorsFormat>();
     authors->module = "RIENET (supersyq/RIENet model.py)";
     authors->infer_config = InferConfig;
+    // Their config/*.yaml (supersyq/RIENet): list_k1 / list_k2 hold one value per iteration,
+    // the same in every file, so one k and one k_nc here.
+    authors->settings = {
+        {"k", 5, "DGCNN and inlier neighbourhood size (list_k1)"},
+        {"k_nc", 5, "neighbourhood consensus size (list_k2)"},
+        {"nn_margin", 0.7, "consensus margin (nn_margin)"},
+        {"loss_margin", 0.01, "Huber threshold of the chamfer loss (loss_margin)"},
+        {"keypoints", 256, "keypoints of the losses (n_keypoints)"},
+        {"iterations", 3, "registration iterations (n_iters)"}};
+    authors->presets = {
+        {"modelnet40", "config/train.yaml: ModelNet40, same and unseen categories (the defaults)",
+         {{"k", 5}, {"k_nc", 5}, {"nn_margin", 0.7}, {"loss_margin", 0.01}, {"keypoints", 256},
+          {"iterations", 3}}},
+        {"7scenes", "config/train7.yaml: 7Scenes",
+         {{"k", 8}, {"k_nc", 8}, {"nn_margin", 0.5}, {"loss_margin", 0.01}, {"keypoints", 768},
+          {"iterations", 3}}},
+        {"icl_nuim", "config/train-icl.yaml: ICL-NUIM",
+         {{"k", 32}, {"k_nc", 10}, {"nn_margin", 0.5}, {"loss_margin", 0.01}, {"keypoints", 768},
+          {"iterations", 3}}},
+        {"kitti", "config/train-k.yaml: KITTI",
+         {{"k", 32}, {"k_nc", 8}, {"nn_margin", 0.5}, {"loss_margin", 0.0009}, {"keypoints", 1024},
+          {"iterations", 3}}}};
     f.authors = std::move(authors);
     return f;
 }

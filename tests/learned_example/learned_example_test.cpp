@@ -92,7 +92,7 @@ nlohmann::json CentroidNetConfig(const std::string& model) {
 
 /// The "authors'" layout: one nn.Linear(3, 3) named fc.
 nlohmann::json InferCentroidNetConfig(const StateDict& sd, const std::string& file,
-                                      const ImportOptions& /*options*/) {
+                                      const nlohmann::json& /*settings*/) {
     RequireAuthorsTensor(sd, "fc.weight", 2, file, "a CentroidNet");
     nlohmann::json c = CentroidNetConfig("centroid-net");
     c["bias"] = false;

@@ -80,10 +80,7 @@ ImportOptions OptionsFor(const std::string& name) {
     ImportOptions o;
     if (name.rfind("ogmm", 0) == 0) {
         o.from = "ogmm";
-        o.ogmm_clusters = 8;
-        o.ogmm_anchors = 16;
-        o.ogmm_heads = 2;
-        o.ogmm_k = 10;
+        o.settings = {{"clusters", 8}, {"anchors", 16}, {"heads", 2}, {"k", 10}};
     } else {
         o.from = "deepgmr";
     }
@@ -318,6 +315,73 @@ TEST_F(RienetAuthorsCheckpoint, ImportedForwardMatchesTheStandIn) {
         EXPECT_LT(MaxAbs(T.index({Slice(), Slice(0, 3), 3}), want.index({Slice(), Slice(0, 3), 3})),
                   1e-4);
     }
+}
+
+// The same file under --preset 7scenes (the authors' config/train7.yaml) records their 7Scenes
+// settings and runs as the stand-in does with them (float64, within 1e-4 as above); under the
+// ModelNet40 defaults the same weights give another transform, so the preset is what matches.
+TEST_F(RienetAuthorsCheckpoint, SevenScenesPresetRecordsItsSettingsAndMatchesTheStandIn) {
+    ImportOptions o = FromRienet();
+    o.preset = "7scenes";
+    const fs::path ck = File("ck_rienet_7scenes");
+    const nlohmann::json j =
+        ImportAuthorsCheckpoint(File("rienet_authors.pth").string(), ck.string(), o);
+    const nlohmann::json& c = j.at("config");
+    EXPECT_EQ(c.at("k"), 8);
+    EXPECT_EQ(c.at("k_nc"), 8);
+    EXPECT_EQ(c.at("nn_margin"), 0.5);
+    EXPECT_EQ(c.at("keypoints"), 768);
+    EXPECT_EQ(c.at("name"), "rienet-authors");  // not the zoo's ModelNet40 `rienet`
+    EXPECT_EQ(j.at("imported_from").at("preset"), "7scenes");
+    EXPECT_EQ(j.at("imported_from").at("assumed_settings"), nlohmann::json::array());
+    const auto net = LoadNetFromCheckpoint(ck.string());
+    ImportAuthorsCheckpoint(File("rienet_authors.pth").string(), File("ck_rienet_mn").string(),
+                            FromRienet());
+    const auto defaults = LoadNetFromCheckpoint(File("ck_rienet_mn").string());
+    torch::NoGradGuard no_grad;
+    for (auto* n : {net.get(), defaults.get()}) {
+        n->to(torch::kDouble);
+        n->eval();
+    }
+    for (const auto& [name, cs] : rienet_ref_->at("cases").items()) {
+        SCOPED_TRACE(name);
+        PairBatch batch;
+        batch.source = TensorFromJson(cs.at("source"));
+        batch.target = TensorFromJson(cs.at("target"));
+        const torch::Tensor want = TensorFromJson(rienet_ref_->at("cases_7scenes").at(name).at("T"));
+        EXPECT_LT(MaxAbs(net->Forward(batch).T, want), 1e-4);
+        EXPECT_GT(MaxAbs(defaults->Forward(batch).T, want), 1e-3);
+    }
+}
+
+// Presets and settings are checked before the file is read: an unknown preset, an unknown key
+// and a value of another type than the default's are refused naming them.
+TEST_F(RienetAuthorsCheckpoint, UnknownPresetsKeysAndTypesAreRefusedByName) {
+    const auto error = [&](ImportOptions o) {
+        return ErrorOf([&] {
+            ImportAuthorsCheckpoint(File("rienet_authors.pth").string(),
+                                    File("refused_settings").string(), o);
+        });
+    };
+    ImportOptions o = FromRienet();
+    o.preset = "scannet";
+    std::string e = error(o);
+    EXPECT_NE(e.find("unknown preset 'scannet'"), std::string::npos) << e;
+    EXPECT_NE(e.find("7scenes"), std::string::npos) << e;  // lists the known ones
+    o.preset = "";
+    o.settings = {{"clusters", 64}};
+    e = error(o);
+    EXPECT_NE(e.find("unknown setting 'clusters'"), std::string::npos) << e;
+    o.settings = {{"k", 2.5}};
+    e = error(o);
+    EXPECT_NE(e.find("setting k = 2.5"), std::string::npos) << e;
+    o.settings = {{"k", 8}};
+    o.preset = "icl_nuim";  // --setting wins over the preset, the rest is the preset's
+    const ResolvedImportSettings r = ResolveImportSettings(o);
+    EXPECT_EQ(r.values.at("k"), 8);
+    EXPECT_EQ(r.values.at("k_nc"), 10);
+    EXPECT_TRUE(r.assumed.empty());
+    EXPECT_FALSE(fs::exists(File("refused_settings")));
 }
 
 // A DeepGMR checkpoint and truncated copies of the RIENet file are refused, naming the file and

@@ -313,11 +313,15 @@ def checkpoint(out):
     torch.save({"model": net.state_dict(), "optimizer": optimizer.state_dict(), "epoch": 41,
                 "best_result": np.float64(0.0123)}, os.path.join(out, "rienet_authors.pth"))
     net64 = make_net(CONFIG, torch.float32).double()  # float32-stored weights, run in float64
-    ref = {"tensors": len(net.state_dict()), "cases": {}}
+    ref = {"tensors": len(net.state_dict()), "cases": {}, "cases_7scenes": {}}
+    # The authors' config/train7.yaml: the same widths, other neighbourhoods and margin.
+    config7 = dict(CONFIG, k=8, k_nc=8, nn_margin=0.5, keypoints=768)
     for name, src, tgt in cases():
         with torch.no_grad():
             T, _ = run(net64, src, tgt, CONFIG)
+            T7, _ = run(net64, src, tgt, config7)
         ref["cases"][name] = {"source": src.tolist(), "target": tgt.tolist(), "T": T.tolist()}
+        ref["cases_7scenes"][name] = {"T": T7.tolist()}
     with open(os.path.join(out, "rienet_reference.json"), "w") as f:
         json.dump(ref, f)
 
