@@ -232,6 +232,11 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->add_option("--max-steps", a->train.max_steps, "Stop after this many steps in total")
         ->check(PositiveWholeNumber());
     cmd->add_flag("--resume", a->train.resume, "Continue from OUT/last");
+    cmd->add_option("--init-from", a->train.init_from,
+                    "Start a fresh run from this checkpoint folder's weights (same model "
+                    "config; fresh optimizer and LR plan), e.g. to fine-tune an object-trained "
+                    "model on indoor scans")
+        ->check(CLI::ExistingDirectory);
     cmd->add_option("--threads", a->train.threads, "Torch threads")
         ->check(ThreadCount())
         ->capture_default_str();

@@ -437,6 +437,10 @@ void Trainer::Start() {
         throw std::runtime_error("output directory " + dir_.string() +
                                  " already holds a run (last/); pass --resume or another --out");
     }
+    if (!options_.init_from.empty()) {
+        LoadCheckpoint(options_.init_from, *net_);  // refuses another model config by name
+        log_ << "train: initial weights from " << options_.init_from << "\n";
+    }
     fs::create_directories(dir_);
     WriteMetricsFile(dir_ / "metrics.csv", CsvLine({}, /*header=*/true), /*truncate=*/true);
     WriteMetricsFile(dir_ / "metrics.jsonl", "", /*truncate=*/true);

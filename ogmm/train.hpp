@@ -71,6 +71,10 @@ TrainConfig TrainConfigFromJson(const nlohmann::json& j);
 struct TrainOptions {
     std::string out_dir;  ///< run directory: last/, best/, metrics.csv, metrics.jsonl
     bool resume = false;  ///< continue from out_dir/last
+    /// A fresh run starts from this checkpoint folder's weights (same model config; fresh
+    /// optimizer, step 0), e.g. an object-trained model fine-tuned on indoor scans; "" = the
+    /// seeded initialisation. Ignored by --resume (the run's own weights continue).
+    std::string init_from;
     /// Wall-clock budget of this invocation (0: none); the run ends with a validated checkpoint.
     double minutes = 0.0;
     /// With `minutes` on a fresh run: plan the LR schedule over the steps that fit the budget
