@@ -47,6 +47,12 @@ void SetupReproduceCommand(CLI::App* cmd) {
         ->capture_default_str();
     cmd->add_option("--methods", o->methods, "Methods (default: every registered one)")
         ->delimiter(',');
+    cmd->add_option("--weights", o->weights,
+                    "Weights manifest (JSON): the checkpoint each learned method runs per "
+                    "experiment, regbench folders or the authors' .pth files (imported into "
+                    "OUT/weights); default: the shipped data/models/weights.json "
+                    "(docs/reproducing.md)")
+        ->check(CLI::ExistingFile);
     cmd->callback([o] {
         // The one output rule (docs/usage.md, "Outputs"): the folder may exist (a second
         // invocation continues it) but is never a link to another folder nor inside an input.
@@ -54,6 +60,7 @@ void SetupReproduceCommand(CLI::App* cmd) {
         rule.folder = true;
         rule.continues = true;
         std::vector<std::string> inputs = o->experiment_files;
+        if (!o->weights.empty()) inputs.push_back(o->weights);
         for (const std::string* root : {&o->modelnet40, &o->sevenscenes, &o->icl_nuim}) {
             inputs.push_back(*root);
         }

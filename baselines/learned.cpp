@@ -13,6 +13,7 @@
 #include "core/cpu_time.hpp"
 #include "core/data_dir.hpp"
 #include "core/params.hpp"
+#include "core/sha256.hpp"
 #include "ogmm/checkpoint.hpp"
 #include "ogmm/cost.hpp"
 #include "ogmm/family.hpp"
@@ -104,6 +105,13 @@ public:
         checkpoint_ =
             options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
         checkpoint_label_ = CheckpointLabel(checkpoint_);
+        try {
+            const CheckpointInfo info = DescribeCheckpoint(checkpoint_);
+            checkpoint_sha256_ = info.sha256;
+            checkpoint_source_ = info.source;
+        } catch (const std::exception&) {
+            // an unreadable weights file fails each call when it loads, with its own message
+        }
         if (!options_.attention.empty()) inference_["attention"] = options_.attention;
         // The GEMM rate of the floor, measured once per process, here in the process that
         // creates the method: the runner's isolated calls are forked from it and inherit it.
@@ -118,6 +126,10 @@ protected:
         AlignResult result;
         result.extra["checkpoint"] = checkpoint_;
         if (!checkpoint_label_.empty()) result.extra["checkpoint_label"] = checkpoint_label_;
+        if (!checkpoint_sha256_.empty()) {
+            result.extra["checkpoint_sha256"] = checkpoint_sha256_;
+            result.extra["checkpoint_source"] = checkpoint_source_;
+        }
         if (!Load(result)) return result;
         const auto t0 = std::chrono::steady_clock::now();
         const CpuStopwatch cpu(context.threads);
@@ -204,6 +216,8 @@ private:
     Resolved options_;
     std::string checkpoint_;
     std::string checkpoint_label_;  ///< "model M, step S" of checkpoint.json (report labels)
+    std::string checkpoint_sha256_;  ///< of its weights file (DescribeCheckpoint)
+    std::string checkpoint_source_;  ///< shipped | authors | trained
     nlohmann::json inference_ = nlohmann::json::object();  ///< {"attention": ...} when given
     nlohmann::json cost_config_;  ///< the network's zoo config, what ComputeForwardCost counts
     std::mutex load_mutex_;
@@ -231,6 +245,11 @@ std::string CheckpointLabel(const std::string& dir) {
         label += ", step " + std::to_string(j["steps"].get<std::uint64_t>());
     } else if (j.contains("imported_from")) {
         label += ", imported";
+        const auto& from = j["imported_from"];
+        if (from.is_object() && from.contains("preset") && from["preset"].is_string() &&
+            !from["preset"].get<std::string>().empty()) {
+            label += " (preset " + from["preset"].get<std::string>() + ")";
+        }
     }
     return label;
 }
@@ -292,6 +311,38 @@ MethodInfo MakeInfo(const ogmm::NetworkFamily& family, const ogmm::LearnedMethod
 }
 
 }  // namespace
+
+std::string CheckpointInfo::Describe() const {
+    return label + " (" + source + ", sha256 " + sha256.substr(0, 12) + ")";
+}
+
+CheckpointInfo DescribeCheckpoint(const std::string& dir) {
+    namespace fs = std::filesystem;
+    const nlohmann::json j = ogmm::ReadCheckpointJson(dir);  // throws naming the folder
+    CheckpointInfo info;
+    info.dir = dir;
+    info.label = CheckpointLabel(dir);
+    const std::string weights = j.contains("weights") && j["weights"].is_string()
+                                    ? j["weights"].get<std::string>()
+                                    : std::string("weights.pt");
+    info.sha256 = Sha256File((fs::path(dir) / weights).string());
+    std::error_code ec;
+    const fs::path root = fs::weakly_canonical(ShippedCheckpointDir(""), ec);
+    const fs::path here = fs::weakly_canonical(dir, ec);
+    const auto rel = here.lexically_relative(root);
+    const bool inside = !rel.empty() && rel.native().rfind("..", 0) != 0;
+    info.source = j.contains("imported_from") ? "authors" : inside ? "shipped" : "trained";
+    return info;
+}
+
+std::string DefaultCheckpointDir(const std::string& method) {
+    for (const auto& family : ogmm::Families()) {
+        for (const auto& m : family.methods) {
+            if (m.name == method) return ShippedCheckpointDir(family.shipped_model);
+        }
+    }
+    return "";
+}
 
 std::vector<MethodInfo> LearnedMethodInfos() {
     std::vector<MethodInfo> out;

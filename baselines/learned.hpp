@@ -20,6 +20,26 @@ std::vector<MethodInfo> LearnedMethodInfos();
 /// variable is set, else <source dir baked in at build time>/data/models/<name>.
 std::string ShippedCheckpointDir(const std::string& name);
 
+/// The shipped checkpoint folder learned method `method` runs when its checkpoint parameter is
+/// "" (ShippedCheckpointDir of its family's shipped model); "" when `method` is not a learned
+/// method.
+std::string DefaultCheckpointDir(const std::string& method);
+
+/// Which weights a learned method ran, as result rows and table captions name them.
+struct CheckpointInfo {
+    std::string dir;
+    std::string label;   ///< "model M, step S" / "model M, imported (preset P)"
+    std::string sha256;  ///< of the weights file (the folder's checkpoint.json "weights")
+    /// "shipped" (under the shipped models folder), "authors" (imported from the authors'
+    /// file) or "trained" (a user's `regbench train` folder elsewhere)
+    std::string source;
+    /// "label (source, sha256 first 12)" for captions.
+    std::string Describe() const;
+};
+/// Describes checkpoint folder `dir`; throws std::runtime_error naming it when its
+/// checkpoint.json or weights file cannot be read.
+CheckpointInfo DescribeCheckpoint(const std::string& dir);
+
 /// ICP refinement settings of the OGMM evaluation: Open3D point-to-point ICP started from the
 /// network's estimate.
 struct IcpRefineOptions {

@@ -18,9 +18,11 @@
 
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
+#include "core/json_limits.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "experiments/experiment_file.hpp"
+#include "experiments/weights_manifest.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -304,6 +306,52 @@ void ValidateOptions(const ReproduceOptions& o, const std::vector<ExperimentFile
     }
 }
 
+/// `methods` with each learned method's checkpoint of experiment `id` (a checkpoint parameter
+/// where it is not the method's shipped folder, so rows of the shipped weights stay as they
+/// were), and in `note` the weights every learned method runs, for the captions.
+std::vector<MethodSpec> WithWeights(std::vector<MethodSpec> methods, const WeightsPlan& weights,
+                                    const std::string& id, std::string* note) {
+    const auto it = weights.find(id);
+    if (it == weights.end()) return methods;
+    for (auto& spec : methods) {
+        const auto c = it->second.find(spec.name);
+        if (c == it->second.end()) continue;
+        if (!c->second.is_default) spec.params["checkpoint"] = c->second.checkpoint;
+        *note += (note->empty() ? "" : "; ") + spec.name + " = " + c->second.Describe();
+    }
+    return methods;
+}
+
+/// The weights manifest's plan for this run (refused before any work when an entry does not
+/// fit), recorded in OUT/weights.json; a folder run with other weights is refused.
+WeightsPlan PlanWeights(const std::vector<ExperimentFile>& files, const ReproduceOptions& o,
+                        const fs::path& out, std::ostream& log) {
+    const std::string path = o.weights.empty() ? DefaultWeightsManifestPath() : o.weights;
+    const WeightsManifest manifest =
+        path.empty() ? WeightsManifest{} : ReadWeightsManifest(path);
+    // Every experiment of the files, not only those of --tables: a manifest of the whole
+    // paper fits a run of one table, and the record does not change with --tables.
+    std::vector<WeightsTarget> targets;
+    for (const auto& f : files) {
+        std::vector<std::string> names = f.methods;
+        if (names.empty()) {
+            for (const auto& m : AllMethods()) names.push_back(m.name);
+        }
+        for (const auto& e : f.experiments) targets.push_back({e.id, f.table, names});
+    }
+    const WeightsPlan plan = ResolveWeights(manifest, targets, (out / "weights").string(), log);
+    const nlohmann::json now = WeightsPlanJson(manifest, plan);
+    const fs::path record = out / "weights.json";
+    fs::create_directories(out);
+    if (fs::exists(record)) {
+        CheckSameWeights(ReadJsonFileBounded(record.string(), record.string()), now,
+                         "reproduce: " + out.string());
+    }
+    WriteText(record, now.dump(1) + "\n");
+    if (!manifest.path.empty()) log << "reproduce: weights from " << manifest.path << "\n";
+    return plan;
+}
+
 /// Each experiment's result rows, pair-file provenance and pairs, by experiment id.
 struct ExperimentOutputs {
     std::map<std::string, std::vector<ResultRow>> rows;
@@ -314,14 +362,16 @@ struct ExperimentOutputs {
 /// Generates and runs every experiment; each step is skipped or resumed when done before.
 ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experiments,
                                  const std::map<std::string, std::vector<MethodSpec>>& methods,
-                                 const ReproduceOptions& o, const fs::path& out,
-                                 ReproduceSummary& summary, std::ostream& log) {
+                                 const WeightsPlan& weights, const ReproduceOptions& o,
+                                 const fs::path& out, ReproduceSummary& summary,
+                                 std::ostream& log) {
     ExperimentOutputs x;
     for (const auto& e : experiments) {
         const std::string& id = e.spec.id;
         const fs::path pairs = out / "pairs" / (id + ".h5");
         const fs::path results = out / "results" / (id + ".jsonl");
-        const auto& m = methods.at(e.table);
+        std::string weights_note;
+        const auto m = WithWeights(methods.at(e.table), weights, id, &weights_note);
         if (m.empty()) {  // a file naming only learned methods, none trained in this build
             log << "reproduce: " << id << ": none of its methods can run, skipped\n";
             continue;
@@ -333,6 +383,7 @@ ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experimen
         x.rows[id] = ReadResultRows(results.string());
         x.provenance[id] = ProvenanceOfPairFile(pairs.string());
         x.provenance[id].fallback = e.fallback;
+        x.provenance[id].weights = weights_note;
         x.pairs[id] = ReadPairFile(pairs.string());
     }
     return x;
@@ -593,6 +644,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     if (folder.filename().empty() && folder.has_parent_path()) folder = folder.parent_path();
     CreateParentFolders(folder.string());
     const OutputLock lock(folder.string());
+    const WeightsPlan weights = PlanWeights(files, o, out, log);
     fs::create_directories(out / "pairs");
     fs::create_directories(out / "results");
     summary.out_dir = out.string();
@@ -600,7 +652,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     const auto methods = ChooseAllMethods(files, o, &unavailable, log);
     summary.experiments = experiments.size();
 
-    ExperimentOutputs x = RunExperiments(experiments, methods, o, out, summary, log);
+    ExperimentOutputs x = RunExperiments(experiments, methods, weights, o, out, summary, log);
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     auto variant_sets = RunVariants(files, methods, x, o, out, summary, log);
     auto timing_sets = RunTimingVariants(files, methods, x, o, out, summary, log);

@@ -31,6 +31,9 @@ struct ReproduceOptions {
     std::uint64_t seed = 1;            ///< benchmark seed of every pair file
     std::vector<std::string> methods;  ///< empty: every registered method that can be created
     bool progress = true;              ///< progress lines on stderr
+    /// Weights manifest (experiments/weights_manifest.hpp): which checkpoint each learned
+    /// method runs in each experiment; "" = the shipped one (data/models/weights.json).
+    std::string weights;
 };
 
 struct ReproduceSummary {

@@ -51,6 +51,7 @@ std::string DescribeSetData(const ResultSet& s) {
                                   : fmt::format(", noise sigma {:g}", p.noise_sigma);
     }
     if (!p.fallback.empty()) d += " [" + p.fallback + "]";
+    if (!p.weights.empty()) d += "; weights: " + p.weights;
     return d;
 }
 

@@ -81,6 +81,9 @@ struct Provenance {
     /// uses item k mod items), "" when the pair file does not say (older files).
     std::string selection;
     double noise_sigma = std::nan("");  ///< jitter sigma applied (0: noise-free; NaN: unknown)
+    /// The weights each learned method ran on these pairs ("ogmm = model ogmm-small, step 523
+    /// (shipped, sha256 ...); ..."); "" when no learned method ran.
+    std::string weights;
 };
 
 struct Table;

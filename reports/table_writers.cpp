@@ -80,7 +80,7 @@ const std::vector<std::string> kCsvHeader = {
     "ci95_half_width", "ci95_lo", "ci95_hi",   "text",     "pairs",     "pairs_file",
     "pairs_hash", "dataset",      "split",     "protocol", "pairing",   "seed",
     "points",     "keep",         "regbench_version", "fallback", "gt_ccd_floor", "selection",
-    "noise_sigma"};
+    "noise_sigma", "weights"};
 // clang-format on
 
 }  // namespace
@@ -406,7 +406,8 @@ nlohmann::json TablesToJson(const std::vector<Table>& tables) {
                                       {"fallback", p ? p->fallback : ""},
                                       {"gt_ccd_floor", p ? num(p->gt_ccd_floor) : nlohmann::json()},
                                       {"selection", p ? p->selection : ""},
-                                      {"noise_sigma", p ? num(p->noise_sigma) : nlohmann::json()}};
+                                      {"noise_sigma", p ? num(p->noise_sigma) : nlohmann::json()},
+                                      {"weights", p ? p->weights : ""}};
                 out.push_back(rec);
             }
         }
