@@ -21,6 +21,7 @@
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "experiments/experiment_file.hpp"
+#include "experiments/reproduce_steps.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -329,8 +330,7 @@ ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experimen
         summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
         const RunOptions run = ExperimentRun(o, pairs, m, results);
         log << "reproduce: " << id << ": running " << m.size() << " methods\n";
-        summary.rows_run += RunBenchmark(run).rows_written;
-        x.rows[id] = ReadResultRows(results.string());
+        x.rows[id] = RunResultFile(run, o, out.string(), summary);  // by step (reproduce_steps)
         x.provenance[id] = ProvenanceOfPairFile(pairs.string());
         x.provenance[id].fallback = e.fallback;
         x.pairs[id] = ReadPairFile(pairs.string());
@@ -375,9 +375,8 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
                                                  out / "results" / (stem + ".jsonl"));
             log << "reproduce: " << f.table << ": variant " << row.row << " (checkpoint " << dir
                 << ")\n";
-            summary.rows_run += RunBenchmark(run).rows_written;
             variant_sets[f.table].push_back(
-                {v.rows_are_groups ? row.row : "", ReadResultRows(run.out_path),
+                {v.rows_are_groups ? row.row : "", RunResultFile(run, o, out.string(), summary),
                  x.provenance.at(v.pairs_of), v.rows_are_groups ? "" : row.row});
         }
     }
@@ -415,9 +414,8 @@ std::map<std::string, std::vector<ResultSet>> RunTimingVariants(
                                                  out / "results" / (stem + ".jsonl"));
             log << "reproduce: " << f.table << ": row " << v.row << " (" << v.method << " "
                 << v.params.dump() << ")\n";
-            summary.rows_run += RunBenchmark(run).rows_written;
-            sets[f.table].push_back(
-                {"", ReadResultRows(run.out_path), x.provenance.at(f.timing_of), v.row});
+            sets[f.table].push_back({"", RunResultFile(run, o, out.string(), summary),
+                                     x.provenance.at(f.timing_of), v.row});
         }
     }
     return sets;
@@ -592,18 +590,20 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     fs::path folder = out.lexically_normal();
     if (folder.filename().empty() && folder.has_parent_path()) folder = folder.parent_path();
     CreateParentFolders(folder.string());
-    const OutputLock lock(folder.string());
+    const OutputLock lock(StepLockFolder(o, folder.string()));  // --shard: its own folder
     fs::create_directories(out / "pairs");
     fs::create_directories(out / "results");
     summary.out_dir = out.string();
     std::map<std::string, std::string> unavailable;
     const auto methods = ChooseAllMethods(files, o, &unavailable, log);
     summary.experiments = experiments.size();
+    CheckStep(o, experiments, methods, out.string());  // --prepare, --shard, --render
 
     ExperimentOutputs x = RunExperiments(experiments, methods, o, out, summary, log);
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     auto variant_sets = RunVariants(files, methods, x, o, out, summary, log);
     auto timing_sets = RunTimingVariants(files, methods, x, o, out, summary, log);
+    if (FinishStep(o, out.string(), summary, log)) return summary;  // --prepare, --shard
     const std::vector<Table> tables =
         BuildTables(files, experiments, x, variant_sets, timing_sets, unavailable, paper, o);
 
