@@ -7,6 +7,8 @@
 #                   a shard that lost rows runs only those
 #   refusals        bad --shard (exit 2), steps out of order or with other options, render of
 #                   missing, doubled or mixed shards: each refused naming the cause or the rows
+#   array_defaults  scripts/slurm/regbench-array.sbatch's shard and merge steps with their
+#                   default settings produce rows a `reproduce` folder resumes as its own
 set -uo pipefail
 bin="$1"
 src="$2"
@@ -101,6 +103,31 @@ refusals)
   rb reproduce "${args[@]}" --out r --render || fail "final render: $(cat "$T/err")"
   [ -f r/tables.md ] || fail "the final render wrote no tables.md"
   echo "ok: bad --shard exit 2; unprepared, mismatched, incomplete, doubled, mixed refused"
+  ;;
+array_defaults)
+  # The array script's shard and merge steps as Slurm would start them, TIMEOUT left unset.
+  args=(--quick --tables table1 --pairs 3 --methods identity,icp)
+  rb reproduce "${args[@]}" --out r --prepare || fail "prepare: $(cat "$T/err")"
+  for id in tab1_same tab1_cross; do
+    mkdir "a_$id"  # the script's submission step makes OUT
+    for i in 0 1; do
+      env -u TIMEOUT SLURM_JOB_ID=1 SLURM_ARRAY_TASK_ID=$i REGBENCH_STEP=shard \
+        PAIRS="r/pairs/$id.h5" METHODS=identity,icp OUT="a_$id" SHARDS=2 REGBENCH="$bin" \
+        bash "$src/scripts/slurm/regbench-array.sbatch" 2>"$T/err" ||
+        fail "array shard $i of $id: $(cat "$T/err")"
+    done
+    env -u TIMEOUT SLURM_JOB_ID=2 REGBENCH_STEP=merge PAIRS="r/pairs/$id.h5" METHODS=identity,icp \
+      OUT="a_$id" SHARDS=2 REGBENCH="$bin" bash "$src/scripts/slurm/regbench-array.sbatch" \
+      2>"$T/err" || fail "array merge of $id: $(cat "$T/err")"
+    cp "a_$id/merged.jsonl" "r/results/$id.jsonl"
+  done
+  # reproduce resumes only rows of its own settings (--timeout 120 by default): every merged
+  # row must be kept, no call redone.
+  rb reproduce "${args[@]}" --out r ||
+    fail "reproduce refused the array's rows (its defaults disagree): $(cat "$T/err")"
+  grep -q "(0 pair files generated, 0 calls run)" "$T/err" ||
+    fail "reproduce redid calls of the array's rows: $(cat "$T/err")"
+  echo "ok: the array script's default rows resume in reproduce as they are"
   ;;
 *)
   fail "unknown scenario '$scenario'"

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Stands up a real single-node Slurm (slurmctld + slurmd + munge on loopback, private ports,
-# everything under a temporary directory), submits scripts/slurm/regbench-array.sbatch for a
-# small benchmark (4 array tasks + the afterok merge job), waits, and checks that the merged
-# result equals a single-process run (timing fields aside). Stops every daemon it started.
+# everything under a temporary directory), submits scripts/slurm/regbench-array.sbatch with its
+# defaults for a small benchmark (4 array tasks + the afterok merge job), waits, and checks that
+# the merged result equals a single-process run at `run --timeout 120`, the script's default
+# and reproduce's (timing fields aside). Stops every daemon it started.
 # Usage: slurm_test.sh REGBENCH SOURCE_DIR. Exit 77 (CTest: skipped) with the reason printed
 # when the Slurm/munge packages are absent or the test is not run as root (slurmd needs root).
 set -uo pipefail
@@ -115,7 +116,7 @@ done
 [ "$state" = COMPLETED ] || fail "merge job $merge_id ended in state '$state'"
 
 "$bin" run --pairs "$B/out/pairs.h5" --methods identity,icp --out "$B/out/single.jsonl" -q \
-  2>/dev/null || fail "single-process run"
+  --timeout 120 2>/dev/null || fail "single-process run"
 strip() { sed -E 's/"(cpu_)?seconds":[^,]*,//g; s/"machine":\{[^}]*\},?//g' "$1"; }
 diff <(strip "$B/out/single.jsonl") <(strip "$B/out/res/merged.jsonl") >/dev/null ||
   fail "merged result differs from the single-process run"
