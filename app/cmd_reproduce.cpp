@@ -53,7 +53,28 @@ void SetupReproduceCommand(CLI::App* cmd) {
                     "OUT/weights); default: the shipped data/models/weights.json "
                     "(docs/reproducing.md)")
         ->check(CLI::ExistingFile);
-    cmd->callback([o] {
+    // The steps of a run shared by several machines or a Slurm array (docs/cluster.md, "The
+    // paper's tables on a cluster"; scripts/slurm/regbench-reproduce.sbatch submits them).
+    auto shard = std::make_shared<std::string>();
+    auto prepare = cmd->add_flag(
+        "--prepare",
+        "Shared run, step 1 (once): generate every pair file into --out and record the options");
+    auto shard_opt = cmd->add_option(
+        "--shard", *shard,
+        "Shared run, step 2: run shard i of n (pairs k with k % n == i) of every experiment's "
+        "calls into OUT/shards/<i>-of-<n>/, resumable; given as i/n");
+    auto render = cmd->add_flag("--render",
+                                "Shared run, step 3: merge the shards into OUT/results/ (every "
+                                "experiment, pair and method exactly once) and write the reports");
+    prepare->excludes(shard_opt)->excludes(render);
+    shard_opt->excludes(render);
+    cmd->callback([o, shard, prepare, shard_opt, render] {
+        if (*prepare) o->step = ReproduceOptions::Step::kPrepare;
+        if (*render) o->step = ReproduceOptions::Step::kRender;
+        if (*shard_opt) {
+            o->step = ReproduceOptions::Step::kShard;
+            ParseShard(*shard, &o->shard_index, &o->shard_count);
+        }
         // The one output rule (docs/usage.md, "Outputs"): the folder may exist (a second
         // invocation continues it) but is never a link to another folder nor inside an input.
         OutputRule rule;
@@ -66,6 +87,14 @@ void SetupReproduceCommand(CLI::App* cmd) {
         }
         CheckOutputRule(o->out_dir, inputs, rule);
         const ReproduceSummary s = Reproduce(*o, std::cerr);
+        if (o->step == ReproduceOptions::Step::kPrepare) {
+            std::cout << "pairs:         " << s.out_dir << "/pairs\n";
+            return;
+        }
+        if (o->step == ReproduceOptions::Step::kShard) {
+            std::cout << "shard results: " << s.shard_dir << "\n";
+            return;
+        }
         std::cout << "report folder: " << s.out_dir << "\n"
                   << "tables:        " << s.markdown_path << "\n"
                   << "HTML report:   " << s.html_path << "\n";

@@ -23,6 +23,7 @@
 #include "datasets/dataset_shapes.hpp"
 #include "experiments/experiment_file.hpp"
 #include "experiments/weights_manifest.hpp"
+#include "experiments/reproduce_steps.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -323,7 +324,9 @@ std::vector<MethodSpec> WithWeights(std::vector<MethodSpec> methods, const Weigh
 }
 
 /// The weights manifest's plan for this run (refused before any work when an entry does not
-/// fit), recorded in OUT/weights.json; a folder run with other weights is refused.
+/// fit), recorded in OUT/weights.json; a folder run with other weights is refused. A shared
+/// run's --prepare imports the authors' files and writes the record; --shard and --render
+/// only check against it (they run at the same time and must not write it).
 WeightsPlan PlanWeights(const std::vector<ExperimentFile>& files, const ReproduceOptions& o,
                         const fs::path& out, std::ostream& log) {
     const std::string path = o.weights.empty() ? DefaultWeightsManifestPath() : o.weights;
@@ -339,15 +342,20 @@ WeightsPlan PlanWeights(const std::vector<ExperimentFile>& files, const Reproduc
         }
         for (const auto& e : f.experiments) targets.push_back({e.id, f.table, names});
     }
-    const WeightsPlan plan = ResolveWeights(manifest, targets, (out / "weights").string(), log);
+    const bool shared_step =
+        o.step == ReproduceOptions::Step::kShard || o.step == ReproduceOptions::Step::kRender;
+    const WeightsPlan plan =
+        ResolveWeights(manifest, targets, (out / "weights").string(), log, !shared_step);
     const nlohmann::json now = WeightsPlanJson(manifest, plan);
     const fs::path record = out / "weights.json";
-    fs::create_directories(out);
     if (fs::exists(record)) {
         CheckSameWeights(ReadJsonFileBounded(record.string(), record.string()), now,
                          "reproduce: " + out.string());
     }
-    WriteText(record, now.dump(1) + "\n");
+    if (!shared_step) {
+        fs::create_directories(out);
+        WriteText(record, now.dump(1) + "\n");
+    }
     if (!manifest.path.empty()) log << "reproduce: weights from " << manifest.path << "\n";
     return plan;
 }
@@ -379,8 +387,7 @@ ExperimentOutputs RunExperiments(const std::vector<PlannedExperiment>& experimen
         summary.pairs_generated += EnsurePairs(e, pairs, o, log) ? 1 : 0;
         const RunOptions run = ExperimentRun(o, pairs, m, results);
         log << "reproduce: " << id << ": running " << m.size() << " methods\n";
-        summary.rows_run += RunBenchmark(run).rows_written;
-        x.rows[id] = ReadResultRows(results.string());
+        x.rows[id] = RunResultFile(run, o, out.string(), summary);  // by step (reproduce_steps)
         x.provenance[id] = ProvenanceOfPairFile(pairs.string());
         x.provenance[id].fallback = e.fallback;
         x.provenance[id].weights = weights_note;
@@ -426,9 +433,8 @@ std::map<std::string, std::vector<ResultSet>> RunVariants(
                                                  out / "results" / (stem + ".jsonl"));
             log << "reproduce: " << f.table << ": variant " << row.row << " (checkpoint " << dir
                 << ")\n";
-            summary.rows_run += RunBenchmark(run).rows_written;
             variant_sets[f.table].push_back(
-                {v.rows_are_groups ? row.row : "", ReadResultRows(run.out_path),
+                {v.rows_are_groups ? row.row : "", RunResultFile(run, o, out.string(), summary),
                  x.provenance.at(v.pairs_of), v.rows_are_groups ? "" : row.row});
         }
     }
@@ -466,9 +472,8 @@ std::map<std::string, std::vector<ResultSet>> RunTimingVariants(
                                                  out / "results" / (stem + ".jsonl"));
             log << "reproduce: " << f.table << ": row " << v.row << " (" << v.method << " "
                 << v.params.dump() << ")\n";
-            summary.rows_run += RunBenchmark(run).rows_written;
-            sets[f.table].push_back(
-                {"", ReadResultRows(run.out_path), x.provenance.at(f.timing_of), v.row});
+            sets[f.table].push_back({"", RunResultFile(run, o, out.string(), summary),
+                                     x.provenance.at(f.timing_of), v.row});
         }
     }
     return sets;
@@ -643,7 +648,7 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     fs::path folder = out.lexically_normal();
     if (folder.filename().empty() && folder.has_parent_path()) folder = folder.parent_path();
     CreateParentFolders(folder.string());
-    const OutputLock lock(folder.string());
+    const OutputLock lock(StepLockFolder(o, folder.string()));  // --shard: its own folder
     const WeightsPlan weights = PlanWeights(files, o, out, log);
     fs::create_directories(out / "pairs");
     fs::create_directories(out / "results");
@@ -651,11 +656,13 @@ ReproduceSummary Reproduce(const ReproduceOptions& o, std::ostream& log) {
     std::map<std::string, std::string> unavailable;
     const auto methods = ChooseAllMethods(files, o, &unavailable, log);
     summary.experiments = experiments.size();
+    CheckStep(o, experiments, methods, out.string());  // --prepare, --shard, --render
 
     ExperimentOutputs x = RunExperiments(experiments, methods, weights, o, out, summary, log);
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     auto variant_sets = RunVariants(files, methods, x, o, out, summary, log);
     auto timing_sets = RunTimingVariants(files, methods, x, o, out, summary, log);
+    if (FinishStep(o, out.string(), summary, log)) return summary;  // --prepare, --shard
     const std::vector<Table> tables =
         BuildTables(files, experiments, x, variant_sets, timing_sets, unavailable, paper, o);
 

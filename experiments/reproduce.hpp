@@ -34,6 +34,13 @@ struct ReproduceOptions {
     /// Weights manifest (experiments/weights_manifest.hpp): which checkpoint each learned
     /// method runs in each experiment; "" = the shipped one (data/models/weights.json).
     std::string weights;
+    /// The run whole on one machine, or one step of it shared by several machines or a Slurm
+    /// array (experiments/reproduce_steps.hpp, docs/cluster.md): generate the pairs, run one
+    /// shard of every result file's calls, or merge the shards and write the reports.
+    enum class Step { kAll, kPrepare, kShard, kRender };
+    Step step = Step::kAll;
+    int shard_index = 0;  ///< kShard: this shard, of
+    int shard_count = 1;  ///< kShard: this many
 };
 
 struct ReproduceSummary {
@@ -43,6 +50,9 @@ struct ReproduceSummary {
     std::size_t experiments = 0;
     std::size_t pairs_generated = 0;  ///< pair files written by this invocation
     std::size_t rows_run = 0;         ///< method calls made by this invocation (resume skips)
+    std::string shard_dir;            ///< kShard: the folder of this shard's results
+    /// kRender: the result files whose shards did not merge, each with the rows named.
+    std::vector<std::string> incomplete;
 };
 
 struct Provenance;

@@ -149,7 +149,7 @@ std::string DefaultWeightsManifestPath() {
 // every target's learned methods), each step using what the one before established.
 WeightsPlan ResolveWeights(const WeightsManifest& manifest,
                            const std::vector<WeightsTarget>& targets,
-                           const std::string& import_dir, std::ostream& log) {
+                           const std::string& import_dir, std::ostream& log, bool may_import) {
     WeightsPlan plan;
 #ifdef REGBENCH_HAVE_LEARNED
     std::vector<std::string> learned;
@@ -222,6 +222,10 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
             fs::path(import_dir) / (ImportFolderName(e, i) + "-" + Sha256Hex(key).substr(0, 12));
         dirs[i] = dir.string();
         if (fs::exists(dir / "checkpoint.json")) continue;
+        if (!may_import) {
+            Refuse(e.where, e.authors_file + " is not imported into " + dir.string() +
+                                " yet: run `reproduce --prepare` with this manifest first");
+        }
         fs::create_directories(import_dir);
         log << "reproduce: importing " << e.authors_file << " (--from " << e.from
             << (e.preset.empty() ? "" : " --preset " + e.preset) << ") into " << dir.string()
@@ -267,6 +271,7 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
     (void)targets;
     (void)import_dir;
     (void)log;
+    (void)may_import;
     if (!manifest.entries.empty()) {
         Refuse(manifest.entries.front().where, "this build has no learned methods (LibTorch)");
     }

@@ -66,10 +66,13 @@ struct WeightsTarget {
 /// authors' files that exist with a known family (refused naming the entry). Then imports each
 /// authors' file once into `import_dir`/<entry> (kept when an earlier invocation imported the
 /// same file with the same settings) and describes every learned method's weights in every
-/// target. Without LibTorch: an empty plan, and an entry is refused.
+/// target. With `may_import` false (a shared run's shards), an authors' file not imported yet
+/// is refused, naming the step that imports it. Without LibTorch: an empty plan, and an entry
+/// is refused.
 WeightsPlan ResolveWeights(const WeightsManifest& manifest,
                            const std::vector<WeightsTarget>& targets,
-                           const std::string& import_dir, std::ostream& log);
+                           const std::string& import_dir, std::ostream& log,
+                           bool may_import = true);
 
 /// The plan as JSON (written to OUT/weights.json) and the refusal of a resumed folder whose
 /// recorded plan differs, naming the first difference.

@@ -374,7 +374,9 @@ void SetMeanWithCi(const std::vector<double>& v, const std::string& stream, Cell
 struct Timings {
     std::vector<std::string> order;
     std::map<std::string, TimingRow> by_label;
-    std::set<std::string> learned_blas;
+    /// GEMM rates (GMAC/s) by BLAS: each process measures its own (runners/, learned.cpp), so
+    /// the shards of one run (reproduce --shard) bring one each.
+    std::map<std::string, std::vector<double>> learned_blas;
 };
 
 Timings CollectTimings(const std::vector<ResultSet>& sets) {
@@ -399,9 +401,8 @@ Timings CollectTimings(const std::vector<ResultSet>& sets) {
             const auto blas =
                 r.result.extra.is_object() ? r.result.extra.find("blas") : r.result.extra.end();
             if (blas != r.result.extra.end() && blas->is_string() && std::isfinite(floor)) {
-                t.learned_blas.insert(
-                    fmt::format("{} at {:.1f} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
-                                blas->get<std::string>(), ExtraNumber(r, "gemm_gmac_per_s")));
+                t.learned_blas[blas->get<std::string>()].push_back(
+                    ExtraNumber(r, "gemm_gmac_per_s"));
             }
         }
     }
@@ -470,7 +471,15 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
     for (const auto& s : files) t.provenance.push_back(s.provenance);
     AddFloorNotes(files, &t);
     std::string learned;
-    for (const auto& b : timings.learned_blas) learned += (learned.empty() ? "" : "; ") + b;
+    for (const auto& [b, rates] : timings.learned_blas) {
+        // One BLAS once, at its rate or, measured by several processes, their range.
+        const auto [lo, hi] = std::minmax_element(rates.begin(), rates.end());
+        const std::string low = fmt::format("{:.1f}", *lo);
+        const std::string high = fmt::format("{:.1f}", *hi);
+        learned +=
+            fmt::format("{}{} at {} GMAC/s single-thread fp32 (LibTorch mm, 717x512x512)",
+                        learned.empty() ? "" : "; ", b, low == high ? low : low + "-" + high);
+    }
     t.caption = fmt::format(
         "CPU milliseconds of the method's own call per pair (successful calls; the harness's "
         "loading, metrics and I/O excluded; a learned method's call includes its ICP "

@@ -12,8 +12,14 @@ call, writing the row): with --process-cpu (user + system CPU seconds of the qui
 --overhead seconds per call are assumed. Prints per result file and in total, and the wall time
 on --cores otherwise idle cores.
 
+With --tasks N it also sizes a sharded run (`reproduce --shard i/N`, the Slurm array of
+scripts/slurm/regbench-reproduce.sbatch): task i runs pairs k with k % N == i of every result
+file, so task 0, with ceil(pairs / N) of each, is the heaviest; it prints that task's CPU
+seconds and its wall time with --cores cores per task (its --jobs), which is the array's wall
+time once every task has a node, and the core-hours the array holds.
+
 Usage: scripts/estimate_full_run.py QUICK_OUT [--plan experiments/plan] [--pairs 1000]
-           [--cores 2] [--process-cpu SECONDS | --overhead 0.06]
+           [--cores 2] [--process-cpu SECONDS | --overhead 0.06] [--tasks N]
 """
 import argparse
 import glob
@@ -54,6 +60,18 @@ def plan_pairs(plan_dir, n):
     return out
 
 
+def print_tasks(lines, overhead, tasks, cores, total):
+    """The heaviest task of a `--shard i/tasks` array (task 0: ceil(pairs / tasks) of each file)."""
+    cpu = 0.0
+    for _stem, n, m, cpu_s in lines:
+        share = -(-n // tasks)  # ceil
+        cpu += share * (cpu_s / n + overhead * m)
+    wall = cpu / cores
+    print(f"{tasks} tasks x {cores} core(s): the heaviest task {cpu:.0f} s CPU, "
+          f"{wall / 60:.0f} min wall; {tasks * cores * wall / 3600:.1f} core-hours held "
+          f"({total / 3600:.1f} CPU-hours of work)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("quick_out")
@@ -63,6 +81,8 @@ def main():
     parser.add_argument("--cores", type=int, default=2)
     parser.add_argument("--process-cpu", type=float, default=None)
     parser.add_argument("--overhead", type=float, default=0.06)
+    parser.add_argument("--tasks", type=int, default=0,
+                        help="size an array of this many shards, --cores cores each")
     args = parser.parse_args()
     pairs = plan_pairs(args.plan, args.pairs)
     files = sorted(glob.glob(os.path.join(args.quick_out, "results", "*.jsonl")))
@@ -104,6 +124,8 @@ def main():
     print(f"full run: {full_calls} calls, {full_cpu:.0f} s method CPU + {overhead * full_calls:.0f} s "
           f"harness = {total:.0f} s CPU ({total / 3600:.1f} CPU-hours), "
           f"{total / 3600 / args.cores:.1f} h on {args.cores} idle cores")
+    if args.tasks > 0:
+        print_tasks(lines, overhead, args.tasks, args.cores, total)
     return 0
 
 
