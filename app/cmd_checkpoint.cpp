@@ -53,8 +53,8 @@ std::string SettingsHelp() {
         "configs), and presets (--preset NAME), per --from family:\n";
     for (const auto& from : ogmm::AuthorsFormats()) {
         const auto settings = ogmm::AuthorsImportSettings(from);
-        out += "  " + from + (settings.empty() ? ": none, its tensors fix the whole network\n"
-                                               : ":\n");
+        out += "  " + from +
+               (settings.empty() ? ": none, its tensors fix the whole network\n" : ":\n");
         for (const auto& s : settings) {
             out += "    " + s.key + " = " + s.default_value.dump() + "  " + s.doc + "\n";
         }

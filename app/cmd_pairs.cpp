@@ -56,9 +56,8 @@ void SetupInspectCommand(CLI::App* cmd) {
             std::cout << "checkpoint: " << *file << "\n";
             for (const auto& [key, value] : c.items()) {
                 if (key == "checkpoint") continue;
-                std::cout << key << ": " << (value.is_string() ? value.get<std::string>()
-                                                                : value.dump())
-                          << "\n";
+                std::cout << key << ": "
+                          << (value.is_string() ? value.get<std::string>() : value.dump()) << "\n";
             }
             return;
         }

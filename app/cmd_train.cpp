@@ -1,6 +1,6 @@
-// `regbench train`: train a learned network (DeepGMR, OGMM) on pairs made on the fly by a pair
-// protocol (or read from a pair file), with validation, checkpoints and a wall-clock budget; and
-// `--ablation` to train the paper's ablation variants. The data and the variants come from
+// `regbench train`: train a learned network (any registered family) on pairs made on the fly by a
+// pair protocol (or read from a pair file), with validation, checkpoints and a wall-clock budget;
+// and `--ablation` to train the paper's ablation variants. The data and the variants come from
 // experiments/training.hpp.
 #include <filesystem>
 #include <fstream>
@@ -255,7 +255,8 @@ void SetupTrainCommand(CLI::App* cmd) {
     cmd->callback([cmd, a] { Run(*a, CommandLine(*cmd)); });
 }
 
-constexpr const char* kTrainSummary = "Train a learned registration network (DeepGMR, OGMM)";
+constexpr const char* kTrainSummary =
+    "Train a learned registration network (OGMM, DeepGMR, OMNet, RIENet, RGM, REGTR)";
 #else
 void SetupTrainCommand(CLI::App* cmd) {
     cmd->callback([] { throw std::runtime_error("train: this build has no LibTorch (ogmm/)"); });

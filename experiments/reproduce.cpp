@@ -22,8 +22,8 @@
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "experiments/experiment_file.hpp"
-#include "experiments/weights_manifest.hpp"
 #include "experiments/reproduce_steps.hpp"
+#include "experiments/weights_manifest.hpp"
 #include "protocols/generate.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
@@ -330,8 +330,7 @@ std::vector<MethodSpec> WithWeights(std::vector<MethodSpec> methods, const Weigh
 WeightsPlan PlanWeights(const std::vector<ExperimentFile>& files, const ReproduceOptions& o,
                         const fs::path& out, std::ostream& log) {
     const std::string path = o.weights.empty() ? DefaultWeightsManifestPath() : o.weights;
-    const WeightsManifest manifest =
-        path.empty() ? WeightsManifest{} : ReadWeightsManifest(path);
+    const WeightsManifest manifest = path.empty() ? WeightsManifest{} : ReadWeightsManifest(path);
     // Every experiment of the files, not only those of --tables: a manifest of the whole
     // paper fits a run of one table, and the record does not change with --tables.
     std::vector<WeightsTarget> targets;

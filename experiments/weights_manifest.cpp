@@ -8,8 +8,8 @@
 
 #include "baselines/learned.hpp"
 #include "core/json_limits.hpp"
-#include "core/sha256.hpp"
 #include "core/registration.hpp"
+#include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "ogmm/authors_checkpoint.hpp"
 #include "ogmm/checkpoint.hpp"
@@ -20,9 +20,9 @@ namespace regbench {
 namespace fs = std::filesystem;
 namespace {
 
-const std::set<std::string> kEntryKeys = {"experiments", "methods",  "label",  "checkpoint",
-                                          "authors_file", "from",    "preset", "settings",
-                                          "comment"};
+const std::set<std::string> kEntryKeys = {"experiments", "methods",      "label",
+                                          "checkpoint",  "authors_file", "from",
+                                          "preset",      "settings",     "comment"};
 
 [[noreturn]] void Refuse(const std::string& where, const std::string& what) {
     throw std::invalid_argument("weights manifest " + where + ": " + what);
@@ -120,13 +120,15 @@ WeightsManifest ReadWeightsManifest(const std::string& path) {
             w.settings = e["settings"];
         }
         if (w.checkpoint.empty() == w.authors_file.empty()) {
-            Refuse(where, "needs exactly one of \"checkpoint\" (a regbench checkpoint folder) "
-                          "and \"authors_file\" (an authors' .pth, with \"from\")");
+            Refuse(where,
+                   "needs exactly one of \"checkpoint\" (a regbench checkpoint folder) "
+                   "and \"authors_file\" (an authors' .pth, with \"from\")");
         }
         if (!w.checkpoint.empty() &&
             (!w.from.empty() || !w.preset.empty() || !w.settings.empty())) {
-            Refuse(where, "\"from\", \"preset\" and \"settings\" go with \"authors_file\" only "
-                          "(a checkpoint folder holds its settings)");
+            Refuse(where,
+                   "\"from\", \"preset\" and \"settings\" go with \"authors_file\" only "
+                   "(a checkpoint folder holds its settings)");
         }
         if (!w.authors_file.empty() && w.from.empty()) {
             Refuse(where, "\"authors_file\" needs \"from\": the family whose authors saved it");
@@ -148,8 +150,8 @@ std::string DefaultWeightsManifestPath() {
 // Long on purpose: one checked sequence (every entry against the plan, then the imports, then
 // every target's learned methods), each step using what the one before established.
 WeightsPlan ResolveWeights(const WeightsManifest& manifest,
-                           const std::vector<WeightsTarget>& targets,
-                           const std::string& import_dir, std::ostream& log, bool may_import) {
+                           const std::vector<WeightsTarget>& targets, const std::string& import_dir,
+                           std::ostream& log, bool may_import) {
     WeightsPlan plan;
 #ifdef REGBENCH_HAVE_LEARNED
     std::vector<std::string> learned;
@@ -171,8 +173,8 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
             if (!Contains(learned, m)) {
                 std::string names;
                 for (const auto& l : learned) names += (names.empty() ? "" : ", ") + l;
-                Refuse(e.where, "names method '" + m + "', which is not a learned method (" +
-                                    names + ")");
+                Refuse(e.where,
+                       "names method '" + m + "', which is not a learned method (" + names + ")");
             }
             for (const auto& t : targets) {
                 if ((Contains(e.experiments, t.experiment) || Contains(e.experiments, t.table)) &&
@@ -194,8 +196,7 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
             if (!Contains(formats, e.from)) {
                 std::string names;
                 for (const auto& f : formats) names += (names.empty() ? "" : ", ") + f;
-                Refuse(e.where, "\"from\": '" + e.from + "' is no authors' format (" + names +
-                                    ")");
+                Refuse(e.where, "\"from\": '" + e.from + "' is no authors' format (" + names + ")");
             }
             ogmm::ImportOptions o{e.from, e.preset, e.settings};
             try {
@@ -252,8 +253,8 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
                     label = e.label;
                 }
             }
-            c.is_default = fs::weakly_canonical(c.checkpoint) ==
-                           fs::weakly_canonical(DefaultCheckpointDir(m));
+            c.is_default =
+                fs::weakly_canonical(c.checkpoint) == fs::weakly_canonical(DefaultCheckpointDir(m));
             if (!fs::exists(fs::path(c.checkpoint) / "checkpoint.json")) {
                 continue;  // a method without its shipped checkpoint is left out by the run
             }
@@ -309,8 +310,8 @@ void CheckSameWeights(const nlohmann::json& recorded, const nlohmann::json& now,
         return j.contains(p) ? j.at(p).dump() : std::string("(none)");
     };
     throw std::invalid_argument(
-        where + " was run with other weights (first difference at " + first + ": " +
-        at(was) + " then, " + at(is) +
+        where + " was run with other weights (first difference at " + first + ": " + at(was) +
+        " then, " + at(is) +
         " now): continuing would mix checkpoints in one table; give a new --out, or "
         "remove the folder to start over");
 }

@@ -70,9 +70,8 @@ struct WeightsTarget {
 /// is refused, naming the step that imports it. Without LibTorch: an empty plan, and an entry
 /// is refused.
 WeightsPlan ResolveWeights(const WeightsManifest& manifest,
-                           const std::vector<WeightsTarget>& targets,
-                           const std::string& import_dir, std::ostream& log,
-                           bool may_import = true);
+                           const std::vector<WeightsTarget>& targets, const std::string& import_dir,
+                           std::ostream& log, bool may_import = true);
 
 /// The plan as JSON (written to OUT/weights.json) and the refusal of a resumed folder whose
 /// recorded plan differs, naming the first difference.

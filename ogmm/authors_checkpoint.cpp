@@ -138,14 +138,15 @@ ResolvedImportSettings ResolveImportSettings(const ImportOptions& options) {
     };
     for (const auto& s : format.settings) out.values[s.key] = s.default_value;
     if (!options.preset.empty()) {
-        const auto it = std::find_if(format.presets.begin(), format.presets.end(),
-                                     [&](const ImportPreset& p) { return p.name == options.preset; });
+        const auto it =
+            std::find_if(format.presets.begin(), format.presets.end(),
+                         [&](const ImportPreset& p) { return p.name == options.preset; });
         if (it == format.presets.end()) {
             std::string names;
             for (const auto& p : format.presets) names += (names.empty() ? "" : ", ") + p.name;
             throw std::invalid_argument(who + ": unknown preset '" + options.preset + "' (" +
-                                        options.from + " presets: " +
-                                        (names.empty() ? "none" : names) + ")");
+                                        options.from +
+                                        " presets: " + (names.empty() ? "none" : names) + ")");
         }
         for (const auto& [k, v] : it->values.items()) set(k, v, "preset " + it->name);
     }

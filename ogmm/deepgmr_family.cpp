@@ -75,8 +75,7 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
     } else if (d_in >= 8 && d_in % 4 == 0) {
         c = Named("deepgmr-orig");
         c["rri_k"] = d_in / 4;
-        c["rri_variant"] =
-            ToString(ParseRriVariant(settings.at("rri_variant").get<std::string>()));
+        c["rri_variant"] = ToString(ParseRriVariant(settings.at("rri_variant").get<std::string>()));
     } else {
         RefuseAuthorsFile(file, "tensor backbone.encoder.0.0.weight has " + std::to_string(d_in) +
                                     " input channels: neither xyz (3) nor RRI (4k)");

@@ -231,11 +231,10 @@ NetworkFamily OgmmFamily() {
     authors->module_rank = OgmmModuleRank;
     authors->check_export = CheckExport;
     // The authors' mnet() defaults; no tensor shape fixes them.
-    authors->settings = {
-        {"clusters", 128, "GMM components J (the authors' n_clusters)"},
-        {"anchors", 128, "FPS anchors of the clustered attention (km_clusters)"},
-        {"heads", 4, "attention heads (num_heads)"},
-        {"k", 20, "DGCNN neighbours (gnn_k)"}};
+    authors->settings = {{"clusters", 128, "GMM components J (the authors' n_clusters)"},
+                         {"anchors", 128, "FPS anchors of the clustered attention (km_clusters)"},
+                         {"heads", 4, "attention heads (num_heads)"},
+                         {"k", 20, "DGCNN neighbours (gnn_k)"}};
     f.authors = std::move(authors);
     return f;
 }

@@ -67,10 +67,12 @@ protected:
         RunCliOk("train --model deepgmr-orig --out " + (*dir_ / "dg").string() +
                  " --max-steps 1 --batch 2 --val-pairs 2 --no-val-icp --threads 1 --data-dir " +
                  (Source() / "data").string());
-        const std::map<std::string, fs::path> from = {
-            {"deepgmr", *dir_ / "dg" / "last"}, {"ogmm", models / "ogmm"},
-            {"rienet", models / "rienet"},      {"omnet", models / "omnet"},
-            {"rgm", models / "rgm"},            {"regtr", models / "regtr"}};
+        const std::map<std::string, fs::path> from = {{"deepgmr", *dir_ / "dg" / "last"},
+                                                      {"ogmm", models / "ogmm"},
+                                                      {"rienet", models / "rienet"},
+                                                      {"omnet", models / "omnet"},
+                                                      {"rgm", models / "rgm"},
+                                                      {"regtr", models / "regtr"}};
         for (const auto& [family, ck] : from) {
             RunCliOk("export-checkpoint " + ck.string() + " --to " + family + " --out " +
                      (*dir_ / (family + ".pth")).string());
@@ -98,11 +100,12 @@ protected:
     /// methods).
     static std::string Reproduce(const fs::path& out, const std::string& weights,
                                  const std::string& tables = "table1,table2",
-                                 const std::string& methods = "ogmm,deepgmr,omnet,rienet,rgm,"
-                                                              "regtr") {
-        return "reproduce --quick --pairs 2 --jobs 2 --tables " + tables + " --methods " +
-               methods + " --data-dir " + (Source() / "data").string() + " --out " +
-               out.string() + (weights.empty() ? "" : " --weights " + weights);
+                                 const std::string& methods =
+                                     "ogmm,deepgmr,omnet,rienet,rgm,"
+                                     "regtr") {
+        return "reproduce --quick --pairs 2 --jobs 2 --tables " + tables + " --methods " + methods +
+               " --data-dir " + (Source() / "data").string() + " --out " + out.string() +
+               (weights.empty() ? "" : " --weights " + weights);
     }
     static inline fs::path* dir_ = nullptr;
 };
@@ -133,9 +136,9 @@ TEST_F(CliWeights, AuthorsFilesFillTables1To3AndAreNamedInCaptionsAndRows) {
         EXPECT_EQ(extra.value("checkpoint_sha256", "").size(), 64u);
         EXPECT_NE(extra.value("checkpoint_label", "").find("imported"), std::string::npos);
     }
-    EXPECT_EQ(experiments, (std::set<std::string>{"tab1_same", "tab1_cross", "tab2_jitter",
-                                                  "tab2_density", "tab3_7scenes",
-                                                  "tab3_icl_nuim"}));
+    EXPECT_EQ(experiments,
+              (std::set<std::string>{"tab1_same", "tab1_cross", "tab2_jitter", "tab2_density",
+                                     "tab3_7scenes", "tab3_icl_nuim"}));
     // RIENet's 7Scenes file ran with the authors' 7Scenes config (no tensor holds it).
     const std::string rienet7 = rows.at({"tab3_7scenes", "rienet"}).at("checkpoint");
     const auto config = nlohmann::json::parse(Read(fs::path(rienet7) / "checkpoint.json"));
@@ -183,26 +186,37 @@ TEST_F(CliWeights, ManifestsThatDoNotFitAreRefusedBeforeAnyWork) {
          {{{"experiments", {"tab1_same"}}, {"methods", {"icp"}}, {"checkpoint", ogmm}},
           "'icp', which is not a learned method"}},
         {"not run",
-         {{{"experiments", {"supp_clusters"}}, {"methods", {"rgm"}}, {"authors_file", rgm},
+         {{{"experiments", {"supp_clusters"}},
+           {"methods", {"rgm"}},
+           {"authors_file", rgm},
            {"from", "rgm"}},
           "does not run it"}},
         {"missing folder",
          {{{"experiments", {"tab1_same"}}, {"methods", {"ogmm"}}, {"checkpoint", "no/such"}},
           "is not a regbench checkpoint folder"}},
         {"missing file",
-         {{{"experiments", {"tab1_same"}}, {"methods", {"rgm"}}, {"authors_file", "none.pth"},
+         {{{"experiments", {"tab1_same"}},
+           {"methods", {"rgm"}},
+           {"authors_file", "none.pth"},
            {"from", "rgm"}},
           "none.pth: no such file"}},
         {"format",
-         {{{"experiments", {"tab1_same"}}, {"methods", {"rgm"}}, {"authors_file", rgm},
+         {{{"experiments", {"tab1_same"}},
+           {"methods", {"rgm"}},
+           {"authors_file", rgm},
            {"from", "pointnetlk"}},
           "'pointnetlk' is no authors' format"}},
         {"preset",
-         {{{"experiments", {"tab3_7scenes"}}, {"methods", {"rienet"}}, {"authors_file", rgm},
-           {"from", "rienet"}, {"preset", "scannet"}},
+         {{{"experiments", {"tab3_7scenes"}},
+           {"methods", {"rienet"}},
+           {"authors_file", rgm},
+           {"from", "rienet"},
+           {"preset", "scannet"}},
           "unknown preset 'scannet'"}},
         {"both sources",
-         {{{"experiments", {"tab1_same"}}, {"methods", {"ogmm"}}, {"checkpoint", ogmm},
+         {{{"experiments", {"tab1_same"}},
+           {"methods", {"ogmm"}},
+           {"checkpoint", ogmm},
            {"authors_file", rgm}},
           "needs exactly one of"}}};
     for (const auto& [name, c] : cases) {
@@ -249,10 +263,10 @@ TEST_F(CliWeights, RealLayoutDatasetsAndAuthorsWeightsInOneCommand) {
         for (const double v : BumpySphere(static_cast<int>(p), 10 + i)) test.push_back(v);
     }
     // Labels 0 and 1 (same-category split, categories 0-19), 25 and 30 (cross, 20-39).
-    testing::WriteH5(mn / "ply_data_train0.h5", {{"data", {4, p, 3}, train},
-                                                 {"label", {4, 1}, {0, 1, 25, 30}, H5T_STD_U8LE}});
-    testing::WriteH5(mn / "ply_data_test0.h5", {{"data", {4, p, 3}, test},
-                                                {"label", {4, 1}, {0, 1, 25, 30}, H5T_STD_U8LE}});
+    testing::WriteH5(mn / "ply_data_train0.h5",
+                     {{"data", {4, p, 3}, train}, {"label", {4, 1}, {0, 1, 25, 30}, H5T_STD_U8LE}});
+    testing::WriteH5(mn / "ply_data_test0.h5",
+                     {{"data", {4, p, 3}, test}, {"label", {4, 1}, {0, 1, 25, 30}, H5T_STD_U8LE}});
     std::string names;
     for (int c = 0; c < 40; ++c) names += "class" + std::to_string(c) + "\n";
     testing::WriteText(mn / "shape_names.txt", names);
@@ -270,7 +284,8 @@ TEST_F(CliWeights, RealLayoutDatasetsAndAuthorsWeightsInOneCommand) {
     for (int s = 0; s < 2; ++s) {
         const std::vector<double> pts = BumpySphere(300, 20 + s);
         src.insert(src.end(), pts.begin(), pts.end());
-        for (std::size_t i = 0; i < pts.size(); ++i) tgt.push_back(pts[i] + (i % 3 == 0 ? 0.1 : 0.0));
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            tgt.push_back(pts[i] + (i % 3 == 0 ? 0.1 : 0.0));
         transform.insert(transform.end(), {1, 0, 0, 0.1, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
     }
     testing::WriteH5(data / "icl" / "test" / "icl_nuim.h5",
@@ -278,23 +293,33 @@ TEST_F(CliWeights, RealLayoutDatasetsAndAuthorsWeightsInOneCommand) {
                       {"target", {2, 300, 3}, tgt},
                       {"transform", {2, 4, 4}, transform, H5T_IEEE_F64LE}});
     const fs::path manifest = data / "weights.json";
-    std::ofstream(manifest) << nlohmann::json{
-        {"format", "regbench-weights"},
-        {"format_version", 1},
-        {"entries",
-         {{{"label", "rienet-modelnet"}, {"experiments", {"table1_modelnet_partial"}},
-           {"methods", {"rienet"}}, {"authors_file", (*dir_ / "rienet.pth").string()},
-           {"from", "rienet"}, {"preset", "modelnet40"}},
-          {{"label", "rienet-7scenes"}, {"experiments", {"tab3_7scenes"}}, {"methods", {"rienet"}},
-           {"authors_file", (*dir_ / "rienet.pth").string()}, {"from", "rienet"},
-           {"preset", "7scenes"}},
-          {{"label", "rienet-icl_nuim"}, {"experiments", {"tab3_icl_nuim"}},
-           {"methods", {"rienet"}}, {"authors_file", (*dir_ / "rienet.pth").string()},
-           {"from", "rienet"}, {"preset", "icl_nuim"}}}}}.dump();
+    std::ofstream(manifest) << nlohmann::json{{"format", "regbench-weights"},
+                                              {"format_version", 1},
+                                              {"entries",
+                                               {{{"label", "rienet-modelnet"},
+                                                 {"experiments", {"table1_modelnet_partial"}},
+                                                 {"methods", {"rienet"}},
+                                                 {"authors_file", (*dir_ / "rienet.pth").string()},
+                                                 {"from", "rienet"},
+                                                 {"preset", "modelnet40"}},
+                                                {{"label", "rienet-7scenes"},
+                                                 {"experiments", {"tab3_7scenes"}},
+                                                 {"methods", {"rienet"}},
+                                                 {"authors_file", (*dir_ / "rienet.pth").string()},
+                                                 {"from", "rienet"},
+                                                 {"preset", "7scenes"}},
+                                                {{"label", "rienet-icl_nuim"},
+                                                 {"experiments", {"tab3_icl_nuim"}},
+                                                 {"methods", {"rienet"}},
+                                                 {"authors_file", (*dir_ / "rienet.pth").string()},
+                                                 {"from", "rienet"},
+                                                 {"preset", "icl_nuim"}}}}}
+                                   .dump();
     const fs::path out = *dir_ / "real_out";
     const CliResult r = RunCli(
         "reproduce --tables table1,table3 --methods identity,rienet --pairs 2 --jobs 2 "
-        "--modelnet40 " + mn.string() + " --7scenes " + (data / "7s").string() + " --icl-nuim " +
+        "--modelnet40 " +
+        mn.string() + " --7scenes " + (data / "7s").string() + " --icl-nuim " +
         (data / "icl").string() + " --weights " + manifest.string() + " --out " + out.string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const std::string tables = Read(out / "tables.md");

@@ -70,9 +70,13 @@ TEST(WeightsManifest, LaterEntriesWinAndTablesCoverTheirExperiments) {
         {"format", "regbench-weights"},
         {"format_version", 1},
         {"entries",
-         {{{"experiments", {"table1_modelnet_partial"}}, {"methods", {"ogmm-noicp"}},
-           {"checkpoint", rgm}, {"label", "first"}},
-          {{"experiments", {"tab1_cross"}}, {"methods", {"ogmm-noicp"}}, {"checkpoint", ogmm},
+         {{{"experiments", {"table1_modelnet_partial"}},
+           {"methods", {"ogmm-noicp"}},
+           {"checkpoint", rgm},
+           {"label", "first"}},
+          {{"experiments", {"tab1_cross"}},
+           {"methods", {"ogmm-noicp"}},
+           {"checkpoint", ogmm},
            {"label", "second"}}}}}.dump();
     std::ostringstream log;
     const WeightsPlan plan = ResolveWeights(ReadWeightsManifest((dir / "m.json").string()),
@@ -89,23 +93,26 @@ TEST(WeightsManifest, LaterEntriesWinAndTablesCoverTheirExperiments) {
 TEST(WeightsManifest, FormErrorsNameTheFileAndEntry) {
     const fs::path dir = testing::FreshTempDir("weights_form");
     const auto error = [&](const nlohmann::json& entry) {
-        std::ofstream(dir / "m.json", std::ios::trunc)
-            << nlohmann::json{{"format", "regbench-weights"},
-                              {"format_version", 1},
-                              {"entries", {entry}}}
-                   .dump();
+        std::ofstream(dir / "m.json", std::ios::trunc) << nlohmann::json{
+            {"format", "regbench-weights"},
+            {"format_version", 1},
+            {"entries", {entry}}}.dump();
         return testing::ErrorOf([&] { ReadWeightsManifest((dir / "m.json").string()); });
     };
-    std::string e = error({{"experiments", {"tab1_same"}}, {"methods", {"ogmm"}},
-                           {"checkpoint", "x"}, {"weights", "y"}});
+    std::string e = error({{"experiments", {"tab1_same"}},
+                           {"methods", {"ogmm"}},
+                           {"checkpoint", "x"},
+                           {"weights", "y"}});
     EXPECT_NE(e.find("entry 1: unknown key \"weights\""), std::string::npos) << e;
     e = error({{"experiments", {"tab1_same"}}, {"methods", {"ogmm"}}});
     EXPECT_NE(e.find("needs exactly one of"), std::string::npos) << e;
-    e = error({{"experiments", {"tab1_same"}}, {"methods", {"ogmm"}}, {"checkpoint", "x"},
+    e = error({{"experiments", {"tab1_same"}},
+               {"methods", {"ogmm"}},
+               {"checkpoint", "x"},
                {"preset", "7scenes"}});
     EXPECT_NE(e.find("go with \"authors_file\" only"), std::string::npos) << e;
-    e = error({{"experiments", nlohmann::json::array()}, {"methods", {"ogmm"}},
-               {"checkpoint", "x"}});
+    e = error(
+        {{"experiments", nlohmann::json::array()}, {"methods", {"ogmm"}}, {"checkpoint", "x"}});
     EXPECT_NE(e.find("needs \"experiments\""), std::string::npos) << e;
     EXPECT_NE(e.find((dir / "m.json").string()), std::string::npos) << e;
 }

@@ -348,7 +348,8 @@ TEST_F(RienetAuthorsCheckpoint, SevenScenesPresetRecordsItsSettingsAndMatchesThe
         PairBatch batch;
         batch.source = TensorFromJson(cs.at("source"));
         batch.target = TensorFromJson(cs.at("target"));
-        const torch::Tensor want = TensorFromJson(rienet_ref_->at("cases_7scenes").at(name).at("T"));
+        const torch::Tensor want =
+            TensorFromJson(rienet_ref_->at("cases_7scenes").at(name).at("T"));
         EXPECT_LT(MaxAbs(net->Forward(batch).T, want), 1e-4);
         EXPECT_GT(MaxAbs(defaults->Forward(batch).T, want), 1e-3);
     }
