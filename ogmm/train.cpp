@@ -9,6 +9,7 @@
 #include <malloc.h>
 #endif
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -297,6 +298,87 @@ void DropTornLastLine(const fs::path& path, std::ostream& log) {
         << " bytes, cut by an interrupted write)\n";
 }
 
+/// The metrics files of a resumed run hold exactly the rows of its checkpoint's past: a row
+/// of a step after the checkpoint's (left when a save failed or was killed after its row was
+/// written, as regbench wrote them until issue 55) is dropped, and the checkpoint's own row,
+/// missing when a kill came between the save and the append, is written from its
+/// checkpoint.json "metrics". Both are said in the log.
+void KeepMetricsOfCheckpoint(const fs::path& dir, const nlohmann::json& checkpoint,
+                             std::ostream& log) {
+    const std::int64_t step = checkpoint.value("steps", std::int64_t{0});
+    const nlohmann::json row = checkpoint.value("metrics", nlohmann::json());
+    const bool has_row = row.is_object() && row.value("step", std::int64_t{-1}) == step;
+    for (const bool csv : {true, false}) {
+        const fs::path path = dir / (csv ? "metrics.csv" : "metrics.jsonl");
+        std::error_code ec;
+        if (!fs::exists(fs::symlink_status(path, ec))) continue;
+        RequireRegularOrAbsent(path.string(), "metrics file");
+        std::string text;
+        {
+            std::ifstream in(path, std::ios::binary);
+            text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        }
+        std::istringstream lines(text);
+        std::string kept, line;
+        std::int64_t last_step = -1;
+        int dropped = 0;
+        int step_column = -1;
+        for (bool first = true; std::getline(lines, line); first = false) {
+            std::int64_t row_step = -1;
+            if (csv && first) {  // the header
+                std::istringstream cells(line);
+                std::string cell;
+                for (int c = 0; std::getline(cells, cell, ','); ++c)
+                    if (cell == "step") step_column = c;
+                kept += line + "\n";
+                continue;
+            }
+            try {
+                if (csv) {
+                    std::istringstream cells(line);
+                    std::string cell;
+                    for (int c = 0; std::getline(cells, cell, ',') && c <= step_column; ++c)
+                        if (c == step_column) row_step = std::stoll(cell);
+                } else {
+                    row_step = nlohmann::json::parse(line).at("step").get<std::int64_t>();
+                }
+            } catch (const std::exception&) {
+                throw std::runtime_error(path.string() + ": a row without a readable step: " +
+                                         line.substr(0, 80));
+            }
+            if (row_step > step) {
+                ++dropped;
+                continue;
+            }
+            last_step = std::max(last_step, row_step);
+            kept += line + "\n";
+        }
+        const bool add = has_row && last_step < step;
+        if (add) {
+            if (csv) {
+                std::string cells;
+                for (const auto& [key, value] : MetricColumns(EpochMetrics{})) {
+                    (void)value;
+                    cells += (cells.empty() ? "" : ",") + row.at(key).dump();
+                }
+                kept += cells + "\n";
+            } else {
+                kept += row.dump() + "\n";
+            }
+        }
+        if (dropped == 0 && !add) continue;
+        WriteFileAtomic(path.string(), kept);
+        log << "train: " << path.string() << ": ";
+        if (dropped > 0) {
+            log << "dropped " << dropped << " row(s) after the checkpoint's step " << step;
+        }
+        if (add) {
+            log << (dropped > 0 ? "; " : "") << "wrote the checkpoint's row of step " << step;
+        }
+        log << "\n";
+    }
+}
+
 /// Every counter is checked as written: a count must be a whole number in [0, 2^53] (a step of
 /// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
 /// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
@@ -433,9 +515,14 @@ Trainer::Trainer(const nlohmann::json& config, const TrainData& data, const Trai
 }
 
 void Trainer::Start() {
-    if (fs::exists(dir_ / "last")) {
-        throw std::runtime_error("output directory " + dir_.string() +
-                                 " already holds a run (last/); pass --resume or another --out");
+    // last.tmp / last.old: a save of last/ a kill interrupted, which --resume recovers; a fresh
+    // run would have discarded it.
+    for (const char* name : {"last", "last.tmp", "last.old"}) {
+        if (fs::exists(fs::symlink_status(dir_ / name))) {
+            throw std::runtime_error("output directory " + dir_.string() +
+                                     " already holds a run (" + name +
+                                     "/); pass --resume or another --out");
+        }
     }
     fs::create_directories(dir_);
     WriteMetricsFile(dir_ / "metrics.csv", CsvLine({}, /*header=*/true), /*truncate=*/true);
@@ -468,6 +555,11 @@ void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const f
 
 void Trainer::Resume() {
     const fs::path last = dir_ / "last";
+    // A save a kill interrupted is finished or undone first (never discarded), and said so.
+    for (const char* name : {"last", "best"}) {
+        const std::string done = RecoverCheckpointFolder((dir_ / name).string());
+        if (!done.empty()) log_ << "train: " << done << "\n";
+    }
     if (!fs::exists(last))
         throw std::runtime_error("--resume: " + last.string() + " does not exist");
     const nlohmann::json j = LoadCheckpoint(last.string(), *net_, opt_.get());
@@ -485,6 +577,7 @@ void Trainer::Resume() {
     }
     if (state_.planned_steps <= 0) state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
     for (const char* name : {"metrics.csv", "metrics.jsonl"}) DropTornLastLine(dir_ / name, log_);
+    KeepMetricsOfCheckpoint(dir_, j, log_);
     elapsed_before_ = state_.elapsed_seconds;
     cpu_before_ = state_.cpu_seconds;
     log_ << "train: resumed " << last.string() << " at step " << state_.step << " of "
@@ -652,7 +745,6 @@ void Trainer::EndEpoch() {
             state_.plateau_bad = 0;
         }
     }
-    AppendMetrics(dir_, m);
     summary_.epochs.push_back(m);
     log_ << "train: validation epoch " << m.epoch << " step " << m.step << ": loss " << m.val_loss
          << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t " << m.mae_t
@@ -663,7 +755,11 @@ void Trainer::EndEpoch() {
         log_ << "; WORSE THAN THE IDENTITY (network alone)";
     }
     log_ << "\n";
+    // The metrics row describes the saved state: written once the checkpoint is (a full disk
+    // or a kill in between leaves a checkpoint without its row, which --resume writes from the
+    // checkpoint, never a row without its checkpoint).
     Checkpoint(m);
+    AppendMetrics(dir_, m);
 }
 
 void Trainer::Checkpoint(const EpochMetrics& m) {
