@@ -162,6 +162,16 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
             msg += "\n  ... and " + std::to_string(problems.size() - 30) + " more";
         RefuseAuthorsFile(pth, msg);
     }
+    // Poisoned weights (NaN, Inf, |w| > kMaxAbsWeight) imported with exit 0 and ran silently.
+    for (const auto& [au, r] : mapping) {
+        (void)r;
+        const torch::Tensor* t = Find(sd, au);
+        const std::string problem = t != nullptr ? WeightValueProblem(*t) : "";
+        if (!problem.empty()) {
+            RefuseAuthorsFile(pth, "tensor " + au + " " + problem +
+                                       "; refusing to import poisoned weights");
+        }
+    }
     nlohmann::json map_json = nlohmann::json::array();
     {
         torch::NoGradGuard no_grad;

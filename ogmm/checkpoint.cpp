@@ -105,6 +105,18 @@ bool IsCompleteCheckpoint(const fs::path& dir) {
 
 }  // namespace
 
+std::string WeightValueProblem(const torch::Tensor& t) {
+    if (!t.is_floating_point() || t.numel() == 0) return "";
+    const torch::Tensor d = t.detach().to(torch::kCPU, torch::kDouble);
+    if (torch::isnan(d).any().item<bool>()) return "holds NaN";
+    if (torch::isinf(d).any().item<bool>()) return "holds Inf";
+    const double largest = d.abs().max().item<double>();
+    if (largest <= kMaxAbsWeight) return "";
+    std::ostringstream o;
+    o << "holds |w| = " << largest << ", beyond the bound " << kMaxAbsWeight;
+    return o.str();
+}
+
 std::string CheckpointFolderPath(const std::string& dir) {
     const std::string d = WithoutTrailingSlashes(dir);
     const std::string last = fs::path(d).filename().string();
@@ -344,6 +356,17 @@ nlohmann::json LoadCheckpointAs(const std::string& dir, RegistrationNet& net,
         throw std::runtime_error(
             "checkpoint weights " + weights.string() +
             " are corrupt or do not fit the model: " + e.what_without_backtrace());
+    }
+    // Poisoned weights (NaN, Inf, |w| > kMaxAbsWeight) ran silently and gave the identity.
+    for (const bool buffers : {false, true}) {
+        for (const auto& item : buffers ? net.named_buffers() : net.named_parameters()) {
+            const std::string problem = WeightValueProblem(item.value());
+            if (!problem.empty()) {
+                throw std::runtime_error("checkpoint weights " + weights.string() + ": tensor " +
+                                         item.key() + " " + problem +
+                                         "; refusing to run poisoned weights");
+            }
+        }
     }
     if (optimizer != nullptr) {
         const fs::path opt = fs::path(dir) / kOptimizerFile;

@@ -12,6 +12,9 @@
 namespace torch::optim {
 class Optimizer;
 }  // namespace torch::optim
+namespace at {
+class Tensor;  // torch::Tensor
+}  // namespace at
 
 namespace regbench::ogmm {
 
@@ -35,6 +38,17 @@ std::string BuildGitSha();
 /// may be null.
 void SaveCheckpoint(const std::string& dir, RegistrationNet& net, const nlohmann::json& meta,
                     torch::optim::Optimizer* optimizer = nullptr);
+
+/// The largest |value| a weight may hold. Trained weights are O(1) to O(1e3); a value above
+/// 1e30 (3e38 is float's largest) overflows the first product it enters, and the network then
+/// runs on Inf and NaN. Import (import-checkpoint) and load (every checkpoint a method or
+/// --resume reads) refuse a tensor holding NaN, Inf or a value beyond it.
+constexpr double kMaxAbsWeight = 1e30;
+
+/// "" when every value of `t` is finite and within kMaxAbsWeight (and for a tensor that is not
+/// floating point or empty); else what is wrong, in words ("holds NaN", "holds Inf", "holds
+/// |w| = 3e+38, beyond the bound 1e+30").
+std::string WeightValueProblem(const at::Tensor& t);
 
 /// `dir` without trailing slashes; std::invalid_argument naming it when it is empty, "/", or
 /// ends in "." or "..": a checkpoint folder must be a folder of its own.
