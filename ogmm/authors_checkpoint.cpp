@@ -186,8 +186,9 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
     meta["config"] = config;
     meta["imported_from"] = {
         {"file", fs::absolute(pth).lexically_normal().string()},
-        {"sha256", Sha256File(pth)},
-        {"bytes", fs::file_size(pth)},
+        // Of the bytes imported, not of the name again (read once: issue 55).
+        {"sha256", contents.sha256},
+        {"bytes", contents.bytes},
         {"format", contents.format},
         {"from", options.from},
         {"module", format.module},
