@@ -47,9 +47,12 @@ nlohmann::json ToJson(const TrainConfig& c) { return c; }
 TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
     // Unknown keys (a misspelt key in a recipe) and wrong types are errors naming the key.
     const auto c = ParseConfig<TrainConfig>(j, "train config");
-    if (c.lr <= 0 || c.batch < 1 || c.epochs < 1 || c.pairs_per_epoch < c.batch) {
+    // NaN passed "lr <= 0"; 1e18 passed and ended in a LibTorch backtrace once the weights
+    // were no longer finite.
+    if (!(c.lr > 0 && c.lr <= kMaxLearningRate) || c.batch < 1 || c.epochs < 1 ||
+        c.pairs_per_epoch < c.batch) {
         throw std::invalid_argument(
-            "train config: need lr > 0, batch >= 1, epochs >= 1 and "
+            "train config: need lr in (0, 1], batch >= 1, epochs >= 1 and "
             "pairs_per_epoch >= batch: " +
             ToJson(c).dump());
     }

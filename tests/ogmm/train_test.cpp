@@ -370,6 +370,18 @@ TEST_F(SmallTrain, AKillDuringACheckpointSaveResumesToTheUninterruptedRun) {
     fs::remove_all(whole);
 }
 
+// Issue 55, item 7: `train --lr 1e18` ended in a raw LibTorch backtrace, and a recipe's NaN lr
+// passed "lr <= 0". Expected: a recipe lr outside (0, kMaxLearningRate = 1] is refused naming
+// lr; 1 itself is accepted.
+TEST(Train, RecipeLearningRateOutsideItsRangeIsRefused) {
+    for (const double lr : {1e18, 1.5, std::nan(""), 0.0, -1.0}) {
+        const std::string e =
+            regbench::testing::ErrorOf([&] { TrainConfigFromJson({{"lr", lr}}); });
+        EXPECT_NE(e.find("need lr in (0, 1]"), std::string::npos) << lr << ": " << e;
+    }
+    EXPECT_EQ(TrainConfigFromJson({{"lr", 1.0}}).lr, 1.0);
+}
+
 // A run limited by --max-steps printed the LR plan's step count and an ETA to the plan's end
 // (found 2026-12-04: `--max-steps 576` of a 2,560-step plan showed "ETA 0h58m" with 3 steps
 // left). Expected, by hand: the line names the stop step and the last line's ETA is zero.
