@@ -205,6 +205,49 @@ TEST(CliCheckpointRefusal, FolderWritersRefuseDotsAndTheCurrentFolderAndKeepOthe
     fs::remove_all(dir);
 }
 
+// Issue 55, item 2: `import-checkpoint --force` killed while replacing its folder left only
+// OUT.tmp (the old folder was removed first). Expected, for a kill (SIGKILL, exit 137) after
+// every step of the save (REGBENCH_TEST_KILL_SAVE_AT): the checkpoint exports as it is, or, in
+// the one moment it is not at its path, the refusal names the leftover; the next import
+// --force recovers and replaces it, leaving nothing beside it.
+TEST(CliCheckpointRefusal, ImportCheckpointKilledAtEveryStepOfItsSaveLeavesACheckpoint) {
+    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src, nullptr);
+    const fs::path dir = testing::FreshTempDir("import_kill");
+    const std::string pth = (dir / "m.pth").string();
+    testing::RunCliOk("export-checkpoint " + (fs::path(src) / "data" / "models" / "rgm").string() +
+                      " --to rgm --out " + pth);
+    const fs::path ck = dir / "ck";
+    const std::string import = "import-checkpoint " + pth + " --from rgm --force --out " +
+                               ck.string();
+    testing::RunCliOk(import);
+    const std::string back = (dir / "back.pth").string();
+    for (int k = 1; k <= 7; ++k) {
+        SCOPED_TRACE("killed after step " + std::to_string(k));
+        const CliResult killed = testing::RunShell("REGBENCH_TEST_KILL_SAVE_AT=" +
+                                                   std::to_string(k) + " " +
+                                                   std::string(REGBENCH_CLI) + " " + import +
+                                                   " 2>&1");
+        EXPECT_EQ(killed.exit_code, 128 + 9) << killed.output;
+        fs::remove(back);
+        const CliResult exported =
+            RunCli("export-checkpoint " + ck.string() + " --to rgm --out " + back);
+        if (fs::exists(ck)) {
+            EXPECT_EQ(exported.exit_code, 0) << exported.output;
+        } else {
+            EXPECT_EQ(k, 5);  // between the two renames only
+            EXPECT_NE(exported.output.find(ck.string() + ".tmp"), std::string::npos)
+                << exported.output;
+        }
+        testing::RunCliOk(import);
+        EXPECT_FALSE(fs::exists(ck.string() + ".tmp"));
+        EXPECT_FALSE(fs::exists(ck.string() + ".old"));
+        fs::remove(back);
+        testing::RunCliOk("export-checkpoint " + ck.string() + " --to rgm --out " + back);
+    }
+    fs::remove_all(dir);
+}
+
 // Issue 55, item 8: `import-checkpoint` on a folder or a FIFO said "no such file". Expected:
 // exit 1 naming the path and what it is.
 TEST(CliCheckpointRefusal, ImportCheckpointNamesWhatItsInputIs) {
