@@ -450,6 +450,7 @@ public:
 private:
     void Start();
     void Resume();
+    void RecoverCheckpoints();
     void RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const fs::path& last) const;
     std::future<PairBatch> Prefetch(std::int64_t step) const;
     double Step(const PairBatch& batch);
@@ -518,14 +519,12 @@ Trainer::Trainer(const nlohmann::json& config, const TrainData& data, const Trai
 }
 
 void Trainer::Start() {
-    // last.tmp / last.old: a save of last/ a kill interrupted, which --resume recovers; a fresh
-    // run would have discarded it.
-    for (const char* name : {"last", "last.tmp", "last.old"}) {
-        if (fs::exists(fs::symlink_status(dir_ / name))) {
-            throw std::runtime_error("output directory " + dir_.string() +
-                                     " already holds a run (" + name +
-                                     "/); pass --resume or another --out");
-        }
+    // A save of last/ a kill interrupted is finished or undone first, so a run whose last/ was
+    // between its renames is refused below like any other (a fresh run used to delete it).
+    RecoverCheckpoints();
+    if (fs::exists(fs::symlink_status(dir_ / "last"))) {
+        throw std::runtime_error("output directory " + dir_.string() +
+                                 " already holds a run (last/); pass --resume or another --out");
     }
     fs::create_directories(dir_);
     WriteMetricsFile(dir_ / "metrics.csv", CsvLine({}, /*header=*/true), /*truncate=*/true);
@@ -556,13 +555,18 @@ void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const f
                              "checkpoint.json 'data'; e.g. --no-jitter, --pairing)");
 }
 
-void Trainer::Resume() {
-    const fs::path last = dir_ / "last";
-    // A save a kill interrupted is finished or undone first (never discarded), and said so.
+void Trainer::RecoverCheckpoints() {
+    // A save a kill interrupted is finished or undone (a whole folder is never discarded), and
+    // said so.
     for (const char* name : {"last", "best"}) {
         const std::string done = RecoverCheckpointFolder((dir_ / name).string());
         if (!done.empty()) log_ << "train: " << done << "\n";
     }
+}
+
+void Trainer::Resume() {
+    const fs::path last = dir_ / "last";
+    RecoverCheckpoints();
     if (!fs::exists(last))
         throw std::runtime_error("--resume: " + last.string() + " does not exist");
     const nlohmann::json j = LoadCheckpoint(last.string(), *net_, opt_.get());
