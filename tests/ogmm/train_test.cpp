@@ -370,6 +370,47 @@ TEST_F(SmallTrain, AKillDuringACheckpointSaveResumesToTheUninterruptedRun) {
     fs::remove_all(whole);
 }
 
+// Issue 55, item 2: a run killed in its first save left only last.tmp, and a plain rerun started
+// over and deleted it. Expected: a whole last.tmp (killed after step 4, before its rename) is
+// renamed to last/ and the plain rerun refused like any run holding last/ (--resume then goes
+// on from step 10); an incomplete one (killed after step 2) holds no checkpoint, is removed
+// (said in the log) and the rerun starts.
+TEST_F(SmallTrain, AFreshRunRecoversAFirstSaveAKillInterrupted) {
+    for (const int k : {2, 4}) {
+        SCOPED_TRACE("first save killed after step " + std::to_string(k));
+        const fs::path dir = TempDir("first_save_" + std::to_string(k));
+        const pid_t pid = fork();
+        if (pid == 0) {
+            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+            std::ostringstream quiet;
+            Train(config, data, Options(dir, quiet, 10));
+            _exit(0);
+        }
+        int status = 0;
+        ASSERT_EQ(waitpid(pid, &status, 0), pid);
+        ASSERT_TRUE(WIFSIGNALED(status));
+        ASSERT_TRUE(fs::exists(dir / "last.tmp"));
+        ASSERT_FALSE(fs::exists(dir / "last"));
+        std::ostringstream rerun;
+        const std::string e =
+            regbench::testing::ErrorOf([&] { Train(config, data, Options(dir, rerun, 10)); });
+        EXPECT_FALSE(fs::exists(dir / "last.tmp"));
+        if (k == 4) {
+            EXPECT_NE(e.find("already holds a run (last/)"), std::string::npos) << e;
+            EXPECT_NE(rerun.str().find("finished an interrupted save"), std::string::npos)
+                << rerun.str();
+            std::ostringstream resumed;
+            EXPECT_EQ(Train(config, data, Options(dir, resumed, 0, kResume)).steps, 20);
+            EXPECT_NE(resumed.str().find("at step 10 of"), std::string::npos) << resumed.str();
+        } else {
+            EXPECT_EQ(e, "");
+            EXPECT_NE(rerun.str().find("an incomplete save"), std::string::npos) << rerun.str();
+            EXPECT_TRUE(fs::exists(dir / "last" / "checkpoint.json"));
+        }
+        fs::remove_all(dir);
+    }
+}
+
 // Issue 55, item 7: `train --lr 1e18` ended in a raw LibTorch backtrace, and a recipe's NaN lr
 // passed "lr <= 0". Expected: a recipe lr outside (0, kMaxLearningRate = 1] is refused naming
 // lr; 1 itself is accepted.
