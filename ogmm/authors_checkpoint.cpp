@@ -122,7 +122,15 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
         for (auto& kv : sd) kv.first = kv.first.substr(7);
     }
     const nlohmann::json config = InferAuthorsConfig(sd, pth, options);
-    const auto net = MakeNetFromConfig(config);
+    std::shared_ptr<RegistrationNet> net;
+    try {  // sizes inferred from shapes are checked by the family's bounds, named by file
+        net = MakeNetFromConfig(config);
+    } catch (const c10::Error& e) {
+        RefuseAuthorsFile(pth,
+                          std::string("cannot build its model: ") + e.what_without_backtrace());
+    } catch (const std::exception& e) {
+        RefuseAuthorsFile(pth, std::string("cannot build its model: ") + e.what());
+    }
     std::map<std::string, torch::Tensor> rb;
     for (const auto& [k, v] : RegbenchTensors(*net)) rb[k] = v;
     const auto mapping = AuthorsKeyMapping(options.from, config);
