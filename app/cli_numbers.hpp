@@ -87,6 +87,17 @@ inline CLI::Validator OpenInterval(double lo, double hi) {
                              });
 }
 
+/// A finite number in the closed interval [lo, hi] (a tolerance with a sensible ceiling).
+inline CLI::Validator ClosedInterval(double lo, double hi) {
+    char range[64];
+    std::snprintf(range, sizeof(range), "[%g, %g]", lo, hi);
+    return detail::Expecting("REAL", std::string("a number in ") + range,
+                             [lo, hi](const std::string& s) {
+                                 const auto v = detail::PlainReal(s);
+                                 return v && std::isfinite(*v) && *v >= lo && *v <= hi;
+                             });
+}
+
 /// Parses "i/n" with 0 <= i < n, digits only ("1/2x", "-1/2", "1/0" refused).
 inline void ParseShard(const std::string& text, int* index, int* count) {
     const auto slash = text.find('/');

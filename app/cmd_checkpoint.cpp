@@ -10,10 +10,12 @@
 #include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
+#include "core/input_file.hpp"
 #include "core/output_rule.hpp"
 #include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
 #include "ogmm/authors_checkpoint.hpp"
+#include "ogmm/checkpoint.hpp"
 #include "ogmm/family.hpp"
 #endif
 
@@ -81,8 +83,8 @@ void SetupImport(CLI::App* cmd) {
         ->check(CLI::IsMember(ogmm::AuthorsFormats()));
     cmd->add_option("--out", a->out, "Checkpoint folder to write")->required();
     cmd->add_flag("--force", a->force,
-                  "Replace an existing --out folder (all of it: a training run's best/, last/ "
-                  "and metrics too)");
+                  "Replace an existing --out checkpoint folder (never another folder: a "
+                  "training run's, or one holding other files, is refused)");
     cmd->add_option("--preset", a->options.preset,
                     "One of the authors' named configs of the --from family (its settings no "
                     "tensor fixes, e.g. rienet: modelnet40 | 7scenes | icl_nuim | kitti); "
@@ -95,15 +97,16 @@ void SetupImport(CLI::App* cmd) {
         a->options.settings = ParseSettings(a->settings);
         // Refused before the file is read: an unknown preset or key, a value of the wrong type.
         const ogmm::ResolvedImportSettings resolved = ogmm::ResolveImportSettings(a->options);
-        if (!std::filesystem::is_regular_file(a->file)) {
-            throw std::runtime_error(a->file + ": no such file");
-        }
+        // A folder, a FIFO or a device is named as such, not as "no such file".
+        RequireRegularFile(a->file);
         // The one output rule (docs/usage.md, "Outputs"): `--out m.pth` given the input m.pth,
         // or an existing training run folder, replaced them; one writer per checkpoint folder.
         OutputRule rule;
         rule.replace = a->force;
         rule.folder = true;
         const ClaimedOutput claim(a->out, {a->file}, rule);
+        // Refused before the import's work; the save checks again.
+        if (a->force) ogmm::RequireReplaceableCheckpointFolder(a->out);
         const nlohmann::json j = ogmm::ImportAuthorsCheckpoint(a->file, a->out, a->options);
         std::cout << "import-checkpoint: wrote " << a->out << " ("
                   << j.at("config").at("name").get<std::string>() << ", " << j.at("mapping").size()

@@ -28,7 +28,7 @@ void SetupCompareCommand(CLI::App* cmd) {
     auto force = std::make_shared<bool>(false);
     cmd->add_option("base", *base, "Baseline JSONL results")->required();
     cmd->add_option("new", *candidate, "Candidate JSONL results (same pair file)")->required();
-    cmd->add_option("--tolerance", *tolerance,
+    CLI::Option* tolerance_flag = cmd->add_option("--tolerance", *tolerance,
                     "Allowed increase of a metric's mean before a significant worsening fails: "
                     "a number for every metric or METRIC=VALUE,... (metric units); metrics not "
                     "named keep their defaults mae_r=0.1,mae_t=0.001,ccd=0.001,rre=0.2,"
@@ -72,7 +72,9 @@ void SetupCompareCommand(CLI::App* cmd) {
                           OutputRule{*force});
         }
         o->metrics = *metrics;
-        if (!tolerance->empty()) {
+        // Given, even empty (an unset shell variable): parsed, so '' is a usage error, not the
+        // defaults silently.
+        if (tolerance_flag->count() > 0) {
             try {
                 ParseTolerance(*tolerance, o.get());
             } catch (const std::invalid_argument& e) {

@@ -8,6 +8,7 @@
 #include <system_error>
 #include <vector>
 
+#include "app/cli_numbers.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/output_rule.hpp"
@@ -67,13 +68,16 @@ void SetupInspectCommand(CLI::App* cmd) {
             std::cout << nlohmann::json{{"file", *file},
                                         {"summary", ToJson(summary)},
                                         {"provenance", set.provenance}}
-                             .dump(2)
+                             // A path or provenance of any bytes (not UTF-8) is printed
+                             // with U+FFFD, not refused by a raw type_error.316.
+                             .dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
                       << "\n";
             return;
         }
         std::cout << "file: " << *file << "\n"
                   << FormatSummary(summary) << "provenance:\n"
-                  << set.provenance.dump(2) << "\n";
+                  << set.provenance.dump(2, ' ', false, nlohmann::json::error_handler_t::replace)
+                  << "\n";
     });
 }
 
@@ -118,7 +122,9 @@ void SetupImportCommand(CLI::App* cmd) {
     auto force = std::make_shared<bool>(false);
     cmd->add_option("--xyz-dir", *dir, "Directory with the xyz layout")->required();
     cmd->add_option("--out", *out, "Output HDF5 file")->required();
-    cmd->add_option("--eta", *eta, "Overlap label radius")->capture_default_str();
+    cmd->add_option("--eta", *eta, "Overlap label radius")
+        ->check(PositiveReal())  // nan, inf, 1e400, -1, 0 and '' were accepted or failed late
+        ->capture_default_str();
     cmd->add_flag("--force", *force, "Replace an existing --out");
     cmd->callback([dir, out, eta, force] {
         // The one output rule (docs/usage.md, "Outputs"): --out may not lie inside the folder

@@ -36,7 +36,9 @@ void SetupScoreCommand(CLI::App* cmd) {
     cmd->add_option("--rigid-tol", o->rigid_tolerance,
                     "Reject a transform when max|R^T R - I|, |det R - 1| or its bottom row's "
                     "distance from (0,0,0,1) exceeds this")
-        ->check(NonNegativeReal())  // NaN would accept every matrix
+        // NaN would accept every matrix, and so would 1e18 (diag(5, 0.1, 3) scored ok): a
+        // tolerance above kMaxRigidTolerance accepts matrices far from any rotation.
+        ->check(ClosedInterval(0.0, kMaxRigidTolerance))
         ->capture_default_str();
     cmd->add_flag("--allow-scale", o->allow_scale,
                   "Accept similarities s R (uniform scale, e.g. CPD with scale): the rotation "

@@ -224,7 +224,9 @@ void SetupTrainCommand(CLI::App* cmd) {
         ->check(PositiveWholeNumber());
     cmd->add_option("--pairs-per-epoch", a->pairs_per_epoch, "Pairs per epoch (default: recipe)")
         ->check(PositiveWholeNumber());
-    cmd->add_option("--lr", a->lr, "Learning rate (default: recipe)")->check(PositiveReal());
+    cmd->add_option("--lr", a->lr, "Learning rate in (0, 1] (default: recipe)")
+        ->check(PositiveReal())
+        ->check(ClosedInterval(0.0, ogmm::kMaxLearningRate));
     cmd->add_option("--minutes", a->train.minutes,
                     "Wall-clock budget of this invocation; ends with a validated checkpoint. On a "
                     "fresh run without --epochs/--max-steps the LR schedule is planned to fit it")

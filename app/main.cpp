@@ -13,6 +13,7 @@
 
 #include "app/commands.hpp"
 #include "core/memory_policy.hpp"
+#include "core/output_rule.hpp"
 #include "core/version.hpp"
 
 namespace {
@@ -102,6 +103,11 @@ int main(int argc, char** argv) {
         if (what.rfind(": ", 0) == 0) what.erase(0, 2);
         std::cerr << "regbench: usage error: " << regbench::app::OneLine(what)
                   << " (see regbench --help)\n";
+        return 2;
+    } catch (const regbench::OutputPathError& e) {
+        // An output path that names no folder of its own (".", "..", the current folder): the
+        // command line is at fault, as with a refused flag value.
+        std::cerr << "regbench: usage error: " << e.what() << "\n";
         return 2;
     } catch (const std::exception& e) {
         std::cerr << "regbench: error: " << e.what() << "\n";

@@ -52,6 +52,29 @@ std::string LockPathOf(const std::string& path) {
 
 }  // namespace
 
+std::string OutputLockHolder(const std::string& path) {
+    std::string lock_path;
+    try {
+        lock_path = LockPathOf(path);
+    } catch (const std::exception&) {
+        return "";
+    }
+    const int fd = ::open(lock_path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0) return "";
+    std::string holder;
+    struct stat st {};
+    if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) {
+        if (::flock(fd, LOCK_SH | LOCK_NB) == 0) {
+            ::flock(fd, LOCK_UN);
+        } else if (errno == EWOULDBLOCK) {
+            holder = ReadHolder(fd);
+            if (holder == std::to_string(::getpid())) holder.clear();
+        }
+    }
+    ::close(fd);
+    return holder;
+}
+
 void CreateParentFolders(const std::string& folder) {
     const std::filesystem::path parent =
         std::filesystem::path(WithoutTrailingSlashes(folder)).parent_path();

@@ -23,6 +23,11 @@ void RequireRegularOrAbsent(const std::string& path, const std::string& what);
 /// to the command. Commands that write one file keep refusing a missing directory.
 void CreateParentFolders(const std::string& folder);
 
+/// The pid (as its lock file records it) of another process that holds the output lock of
+/// `path` right now; "" when none does, when this process holds it, or when `path` names a
+/// lock file. Takes no lock and creates nothing.
+std::string OutputLockHolder(const std::string& path);
+
 /// The lock of "OUT" and of "OUT.part" is "OUT.lock" (a run's partial file is covered by its
 /// lock); a path ending in ".lock" is refused.
 class OutputLock {

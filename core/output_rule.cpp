@@ -57,6 +57,13 @@ void CheckExisting(const std::string& out, const struct stat& st, const OutputRu
         Refuse(out, "output exists and is not a regular file (refusing to replace it)");
     }
     if (!rule.replace && !rule.continues) {
+        // A run's OUT.part (or OUT) that another regbench is writing right now: name the
+        // writer, since --force would be refused by its lock anyway.
+        const std::string holder = OutputLockHolder(out);
+        if (!holder.empty()) {
+            Refuse(out, "is being written by another regbench process (pid " + holder +
+                            "); wait for it to finish");
+        }
         Refuse(out, "already exists; " + rule.how_to_replace);
     }
 }
@@ -89,6 +96,27 @@ void CheckInputs(const std::string& out, bool exists, const struct stat& st,
     }
 }
 
+/// A folder output must be a folder of its own: "." or ".." put its lock, its temporaries and
+/// (import-checkpoint --force) its replacement on the folder the user stands in or the one above
+/// it, and so does any path that resolves to the current folder or one holding it.
+void CheckFolderName(const std::string& out_arg, const std::string& out) {
+    const std::string last = fs::path(out).filename().string();
+    if (last == "." || last == "..") {
+        throw OutputPathError(out_arg + ": an output folder must be named by its own name, not '" +
+                              last + "' (give e.g. ../run or ./run)");
+    }
+    std::error_code ec;
+    const fs::path cwd = fs::current_path(ec);
+    const fs::path out_path = Resolved(out);
+    if (!ec && EqualOrInside(cwd.lexically_normal(), out_path)) {
+        throw OutputPathError(out_arg + ": output folder " + out_path.string() +
+                              (out_path == cwd.lexically_normal()
+                                   ? " is the current folder"
+                                   : " holds the current folder") +
+                              "; give a folder of its own (e.g. ./run)");
+    }
+}
+
 }  // namespace
 
 void CheckOutputRule(const std::string& out_arg, const std::vector<std::string>& inputs,
@@ -100,6 +128,7 @@ void CheckOutputRule(const std::string& out_arg, const std::vector<std::string>&
                "output names a lock file (regbench keeps OUT.lock beside every output it "
                "writes); pick another name");
     }
+    if (rule.folder) CheckFolderName(out_arg, out);
     struct stat st {};
     const bool exists = ::lstat(out.c_str(), &st) == 0;
     if (exists && S_ISLNK(st.st_mode)) {

@@ -1,12 +1,20 @@
 #pragma once
 // The one output rule every regbench writer follows (docs/usage.md, "Outputs"): checked before
 // any work, and again once the output's lock is held.
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/file_lock.hpp"
 
 namespace regbench {
+
+/// A refusal of the path itself, not of what is on disk: the command line is wrong (the CLI
+/// reports it as a usage error, exit 2).
+class OutputPathError : public std::invalid_argument {
+public:
+    using std::invalid_argument::invalid_argument;
+};
 
 /// How one command's output may meet what is already on disk.
 struct OutputRule {
@@ -24,6 +32,8 @@ struct OutputRule {
 
 /// Refuses `out`, naming it, unless the rule allows it:
 /// - an empty path, or a name ending in ".lock" (regbench's own lock files);
+/// - a folder output named "." or ".." (or ending in "/." or "/.."), or resolving to the current
+///   folder or a folder that holds it ("/", $HOME from inside it): OutputPathError;
 /// - a symbolic link (file or folder): never written through;
 /// - an existing output unless `rule.replace` or `rule.continues`; a file output that is a
 ///   folder or a special file, a folder output that is not a folder;

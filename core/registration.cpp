@@ -89,8 +89,15 @@ AlignResult RegistrationMethod::Align(const PointCloud& source, const PointCloud
         return Failed(Name() + ": produced a translation beyond the coordinate limit (2e15)",
                       result.seconds, result.cpu_seconds);
     }
-    const double s = AllowsScale() ? std::cbrt(sR.determinant()) : 1.0;
     constexpr double kRotationTol = 1e-6;
+    // A last row other than (0, 0, 0, 1) (a Python method's [0.5, 0, 0, 1]) is no rigid
+    // transform either, whatever its top rows hold.
+    const Eigen::RowVector4d bottom = result.T_target_source.row(3);
+    if ((bottom - Eigen::RowVector4d(0.0, 0.0, 0.0, 1.0)).cwiseAbs().maxCoeff() > kRotationTol) {
+        return Failed(Name() + ": produced a transform whose last row is not (0, 0, 0, 1)",
+                      result.seconds, result.cpu_seconds);
+    }
+    const double s = AllowsScale() ? std::cbrt(sR.determinant()) : 1.0;
     if (!(s > 0.0) || !IsRotation(sR / s, kRotationTol)) {
         return Failed(Name() + ": produced a non-rigid transform", result.seconds,
                       result.cpu_seconds);

@@ -182,7 +182,15 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
         for (auto& kv : sd) kv.first = kv.first.substr(7);
     }
     const nlohmann::json config = format.infer_config(sd, pth, settings.values);
-    const auto net = MakeNetFromConfig(config);
+    std::shared_ptr<RegistrationNet> net;
+    try {  // sizes inferred from shapes are checked by the family's bounds, named by file
+        net = MakeNetFromConfig(config);
+    } catch (const c10::Error& e) {
+        RefuseAuthorsFile(pth,
+                          std::string("cannot build its model: ") + e.what_without_backtrace());
+    } catch (const std::exception& e) {
+        RefuseAuthorsFile(pth, std::string("cannot build its model: ") + e.what());
+    }
     std::map<std::string, torch::Tensor> rb;
     for (const auto& [k, v] : RegbenchTensors(*net)) rb[k] = v;
     const auto mapping = AuthorsKeyMapping(options.from, config);
@@ -222,6 +230,16 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
             msg += "\n  ... and " + std::to_string(problems.size() - 30) + " more";
         RefuseAuthorsFile(pth, msg);
     }
+    // Poisoned weights (NaN, Inf, |w| > kMaxAbsWeight) imported with exit 0 and ran silently.
+    for (const auto& [au, r] : mapping) {
+        (void)r;
+        const torch::Tensor* t = Find(sd, au);
+        const std::string problem = t != nullptr ? WeightValueProblem(*t) : "";
+        if (!problem.empty()) {
+            RefuseAuthorsFile(pth, "tensor " + au + " " + problem +
+                                       "; refusing to import poisoned weights");
+        }
+    }
     nlohmann::json map_json = nlohmann::json::array();
     {
         torch::NoGradGuard no_grad;
@@ -236,8 +254,9 @@ nlohmann::json ImportAuthorsCheckpoint(const std::string& pth, const std::string
     meta["config"] = config;
     meta["imported_from"] = {
         {"file", fs::absolute(pth).lexically_normal().string()},
-        {"sha256", Sha256File(pth)},
-        {"bytes", fs::file_size(pth)},
+        // Of the bytes imported, not of the name again (read once: issue 55).
+        {"sha256", contents.sha256},
+        {"bytes", contents.bytes},
         {"format", contents.format},
         {"from", options.from},
         {"module", format.module},

@@ -5,6 +5,8 @@
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 #include "ogmm/gemm_floor.hpp"
 #include "ogmm/net.hpp"
@@ -45,7 +47,27 @@ PairEstimate EstimatePair(RegistrationNet& net, const PointCloud& source, const 
     batch.source = ToTensor(source);
     batch.target = ToTensor(target);
     batch.generator = at::detail::createCPUGenerator(seed);
-    const NetOutput out = net.Forward(batch);
+    NetOutput out;
+    try {
+        out = net.Forward(batch);
+    } catch (const c10::Error& e) {  // the message without LibTorch's stack dump
+        throw std::runtime_error(std::string("the network failed: ") +
+                                 e.what_without_backtrace());
+    }
+    // A NaN or Inf in the estimate is a failed call, never a transform made rigid (the SVD of
+    // a NaN rotation came out as the identity and the row said ok).
+    if (!torch::isfinite(out.T).all().item<bool>()) {
+        throw std::runtime_error("the network's output transform is not finite (NaN or Inf)");
+    }
+    // RGM's assignment turns NaN scores into some permutation and Kabsch into a finite
+    // transform: the NaN shows only in its intermediate outputs.
+    for (const auto& [key, value] : out.aux) {
+        if (value.defined() && value.is_floating_point() &&
+            !torch::isfinite(value).all().item<bool>()) {
+            throw std::runtime_error("the network's output " + key +
+                                     " is not finite (NaN or Inf)");
+        }
+    }
     PairEstimate e;
     e.T = ToRigidTransform(out.T[0]);
     for (const auto& [key, value] : out.aux) {

@@ -107,6 +107,11 @@ OmnetConfig OmnetConfigFromJson(const nlohmann::json& j) {
             "quat_weight and trans_weight >= 0: " +
             ToJson(c).dump());
     }
+    // Issue 55: iterations were unbounded (each has its own weights); 8 times the authors' 4.
+    if (c.iterations > 32 || c.mask_delay > 32) {
+        throw std::invalid_argument("omnet config: iterations and mask_delay must be <= 32: " +
+                                    ToJson(c).dump());
+    }
     if (c.width_divisor < 1 || 64 % c.width_divisor != 0) {
         throw std::invalid_argument(
             "omnet config: width_divisor must divide 64 (1, 2, 4, ..., "

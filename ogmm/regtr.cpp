@@ -130,6 +130,13 @@ RegtrConfig RegtrConfigFromJson(const nlohmann::json& j) {
     if (!(c.wt_overlap >= 0) || !(c.wt_feature >= 0) || !(c.wt_corr >= 0)) {
         bad("loss weights must be >= 0");
     }
+    // Issue 55: sizes read from a file's tensor shapes were unbounded (d_embed 4096 from a
+    // 993-byte file allocated 1.9 GB). Four times the authors' values.
+    if (c.d_embed > 1024 || c.nhead > 32 || c.d_feedforward > 4096 ||
+        c.num_encoder_layers > 24 || c.first_feats_dim > 2048 || c.neighbor_limit > 256) {
+        bad("d_embed <= 1024, nhead <= 32, d_feedforward <= 4096, num_encoder_layers <= 24, "
+            "first_feats_dim <= 2048 and neighbor_limit <= 256 (four times the authors' values)");
+    }
     return c;
 }
 

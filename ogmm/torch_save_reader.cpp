@@ -1,10 +1,15 @@
 #include "ogmm/torch_save_reader.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <caffe2/serialize/inline_container.h>
 #include <caffe2/serialize/istream_adapter.h>
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -13,7 +18,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/input_file.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -758,6 +762,10 @@ TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string
         Fail(name, "declares more data than fits in memory (corrupt file)");
     } catch (const c10::Error& e) {
         Fail(name, std::string("corrupt file: ") + e.what_without_backtrace());
+    } catch (const std::logic_error& e) {
+        // LibTorch's zip reader parses the version record with std::stoull: a huge or
+        // non-numeric one ended as "regbench: error: stoull", without the file.
+        Fail(name, std::string("corrupt file (") + e.what() + " on one of its records)");
     }
     if (bytes.size() >= 262 && bytes.compare(257, 5, "ustar") == 0) {
         Fail(name, "is a tar archive (torch.save of PyTorch < 0.4), which is not supported");
@@ -766,12 +774,53 @@ TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string
 }
 
 TorchSaveContents ReadTorchSaveFile(const std::string& path) {
-    RequireRegularFile(path);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) Fail(path, "cannot be opened");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) Fail(path, "read error");
-    return ReadTorchSaveBytes(bytes, path);
+    // Opened once, without blocking, and the opened file is the one checked and read: a check
+    // by name and a later open let a symbolic link flipped to a FIFO in between block for ever.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) Fail(path, "no such file");
+        Fail(path, std::string("cannot be opened: ") + std::strerror(errno));
+    }
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) Fail(path, std::string("cannot be read: ") + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) Fail(path, "is a directory, not a file");
+    if (!S_ISREG(st.st_mode)) {
+        Fail(path,
+             "not a regular file (a FIFO, socket or device); regbench reads inputs from regular "
+             "files only");
+    }
+    // Read whole, so bounded first: a 30 GB sparse file with a zip header was read into memory
+    // until the OOM killer came.
+    const auto limit = [&](std::uint64_t size) {
+        if (size > kMaxTorchSaveFileBytes) {
+            Fail(path, "is " + std::to_string(size) + " bytes, more than the " +
+                           std::to_string(kMaxTorchSaveFileBytes) +
+                           " a checkpoint regbench imports may have (the largest authors' file "
+                           "is under 100 MB)");
+        }
+    };
+    limit(static_cast<std::uint64_t>(st.st_size));
+    std::string bytes;
+    std::vector<char> buf(1 << 16);
+    for (;;) {
+        const ssize_t n = ::read(fd, buf.data(), buf.size());
+        if (n == 0) break;
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            // An EIO (/proc/self/mem) ended as a bare "basic_filebuf::underflow".
+            Fail(path, std::string("read error: ") + std::strerror(errno));
+        }
+        bytes.append(buf.data(), static_cast<std::size_t>(n));
+        limit(bytes.size());  // a file that grows while read
+    }
+    TorchSaveContents contents = ReadTorchSaveBytes(bytes, path);
+    contents.sha256 = Sha256Hex(bytes);
+    contents.bytes = bytes.size();
+    return contents;
 }
 
 std::string WriteTorchSaveZip(const StateDict& tensors) {

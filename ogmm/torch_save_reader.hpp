@@ -33,9 +33,17 @@ struct TorchSaveContents {
     StateDict tensors;
     std::string format;   ///< "zip" or "legacy"
     std::string wrapper;  ///< "" or the key ("state_dict", "model", ...) the dict was found under
+    std::string sha256;   ///< of the bytes read (ReadTorchSaveFile only; "" from bytes)
+    std::uint64_t bytes = 0;  ///< how many were read (ReadTorchSaveFile only)
 };
 
-/// Reads `path`. `name` (default: path) is how errors name the file.
+/// The largest file ReadTorchSaveFile reads (it reads the file whole): 2 GiB, twenty times the
+/// largest authors' checkpoint regbench imports. A larger file is refused naming it.
+constexpr std::uint64_t kMaxTorchSaveFileBytes = std::uint64_t{2} << 30;
+
+/// Reads `path`, opened once without blocking and checked as opened: a folder, a FIFO or a
+/// device is refused by name (never waited on), as is a file larger than
+/// kMaxTorchSaveFileBytes (before it is read) or one that cannot be read. Errors name `path`.
 TorchSaveContents ReadTorchSaveFile(const std::string& path);
 /// Same for bytes in memory (fuzzing, tests); errors name `name`.
 TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string& name);

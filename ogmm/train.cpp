@@ -9,6 +9,7 @@
 #include <malloc.h>
 #endif
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -46,9 +47,12 @@ nlohmann::json ToJson(const TrainConfig& c) { return c; }
 TrainConfig TrainConfigFromJson(const nlohmann::json& j) {
     // Unknown keys (a misspelt key in a recipe) and wrong types are errors naming the key.
     const auto c = ParseConfig<TrainConfig>(j, "train config");
-    if (c.lr <= 0 || c.batch < 1 || c.epochs < 1 || c.pairs_per_epoch < c.batch) {
+    // NaN passed "lr <= 0"; 1e18 passed and ended in a LibTorch backtrace once the weights
+    // were no longer finite.
+    if (!(c.lr > 0 && c.lr <= kMaxLearningRate) || c.batch < 1 || c.epochs < 1 ||
+        c.pairs_per_epoch < c.batch) {
         throw std::invalid_argument(
-            "train config: need lr > 0, batch >= 1, epochs >= 1 and "
+            "train config: need lr in (0, 1], batch >= 1, epochs >= 1 and "
             "pairs_per_epoch >= batch: " +
             ToJson(c).dump());
     }
@@ -297,6 +301,87 @@ void DropTornLastLine(const fs::path& path, std::ostream& log) {
         << " bytes, cut by an interrupted write)\n";
 }
 
+/// The metrics files of a resumed run hold exactly the rows of its checkpoint's past: a row
+/// of a step after the checkpoint's (left when a save failed or was killed after its row was
+/// written, as regbench wrote them until issue 55) is dropped, and the checkpoint's own row,
+/// missing when a kill came between the save and the append, is written from its
+/// checkpoint.json "metrics". Both are said in the log.
+void KeepMetricsOfCheckpoint(const fs::path& dir, const nlohmann::json& checkpoint,
+                             std::ostream& log) {
+    const std::int64_t step = checkpoint.value("steps", std::int64_t{0});
+    const nlohmann::json row = checkpoint.value("metrics", nlohmann::json());
+    const bool has_row = row.is_object() && row.value("step", std::int64_t{-1}) == step;
+    for (const bool csv : {true, false}) {
+        const fs::path path = dir / (csv ? "metrics.csv" : "metrics.jsonl");
+        std::error_code ec;
+        if (!fs::exists(fs::symlink_status(path, ec))) continue;
+        RequireRegularOrAbsent(path.string(), "metrics file");
+        std::string text;
+        {
+            std::ifstream in(path, std::ios::binary);
+            text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        }
+        std::istringstream lines(text);
+        std::string kept, line;
+        std::int64_t last_step = -1;
+        int dropped = 0;
+        int step_column = -1;
+        for (bool first = true; std::getline(lines, line); first = false) {
+            std::int64_t row_step = -1;
+            if (csv && first) {  // the header
+                std::istringstream cells(line);
+                std::string cell;
+                for (int c = 0; std::getline(cells, cell, ','); ++c)
+                    if (cell == "step") step_column = c;
+                kept += line + "\n";
+                continue;
+            }
+            try {
+                if (csv) {
+                    std::istringstream cells(line);
+                    std::string cell;
+                    for (int c = 0; std::getline(cells, cell, ',') && c <= step_column; ++c)
+                        if (c == step_column) row_step = std::stoll(cell);
+                } else {
+                    row_step = nlohmann::json::parse(line).at("step").get<std::int64_t>();
+                }
+            } catch (const std::exception&) {
+                throw std::runtime_error(path.string() + ": a row without a readable step: " +
+                                         line.substr(0, 80));
+            }
+            if (row_step > step) {
+                ++dropped;
+                continue;
+            }
+            last_step = std::max(last_step, row_step);
+            kept += line + "\n";
+        }
+        const bool add = has_row && last_step < step;
+        if (add) {
+            if (csv) {
+                std::string cells;
+                for (const auto& [key, value] : MetricColumns(EpochMetrics{})) {
+                    (void)value;
+                    cells += (cells.empty() ? "" : ",") + row.at(key).dump();
+                }
+                kept += cells + "\n";
+            } else {
+                kept += row.dump() + "\n";
+            }
+        }
+        if (dropped == 0 && !add) continue;
+        WriteFileAtomic(path.string(), kept);
+        log << "train: " << path.string() << ": ";
+        if (dropped > 0) {
+            log << "dropped " << dropped << " row(s) after the checkpoint's step " << step;
+        }
+        if (add) {
+            log << (dropped > 0 ? "; " : "") << "wrote the checkpoint's row of step " << step;
+        }
+        log << "\n";
+    }
+}
+
 /// Every counter is checked as written: a count must be a whole number in [0, 2^53] (a step of
 /// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
 /// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
@@ -365,6 +450,7 @@ public:
 private:
     void Start();
     void Resume();
+    void RecoverCheckpoints();
     void RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const fs::path& last) const;
     std::future<PairBatch> Prefetch(std::int64_t step) const;
     double Step(const PairBatch& batch);
@@ -433,7 +519,10 @@ Trainer::Trainer(const nlohmann::json& config, const TrainData& data, const Trai
 }
 
 void Trainer::Start() {
-    if (fs::exists(dir_ / "last")) {
+    // A save of last/ a kill interrupted is finished or undone first, so a run whose last/ was
+    // between its renames is refused below like any other (a fresh run used to delete it).
+    RecoverCheckpoints();
+    if (fs::exists(fs::symlink_status(dir_ / "last"))) {
         throw std::runtime_error("output directory " + dir_.string() +
                                  " already holds a run (last/); pass --resume or another --out");
     }
@@ -470,8 +559,18 @@ void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const f
                              "checkpoint.json 'data'; e.g. --no-jitter, --pairing)");
 }
 
+void Trainer::RecoverCheckpoints() {
+    // A save a kill interrupted is finished or undone (a whole folder is never discarded), and
+    // said so.
+    for (const char* name : {"last", "best"}) {
+        const std::string done = RecoverCheckpointFolder((dir_ / name).string());
+        if (!done.empty()) log_ << "train: " << done << "\n";
+    }
+}
+
 void Trainer::Resume() {
     const fs::path last = dir_ / "last";
+    RecoverCheckpoints();
     if (!fs::exists(last))
         throw std::runtime_error("--resume: " + last.string() + " does not exist");
     const nlohmann::json j = LoadCheckpoint(last.string(), *net_, opt_.get());
@@ -489,6 +588,7 @@ void Trainer::Resume() {
     }
     if (state_.planned_steps <= 0) state_.planned_steps = steps_per_epoch_ * recipe_.epochs;
     for (const char* name : {"metrics.csv", "metrics.jsonl"}) DropTornLastLine(dir_ / name, log_);
+    KeepMetricsOfCheckpoint(dir_, j, log_);
     elapsed_before_ = state_.elapsed_seconds;
     cpu_before_ = state_.cpu_seconds;
     log_ << "train: resumed " << last.string() << " at step " << state_.step << " of "
@@ -656,7 +756,6 @@ void Trainer::EndEpoch() {
             state_.plateau_bad = 0;
         }
     }
-    AppendMetrics(dir_, m);
     summary_.epochs.push_back(m);
     log_ << "train: validation epoch " << m.epoch << " step " << m.step << ": loss " << m.val_loss
          << ", mae_r " << m.mae_r << " deg (identity " << m.identity_mae_r << "), mae_t " << m.mae_t
@@ -667,7 +766,11 @@ void Trainer::EndEpoch() {
         log_ << "; WORSE THAN THE IDENTITY (network alone)";
     }
     log_ << "\n";
+    // The metrics row describes the saved state: written once the checkpoint is (a full disk
+    // or a kill in between leaves a checkpoint without its row, which --resume writes from the
+    // checkpoint, never a row without its checkpoint).
     Checkpoint(m);
+    AppendMetrics(dir_, m);
 }
 
 void Trainer::Checkpoint(const EpochMetrics& m) {

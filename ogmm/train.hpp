@@ -40,6 +40,10 @@ using RefineFn = std::function<Transform(const PointCloud& source, const PointCl
                                          const Transform& initial)>;
 
 /// The "train" object of a model config.
+/// The largest learning rate a recipe or --lr may set: every family's recipe uses 1e-4 to
+/// 1e-3, and a rate above 1 only makes the weights overflow.
+constexpr double kMaxLearningRate = 1.0;
+
 struct TrainConfig {
     double lr = 1e-3;                    ///< Adam learning rate
     double weight_decay = 0.0;           ///< Adam (L2) weight decay

@@ -242,7 +242,12 @@ void ValidateProtocolOptions(const ProtocolOptions& o) {
     };
     check_keep(o.keep, "keep");
     Require(std::isfinite(o.noise_sigma) && o.noise_sigma >= 0.0, "noise_sigma", "must be >= 0");
-    Require(std::isfinite(o.noise_clip) && o.noise_clip >= 0.0, "noise_clip", "must be >= 0");
+    // Every offset is clamped to the clip: with the translation's 5e14 it keeps the clouds
+    // within the coordinate limit (a clip of 1e18 wrote a file `inspect` then refused).
+    Require(std::isfinite(o.noise_clip) && o.noise_clip >= 0.0 &&
+                o.noise_clip <= kMaxCoordinate / 4,
+            "noise_clip",
+            "must be in [0, 2.5e14] (clouds must stay within the coordinate limit |x| <= 1e15)");
     Require(std::isfinite(o.max_rotation_deg) && o.max_rotation_deg >= 0.0 &&
                 o.max_rotation_deg <= 180.0,
             "max_rotation_deg", "must be in [0, 180]");

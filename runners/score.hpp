@@ -15,6 +15,9 @@ namespace regbench {
 /// distance from (0, 0, 0, 1). Loose enough for float32 output, tight enough to catch a
 /// scaled, sheared or transposed-by-mistake matrix.
 constexpr double kDefaultRigidTolerance = 1e-4;
+/// The largest --rigid-tol: 0.1 already accepts a rotation matrix 10% off; more accepted
+/// scalings and shears (diag(5, 0.1, 3) with --rigid-tol 1e18) as rigid.
+constexpr double kMaxRigidTolerance = 0.1;
 
 struct ScoreOptions {
     std::string pairs_path;       ///< frozen HDF5 pair file the transforms were computed on

@@ -6,6 +6,7 @@
 // Also the checkpoint writers under the output rule (import-checkpoint never replaces its input
 // or a training run folder). Built only with LibTorch (tests/CMakeLists.txt).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/testing/cli.hpp"
@@ -122,6 +124,151 @@ TEST(CliCheckpointRefusal, ImportCheckpointNeverReplacesItsInputOrARunFolder) {
     ExpectRefused("export-checkpoint " + run.string() + " --to ogmm --out " + exported, exported,
                   "already exists", {exported});
     fs::remove_all(dir_);
+}
+
+// Issue 55, item 1: `import-checkpoint rgm.pth --from rgm --out . --force` deleted everything in
+// the current folder (the save removed DIR whole and wrote DIR + ".tmp"), `--out v1/ --force`
+// deleted v1 through "v1/.tmp", and `--out fresh/` failed. Expected: ".", "..", "./", the
+// current folder and a folder above it are usage errors (exit 2) naming the path, for every
+// folder writer, with every file kept; "v1/" is the folder v1, written or replaced; a folder
+// that is not a checkpoint is never replaced (exit 1, named, kept).
+TEST(CliCheckpointRefusal, FolderWritersRefuseDotsAndTheCurrentFolderAndKeepOtherFolders) {
+    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src, nullptr);
+    const fs::path dir = testing::FreshTempDir("import_dots");
+    const std::string pth = (dir / "m.pth").string();
+    testing::RunCliOk("export-checkpoint " + (fs::path(src) / "data" / "models" / "rgm").string() +
+                      " --to rgm --out " + pth);
+    const fs::path work = dir / "work";
+    const fs::path sub = work / "sub";
+    fs::create_directories(sub);
+    Put(work / "keep", "keep");
+    Put(sub / "keep", "keep");
+    const auto in = [](const fs::path& cwd, const std::string& args) {
+        return testing::RunShell("cd " + cwd.string() + " && " + std::string(REGBENCH_CLI) + " " +
+                                 args + " 2>&1");
+    };
+    const std::vector<std::pair<std::string, std::string>> refused = {
+        {".", "not '.'"},
+        {"./", "not '.'"},
+        {"..", "not '..'"},
+        {"../.", "not '.'"},
+        {sub.string(), "is the current folder"},
+        {sub.string() + "/", "is the current folder"},
+        {work.string(), "holds the current folder"},
+        {"/", "holds the current folder"},
+    };
+    const std::vector<std::string> writers = {
+        "import-checkpoint " + pth + " --from rgm --force --out ",
+        "import-checkpoint " + pth + " --from rgm --out ",
+        "train --model deepgmr-orig-xyz --max-steps 1 --out ",
+        "reproduce --quick --out ",
+        "export " + (dir / "none.h5").string() + " --out ",
+    };
+    for (const auto& writer : writers) {
+        for (const auto& [out, why] : refused) {
+            SCOPED_TRACE(writer + out);
+            const CliResult r = in(sub, writer + out);
+            EXPECT_EQ(r.exit_code, 2) << r.output;
+            EXPECT_NE(r.output.find("usage error: " + out + ":"), std::string::npos) << r.output;
+            EXPECT_NE(r.output.find(why), std::string::npos) << r.output;
+            EXPECT_EQ(testing::ReadBytes(work / "keep"), "keep");
+            EXPECT_EQ(testing::ReadBytes(sub / "keep"), "keep");
+            EXPECT_EQ(std::distance(fs::directory_iterator(sub), fs::directory_iterator()), 1);
+        }
+    }
+    // A trailing slash: the folder itself, new and then replaced, nothing left beside it.
+    for (const char* force : {"", " --force"}) {
+        const CliResult r = in(dir, "import-checkpoint " + pth + " --from rgm --out v1/" + force);
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        EXPECT_TRUE(fs::exists(dir / "v1" / "checkpoint.json"));
+        EXPECT_FALSE(fs::exists(dir / "v1" / ".tmp"));
+        EXPECT_FALSE(fs::exists(dir / "v1.tmp"));
+        EXPECT_FALSE(fs::exists(dir / "v1.old"));
+    }
+    testing::RunCliOk("export-checkpoint " + (dir / "v1").string() + " --to rgm --out " +
+                      (dir / "back.pth").string());
+    // --force never replaces a folder that is not a checkpoint: a folder of the user's, a
+    // training run folder, a shipped model folder with its curve.
+    fs::create_directories(dir / "run" / "last");
+    Put(dir / "run" / "metrics.csv", "epoch\n");
+    fs::copy(fs::path(src) / "data" / "models" / "rgm", dir / "shipped");
+    for (const auto& [folder, kept] : std::vector<std::pair<std::string, fs::path>>{
+             {"work", work / "keep"}, {"run", dir / "run" / "metrics.csv"},
+             {"shipped", dir / "shipped" / "metrics.csv"}}) {
+        ExpectRefused("import-checkpoint " + pth + " --from rgm --force --out " +
+                          (dir / folder).string(),
+                      (dir / folder).string(), "not a regbench checkpoint folder",
+                      {kept.string()});
+        EXPECT_FALSE(fs::exists((dir / folder).string() + ".tmp"));
+    }
+    fs::remove_all(dir);
+}
+
+// Issue 55, item 2: `import-checkpoint --force` killed while replacing its folder left only
+// OUT.tmp (the old folder was removed first). Expected, for a kill (SIGKILL, exit 137) after
+// every step of the save (REGBENCH_TEST_KILL_SAVE_AT): the checkpoint exports as it is, or, in
+// the one moment it is not at its path, the refusal names the leftover; the next import
+// --force recovers and replaces it, leaving nothing beside it.
+TEST(CliCheckpointRefusal, ImportCheckpointKilledAtEveryStepOfItsSaveLeavesACheckpoint) {
+    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src, nullptr);
+    const fs::path dir = testing::FreshTempDir("import_kill");
+    const std::string pth = (dir / "m.pth").string();
+    testing::RunCliOk("export-checkpoint " + (fs::path(src) / "data" / "models" / "rgm").string() +
+                      " --to rgm --out " + pth);
+    const fs::path ck = dir / "ck";
+    const std::string import = "import-checkpoint " + pth + " --from rgm --force --out " +
+                               ck.string();
+    testing::RunCliOk(import);
+    const std::string back = (dir / "back.pth").string();
+    for (int k = 1; k <= 7; ++k) {
+        SCOPED_TRACE("killed after step " + std::to_string(k));
+        const CliResult killed = testing::RunShell("REGBENCH_TEST_KILL_SAVE_AT=" +
+                                                   std::to_string(k) + " " +
+                                                   std::string(REGBENCH_CLI) + " " + import +
+                                                   " 2>&1");
+        EXPECT_EQ(killed.exit_code, 128 + 9) << killed.output;
+        fs::remove(back);
+        const CliResult exported =
+            RunCli("export-checkpoint " + ck.string() + " --to rgm --out " + back);
+        if (fs::exists(ck)) {
+            EXPECT_EQ(exported.exit_code, 0) << exported.output;
+        } else {
+            EXPECT_EQ(k, 5);  // between the two renames only
+            EXPECT_NE(exported.output.find(ck.string() + ".tmp"), std::string::npos)
+                << exported.output;
+        }
+        testing::RunCliOk(import);
+        EXPECT_FALSE(fs::exists(ck.string() + ".tmp"));
+        EXPECT_FALSE(fs::exists(ck.string() + ".old"));
+        fs::remove(back);
+        testing::RunCliOk("export-checkpoint " + ck.string() + " --to rgm --out " + back);
+    }
+    fs::remove_all(dir);
+}
+
+// Issue 55, item 8: `import-checkpoint` on a folder or a FIFO said "no such file". Expected:
+// exit 1 naming the path and what it is.
+TEST(CliCheckpointRefusal, ImportCheckpointNamesWhatItsInputIs) {
+    const fs::path dir = testing::FreshTempDir("import_kinds");
+    const fs::path fifo = dir / "fifo.pth";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    const fs::path folder = dir / "folder.pth";
+    fs::create_directories(folder);
+    const std::vector<std::pair<fs::path, std::string>> cases = {
+        {fifo, "not a regular file"},
+        {folder, "is a directory"},
+        {dir / "none.pth", "no such file"}};
+    for (const auto& [input, why] : cases) {
+        const CliResult r = testing::RunCliWithin(30, "import-checkpoint " + input.string() +
+                                                          " --from rgm --out " +
+                                                          (dir / "o").string());
+        EXPECT_EQ(r.exit_code, 1) << r.output;
+        EXPECT_NE(r.output.find(input.string() + ": " + why), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(dir / "o"));
+    }
+    fs::remove_all(dir);
 }
 
 }  // namespace

@@ -62,6 +62,26 @@ TEST(CliFlagNumbers, InvalidNumbersAreUsageErrorsBeforeAnyWork) {
              "}' --out " + out,
          "--params"},
         {"align " + pairs + " " + pairs + " --method identity --threads 1000000000", "--threads"},
+        // Issue 55, items 7 and 8: accepted (1e18, inf, 1e400), exit 1 or exit 3 before.
+        {"score --pairs " + pairs + " --transforms " + rows + " --method m --out " + out +
+             " --rigid-tol 1e18",
+         "--rigid-tol"},
+        {"score --pairs " + pairs + " --transforms " + rows + " --method m --out " + out +
+             " --rigid-tol 0.2",
+         "--rigid-tol"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta inf", "--eta"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta 1e400", "--eta"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta nan", "--eta"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta -inf", "--eta"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta ''", "--eta"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta -1", "--eta"},
+        {"import --xyz-dir " + dir.string() + " --out " + out + " --eta 0", "--eta"},
+        {"compare " + rows + " " + rows + " --tolerance ''", "--tolerance"},
+        {"generate --protocol jitter --dataset procedural --pairs 2 --noise-sigma 1e18 "
+         "--noise-clip 1e18 --out " + out,
+         "noise_clip"},
+        {"train --model deepgmr-orig-xyz --max-steps 1 --lr 1e18 --out " + out, "--lr"},
+        {"train --model deepgmr-orig-xyz --max-steps 1 --lr 2 --out " + out, "--lr"},
     };
     for (const auto& c : cases) {
         SCOPED_TRACE(c.args);

@@ -2,8 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "ogmm/net.hpp"
 #include "ogmm/zoo.hpp"
@@ -135,6 +142,140 @@ TEST(Checkpoint, SaveOnAFullDiskGivesAMessageAndLeavesNoTemporaryFolder) {
     EXPECT_EQ(WEXITSTATUS(status), 3);
     EXPECT_FALSE(fs::exists(dir / "ck.tmp"));
     EXPECT_FALSE(fs::exists(ck));
+    fs::remove_all(dir);
+}
+
+/// The value of checkpoint.json's "steps" in `ck`, loaded into a fresh net whose parameters are
+/// compared with `a` (steps 1) and `b` (steps 2): the loaded weights must be the ones of the
+/// steps the json says, all of them.
+int LoadedSteps(const fs::path& ck, RegistrationNet& a, RegistrationNet& b) {
+    torch::manual_seed(99);
+    auto c = MakeNet("deepgmr-orig-xyz");
+    const int steps = LoadCheckpoint(ck.string(), *c).at("steps").get<int>();
+    RegistrationNet& want = steps == 1 ? a : b;
+    const auto pw = want.named_parameters();
+    for (const auto& item : c->named_parameters())
+        EXPECT_TRUE(torch::equal(item.value(), pw[item.key()])) << item.key();
+    return steps;
+}
+
+// Issue 55, item 2: saving removed the old folder before renaming the new one in, so a kill in
+// between left only ck.tmp and no checkpoint. Expected, for a kill after every step of the save
+// (REGBENCH_TEST_KILL_SAVE_AT, SIGKILL: no cleanup runs) of checkpoint B over checkpoint A:
+// while B is being written (steps 1-4) A is what loads, once B is whole (the old folder moved
+// aside, step 5, and later) B; ck itself loads whenever it exists, and when it does not (the
+// kill between the two renames) the loader's error names the leftover; recovery leaves no ck.tmp or ck.old behind,
+// and the next save works.
+TEST(Checkpoint, AKillAtEveryStepOfASaveLeavesALoadableCheckpoint) {
+    torch::set_num_threads(1);
+    torch::manual_seed(1);
+    auto a = MakeNet("deepgmr-orig-xyz");
+    torch::manual_seed(2);
+    auto b = MakeNet("deepgmr-orig-xyz");
+    torch::optim::Adam opt(b->parameters(), torch::optim::AdamOptions(1e-3));
+    for (int k = 1; k <= 7; ++k) {
+        SCOPED_TRACE("killed after step " + std::to_string(k));
+        const fs::path dir = TempDir("kill_" + std::to_string(k));
+        const fs::path ck = dir / "ck";
+        SaveCheckpoint(ck.string(), *a, {{"steps", 1}}, &opt);
+        const pid_t pid = fork();
+        if (pid == 0) {
+            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+            try {
+                SaveCheckpoint(ck.string(), *b, {{"steps", 2}}, &opt);
+            } catch (...) {
+                _exit(3);
+            }
+            _exit(0);
+        }
+        int status = 0;
+        ASSERT_EQ(waitpid(pid, &status, 0), pid);
+        ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
+        EXPECT_EQ(WTERMSIG(status), SIGKILL);
+        const int expected = k <= 4 ? 1 : 2;
+        if (fs::exists(ck)) {
+            EXPECT_EQ(LoadedSteps(ck, *a, *b), expected);
+        } else {
+            EXPECT_EQ(k, 5);  // only between the two renames
+            const std::string msg = ErrorOf([&] { ReadCheckpointJson(ck.string()); });
+            EXPECT_NE(msg.find(ck.string() + ".tmp"), std::string::npos) << msg;
+            EXPECT_NE(msg.find(ck.string() + ".old"), std::string::npos) << msg;
+        }
+        const std::string done = RecoverCheckpointFolder(ck.string());
+        EXPECT_EQ(done.empty(), k == 7) << done;  // a finished save leaves nothing behind
+        EXPECT_EQ(LoadedSteps(ck, *a, *b), expected);
+        EXPECT_FALSE(fs::exists(dir / "ck.tmp"));
+        EXPECT_FALSE(fs::exists(dir / "ck.old"));
+        SaveCheckpoint(ck.string(), *b, {{"steps", 2}}, &opt);
+        EXPECT_EQ(LoadedSteps(ck, *a, *b), 2);
+        fs::remove_all(dir);
+    }
+}
+
+// A first save killed before its folder was complete left ck.tmp alone: recovery removes it
+// (nothing loadable was ever there) and says so; a complete one is renamed in.
+TEST(Checkpoint, RecoveryOfAFirstSaveKeepsOnlyAWholeFolder) {
+    torch::set_num_threads(1);
+    auto net = MakeNet("deepgmr-orig-xyz");
+    for (int k : {2, 4}) {
+        SCOPED_TRACE("killed after step " + std::to_string(k));
+        const fs::path dir = TempDir("first_" + std::to_string(k));
+        const fs::path ck = dir / "ck";
+        const pid_t pid = fork();
+        if (pid == 0) {
+            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+            SaveCheckpoint(ck.string(), *net, {{"steps", 1}});
+            _exit(0);
+        }
+        int status = 0;
+        ASSERT_EQ(waitpid(pid, &status, 0), pid);
+        ASSERT_TRUE(WIFSIGNALED(status));
+        EXPECT_FALSE(fs::exists(ck));
+        EXPECT_TRUE(fs::exists(dir / "ck.tmp"));
+        const std::string done = RecoverCheckpointFolder(ck.string());
+        EXPECT_NE(done.find((dir / "ck.tmp").string()), std::string::npos) << done;
+        EXPECT_EQ(fs::exists(ck), k == 4) << done;
+        EXPECT_FALSE(fs::exists(dir / "ck.tmp"));
+        fs::remove_all(dir);
+    }
+}
+
+// Issue 55, item 1: `import-checkpoint --out . --force` emptied the current folder (the save
+// removed DIR whole and wrote DIR + ".tmp"), `--out v1/` deleted v1 through "v1/.tmp". Expected:
+// ".", "..", "a/." and "/" are refused naming the path; "v1/" is the folder v1 (its temporary
+// v1.tmp beside it); a folder holding anything but a checkpoint's files is never replaced, and
+// every file in it stays.
+TEST(Checkpoint, SaveRefusesFoldersThatAreNotACheckpointOfTheirOwn) {
+    torch::set_num_threads(1);
+    const fs::path dir = TempDir("folders");
+    auto net = MakeNet("deepgmr-orig-xyz");
+    const std::vector<std::string> bads = {".",  "..", "./", (dir / ".").string(),
+                                           (dir / "..").string(), "/", ""};
+    for (const std::string& bad : bads) {
+        const std::string msg = ErrorOf([&] { SaveCheckpoint(bad, *net, {}); });
+        EXPECT_NE(msg.find("'" + bad + "'"), std::string::npos) << bad << ": " << msg;
+    }
+    // A folder of other files, and a training run folder: refused, kept.
+    fs::create_directories(dir / "mine");
+    std::ofstream(dir / "mine" / "keep") << "keep";
+    fs::create_directories(dir / "run" / "last");
+    std::ofstream(dir / "run" / "metrics.csv") << "epoch\n";
+    for (const char* name : {"mine", "run"}) {
+        const fs::path target = dir / name;
+        const std::string msg = ErrorOf([&] { SaveCheckpoint(target.string() + "/", *net, {}); });
+        EXPECT_NE(msg.find(target.string()), std::string::npos) << msg;
+        EXPECT_NE(msg.find("not a regbench checkpoint folder"), std::string::npos) << msg;
+    }
+    EXPECT_EQ(testing::ReadBytes(dir / "mine" / "keep"), "keep");
+    EXPECT_TRUE(fs::exists(dir / "run" / "metrics.csv"));
+    EXPECT_TRUE(fs::exists(dir / "run" / "last"));
+    // A trailing slash names the folder itself, new or replaced.
+    SaveCheckpoint((dir / "v1/").string(), *net, {{"steps", 1}});
+    SaveCheckpoint((dir / "v1//").string(), *net, {{"steps", 2}});
+    EXPECT_EQ(ReadCheckpointJson((dir / "v1").string()).at("steps"), 2);
+    EXPECT_FALSE(fs::exists(dir / "v1" / ".tmp"));
+    EXPECT_FALSE(fs::exists(dir / "v1.tmp"));
+    EXPECT_FALSE(fs::exists(dir / "v1.old"));
     fs::remove_all(dir);
 }
 

@@ -1,7 +1,11 @@
 #include "ogmm/train.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,10 +16,12 @@
 #include <iterator>
 #include <sstream>
 
+#include "ogmm/checkpoint.hpp"
 #include "ogmm/edge_stages.hpp"
 #include "ogmm/train_batch.hpp"
 #include "ogmm/zoo.hpp"
 #include "synthetic_pairs.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench::ogmm {
 namespace {
@@ -262,6 +268,159 @@ TEST_F(SmallTrain, ResumeDropsATornMetricsLine) {
     for (const auto& l : lines) EXPECT_EQ(columns(l), columns(lines[0])) << l;
     EXPECT_NE(log.str().find("dropped a torn last line"), std::string::npos);
     fs::remove_all(dir);
+}
+
+/// The "step" of every row of `dir`'s metrics.csv and of its metrics.jsonl (both must agree).
+std::vector<std::int64_t> MetricSteps(const fs::path& dir) {
+    std::vector<std::int64_t> csv_steps, jsonl_steps;
+    std::ifstream csv(dir / "metrics.csv");
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line.rfind("epoch,step,", 0), 0u) << line;  // the header: step is column 2
+    while (std::getline(csv, line)) {
+        const auto a = line.find(','), b = line.find(',', a + 1);
+        csv_steps.push_back(std::stoll(line.substr(a + 1, b - a - 1)));
+    }
+    std::ifstream jsonl(dir / "metrics.jsonl");
+    while (std::getline(jsonl, line))
+        jsonl_steps.push_back(nlohmann::json::parse(line).at("step").get<std::int64_t>());
+    EXPECT_EQ(csv_steps, jsonl_steps);
+    return csv_steps;
+}
+
+/// Every parameter of the checkpoints `a` and `b` is equal.
+void ExpectSameWeights(const fs::path& a, const fs::path& b) {
+    const auto na = LoadNetFromCheckpoint(a.string());
+    const auto nb = LoadNetFromCheckpoint(b.string());
+    const auto pb = nb->named_parameters();
+    for (const auto& item : na->named_parameters())
+        EXPECT_TRUE(torch::equal(item.value(), pb[item.key()])) << item.key();
+}
+
+// Issue 55, item 3: the metrics row was written before the checkpoint it describes, so a save
+// that failed (a full disk) after it left a row of a step no checkpoint holds, and the resumed
+// run listed that epoch twice (1, 2, 2, 3, 4). The state such a run leaves: a checkpoint of
+// step 10 and rows of steps 10 and 20. Expected: the resumed run drops the row of step 20 and
+// ends with the rows an uninterrupted run writes, steps 10 and 20, once each.
+TEST_F(SmallTrain, ResumeDropsMetricsRowsBeyondTheCheckpoint) {
+    const fs::path dir = TempDir("rows_beyond");
+    Train(config, data, Options(dir, log, 10));
+    ASSERT_EQ(MetricSteps(dir), (std::vector<std::int64_t>{10}));
+    std::string csv_row, json_row;
+    {
+        std::ifstream csv(dir / "metrics.csv");
+        std::getline(csv, csv_row);
+        std::getline(csv, csv_row);
+        std::ifstream jsonl(dir / "metrics.jsonl");
+        std::getline(jsonl, json_row);
+    }
+    const auto third = csv_row.find(',', csv_row.find(',') + 1);
+    std::ofstream(dir / "metrics.csv", std::ios::app) << "2,20" << csv_row.substr(third) << "\n";
+    nlohmann::json j = nlohmann::json::parse(json_row);
+    j["epoch"] = 2;
+    j["step"] = 20;
+    std::ofstream(dir / "metrics.jsonl", std::ios::app) << j.dump() << "\n";
+    Train(config, data, Options(dir, log, 0, kResume));
+    EXPECT_EQ(MetricSteps(dir), (std::vector<std::int64_t>{10, 20})) << log.str();
+    EXPECT_NE(log.str().find("dropped 1 row(s) after the checkpoint's step 10"), std::string::npos)
+        << log.str();
+    fs::remove_all(dir);
+}
+
+// Issue 55, items 2 and 3: `train` killed while saving last/ (here: after every step of the
+// save of step 20, REGBENCH_TEST_KILL_SAVE_AT) left only last.tmp, which a plain rerun deleted
+// and --resume did not find. Expected for every step: a plain rerun is refused (a run is
+// there), --resume recovers the checkpoint and ends where an uninterrupted run ends (the same
+// weights), and the metrics list steps 10 and 20 once each: the row of step 20 is written only
+// once its checkpoint is saved, or from the checkpoint when the kill came in between.
+TEST_F(SmallTrain, AKillDuringACheckpointSaveResumesToTheUninterruptedRun) {
+    const fs::path whole = TempDir("kill_whole");
+    Train(config, data, Options(whole, log));
+    for (int k = 1; k <= 7; ++k) {
+        SCOPED_TRACE("killed after step " + std::to_string(k) + " of the save of step 20");
+        const fs::path dir = TempDir("kill_" + std::to_string(k));
+        Train(config, data, Options(dir, log, 10));
+        const pid_t pid = fork();
+        if (pid == 0) {
+            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+            std::ostringstream quiet;
+            try {
+                Train(config, data, Options(dir, quiet, 0, kResume));
+            } catch (...) {
+                _exit(3);
+            }
+            _exit(0);
+        }
+        int status = 0;
+        ASSERT_EQ(waitpid(pid, &status, 0), pid);
+        ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
+        // A row only ever describes a saved state: none for step 20 before last/ holds it.
+        EXPECT_EQ(MetricSteps(dir), (std::vector<std::int64_t>{10}));
+        const std::string plain =
+            regbench::testing::ErrorOf([&] { Train(config, data, Options(dir, log)); });
+        EXPECT_NE(plain.find("already holds a run"), std::string::npos) << plain;
+        std::ostringstream resumed;
+        Train(config, data, Options(dir, resumed, 0, kResume));
+        EXPECT_EQ(MetricSteps(dir), (std::vector<std::int64_t>{10, 20})) << resumed.str();
+        EXPECT_FALSE(fs::exists(dir / "last.tmp"));
+        EXPECT_FALSE(fs::exists(dir / "last.old"));
+        ExpectSameWeights(dir / "last", whole / "last");
+        fs::remove_all(dir);
+    }
+    fs::remove_all(whole);
+}
+
+// Issue 55, item 2: a run killed in its first save left only last.tmp, and a plain rerun started
+// over and deleted it. Expected: a whole last.tmp (killed after step 4, before its rename) is
+// renamed to last/ and the plain rerun refused like any run holding last/ (--resume then goes
+// on from step 10); an incomplete one (killed after step 2) holds no checkpoint, is removed
+// (said in the log) and the rerun starts.
+TEST_F(SmallTrain, AFreshRunRecoversAFirstSaveAKillInterrupted) {
+    for (const int k : {2, 4}) {
+        SCOPED_TRACE("first save killed after step " + std::to_string(k));
+        const fs::path dir = TempDir("first_save_" + std::to_string(k));
+        const pid_t pid = fork();
+        if (pid == 0) {
+            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+            std::ostringstream quiet;
+            Train(config, data, Options(dir, quiet, 10));
+            _exit(0);
+        }
+        int status = 0;
+        ASSERT_EQ(waitpid(pid, &status, 0), pid);
+        ASSERT_TRUE(WIFSIGNALED(status));
+        ASSERT_TRUE(fs::exists(dir / "last.tmp"));
+        ASSERT_FALSE(fs::exists(dir / "last"));
+        std::ostringstream rerun;
+        const std::string e =
+            regbench::testing::ErrorOf([&] { Train(config, data, Options(dir, rerun, 10)); });
+        EXPECT_FALSE(fs::exists(dir / "last.tmp"));
+        if (k == 4) {
+            EXPECT_NE(e.find("already holds a run (last/)"), std::string::npos) << e;
+            EXPECT_NE(rerun.str().find("finished an interrupted save"), std::string::npos)
+                << rerun.str();
+            std::ostringstream resumed;
+            EXPECT_EQ(Train(config, data, Options(dir, resumed, 0, kResume)).steps, 20);
+            EXPECT_NE(resumed.str().find("at step 10 of"), std::string::npos) << resumed.str();
+        } else {
+            EXPECT_EQ(e, "");
+            EXPECT_NE(rerun.str().find("an incomplete save"), std::string::npos) << rerun.str();
+            EXPECT_TRUE(fs::exists(dir / "last" / "checkpoint.json"));
+        }
+        fs::remove_all(dir);
+    }
+}
+
+// Issue 55, item 7: `train --lr 1e18` ended in a raw LibTorch backtrace, and a recipe's NaN lr
+// passed "lr <= 0". Expected: a recipe lr outside (0, kMaxLearningRate = 1] is refused naming
+// lr; 1 itself is accepted.
+TEST(Train, RecipeLearningRateOutsideItsRangeIsRefused) {
+    for (const double lr : {1e18, 1.5, std::nan(""), 0.0, -1.0}) {
+        const std::string e =
+            regbench::testing::ErrorOf([&] { TrainConfigFromJson({{"lr", lr}}); });
+        EXPECT_NE(e.find("need lr in (0, 1]"), std::string::npos) << lr << ": " << e;
+    }
+    EXPECT_EQ(TrainConfigFromJson({{"lr", 1.0}}).lr, 1.0);
 }
 
 // A run limited by --max-steps printed the LR plan's step count and an ETA to the plan's end
