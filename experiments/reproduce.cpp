@@ -330,7 +330,7 @@ std::vector<MethodSpec> WithWeights(std::vector<MethodSpec> methods, const Weigh
 WeightsPlan PlanWeights(const std::vector<ExperimentFile>& files, const ReproduceOptions& o,
                         const fs::path& out, std::ostream& log) {
     const std::string path = o.weights.empty() ? DefaultWeightsManifestPath() : o.weights;
-    const WeightsManifest manifest = path.empty() ? WeightsManifest{} : ReadWeightsManifest(path);
+    WeightsManifest manifest = path.empty() ? WeightsManifest{} : ReadWeightsManifest(path);
     // Every experiment of the files, not only those of --tables: a manifest of the whole
     // paper fits a run of one table, and the record does not change with --tables.
     std::vector<WeightsTarget> targets;
@@ -341,6 +341,9 @@ WeightsPlan PlanWeights(const std::vector<ExperimentFile>& files, const Reproduc
         }
         for (const auto& e : f.experiments) targets.push_back({e.id, f.table, names});
     }
+    // The shipped manifest names the paper's experiments; a run of other experiment files
+    // keeps what applies to it. A manifest the user gives must fit whole.
+    if (o.weights.empty()) manifest = OnlyTargetsOf(manifest, targets);
     const bool shared_step =
         o.step == ReproduceOptions::Step::kShard || o.step == ReproduceOptions::Step::kRender;
     const WeightsPlan plan =

@@ -147,6 +147,24 @@ std::string DefaultWeightsManifestPath() {
 #endif
 }
 
+WeightsManifest OnlyTargetsOf(WeightsManifest manifest,
+                              const std::vector<WeightsTarget>& targets) {
+    std::vector<WeightsEntry> kept;
+    for (auto& e : manifest.entries) {
+        std::vector<std::string> known;
+        for (const auto& x : e.experiments) {
+            const bool has = std::any_of(targets.begin(), targets.end(), [&](const auto& t) {
+                return t.experiment == x || t.table == x;
+            });
+            if (has) known.push_back(x);
+        }
+        e.experiments = known;
+        if (!known.empty()) kept.push_back(std::move(e));
+    }
+    manifest.entries = std::move(kept);
+    return manifest;
+}
+
 // Long on purpose: one checked sequence (every entry against the plan, then the imports, then
 // every target's learned methods), each step using what the one before established.
 WeightsPlan ResolveWeights(const WeightsManifest& manifest,

@@ -41,6 +41,7 @@ WeightsManifest ReadWeightsManifest(const std::string& path);
 /// "" when that file does not exist.
 std::string DefaultWeightsManifestPath();
 
+
 /// One learned method's weights in one experiment.
 struct WeightsChoice {
     std::string checkpoint;  ///< the folder it runs
@@ -60,6 +61,11 @@ struct WeightsTarget {
     std::string table;
     std::vector<std::string> methods;
 };
+
+/// `manifest` with only the experiment and table ids `targets` have, and without the entries
+/// left with none: the shipped manifest names the paper's experiments, which a run of the
+/// user's own experiment files does not have (a user's manifest is checked whole instead).
+WeightsManifest OnlyTargetsOf(WeightsManifest manifest, const std::vector<WeightsTarget>& targets);
 
 /// Checks every entry against the plan before any work: experiments and tables that exist,
 /// methods that are learned and that the entry's tables run, checkpoint folders that exist,

@@ -61,6 +61,22 @@ TEST(WeightsManifest, ShippedDefaultRunsIndoorCheckpointsOnTab3Only) {
     }
 }
 
+// A run of the user's own experiment files keeps of the shipped manifest what applies to it
+// (nothing here: it names only Tab. 3), where a user's manifest naming them is refused.
+TEST(WeightsManifest, ShippedDefaultKeepsOnlyTheExperimentsOfTheRun) {
+    const std::vector<WeightsTarget> mine = {{"mine_partial", "mine", {"ogmm", "icp"}}};
+    const WeightsManifest shipped = ReadWeightsManifest(DefaultWeightsManifestPath());
+    ASSERT_FALSE(shipped.entries.empty());
+    EXPECT_TRUE(OnlyTargetsOf(shipped, mine).entries.empty());
+    std::ostringstream log;
+    const std::string e = testing::ErrorOf(
+        [&] { ResolveWeights(shipped, mine, testing::TempPath("w_mine"), log); });
+    EXPECT_NE(e.find("names experiment 'table3_indoor', which this run does not have"),
+              std::string::npos)
+        << e;
+    EXPECT_EQ(OnlyTargetsOf(shipped, PaperTargets()).entries.size(), shipped.entries.size());
+}
+
 // A later entry wins for the same (experiment, method); a table id covers its experiments.
 TEST(WeightsManifest, LaterEntriesWinAndTablesCoverTheirExperiments) {
     const fs::path dir = testing::FreshTempDir("weights_order");
