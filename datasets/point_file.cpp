@@ -191,7 +191,15 @@ DeclaredCloud ReadPcdHeader(const std::string& path) {
     double width = -1, height = -1;  // -1: no such line
     int width_line = 0;
     d.body_offset = ReadHeader(path, "DATA", [&](int n, const std::vector<std::string>& w) {
-        if (w.empty()) return;
+        if (w.empty() || w[0][0] == '#') return;
+        // Only the format's keywords: Open3D matches them by prefix, so a line "DATAH 3" ended
+        // its header early and left its point count unset (fuzz_pcd: a 40 GB allocation).
+        static const std::set<std::string> kKeywords = {
+            "VERSION", "FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT", "VIEWPOINT",
+            "POINTS",  "DATA"};
+        if (kKeywords.count(w[0]) == 0) {
+            HeaderError(path, n, "'" + w[0] + "' is no PCD header keyword");
+        }
         if (w[0] == "FIELDS") {
             fields = w.size() - 1;
             fields_line = n;
