@@ -226,14 +226,8 @@ private:
 };
 
 /// "model M, step S" (a `regbench train` checkpoint) or "model M, imported" (the authors'
-/// weights, `import-checkpoint`) from dir/checkpoint.json; "" when it cannot be read.
-std::string CheckpointLabel(const std::string& dir) {
-    nlohmann::json j;
-    try {
-        j = ogmm::ReadCheckpointJson(dir);
-    } catch (const std::exception&) {
-        return "";  // a missing checkpoint fails each call with its own message
-    }
+/// weights, `import-checkpoint`) from a checkpoint.json.
+std::string LabelOf(const nlohmann::json& j) {
     std::string model =
         j.contains("model") && j["model"].is_string() ? j["model"].get<std::string>() : "";
     if (model.empty() && j.contains("config") && j["config"].is_object() &&
@@ -252,6 +246,15 @@ std::string CheckpointLabel(const std::string& dir) {
         }
     }
     return label;
+}
+
+/// LabelOf dir/checkpoint.json; "" when it cannot be read.
+std::string CheckpointLabel(const std::string& dir) {
+    try {
+        return LabelOf(ogmm::ReadCheckpointJson(dir));
+    } catch (const std::exception&) {
+        return "";  // a missing checkpoint fails each call with its own message
+    }
 }
 
 /// Opens the checkpoint's checkpoint.json when the method is created, i.e. before a run
@@ -312,16 +315,12 @@ MethodInfo MakeInfo(const ogmm::NetworkFamily& family, const ogmm::LearnedMethod
 
 }  // namespace
 
-std::string CheckpointInfo::Describe() const {
-    return label + " (" + source + ", sha256 " + sha256.substr(0, 12) + ")";
-}
-
 CheckpointInfo DescribeCheckpoint(const std::string& dir) {
     namespace fs = std::filesystem;
     const nlohmann::json j = ogmm::ReadCheckpointJson(dir);  // throws naming the folder
     CheckpointInfo info;
     info.dir = dir;
-    info.label = CheckpointLabel(dir);
+    info.label = LabelOf(j);
     const std::string weights = j.contains("weights") && j["weights"].is_string()
                                     ? j["weights"].get<std::string>()
                                     : std::string("weights.pt");

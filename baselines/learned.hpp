@@ -33,8 +33,6 @@ struct CheckpointInfo {
     /// "shipped" (under the shipped models folder), "authors" (imported from the authors'
     /// file) or "trained" (a user's `regbench train` folder elsewhere)
     std::string source;
-    /// "label (source, sha256 first 12)" for captions.
-    std::string Describe() const;
 };
 /// Describes checkpoint folder `dir`; throws std::runtime_error naming it when its
 /// checkpoint.json or weights file cannot be read.
