@@ -1,6 +1,6 @@
 // `regbench import-checkpoint` / `export-checkpoint`: the authors' PyTorch state dicts of every
 // network family with an authors' format (DeepGMR, OGMM, OMNet, RIENet, RGM, REGTR; .pth, zip
-// or legacy format) to and from regbench checkpoint folders (ogmm/authors_checkpoint.hpp).
+// or legacy format) to and from regbench checkpoint folders (networks/checkpoint/authors_checkpoint.hpp).
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -14,9 +14,9 @@
 #include "core/output_rule.hpp"
 #include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
-#include "ogmm/authors_checkpoint.hpp"
-#include "ogmm/checkpoint.hpp"
-#include "ogmm/family.hpp"
+#include "networks/checkpoint/authors_checkpoint.hpp"
+#include "networks/checkpoint/checkpoint.hpp"
+#include "networks/family.hpp"
 #endif
 
 namespace regbench::app {
@@ -27,7 +27,7 @@ struct ImportArgs {
     std::string file;
     std::string out;
     bool force = false;
-    ogmm::ImportOptions options;
+    networks::ImportOptions options;
     std::vector<std::string> settings;  ///< --setting KEY=VALUE
 };
 
@@ -53,24 +53,24 @@ std::string SettingsHelp() {
     std::string out =
         "Settings no tensor fixes (--setting KEY=VALUE; defaults: the authors' ModelNet40 "
         "configs), and presets (--preset NAME), per --from family:\n";
-    for (const auto& from : ogmm::AuthorsFormats()) {
-        const auto settings = ogmm::AuthorsImportSettings(from);
+    for (const auto& from : networks::AuthorsFormats()) {
+        const auto settings = networks::AuthorsImportSettings(from);
         out += "  " + from +
                (settings.empty() ? ": none, its tensors fix the whole network\n" : ":\n");
         for (const auto& s : settings) {
             out += "    " + s.key + " = " + s.default_value.dump() + "  " + s.doc + "\n";
         }
-        for (const auto& p : ogmm::AuthorsImportPresets(from)) {
+        for (const auto& p : networks::AuthorsImportPresets(from)) {
             out += "    --preset " + p.name + ": " + p.values.dump() + " (" + p.doc + ")\n";
         }
     }
     return out;
 }
 
-/// The network families with an authors' checkpoint format (ogmm/family.hpp), "a | b".
+/// The network families with an authors' checkpoint format (networks/family.hpp), "a | b".
 std::string Formats() {
     std::string list;
-    for (const auto& f : ogmm::AuthorsFormats()) list += (list.empty() ? "" : " | ") + f;
+    for (const auto& f : networks::AuthorsFormats()) list += (list.empty() ? "" : " | ") + f;
     return list;
 }
 
@@ -80,23 +80,23 @@ void SetupImport(CLI::App* cmd) {
         ->required();
     cmd->add_option("--from", a->options.from, "Whose module saved it: " + Formats())
         ->required()
-        ->check(CLI::IsMember(ogmm::AuthorsFormats()));
+        ->check(CLI::IsMember(networks::AuthorsFormats()));
     cmd->add_option("--out", a->out, "Checkpoint folder to write")->required();
     cmd->add_flag("--force", a->force,
                   "Replace an existing --out checkpoint folder (never another folder: a "
                   "training run's, or one holding other files, is refused)");
     cmd->add_option("--preset", a->options.preset,
-                    "One of the authors' named configs of the --from family (its settings no "
-                    "tensor fixes, e.g. rienet: modelnet40 | 7scenes | icl_nuim | kitti); "
-                    "listed below");
+                    "One of the authors' named configs of the --from family (e.g. per dataset: "
+                    "the settings no tensor of their file fixes); each family's are listed "
+                    "below");
     cmd->add_option("--setting", a->settings,
-                    "KEY=VALUE over the preset: a setting no tensor of the file fixes (e.g. "
-                    "deepgmr rri_variant=numpy, ogmm clusters=64, rienet k=8); repeatable");
+                    "KEY=VALUE over the preset: a setting no tensor of the file fixes (each "
+                    "family's keys, types and defaults are listed below); repeatable");
     cmd->footer(SettingsHelp());
     cmd->callback([a] {
         a->options.settings = ParseSettings(a->settings);
         // Refused before the file is read: an unknown preset or key, a value of the wrong type.
-        const ogmm::ResolvedImportSettings resolved = ogmm::ResolveImportSettings(a->options);
+        const networks::ResolvedImportSettings resolved = networks::ResolveImportSettings(a->options);
         // A folder, a FIFO or a device is named as such, not as "no such file".
         RequireRegularFile(a->file);
         // The one output rule (docs/usage.md, "Outputs"): `--out m.pth` given the input m.pth,
@@ -106,8 +106,8 @@ void SetupImport(CLI::App* cmd) {
         rule.folder = true;
         const ClaimedOutput claim(a->out, {a->file}, rule);
         // Refused before the import's work; the save checks again.
-        if (a->force) ogmm::RequireReplaceableCheckpointFolder(a->out);
-        const nlohmann::json j = ogmm::ImportAuthorsCheckpoint(a->file, a->out, a->options);
+        if (a->force) networks::RequireReplaceableCheckpointFolder(a->out);
+        const nlohmann::json j = networks::ImportAuthorsCheckpoint(a->file, a->out, a->options);
         std::cout << "import-checkpoint: wrote " << a->out << " ("
                   << j.at("config").at("name").get<std::string>() << ", " << j.at("mapping").size()
                   << " tensors from a " << j.at("imported_from").at("format").get<std::string>()
@@ -138,13 +138,13 @@ void SetupExport(CLI::App* cmd) {
     cmd->add_option("DIR", a->dir, "regbench checkpoint folder")->required();
     cmd->add_option("--to", a->to, "Whose module will load it: " + Formats())
         ->required()
-        ->check(CLI::IsMember(ogmm::AuthorsFormats()));
+        ->check(CLI::IsMember(networks::AuthorsFormats()));
     cmd->add_option("--out", a->out, ".pth file to write (zip format, torch.load-able)")
         ->required();
     cmd->add_flag("--force", a->force, "Replace an existing --out");
     cmd->callback([a] {
         const ClaimedOutput claim(a->out, {a->dir}, OutputRule{a->force});
-        const ogmm::AuthorsPth pth = ogmm::ExportAuthorsPth(a->dir, a->to);
+        const networks::AuthorsPth pth = networks::ExportAuthorsPth(a->dir, a->to);
         WriteFileAtomic(a->out, pth.bytes,
                         {(std::filesystem::path(a->dir) / "weights.pt").string(),
                          (std::filesystem::path(a->dir) / "checkpoint.json").string()});

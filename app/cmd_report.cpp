@@ -12,6 +12,7 @@
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
 #include "reports/versus.hpp"
+#include "runners/registry.hpp"
 #include "runners/result_row.hpp"
 
 namespace regbench::app {
@@ -119,7 +120,8 @@ void SetupReportCommand(CLI::App* cmd) {
             const nlohmann::json published = LoadPaperTables(*paper_file);
             for (const auto& t : tables) {
                 out_tables.push_back(
-                    PaperComparisonTable(t, published, paper->substr(0, colon), group));
+                    PaperComparisonTable(t, published, paper->substr(0, colon), group,
+                                         PaperRowLabels()));
             }
         }
         std::string text;

@@ -19,9 +19,9 @@
 #include "core/json_limits.hpp"
 #include "core/output_rule.hpp"
 #include "experiments/training.hpp"
-#include "ogmm/family.hpp"
-#include "ogmm/train.hpp"
-#include "ogmm/zoo.hpp"
+#include "networks/family.hpp"
+#include "networks/training/train.hpp"
+#include "networks/zoo.hpp"
 #endif
 
 namespace regbench::app {
@@ -39,7 +39,7 @@ struct TrainArgs {
     double lr = 0.0;
     /// --resume, --minutes, --max-steps, --threads, --seed and --device bind straight to the
     /// trainer's options (their defaults live there); RunOne adds the per-run fields.
-    ogmm::TrainOptions train;
+    networks::TrainOptions train;
     bool val_icp = true;
     std::string ablation;
     std::string bundle;  ///< --write-bundle FILE: write the data and config, train nothing
@@ -76,7 +76,7 @@ nlohmann::json BuildConfig(const TrainArgs& a, const std::string& model,
     nlohmann::json overrides =
         a.config_file.empty() ? nlohmann::json::object() : ReadJsonFile(a.config_file);
     overrides.merge_patch(extra);
-    nlohmann::json config = ogmm::ResolveConfig(model, overrides);
+    nlohmann::json config = networks::ResolveConfig(model, overrides);
     if (a.batch > 0) config["train"]["batch"] = a.batch;
     if (a.epochs > 0) config["train"]["epochs"] = a.epochs;
     if (a.pairs_per_epoch > 0) config["train"]["pairs_per_epoch"] = a.pairs_per_epoch;
@@ -85,8 +85,8 @@ nlohmann::json BuildConfig(const TrainArgs& a, const std::string& model,
 }
 
 void RunOne(const TrainArgs& a, const std::string& command_line, const nlohmann::json& config,
-            const ogmm::TrainData& data, const std::string& out) {
-    ogmm::TrainOptions o = a.train;
+            const networks::TrainData& data, const std::string& out) {
+    networks::TrainOptions o = a.train;
     o.out_dir = out;
     o.plan_to_budget = o.PlansToBudget(a.epochs > 0);
     o.run_info = {{"command", command_line}};
@@ -98,7 +98,7 @@ void RunOne(const TrainArgs& a, const std::string& command_line, const nlohmann:
     std::cerr << "train: " << config.value("name", std::string("?")) << " -> " << out << " ("
               << data.validation.size() << " validation pairs, " << a.train.threads << " threads, "
               << a.train.device << ")\n";
-    const ogmm::TrainSummary s = ogmm::Train(config, data, o);
+    const networks::TrainSummary s = networks::Train(config, data, o);
     std::cerr << "train: done, " << s.steps << " steps; checkpoints " << out << "/last, " << out
               << "/best\n";
 }
@@ -125,17 +125,17 @@ void WriteBundle(const TrainArgs& a, const std::string& command_line) {
               << "regbench-train-portable " << a.bundle << " --out DIR [--device cuda]\n";
 }
 
-/// The zoo's model names (ogmm/family.hpp), comma-separated.
+/// The zoo's model names (networks/family.hpp), comma-separated.
 std::string ModelList() {
     std::string list;
-    for (const auto& m : ogmm::ModelNames()) list += (list.empty() ? "" : ", ") + m;
+    for (const auto& m : networks::ModelNames()) list += (list.empty() ? "" : ", ") + m;
     return list;
 }
 
-/// --list-models: each network family (ogmm/family.hpp), its models and methods, and every
+/// --list-models: each network family (networks/family.hpp), its models and methods, and every
 /// config key with each model's value and the key's doc.
 void ListModels() {
-    for (const auto& f : ogmm::Families()) {
+    for (const auto& f : networks::Families()) {
         std::cout << f.arch << "  -  " << f.summary << "\n    models:";
         for (const auto& m : f.models) std::cout << " " << m;
         std::cout << "\n    methods:";
@@ -177,7 +177,7 @@ void Run(const TrainArgs& a, const std::string& command_line) {
     const ClaimedOutput claim(a.out, {a.config_file, a.data.pairs_file}, rule);
     TrainingDataOptions data_options = a.data;
     data_options.seed = a.train.seed;
-    const ogmm::TrainData data = MakeTrainingData(data_options);
+    const networks::TrainData data = MakeTrainingData(data_options);
     if (a.ablation.empty()) {
         RunOne(a, command_line, BuildConfig(a, a.model, nlohmann::json::object()), data, a.out);
         return;
@@ -226,7 +226,7 @@ void SetupTrainCommand(CLI::App* cmd) {
         ->check(PositiveWholeNumber());
     cmd->add_option("--lr", a->lr, "Learning rate in (0, 1] (default: recipe)")
         ->check(PositiveReal())
-        ->check(ClosedInterval(0.0, ogmm::kMaxLearningRate));
+        ->check(ClosedInterval(0.0, networks::kMaxLearningRate));
     cmd->add_option("--minutes", a->train.minutes,
                     "Wall-clock budget of this invocation; ends with a validated checkpoint. On a "
                     "fresh run without --epochs/--max-steps the LR schedule is planned to fit it")
@@ -258,10 +258,10 @@ void SetupTrainCommand(CLI::App* cmd) {
 }
 
 constexpr const char* kTrainSummary =
-    "Train a learned registration network (OGMM, DeepGMR, OMNet, RIENet, RGM, REGTR)";
+    "Train a learned registration network (every family of `regbench train --list-models`)";
 #else
 void SetupTrainCommand(CLI::App* cmd) {
-    cmd->callback([] { throw std::runtime_error("train: this build has no LibTorch (ogmm/)"); });
+    cmd->callback([] { throw std::runtime_error("train: this build has no LibTorch (networks/)"); });
 }
 constexpr const char* kTrainSummary = "Train a learned network (not in this build: needs LibTorch)";
 #endif

@@ -453,11 +453,13 @@ FilterRegOptions ParseFilterRegOptions(const nlohmann::json& params) {
 }
 
 MethodInfo FilterRegMethodInfo() {
-    return MakeMethodInfo<FilterRegOptions>(
+    MethodInfo info = MakeMethodInfo<FilterRegOptions>(
         kFilterRegName,
         "FilterReg (Gao & Tedrake 2019) as probreg's registration_filterreg: permutohedral-lattice "
         "E-step, weighted Kabsch (pt2pt) or twist (pt2pl) M-step; regbench C++",
         AlignFilterReg);
+    info.paper_label = "FilterReg";  // the row of the OGMM paper's tables
+    return info;
 }
 
 }  // namespace regbench

@@ -1,5 +1,5 @@
 // The learned methods. Neither LibTorch nor Open3D headers are included here: the networks are
-// reached through ogmm/ (ogmm/inference.hpp), ICP through the `icp` method (baselines/icp.cpp).
+// reached through networks/ (networks/inference.hpp), ICP through the `icp` method (baselines/icp.cpp).
 #include "baselines/learned.hpp"
 
 #include <algorithm>
@@ -14,11 +14,11 @@
 #include "core/data_dir.hpp"
 #include "core/params.hpp"
 #include "core/sha256.hpp"
-#include "ogmm/checkpoint.hpp"
-#include "ogmm/cost.hpp"
-#include "ogmm/family.hpp"
-#include "ogmm/gemm_floor.hpp"
-#include "ogmm/inference.hpp"
+#include "networks/checkpoint/checkpoint.hpp"
+#include "networks/cost.hpp"
+#include "networks/family.hpp"
+#include "networks/gemm_floor.hpp"
+#include "networks/inference.hpp"
 
 namespace regbench {
 
@@ -48,15 +48,14 @@ Transform IcpRefine(const PointCloud& source, const PointCloud& target, const Tr
 
 namespace {
 
-/// The parameters of the learned methods. The variants with ICP refinement (`ogmm`, `deepgmr`;
-/// kIcp) have the icp_* keys, the network-alone ones (`-noicp`) the checkpoint only; OGMM's
-/// (kAttention) the attention of the network too.
-template <bool kIcp, bool kAttention>
+/// The parameters every learned method has. The variants with ICP refinement (`ogmm`,
+/// `deepgmr`; kIcp) have the icp_* keys, the network-alone ones (`-noicp`) the checkpoint only.
+/// A family's inference parameters (NetworkFamily::inference_params, e.g. OGMM's attention)
+/// join them in MakeInfo.
+template <bool kIcp>
 struct LearnedOptions {
     /// Checkpoint directory; "" = the shipped one (ShippedCheckpointDir of the method's model).
     std::string checkpoint;
-    /// "" = the checkpoint's; "clustered" or "full" runs its weights with that attention.
-    std::string attention;
     double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius
     int icp_max_iterations = 30;                    ///< ICP iterations
 
@@ -65,12 +64,6 @@ struct LearnedOptions {
         // MakeInfo appends the shipped folder of the method's model to this doc.
         f("checkpoint", checkpoint,
           "checkpoint directory from `regbench train`; \"\" = the shipped one, ");
-        if constexpr (kAttention) {
-            f("attention", attention,
-              "\"\" = the checkpoint's; \"clustered\" (FPS anchors) or \"full\" (every point, "
-              "paper Tab. 6 \"f\") runs the checkpoint's weights with that attention (the two "
-              "have the same parameters)");
-        }
         if constexpr (kIcp) {
             f("icp_max_correspondence_distance", icp_max_correspondence_distance,
               "ICP refinement radius; 0.07 = 2 * overlap_radius of the OGMM code");
@@ -78,11 +71,6 @@ struct LearnedOptions {
         }
     }
     void Validate(ParamCheck& c) const {
-        if constexpr (kAttention) {
-            c.Require(attention.empty() || attention == "clustered" || attention == "full",
-                      "attention",
-                      "must be \"\", \"clustered\" or \"full\", got \"" + attention + "\"");
-        }
         if constexpr (kIcp) {
             c.Above("icp_max_correspondence_distance", icp_max_correspondence_distance, 0.0);
             c.AtLeast("icp_max_iterations", icp_max_iterations, 1);
@@ -90,18 +78,50 @@ struct LearnedOptions {
     }
 };
 
+/// The family's inference parameters of `params` (each a string, "" or one of its choices;
+/// absent: ""), removed from `params`; the non-empty ones are the checkpoint's config overrides.
+struct InferenceValues {
+    nlohmann::json all = nlohmann::json::object();        ///< every key, as rows record them
+    nlohmann::json overrides = nlohmann::json::object();  ///< the non-empty ones
+};
+InferenceValues TakeInferenceParams(const networks::NetworkFamily& family,
+                                    const std::string& method, nlohmann::json& params) {
+    InferenceValues out;
+    for (const auto& p : family.inference_params) {
+        std::string value;
+        if (params.is_object() && params.contains(p.key)) {
+            const nlohmann::json& given = params.at(p.key);
+            Require(given.is_string(), method, p.key, "expects string, got " + given.dump());
+            value = given.get<std::string>();
+            params.erase(p.key);
+        }
+        std::string may = "\"\"";
+        bool ok = value.empty();
+        for (std::size_t i = 0; i < p.choices.size(); ++i) {
+            may += (i + 1 == p.choices.size() ? " or \"" : ", \"") + p.choices[i] + "\"";
+            ok = ok || value == p.choices[i];
+        }
+        Require(ok, method, p.key, "must be " + may + ", got \"" + value + "\"");
+        out.all[p.key] = value;
+        if (!value.empty()) out.overrides[p.key] = value;
+    }
+    return out;
+}
+
 std::string CheckpointLabel(const std::string& dir);
 
 class LearnedMethod final : public RegistrationMethod {
 public:
-    template <bool kIcp, bool kAttention>
-    LearnedMethod(std::string name, std::string model_dir,
-                  const LearnedOptions<kIcp, kAttention>& options)
+    template <bool kIcp>
+    LearnedMethod(std::string name, std::string model_dir, const LearnedOptions<kIcp>& options,
+                  const InferenceValues& inference)
         : name_(std::move(name)),
           icp_(kIcp),
           params_(ParamsToJson(options)),  // "" = shipped; the path used is in each row's extra
-          options_{options.checkpoint, options.attention, options.icp_max_correspondence_distance,
-                   options.icp_max_iterations} {
+          options_{options.checkpoint, options.icp_max_correspondence_distance,
+                   options.icp_max_iterations},
+          inference_(inference.overrides) {
+        params_.update(inference.all);
         checkpoint_ =
             options_.checkpoint.empty() ? ShippedCheckpointDir(model_dir) : options_.checkpoint;
         checkpoint_label_ = CheckpointLabel(checkpoint_);
@@ -112,10 +132,9 @@ public:
         } catch (const std::exception&) {
             // an unreadable weights file fails each call when it loads, with its own message
         }
-        if (!options_.attention.empty()) inference_["attention"] = options_.attention;
         // The GEMM rate of the floor, measured once per process, here in the process that
         // creates the method: the runner's isolated calls are forked from it and inherit it.
-        (void)ogmm::ProcessGemmRate();
+        (void)networks::ProcessGemmRate();
     }
     std::string Name() const override { return name_; }
     nlohmann::json Params() const override { return params_; }
@@ -134,8 +153,8 @@ protected:
         const auto t0 = std::chrono::steady_clock::now();
         const CpuStopwatch cpu(context.threads);
         // FPS starts etc. depend on the pair only (the seed), not on other runner threads.
-        const ogmm::PairEstimate estimate =
-            ogmm::EstimatePair(*net_, source, target, context.IntSeed(), context.threads);
+        const networks::PairEstimate estimate =
+            networks::EstimatePair(*net_, source, target, context.IntSeed(), context.threads);
         const Transform& T_net = estimate.T;
         result.extra["network_cpu_seconds"] = cpu.Elapsed();
         result.extra["network_seconds"] =
@@ -146,16 +165,16 @@ protected:
         // A config the cost model cannot read (a key it needs missing) leaves them out.
         std::int64_t macs = 0;
         try {
-            macs = ogmm::ComputeForwardCost(cost_config_, source.rows(), target.rows()).total;
+            macs = networks::ComputeForwardCost(cost_config_, source.rows(), target.rows()).total;
         } catch (const std::exception&) {
             macs = 0;
         }
         if (macs > 0) {
-            const ogmm::GemmRate& gemm = ogmm::ProcessGemmRate();
+            const networks::GemmRate& gemm = networks::ProcessGemmRate();
             result.extra["macs"] = macs;
             result.extra["gemm_gmac_per_s"] = gemm.macs_per_second * 1e-9;
             result.extra["floor_seconds"] = static_cast<double>(macs) / gemm.macs_per_second;
-            result.extra["blas"] = ogmm::BlasDescription();
+            result.extra["blas"] = networks::BlasDescription();
         }
         // Per-point outputs (overlap scores and the like) summarised by their mean.
         for (const auto& [key, mean] : estimate.source_point_means) {
@@ -189,8 +208,8 @@ private:
                                              " does not exist (train one with `regbench train`, "
                                              "or set parameter checkpoint / $REGBENCH_MODELS)");
                 }
-                net_ = ogmm::LoadNetFromCheckpoint(checkpoint_, inference_);
-                cost_config_ = ogmm::CheckpointNetConfig(checkpoint_, inference_);
+                net_ = networks::LoadNetFromCheckpoint(checkpoint_, inference_);
+                cost_config_ = networks::CheckpointNetConfig(checkpoint_, inference_);
             } catch (const std::exception& e) {
                 load_error_ = name_ + ": " + e.what();
             }
@@ -205,7 +224,6 @@ private:
     /// The options of every learned method, resolved.
     struct Resolved {
         std::string checkpoint;
-        std::string attention;
         double icp_max_correspondence_distance;
         int icp_max_iterations;
     };
@@ -218,10 +236,10 @@ private:
     std::string checkpoint_label_;  ///< "model M, step S" of checkpoint.json (report labels)
     std::string checkpoint_sha256_;  ///< of its weights file (DescribeCheckpoint)
     std::string checkpoint_source_;  ///< shipped | authors | trained
-    nlohmann::json inference_ = nlohmann::json::object();  ///< {"attention": ...} when given
+    nlohmann::json inference_;  ///< the inference parameters given (config overrides)
     nlohmann::json cost_config_;  ///< the network's zoo config, what ComputeForwardCost counts
     std::mutex load_mutex_;
-    std::shared_ptr<ogmm::RegistrationNet> net_;
+    std::shared_ptr<networks::RegistrationNet> net_;
     std::string load_error_;
 };
 
@@ -251,7 +269,7 @@ std::string LabelOf(const nlohmann::json& j) {
 /// LabelOf dir/checkpoint.json; "" when it cannot be read.
 std::string CheckpointLabel(const std::string& dir) {
     try {
-        return LabelOf(ogmm::ReadCheckpointJson(dir));
+        return LabelOf(networks::ReadCheckpointJson(dir));
     } catch (const std::exception&) {
         return "";  // a missing checkpoint fails each call with its own message
     }
@@ -261,7 +279,7 @@ std::string CheckpointLabel(const std::string& dir) {
 /// starts: a missing or unreadable checkpoint, a config its family refuses (sizes out of range),
 /// or one of another network family (an OGMM checkpoint under `deepgmr` would run OGMM under
 /// DeepGMR's name) is refused naming the folder. The weights load on first use.
-void CheckCheckpoint(const ogmm::NetworkFamily& family, const ogmm::LearnedMethodSpec& method,
+void CheckCheckpoint(const networks::NetworkFamily& family, const networks::LearnedMethodSpec& method,
                      const std::string& dir, const nlohmann::json& inference) {
     if (!std::filesystem::is_directory(dir)) {
         throw std::invalid_argument(method.name + ": checkpoint directory " + dir +
@@ -270,13 +288,13 @@ void CheckCheckpoint(const ogmm::NetworkFamily& family, const ogmm::LearnedMetho
     }
     std::string arch;
     try {
-        arch = ogmm::CheckCheckpointModel(dir, inference);
+        arch = networks::CheckCheckpointModel(dir, inference);
     } catch (const std::exception& e) {
         throw std::invalid_argument(method.name + ": " + e.what());
     }
     if (arch != family.arch) {
         std::string instead = arch;  // the method of the checkpoint's family with the same ICP
-        for (const auto& m : ogmm::FindFamily(arch).methods) {
+        for (const auto& m : networks::FindFamily(arch).methods) {
             if (m.icp == method.icp) instead = m.name;
         }
         throw std::invalid_argument(method.name + ": checkpoint " + dir + " holds a " + arch +
@@ -285,30 +303,48 @@ void CheckCheckpoint(const ogmm::NetworkFamily& family, const ogmm::LearnedMetho
     }
 }
 
-template <bool kIcp, bool kAttention>
-MethodInfo MakeInfo(const ogmm::NetworkFamily& family, const ogmm::LearnedMethodSpec& method) {
-    using Options = LearnedOptions<kIcp, kAttention>;
+template <bool kIcp>
+MethodInfo MakeInfo(const networks::NetworkFamily& family,
+                    const networks::LearnedMethodSpec& method) {
+    using Options = LearnedOptions<kIcp>;
     MethodInfo info = DescribeParams<Options>(method.name, method.summary);
+    info.paper_label = method.paper_label;
     info.cost = [cost = family.cost_class](const nlohmann::json&) { return cost; };
     const std::string model_dir = family.shipped_model;
     const std::string shipped = ShippedCheckpointDir(model_dir) + " ($REGBENCH_MODELS overrides)";
     info.param_docs.at("checkpoint") += shipped;
     info.schema["properties"]["checkpoint"]["description"] = info.param_docs.at("checkpoint");
-    info.create = [family, method](const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
+    for (const auto& p : family.inference_params) {
+        info.defaults[p.key] = "";
+        info.param_docs[p.key] = p.doc;
+        info.schema["properties"][p.key] = {{"type", "string"}, {"default", ""},
+                                            {"description", p.doc}};
+    }
+    info.create = [family, method, known = info.defaults](
+                      const nlohmann::json& j) -> std::unique_ptr<RegistrationMethod> {
         const std::string& name = method.name;
         if (!kIcp && j.is_object() &&
             (j.contains("icp_max_correspondence_distance") || j.contains("icp_max_iterations"))) {
             throw std::invalid_argument(name +
                                         ": no ICP in this variant; drop the icp_* parameters");
         }
-        const auto o = ParseParams<Options>(name, j);
-        nlohmann::json inference = nlohmann::json::object();
-        if (!o.attention.empty()) inference["attention"] = o.attention;
+        if (j.is_object()) {  // unknown keys named with every known one, inference ones included
+            for (const auto& item : j.items()) {
+                if (known.contains(item.key())) continue;
+                std::string list;
+                for (const auto& k : known.items()) list += (list.empty() ? "" : ", ") + k.key();
+                throw std::invalid_argument(name + ": unknown parameter '" + item.key() +
+                                            "' (known: " + list + ")");
+            }
+        }
+        nlohmann::json rest = j;
+        const InferenceValues inference = TakeInferenceParams(family, name, rest);
+        const auto o = ParseParams<Options>(name, rest);
         CheckCheckpoint(family, method,
                         o.checkpoint.empty() ? ShippedCheckpointDir(family.shipped_model)
                                              : o.checkpoint,
-                        inference);
-        return std::make_unique<LearnedMethod>(name, family.shipped_model, o);
+                        inference.overrides);
+        return std::make_unique<LearnedMethod>(name, family.shipped_model, o, inference);
     };
     return info;
 }
@@ -317,7 +353,7 @@ MethodInfo MakeInfo(const ogmm::NetworkFamily& family, const ogmm::LearnedMethod
 
 CheckpointInfo DescribeCheckpoint(const std::string& dir) {
     namespace fs = std::filesystem;
-    const nlohmann::json j = ogmm::ReadCheckpointJson(dir);  // throws naming the folder
+    const nlohmann::json j = networks::ReadCheckpointJson(dir);  // throws naming the folder
     CheckpointInfo info;
     info.dir = dir;
     info.label = LabelOf(j);
@@ -335,7 +371,7 @@ CheckpointInfo DescribeCheckpoint(const std::string& dir) {
 }
 
 std::string DefaultCheckpointDir(const std::string& method) {
-    for (const auto& family : ogmm::Families()) {
+    for (const auto& family : networks::Families()) {
         for (const auto& m : family.methods) {
             if (m.name == method) return ShippedCheckpointDir(family.shipped_model);
         }
@@ -345,19 +381,10 @@ std::string DefaultCheckpointDir(const std::string& method) {
 
 std::vector<MethodInfo> LearnedMethodInfos() {
     std::vector<MethodInfo> out;
-    for (const auto& family : ogmm::Families()) {
-        // The one inference option a method can take as a parameter today is "attention"
-        // (LearnedOptions); a family with another needs a field there.
-        const auto& keys = family.inference_keys;
-        const bool attention = std::find(keys.begin(), keys.end(), "attention") != keys.end();
+    for (const auto& family : networks::Families()) {
         for (const auto& method : family.methods) {
-            if (method.icp) {
-                out.push_back(attention ? MakeInfo<true, true>(family, method)
-                                        : MakeInfo<true, false>(family, method));
-            } else {
-                out.push_back(attention ? MakeInfo<false, true>(family, method)
-                                        : MakeInfo<false, false>(family, method));
-            }
+            out.push_back(method.icp ? MakeInfo<true>(family, method)
+                                     : MakeInfo<false>(family, method));
         }
     }
     return out;

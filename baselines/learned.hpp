@@ -8,7 +8,7 @@
 
 namespace regbench {
 
-/// The methods of every network family (ogmm/family.hpp), in the registry's order (today
+/// The methods of every network family (networks/family.hpp), in the registry's order (today
 /// `ogmm`, `ogmm-noicp`, `deepgmr`, `deepgmr-noicp`). Any checkpoint of the method's family
 /// (its config.arch) runs under it, e.g. `deepgmr` with checkpoint = a deepgmr-orig run.
 /// Creating the method opens checkpoint.json: a missing folder, an unreadable checkpoint, a

@@ -243,12 +243,14 @@ OneClassSvm FitOneClassSvm(const PointCloud& X, double nu, double gamma, double 
 }
 
 MethodInfo SvrMethodInfo() {
-    return MakeMethodInfo<SvrOptions>(
+    MethodInfo info = MakeMethodInfo<SvrOptions>(
         "svr",
         "Support Vector Registration rigid as probreg runs it: libsvm one-class nu-SVM per cloud "
         "(support vectors = GMM means), L2 cost, scipy-like BFGS; exact Gauss sums (approximated "
         "at scale)",
         AlignSvr);
+    info.paper_label = "SVR";  // the row of the OGMM paper's tables
+    return info;
 }
 
 }  // namespace regbench

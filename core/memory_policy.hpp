@@ -10,7 +10,7 @@ namespace regbench {
 /// with the kernel zeroing it, every call (training: 210,000-590,000 faults a step, 60-80% of
 /// its CPU time; RIENet's inference forward: about two thirds of its CPU time; see
 /// docs/performance.md). The cost: the process's heap stays at its peak. Called by `regbench`'s
-/// main, the benchmarks' main and ogmm::Train(); a library (the Python module) leaves the host
+/// main, the benchmarks' main and networks::Train(); a library (the Python module) leaves the host
 /// process's allocator alone. No effect without glibc. Idempotent.
 void RetainFreedMemory();
 

@@ -102,6 +102,9 @@ enum class CostClass {
 struct MethodInfo {
     std::string name;     ///< registry name, e.g. "cpd"
     std::string summary;  ///< one line: what it is and which implementation
+    /// The row of the OGMM paper's tables this method fills (e.g. "CPD"); "" = none. The
+    /// reports name the paper's rows by it (PaperTableOptions::paper_rows).
+    std::string paper_label;
     /// parameter name -> one-line meaning (units, range, why this default)
     std::map<std::string, std::string> param_docs;
     /// Default parameters (what Params() returns for an empty JSON object).

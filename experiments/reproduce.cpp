@@ -556,13 +556,15 @@ std::vector<Table> BuildTables(const std::vector<ExperimentFile>& files,
             for (const auto& s : timing_sets[f.table]) sets.push_back(s);
             tables.push_back(
                 BuildTimingTable(sets, paper, CpuModel(),
-                                 "none (Eigen's own kernels; the classical methods link no BLAS)"));
+                                 "none (Eigen's own kernels; the classical methods link no BLAS)",
+                                 PaperRowLabels()));
             tables.back().title = f.title;
             continue;
         }
         const PaperTableSpec spec = SpecOf(f);
         PaperTableOptions to;
         to.unavailable = unavailable;
+        to.paper_rows = PaperRowLabels();
         const std::vector<ResultSet> sets =
             SetsOf(f, spec, experiments, x, variant_sets, paper, &to);
         tables.push_back(BuildPaperTable(spec, sets, paper, to));

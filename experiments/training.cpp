@@ -39,8 +39,8 @@ std::vector<ShapeSource> LoadShapes(const TrainingDataOptions& a, const std::str
 }
 
 /// Training stream and validation pairs from a frozen pair file.
-ogmm::TrainData FromPairFile(const TrainingDataOptions& a) {
-    ogmm::TrainData data;
+networks::TrainData FromPairFile(const TrainingDataOptions& a) {
+    networks::TrainData data;
     auto set = std::make_shared<PairSet>(ReadPairFile(a.pairs_file));
     const std::size_t n = set->pairs.size();
     const auto n_val = static_cast<std::size_t>(a.val_fraction * static_cast<double>(n));
@@ -85,7 +85,7 @@ TrainingBundle LoadTrainingBundle(const TrainingDataOptions& a) {
     return b;
 }
 
-ogmm::TrainData MakeTrainingData(const TrainingDataOptions& a) {
+networks::TrainData MakeTrainingData(const TrainingDataOptions& a) {
     if (!a.pairs_file.empty()) return FromPairFile(a);
     return MakeTrainingData(LoadTrainingBundle(a));
 }

@@ -1,6 +1,6 @@
 #pragma once
 // The data `regbench train` learns from, and the paper's learned variants it trains with
-// --ablation. Here, not in ogmm/: ogmm/ (the trainer) links core, gmm and LibTorch only, while
+// --ablation. Here, not in networks/: networks/ (the trainer) links core, gmm and LibTorch only, while
 // training pairs come from datasets/ and protocols/ (docs/layout.md).
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "experiments/training_bundle.hpp"
-#include "ogmm/train.hpp"
+#include "networks/training/train.hpp"
 
 namespace regbench {
 
@@ -31,7 +31,7 @@ struct TrainingDataOptions {
 
 /// The training stream and validation pairs; throws std::invalid_argument / runtime_error
 /// naming the option or input ("train: ...").
-ogmm::TrainData MakeTrainingData(const TrainingDataOptions& o);
+networks::TrainData MakeTrainingData(const TrainingDataOptions& o);
 
 /// The shapes, protocol and seed protocol data (no --pairs-file) come from, for
 /// MakeTrainingData or a file (`train --write-bundle`). Its `config` and `command` are left

@@ -77,8 +77,8 @@ std::vector<ShapeSource> ShapesFromJson(const nlohmann::json& a, const char* key
 
 }  // namespace
 
-ogmm::TrainSample ToTrainSample(const Pair& p) {
-    ogmm::TrainSample s;
+networks::TrainSample ToTrainSample(const Pair& p) {
+    networks::TrainSample s;
     s.source = p.source;
     s.target = p.target;
     s.T_gt = p.T_gt;
@@ -87,8 +87,8 @@ ogmm::TrainSample ToTrainSample(const Pair& p) {
     return s;
 }
 
-ogmm::TrainData MakeTrainingData(const TrainingBundle& b) {
-    ogmm::TrainData data;
+networks::TrainData MakeTrainingData(const TrainingBundle& b) {
+    networks::TrainData data;
     // Validation pairs come from another seed stream than training pairs.
     const std::uint64_t val_seed = b.seed ^ 0x76616c6964ULL;
     for (int i = 0; i < b.val_pairs; ++i) {

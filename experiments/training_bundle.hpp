@@ -4,14 +4,14 @@
 // model config, in one file. A machine with LibTorch alone (a GPU node without Open3D, PCL,
 // CGAL or HDF5) trains on the same pair stream from it: `regbench train ... --write-bundle
 // FILE` here, `regbench-train-portable FILE --out DIR --device cuda` there (portable/). This
-// file and its .cpp need core/, protocols/' pair generation and ogmm/train.hpp only, so
+// file and its .cpp need core/, protocols/' pair generation and networks/training/train.hpp only, so
 // portable/ compiles them in directly (docs/learned-methods.md, "Training on a GPU machine").
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include "ogmm/train.hpp"
+#include "networks/training/train.hpp"
 #include "protocols/pair_protocols.hpp"
 #include "protocols/shape_source.hpp"
 
@@ -33,10 +33,10 @@ struct TrainingBundle {
 };
 
 /// A protocol pair as the trainer takes it.
-ogmm::TrainSample ToTrainSample(const Pair& p);
+networks::TrainSample ToTrainSample(const Pair& p);
 
 /// The training stream and validation pairs of `b` (what `regbench train` trains on).
-ogmm::TrainData MakeTrainingData(const TrainingBundle& b);
+networks::TrainData MakeTrainingData(const TrainingBundle& b);
 
 /// Writes `b` to `path` (CBOR, atomically). Throws std::invalid_argument naming a stored-pair
 /// shape (those come from pair files, which bundles do not carry) and std::runtime_error naming

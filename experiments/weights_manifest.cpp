@@ -11,9 +11,9 @@
 #include "core/registration.hpp"
 #include "core/sha256.hpp"
 #ifdef REGBENCH_HAVE_LEARNED
-#include "ogmm/authors_checkpoint.hpp"
-#include "ogmm/checkpoint.hpp"
-#include "ogmm/family.hpp"
+#include "networks/checkpoint/authors_checkpoint.hpp"
+#include "networks/checkpoint/checkpoint.hpp"
+#include "networks/family.hpp"
 #endif
 
 namespace regbench {
@@ -210,15 +210,15 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
             if (!fs::is_regular_file(e.authors_file)) {
                 Refuse(e.where, "authors_file " + e.authors_file + ": no such file");
             }
-            const auto formats = ogmm::AuthorsFormats();
+            const auto formats = networks::AuthorsFormats();
             if (!Contains(formats, e.from)) {
                 std::string names;
                 for (const auto& f : formats) names += (names.empty() ? "" : ", ") + f;
                 Refuse(e.where, "\"from\": '" + e.from + "' is no authors' format (" + names + ")");
             }
-            ogmm::ImportOptions o{e.from, e.preset, e.settings};
+            networks::ImportOptions o{e.from, e.preset, e.settings};
             try {
-                ogmm::ResolveImportSettings(o);
+                networks::ResolveImportSettings(o);
             } catch (const std::exception& ex) {
                 Refuse(e.where, ex.what());
             }
@@ -234,9 +234,9 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
         }
         // Named by the file's and the settings' content, so an import is never replaced: an
         // earlier invocation's is reused, another file or setting gets a folder of its own.
-        const ogmm::ImportOptions o{e.from, e.preset, e.settings};
+        const networks::ImportOptions o{e.from, e.preset, e.settings};
         const std::string key = Sha256File(e.authors_file) + " " + e.from + " " + e.preset + " " +
-                                ogmm::ResolveImportSettings(o).values.dump();
+                                networks::ResolveImportSettings(o).values.dump();
         const fs::path dir =
             fs::path(import_dir) / (ImportFolderName(e, i) + "-" + Sha256Hex(key).substr(0, 12));
         dirs[i] = dir.string();
@@ -250,7 +250,7 @@ WeightsPlan ResolveWeights(const WeightsManifest& manifest,
             << (e.preset.empty() ? "" : " --preset " + e.preset) << ") into " << dir.string()
             << "\n";
         try {
-            ogmm::ImportAuthorsCheckpoint(e.authors_file, dir.string(), o);
+            networks::ImportAuthorsCheckpoint(e.authors_file, dir.string(), o);
         } catch (const std::exception& ex) {
             Refuse(e.where, ex.what());
         }

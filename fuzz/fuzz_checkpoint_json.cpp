@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-#include "ogmm/checkpoint_json.hpp"
+#include "networks/checkpoint/checkpoint_json.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string text(reinterpret_cast<const char*>(data), size);
@@ -20,17 +20,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                  {"weights", "weights.pt"},
                                  {"weights_bytes", size}};
     try {
-        const nlohmann::json j = regbench::ogmm::ParseCheckpointJson(text, "fuzz/checkpoint.json");
-        (void)regbench::ogmm::CheckpointArch(j);
+        const nlohmann::json j = regbench::networks::ParseCheckpointJson(text, "fuzz/checkpoint.json");
+        (void)regbench::networks::CheckpointArch(j);
         (void)j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
         checkpoint = j;
     } catch (const std::runtime_error&) {
     } catch (const std::invalid_argument&) {
     }
     const std::string_view bytes(text);
-    const std::size_t tail = std::min(bytes.size(), regbench::ogmm::kWeightsTailBytes);
+    const std::size_t tail = std::min(bytes.size(), regbench::networks::kWeightsTailBytes);
     try {
-        regbench::ogmm::CheckWeightsBytes(bytes.substr(0, 4), bytes.substr(bytes.size() - tail),
+        regbench::networks::CheckWeightsBytes(bytes.substr(0, 4), bytes.substr(bytes.size() - tail),
                                           size, checkpoint, "fuzz/weights.pt");
     } catch (const std::runtime_error&) {
     }

@@ -14,7 +14,7 @@
 
 #include "core/parse_number.hpp"
 #include "experiments/training_bundle.hpp"
-#include "ogmm/train.hpp"
+#include "networks/training/train.hpp"
 
 namespace {
 
@@ -26,7 +26,7 @@ constexpr const char* kUsage =
 
 struct Args {
     std::string bundle;
-    regbench::ogmm::TrainOptions train;
+    regbench::networks::TrainOptions train;
     std::string command = "regbench-train-portable";
 };
 
@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
                                         " holds no model config (write it with `regbench train "
                                         "--model NAME ... --write-bundle FILE`)");
         }
-        const regbench::ogmm::TrainData data = regbench::MakeTrainingData(bundle);
-        regbench::ogmm::TrainOptions& o = a.train;
+        const regbench::networks::TrainData data = regbench::MakeTrainingData(bundle);
+        regbench::networks::TrainOptions& o = a.train;
         o.seed = bundle.seed;
         o.plan_to_budget = o.PlansToBudget(bundle.length_given);
         o.run_info = {
@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
         std::cerr << "train: " << bundle.config.value("name", std::string("?")) << " -> "
                   << o.out_dir << " (" << data.validation.size() << " validation pairs, "
                   << o.threads << " threads, " << o.device << ")\n";
-        const regbench::ogmm::TrainSummary s = regbench::ogmm::Train(bundle.config, data, o);
+        const regbench::networks::TrainSummary s = regbench::networks::Train(bundle.config, data, o);
         std::cerr << "train: done, " << s.steps << " steps; checkpoints " << o.out_dir << "/last, "
                   << o.out_dir << "/best\n";
         return 0;

@@ -26,9 +26,9 @@ std::string MetricHeader(const std::string& m) {
 }
 
 /// The paper's row name of a result row: the set's label, else the paper's method name.
-std::string PaperRowOf(const ResultRow& row, const ResultSet& set) {
+std::string PaperRowOf(const ResultRow& row, const ResultSet& set, const PaperRows& paper_rows) {
     if (!set.row_label.empty()) return set.row_label;
-    return PaperRowName(row.method).value_or(row.method);
+    return PaperRowName(paper_rows, row.method).value_or(row.method);
 }
 
 /// "ours / full" or the set's group: how the caption names a set.
@@ -233,9 +233,10 @@ double PaperCell(const nlohmann::json& paper, const std::string& table,
         }
         return -1;
     };
-    // Sweep tables list metrics as rows and groups as columns, for OGMM only.
+    // Sweep tables list metrics as rows and groups as columns, for one method (the table's
+    // "method" in the paper's file).
     if (rows.contains(metric) && !group.empty() && column(group) >= 0) {
-        if (paper_row != "OGMM") return std::nan("");
+        if (paper_row != t.value("method", "")) return std::nan("");
         return rows.at(metric).at(static_cast<std::size_t>(column(group))).get<double>();
     }
     const int c = column(group.empty() ? metric : group + "." + metric);
@@ -254,7 +255,7 @@ Cell MeasuredCell(const ResultSet& set, const std::string& label, const std::str
     std::vector<double> v;
     std::size_t n = 0;
     for (const auto& r : set.rows) {
-        if (PaperRowOf(r, set) != label) continue;
+        if (PaperRowOf(r, set, o.paper_rows) != label) continue;
         ++n;
         // Null metrics are failures: they keep the pair count honest but no
         // number can stand in for them, so the cell says how many.
@@ -283,13 +284,14 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
     t.id = spec.id;
     t.title = spec.title;
     t.row_header = spec.rows_are_methods ? "method" : "variant";
-    // Row order: the paper's (for sweep tables: OGMM), then measured rows the paper lacks.
+    // Row order: the paper's (for sweep tables: the table's one method), then measured rows the
+    // paper lacks.
     std::vector<std::string> order;
     const auto& pt = paper.at("tables").value(spec.id, nlohmann::json::object());
     const bool published = paper.at("tables").contains(spec.id);
     const bool sweep = pt.contains("rows") && pt["rows"].contains("mae_r");
     if (sweep) {
-        order.push_back("OGMM");
+        order.push_back(pt.value("method", ""));
     } else if (pt.contains("row_order")) {  // recorded by LoadPaperTables in the paper's order
         order = pt["row_order"].get<std::vector<std::string>>();
     } else if (pt.contains("rows")) {
@@ -297,7 +299,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
     }
     for (const auto& s : sets) {
         for (const auto& r : s.rows) {
-            const std::string label = PaperRowOf(r, s);
+            const std::string label = PaperRowOf(r, s, o.paper_rows);
             if (std::find(order.begin(), order.end(), label) == order.end()) order.push_back(label);
         }
     }
@@ -305,7 +307,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
     // Reasons for rows that could not be measured, keyed by paper row name.
     std::map<std::string, std::string> reasons;
     for (const auto& [method, why] : o.unavailable)
-        reasons[PaperRowName(method).value_or(method)] = why;
+        reasons[PaperRowName(o.paper_rows, method).value_or(method)] = why;
     for (const auto& label : order) {
         RowCells cells;
         for (const auto& g : spec.groups) {
@@ -313,7 +315,7 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
             for (const auto& s : sets) {
                 if (s.group != g) continue;
                 for (const auto& r : s.rows) {
-                    if (PaperRowOf(r, s) == label) set = &s;
+                    if (PaperRowOf(r, s, o.paper_rows) == label) set = &s;
                 }
             }
             for (const auto& m : spec.metrics) {
@@ -412,7 +414,8 @@ Timings CollectTimings(const std::vector<ResultSet>& sets) {
 }  // namespace
 
 Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json& paper,
-                       const std::string& cpu_model, const std::string& blas) {
+                       const std::string& cpu_model, const std::string& blas,
+                       const PaperRows& paper_rows) {
     Table t;
     t.id = "table6_inference_time";
     t.title = "Tab. 6: time per pair";
@@ -426,6 +429,8 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
                  {"threads", "threads", CellSource::kMeasured, Better::kNone, 0},
                  {"paper:ms", "paper ms", CellSource::kPaper, Better::kNone, 0}};
     const auto& rows = paper.at("tables").at("table6_inference_time").at("rows");
+    const nlohmann::json of =
+        paper.at("tables").at("table6_inference_time").value("row_of", nlohmann::json::object());
     Timings timings = CollectTimings(sets);
     for (const auto& label : timings.order) {
         const TimingRow& m = timings.by_label[label];
@@ -444,11 +449,13 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         points.value = m.points;
         th.value = m.threads;
         p.source = CellSource::kPaper;
-        const std::string name = PaperRowName(label).value_or(label);
+        const std::string name = PaperRowName(paper_rows, label).value_or(label);
         if (rows.contains(name)) {
             p.value = 1e3 * rows[name].at(0).get<double>();
-        } else if (name == "OGMM" && rows.contains("OGMM_clustered_attention")) {
-            p.value = 1e3 * rows["OGMM_clustered_attention"].at(0).get<double>();
+        } else if (of.contains(name) && rows.contains(of[name].get<std::string>())) {
+            // the paper's row a method's own fills (e.g. the clustered-attention time of a
+            // clustered-attention checkpoint): the table's "row_of" in the paper's file
+            p.value = 1e3 * rows[of[name].get<std::string>()].at(0).get<double>();
         }
         t.AddRow(label, {{"cpu_ms_mean", mean},
                          {"cpu_ms_median", median},
@@ -485,7 +492,7 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         "loading, metrics and I/O excluded; a learned method's call includes its ICP "
         "refinement and, in an isolated call, loading its weights), one call at a time per core "
         "with the threads shown. For the learned methods, network CPU ms is the forward alone, "
-        "GMAC its multiply-accumulates for this config and these point counts (ogmm/cost), "
+        "GMAC its multiply-accumulates for this config and these point counts (networks/cost), "
         "floor ms those MACs at the single-thread fp32 GEMM rate measured in the same process, "
         "and x floor = network CPU ms / floor ms. Ours: CPU {}; BLAS of the learned methods: "
         "{}; classical methods: {}; CPU only (no GPU rows measured). Paper (ms): {}",

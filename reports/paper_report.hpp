@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "reports/paper_tables.hpp"
 #include "reports/statistics.hpp"
 #include "reports/table.hpp"
 #include "runners/result_row.hpp"
@@ -60,6 +61,9 @@ struct PaperTableOptions {
     /// Methods (regbench names) that could not run, with the reason shown in their cells
     /// (e.g. {"ogmm", "not trained"}).
     std::map<std::string, std::string> unavailable;
+    /// The paper's row name of each method (reports/paper_tables.hpp PaperRows); a method
+    /// without one fills a row of its own name.
+    PaperRows paper_rows;
 };
 
 /// Builds the table: the paper's rows in its order (plus measured methods the paper lacks),
@@ -76,7 +80,8 @@ Table BuildPaperTable(const PaperTableSpec& spec, const std::vector<ResultSet>& 
 /// of that name (e.g. "OGMM_full_attention", the paper's row). The caption names the CPU
 /// model, `blas` (the classical methods'), the learned rows' BLAS and GEMM rate.
 Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json& paper,
-                       const std::string& cpu_model, const std::string& blas);
+                       const std::string& cpu_model, const std::string& blas,
+                       const PaperRows& paper_rows);
 
 /// The CPU model from /proc/cpuinfo ("unknown CPU" when unreadable).
 std::string CpuModel();

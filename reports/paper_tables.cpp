@@ -36,20 +36,15 @@ nlohmann::json LoadPaperTables(const std::string& path) {
 
 std::string DefaultPaperTablesPath() { return DataDir() + "/paper/ogmm_wacv2023_tables.json"; }
 
-std::optional<std::string> PaperRowName(const std::string& method) {
-    static const std::map<std::string, std::string> kNames = {
-        {"icp", "ICP"},         {"fgr", "FGR"},   {"cpd", "CPD"},
-        {"gmmreg", "GMMReg"},   {"svr", "SVR"},   {"filterreg", "FilterReg"},
-        {"deepgmr", "DeepGMR"}, {"ogmm", "OGMM"}, {"omnet", "OMNET"},
-        {"rienet", "RIENet"},   {"rgm", "RGM"},
-        {"regtr", "REGTR"}};
-    const auto it = kNames.find(method);
-    if (it == kNames.end()) return std::nullopt;
+std::optional<std::string> PaperRowName(const PaperRows& rows, const std::string& method) {
+    const auto it = rows.find(method);
+    if (it == rows.end() || it->second.empty()) return std::nullopt;
     return it->second;
 }
 
 Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
-                           const std::string& table, const std::string& group) {
+                           const std::string& table, const std::string& group,
+                           const PaperRows& paper_rows) {
     const auto& tables = paper.at("tables");
     if (!tables.contains(table)) {
         std::string known;
@@ -106,7 +101,7 @@ Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
     t.columns.push_back(published("s", kSecondsDecimals));
     t.columns.back().key = "paper:seconds";
     for (const auto& s : ours.methods) {
-        const auto row = PaperRowName(s.method);
+        const auto row = PaperRowName(paper_rows, s.method);
         const auto mine = [&](double v) { return MeasuredCell(v, s.pairs); };
         const auto mean = [&](const Estimate& e) {  // with its bootstrap CI
             Cell c = mine(e.mean);

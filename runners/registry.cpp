@@ -38,6 +38,14 @@ CostClass MethodCost(const std::string& name, const nlohmann::json& params) {
     return FindMethod(name).cost(params.is_null() ? nlohmann::json::object() : params);
 }
 
+std::map<std::string, std::string> PaperRowLabels() {
+    std::map<std::string, std::string> out;
+    for (const auto& m : AllMethods()) {
+        if (!m.paper_label.empty()) out[m.name] = m.paper_label;
+    }
+    return out;
+}
+
 const MethodInfo& FindMethod(const std::string& name) {
     for (const auto& m : AllMethods()) {
         if (m.name == name) return m;

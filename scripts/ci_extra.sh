@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # CI extras after the main test suite (scripts/test.sh runs this):
 #  1. an AddressSanitizer + UndefinedBehaviorSanitizer build with clang in build-san/ (no
-#     ogmm/, no benchmarks; LibTorch only for fuzz_torch_save) and its test suite: core,
+#     networks/, no benchmarks; LibTorch only for fuzz_torch_save) and its test suite: core,
 #     protocols, baselines, runners, reports, app and the CLI reliability scenarios (the Slurm test runs in the main build only);
 #  2. every libFuzzer target (fuzz/) on a copy of its seed corpus fuzz/corpus/<name>/, with a
 #     fixed seed and a fixed number of inputs (REGBENCH_FUZZ_RUNS, default 20000) capped at

@@ -6,7 +6,7 @@ example (scripts/docs_examples.sh deepgmr_import): the real `modelnet_noisy.pth`
   deepgmr_standin.py OUT_DIR
 
 writes OUT_DIR/modelnet_noisy.pth, the authors' DeepGMR module layout (RRI, k 20, d_model 1024,
-J 16; tests/ogmm/authors_parity.py) with PyTorch's default initialisation under
+J 16; tests/networks/authors_parity.py) with PyTorch's default initialisation under
 torch.manual_seed(0), saved in the legacy (pre-1.6) torch.save format their releases use; and
 OUT_DIR/modelnet_noisy.h5, 20 pairs in their test files' layout (`source`, `target` [20, 1024, 3]
 float32, `transform` [20, 4, 4] float32 with target = R source + t) made from procedural
@@ -24,7 +24,7 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "ogmm"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "networks"))
 from authors_parity import DeepGMRLayout  # noqa: E402
 
 PAIRS, POINTS = 20, 1024

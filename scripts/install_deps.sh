@@ -10,7 +10,7 @@
 # (that stage, worktrees, re-runs) cheap.
 # --main installs only what the `regbench` binary and its data need (README command 1,
 # scripts/main_job.sh): about 860 MB fewer to fetch and unpack than the full list. libdlib-dev:
-# dlib's linear assignment (max_cost_assignment) for RGM's test time (ogmm/rgm_assignment.cpp).
+# dlib's linear assignment (max_cost_assignment) for RGM's test time (networks/families/rgm/assignment.cpp).
 set -euo pipefail
 
 PACKAGES=(

@@ -3,12 +3,12 @@
 
 Builds DGCNN, the SuperGlue-style attention, the whole OGMM forward/loss and DeepGMR (the OGMM
 paper's variant on DGCNN features, and the original PointNet on centred xyz or RRI features)
-in PyTorch with the same module names as ogmm/layers.cpp, ogmm/ogmm_net.cpp and
-ogmm/deepgmr.cpp, sets every parameter and buffer from a deterministic formula (no RNG), runs
-them on deterministic inputs and prints the outputs as JSON. tests/ogmm/ogmm_net_test.cpp,
-tests/ogmm/layers_test.cpp and tests/ogmm/deepgmr_test.cpp pin the C++ outputs to these
+in PyTorch with the same module names as networks/layers/layers.cpp, networks/families/ogmm/net.cpp and
+networks/families/deepgmr/net.cpp, sets every parameter and buffer from a deterministic formula (no RNG), runs
+them on deterministic inputs and prints the outputs as JSON. networks/families/ogmm/ogmm_test.cpp,
+tests/networks/layers_test.cpp and networks/families/deepgmr/deepgmr_test.cpp pin the C++ outputs to these
 numbers. The DeepGMR part is written from the model's description (docs/learned-methods.md,
-"DeepGMR"), not from ogmm/deepgmr.cpp.
+"DeepGMR"), not from networks/families/deepgmr/net.cpp.
 
 Not a dependency of the product: run it by hand with Debian's python3-torch when a fixture
 changes:  /usr/bin/python3 scripts/ogmm_reference.py

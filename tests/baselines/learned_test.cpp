@@ -11,9 +11,9 @@
 
 #include "core/math_constants.hpp"
 #include "core/transform.hpp"
-#include "ogmm/checkpoint.hpp"
-#include "ogmm/net.hpp"
-#include "ogmm/zoo.hpp"
+#include "networks/checkpoint/checkpoint.hpp"
+#include "networks/net.hpp"
+#include "networks/zoo.hpp"
 #include "runners/registry.hpp"
 #include "tests/baselines/registration_fixtures.hpp"
 #include "tests/testing/expect_throw.hpp"
@@ -52,9 +52,9 @@ fs::path SaveUntrainedCheckpoint(const std::string& model, std::uint64_t seed) {
     torch::set_num_threads(1);
     const fs::path dir = regbench::testing::TempPath("learned_" + model);
     torch::manual_seed(seed);
-    auto net = ogmm::MakeNet(model);
-    ogmm::SaveCheckpoint(dir.string(), *net,
-                         {{"model", model}, {"config", ogmm::NamedConfig(model)}});
+    auto net = networks::MakeNet(model);
+    networks::SaveCheckpoint(dir.string(), *net,
+                         {{"model", model}, {"config", networks::NamedConfig(model)}});
     return dir;
 }
 
@@ -213,7 +213,7 @@ TEST(Learned, RejectsUnknownParameters) {
 /// MACs of one forward of the tiny OGMM below (d = 4 channels, k = 2 neighbours, spe_k = 2,
 /// a = 2 anchors, J = 3 clusters (the least a rigid fit takes), one GMM round, 2 heads) on two
 /// clouds of n = 8 points, counted by hand from the layer shapes (in x out channels x the positions
-/// a layer runs on), independently of ogmm/cost.cpp. `full`: every point is a key of the attention.
+/// a layer runs on), independently of networks/cost.cpp. `full`: every point is a key of the attention.
 std::int64_t TinyOgmmMacsByHand(bool full) {
     constexpr std::int64_t n = 8, d = 4, k = 2, spe_k = 2, a = 2, J = 3, rounds = 1;
     // DGCNN: 1x1 convs 6->64->64->128->256 on the n k edges, 512->d on the n points, and the
@@ -252,7 +252,7 @@ TEST(Learned, RowsCarryTheNetworksMacsAndFloor) {
     EXPECT_EQ(TinyOgmmMacsByHand(false), 1508202);
     EXPECT_EQ(TinyOgmmMacsByHand(true), 1511370);
     torch::set_num_threads(1);
-    nlohmann::json config = ogmm::NamedConfig("ogmm-tiny");
+    nlohmann::json config = networks::NamedConfig("ogmm-tiny");
     config.merge_patch({{"emb_dims", 4},
                         {"k", 2},
                         {"spe_k", 2},
@@ -262,8 +262,8 @@ TEST(Learned, RowsCarryTheNetworksMacsAndFloor) {
                         {"heads", 2}});
     const fs::path dir = regbench::testing::TempPath("learned_macs");
     torch::manual_seed(4);
-    auto net = ogmm::MakeNetFromConfig(config);
-    ogmm::SaveCheckpoint(dir.string(), *net, {{"model", "ogmm-tiny"}, {"config", config}});
+    auto net = networks::MakeNetFromConfig(config);
+    networks::SaveCheckpoint(dir.string(), *net, {{"model", "ogmm-tiny"}, {"config", config}});
     const auto full = testing::CleanCompletePair(20.0);
     const PointCloud source = full.source.topRows(8), target = full.target.topRows(8);
     AlignContext context;

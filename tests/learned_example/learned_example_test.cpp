@@ -2,8 +2,9 @@
 // cannot rot: a network family `centroid-net` (not in the tree) declared once, registered,
 // trained for two steps, imported from an "authors'" state dict, and run as a regbench method
 // on a 40,000-point pair file. The block between the EXAMPLE markers is the document's
-// ogmm/centroid_net.cpp verbatim; keep them in step. In the tree the family is listed in
-// ogmm/family.cpp; here RegisterFamily adds the same object before the registry is first used.
+// networks/families/centroid_net/family.cpp verbatim; keep them in step. In the tree the family
+// has its line in networks/families/families.def; here RegisterFamily adds the same object
+// before the registry is first used.
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
@@ -14,20 +15,20 @@
 
 #include "core/rng.hpp"
 #include "core/transform.hpp"
-#include "ogmm/authors_state_dict.hpp"
-#include "ogmm/checkpoint.hpp"
-#include "ogmm/cost.hpp"
-#include "ogmm/family.hpp"
-#include "ogmm/net.hpp"
-#include "ogmm/train.hpp"
-#include "ogmm/zoo.hpp"
+#include "networks/checkpoint/authors_format.hpp"
+#include "networks/checkpoint/checkpoint.hpp"
+#include "networks/cost.hpp"
+#include "networks/family.hpp"
+#include "networks/net.hpp"
+#include "networks/training/train.hpp"
+#include "networks/zoo.hpp"
 #include "runners/registry.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/temp_dir_test.hpp"
 
-namespace regbench::ogmm {
+namespace regbench::networks {
 
 // EXAMPLE BEGIN
 using torch::indexing::Slice;
@@ -227,4 +228,4 @@ TEST_F(LearnedExample, TrainsImportsAndRunsOnA40000PointPairFile) {
 }
 
 }  // namespace
-}  // namespace regbench::ogmm
+}  // namespace regbench::networks

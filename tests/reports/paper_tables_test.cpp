@@ -5,6 +5,10 @@
 namespace regbench {
 namespace {
 
+/// The OGMM paper's row name of CPD (its tables spell it so); the registry's own labels are
+/// checked against the paper's file in tests/baselines (PaperLabels.*).
+const PaperRows kPaperRows = {{"cpd", "CPD"}};
+
 /// Our side: cpd (MAE(R) 1.5, CI [1, 2]) and identity (all zero), each over `pairs` pairs.
 ReportTable CpdAndIdentity(std::size_t pairs) {
     ReportTable ours;
@@ -19,7 +23,7 @@ ReportTable CpdAndIdentity(std::size_t pairs) {
 TEST(PaperTables, ComparisonPutsThePaperCellNextToOurs) {
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     const ReportTable ours = CpdAndIdentity(30);
-    const Table t = PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category");
+    const Table t = PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category", kPaperRows);
     const std::string md = TableToMarkdown(t, TableForm::kFull);
     // Paper Tab. 1 cross-category CPD: MAE(R) 12.681, MAE(t) 0.1153, CCD 0.1154; Tab. 6: 4.347 s.
     // Issue 26: the pairs column (ours: 30) says what our means are over.
@@ -40,7 +44,7 @@ TEST(PaperTables, EveryFormatCarriesThePapersCellsAndOurPairs) {
     // Issue 26: --paper was dropped silently with --format csv|latex|json.
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     const ReportTable ours = CpdAndIdentity(10);
-    const Table t = PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category");
+    const Table t = PaperComparisonTable(ours, paper, "table1_modelnet_partial", "cross_category", kPaperRows);
     const std::string csv = TablesToCsv({t});
     // Same cells as the Markdown test above (the paper's JSON), one record each.
     for (const char* record :
@@ -68,12 +72,12 @@ TEST(PaperTables, EveryFormatCarriesThePapersCellsAndOurPairs) {
 TEST(PaperTables, UnknownTableOrGroupListsTheValidOnes) {
     const nlohmann::json paper = LoadPaperTables(DefaultPaperTablesPath());
     try {
-        PaperComparisonTable({}, paper, "table9", "");
+        PaperComparisonTable({}, paper, "table9", "", kPaperRows);
         FAIL();
     } catch (const std::invalid_argument& e) {
         EXPECT_NE(std::string(e.what()).find("table1_modelnet_partial"), std::string::npos);
     }
-    EXPECT_THROW(PaperComparisonTable({}, paper, "table1_modelnet_partial", "nosuch"),
+    EXPECT_THROW(PaperComparisonTable({}, paper, "table1_modelnet_partial", "nosuch", kPaperRows),
                  std::invalid_argument);
     EXPECT_THROW(LoadPaperTables("/nonexistent.json"), std::runtime_error);
 }
