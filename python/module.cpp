@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -212,7 +213,36 @@ py::dict Metrics(py::handle T_est, py::handle T_gt, py::handle source, py::handl
 // ---------------------------------------------------------------------------------------------
 // Runs
 
-/// The name a callable runs under: the tuple's name, else its __name__.
+/// A callable's method name as UTF-8, checked: every row, OUT.part (which resume reads back)
+/// and the report tables hold it. Throws ValueError naming the name (as repr) and the problem.
+std::string CheckedMethodName(const py::str& name) {
+    const std::string shown = py::repr(name).cast<std::string>();
+    // py::str -> std::string is a pybind11 cast error for a str that UTF-8 cannot encode.
+    const py::object utf8 = py::reinterpret_steal<py::object>(PyUnicode_AsUTF8String(name.ptr()));
+    if (!utf8) {
+        PyErr_Clear();
+        throw py::value_error("method name " + shown +
+                              " cannot be encoded as UTF-8 (a lone surrogate, as os.fsdecode "
+                              "makes of undecodable bytes); result rows are UTF-8 JSON");
+    }
+    const std::string s = utf8.cast<py::bytes>();
+    if (s.empty()) {
+        throw py::value_error("method name is empty: pass the callable as (name, callable)");
+    }
+    for (const unsigned char c : s) {
+        if (c < 0x20 || c == 0x7f) {
+            throw py::value_error("method name " + shown +
+                                  " contains a control character (a newline would split the "
+                                  "rows of the report tables)");
+        }
+    }
+    if (s.find_first_of(", ") != std::string::npos) {
+        throw py::value_error("method name " + shown + " must not contain commas or spaces");
+    }
+    return s;
+}
+
+/// The name a callable runs under: the tuple's name, else its __name__ (checked).
 std::string CallableName(py::handle item, py::handle* fn) {
     if (py::isinstance<py::tuple>(item)) {
         const py::tuple t = item.cast<py::tuple>();
@@ -220,16 +250,15 @@ std::string CallableName(py::handle item, py::handle* fn) {
             throw py::value_error("a method given as a tuple must be (name, callable)");
         }
         *fn = t[1];
-        return t[0].cast<std::string>();
+        return CheckedMethodName(t[0].cast<py::str>());
     }
     *fn = item;
-    const std::string name =
-        py::hasattr(item, "__name__") ? py::str(item.attr("__name__")).cast<std::string>() : "";
-    if (name.empty() || name == "<lambda>") {
+    const py::str name = py::hasattr(item, "__name__") ? py::str(item.attr("__name__")) : py::str();
+    if (py::len(name) == 0 || name.equal(py::str("<lambda>"))) {
         throw py::value_error("cannot name the callable " + py::repr(item).cast<std::string>() +
                               ": pass it as (name, callable)");
     }
-    return name;
+    return CheckedMethodName(name);
 }
 
 /// Adds `methods` to o.methods in the order given: names of built-in methods ("a,b" and "all"
@@ -265,9 +294,6 @@ void AddMethods(py::handle methods, const nlohmann::json& by_method,
         if (!PyCallable_Check(fn.ptr())) {
             throw py::type_error("methods must be names of built-in methods or callables, got " +
                                  py::repr(item).cast<std::string>());
-        }
-        if (name.find_first_of(", \t") != std::string::npos) {
-            throw py::value_error("method name '" + name + "' must not contain commas or spaces");
         }
         bool registered = true;
         try {
@@ -330,9 +356,13 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
         if (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)) {
             throw py::type_error("timeout must be a number of seconds or None");
         }
-        o.timeout_seconds = timeout.cast<double>();
-        if (!(o.timeout_seconds > 0.0))
-            throw py::value_error("timeout must be > 0 seconds (or None)");
+        o.timeout_seconds = PyFloat_AsDouble(timeout.ptr());  // an int beyond a double: error
+        if (PyErr_Occurred()) PyErr_Clear();
+        // As --timeout: finite (rows record it as JSON, which has no inf; resume compares it).
+        if (!std::isfinite(o.timeout_seconds) || !(o.timeout_seconds > 0.0)) {
+            throw py::value_error("timeout must be a finite number of seconds > 0 (or None), got " +
+                                  py::repr(timeout).cast<std::string>());
+        }
     }
     const auto pending = std::make_shared<PendingInterrupt>();
     AddMethods(methods, ParamsToJson(params, "params"), pending, o);
