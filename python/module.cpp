@@ -2,15 +2,19 @@
 // and Python callables benchmarked as methods by the C++ runner. A thin layer: every check,
 // timing, row and file format is the C++ core's; this file converts types and errors.
 #include <Python.h>
+#include <cxxabi.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/metrics.hpp"
@@ -28,6 +32,35 @@
 
 namespace regbench::python {
 namespace {
+
+/// f() with the interpreter lock released, the lock taken back in an ordinary frame. When the
+/// interpreter is finalising, CPython ends a daemon thread that asks for the lock inside
+/// PyEval_RestoreThread (pthread_exit, a forced unwind); from the destructor of pybind11's
+/// gil_scoped_release (noexcept) that was std::terminate: a daemon thread inside align() at
+/// interpreter exit ended the process with SIGABRT (issue 55, item 6). Here the unwind leaves
+/// through pybind11's dispatcher (which rethrows it) and CPython's frames, as a pure Python
+/// daemon thread's does.
+template <class F>
+auto WithoutGil(F&& f) -> decltype(f()) {
+    using Result = decltype(f());
+    std::optional<std::conditional_t<std::is_void_v<Result>, bool, Result>> result;
+    std::exception_ptr error;
+    PyThreadState* const state = PyEval_SaveThread();
+    try {
+        if constexpr (std::is_void_v<Result>) {
+            f();
+        } else {
+            result.emplace(f());
+        }
+    } catch (abi::__forced_unwind&) {  // this thread is being ended: never swallowed
+        throw;
+    } catch (...) {
+        error = std::current_exception();
+    }
+    PyEval_RestoreThread(state);
+    if (error) std::rethrow_exception(error);
+    if constexpr (!std::is_void_v<Result>) return std::move(*result);
+}
 
 /// os.fspath(path) as a std::string (str and os.PathLike accepted).
 std::string PathOf(py::handle path) {
@@ -62,10 +95,11 @@ std::shared_ptr<PairFile> OpenPairFile(py::handle path_like) {
     f->path = PathOf(path_like);
     RequireFile(f->path, "pair file");
     try {
-        py::gil_scoped_release release;
-        auto set = std::make_shared<PairSet>(ReadPairFile(f->path));
-        f->data = DataTagOf(f->path, *set);  // checks the stored content hash
-        f->set = std::move(set);
+        WithoutGil([&] {
+            auto set = std::make_shared<PairSet>(ReadPairFile(f->path));
+            f->data = DataTagOf(f->path, *set);  // checks the stored content hash
+            f->set = std::move(set);
+        });
     } catch (const std::runtime_error& e) {
         throw py::value_error(e.what());  // the file's content: bad input
     }
@@ -169,10 +203,7 @@ AlignOutcome Align(py::handle source, py::handle target, const std::string& meth
     context.threads = threads;
     SetOmpThreads(threads);  // setenv: before other threads may run
     AlignOutcome out{spec.name, spec.params, {}};
-    {
-        py::gil_scoped_release release;
-        out.result = AlignClouds(*reg, src, tgt, normalize, context);
-    }
+    out.result = WithoutGil([&] { return AlignClouds(*reg, src, tgt, normalize, context); });
     return out;
 }
 
@@ -197,12 +228,11 @@ py::dict Metrics(py::handle T_est, py::handle T_gt, py::handle source, py::handl
         labels =
             Eigen::Map<const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>>(a.data(), a.shape(0));
     }
-    PairMetrics m;
-    {
-        py::gil_scoped_release release;
-        m = ComputeMetrics(gt, est, src, tgt, convention);
-        m.overlap_rmse = OverlapRmse(gt, est, src, labels);
-    }
+    const PairMetrics m = WithoutGil([&] {
+        PairMetrics r = ComputeMetrics(gt, est, src, tgt, convention);
+        r.overlap_rmse = OverlapRmse(gt, est, src, labels);
+        return r;
+    });
     py::dict d;
     for (const auto& f : PerPairMetrics()) d[f.name] = m.*f.field;
     d["ccd_within_clip"] = m.ccd_within_clip;
@@ -379,8 +409,7 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
     SetOmpThreads(threads >= 1 ? threads : 1);
     RunSummary s;
     try {
-        py::gil_scoped_release release;
-        s = RunBenchmark(o);
+        s = WithoutGil([&] { return RunBenchmark(o); });
     } catch (const std::runtime_error& e) {
         // Problems of the pair file are bad input; the rest (locks, writes, resume) are not.
         const std::string what = e.what();
