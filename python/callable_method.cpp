@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "python/convert.hpp"
+#include "python/gil.hpp"
 
 namespace regbench::python {
 
@@ -79,7 +80,7 @@ void PendingInterrupt::Store(const py::error_already_set& e) {
 
 void PendingInterrupt::RethrowIfAny() {
     if (shared_->state.load() == 2) {
-        py::gil_scoped_acquire gil;  // before the mutex, which Store takes with the lock held
+        const GilAcquired gil;  // before the mutex, which Store takes with the lock held
         std::lock_guard<std::mutex> guard(mutex_);
         if (!error_) {
             PyErr_SetString(PyExc_KeyboardInterrupt, shared_->text);
@@ -141,13 +142,14 @@ void ReadCallableResult(const py::object& out, AlignResult* r) {
 AlignResult CallableMethod::DoAlign(const PointCloud& source, const PointCloud& target,
                                     const AlignContext& /*context*/) {
     const auto start = std::chrono::steady_clock::now();
-    py::gil_scoped_acquire gil;
+    const GilAcquired gil;
     const double waited =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     AlignResult r;
     try {
-        py::dict kwargs = JsonToPy(params_);
-        const py::object out = fn_(CloudToPy(source), CloudToPy(target), **kwargs);
+        const py::dict kwargs = JsonToPy(params_);
+        const py::object out =
+            CallOrPark(fn_, py::make_tuple(CloudToPy(source), CloudToPy(target)), kwargs);
         ReadCallableResult(out, &r);
     } catch (py::error_already_set& e) {
         if (!e.matches(PyExc_Exception)) {

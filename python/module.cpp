@@ -2,19 +2,15 @@
 // and Python callables benchmarked as methods by the C++ runner. A thin layer: every check,
 // timing, row and file format is the C++ core's; this file converts types and errors.
 #include <Python.h>
-#include <cxxabi.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <exception>
 #include <filesystem>
 #include <memory>
-#include <optional>
 #include <stdexcept>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 #include "core/metrics.hpp"
@@ -24,6 +20,7 @@
 #include "protocols/pair_file.hpp"
 #include "python/callable_method.hpp"
 #include "python/convert.hpp"
+#include "python/gil.hpp"
 #include "reports/versus.hpp"
 #include "runners/align_clouds.hpp"
 #include "runners/registry.hpp"
@@ -33,35 +30,6 @@
 
 namespace regbench::python {
 namespace {
-
-/// f() with the interpreter lock released, the lock taken back in an ordinary frame. When the
-/// interpreter is finalising, CPython ends a daemon thread that asks for the lock inside
-/// PyEval_RestoreThread (pthread_exit, a forced unwind); from the destructor of pybind11's
-/// gil_scoped_release (noexcept) that was std::terminate: a daemon thread inside align() at
-/// interpreter exit ended the process with SIGABRT (issue 55, item 6). Here the unwind leaves
-/// through pybind11's dispatcher (which rethrows it) and CPython's frames, as a pure Python
-/// daemon thread's does.
-template <class F>
-auto WithoutGil(F&& f) -> decltype(f()) {
-    using Result = decltype(f());
-    std::optional<std::conditional_t<std::is_void_v<Result>, bool, Result>> result;
-    std::exception_ptr error;
-    PyThreadState* const state = PyEval_SaveThread();
-    try {
-        if constexpr (std::is_void_v<Result>) {
-            f();
-        } else {
-            result.emplace(f());
-        }
-    } catch (abi::__forced_unwind&) {  // this thread is being ended: never swallowed
-        throw;
-    } catch (...) {
-        error = std::current_exception();
-    }
-    PyEval_RestoreThread(state);
-    if (error) std::rethrow_exception(error);
-    if constexpr (!std::is_void_v<Result>) return std::move(*result);
-}
 
 /// os.fspath(path) as a std::string (str and os.PathLike accepted).
 std::string PathOf(py::handle path) {
@@ -413,7 +381,7 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
     o.check_interrupt = [pending, caller] {
         pending->RethrowIfAny();
         if (PyThread_get_thread_ident() == caller) {
-            py::gil_scoped_acquire gil;
+            const GilAcquired gil;
             if (PyErr_CheckSignals() != 0) throw py::error_already_set();
         }
     };
