@@ -1,13 +1,70 @@
 #include "python/callable_method.hpp"
 
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <new>
 #include <stdexcept>
 
 #include "python/convert.hpp"
+#include "python/gil.hpp"
 
 namespace regbench::python {
 
+/// What a forked child hands to the run's process: state 0 nothing, 1 a child is writing,
+/// 2 `text` holds the message of the KeyboardInterrupt to raise.
+struct PendingInterrupt::Shared {
+    std::atomic<int> state;
+    char text[1024];
+};
+static_assert(std::atomic<int>::is_always_lock_free, "shared between processes");
+
+PendingInterrupt::PendingInterrupt() : owner_pid_(static_cast<long>(::getpid())) {
+    void* p =
+        ::mmap(nullptr, sizeof(Shared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (p == MAP_FAILED) {
+        throw std::runtime_error(std::string("run: cannot map the interrupt flag shared with "
+                                             "timeout= children: ") +
+                                 std::strerror(errno));
+    }
+    shared_ = new (p) Shared{};
+}
+
+PendingInterrupt::~PendingInterrupt() {
+    shared_->~Shared();
+    ::munmap(shared_, sizeof(Shared));
+}
+
+namespace {
+
+/// The message of the KeyboardInterrupt that stands for `e`: a KeyboardInterrupt's own, else
+/// "<Type> raised in a callable: <description>".
+std::string InterruptText(const py::error_already_set& e) {
+    if (e.matches(PyExc_KeyboardInterrupt)) return py::str(e.value()).cast<std::string>();
+    return py::str(e.type().attr("__name__")).cast<std::string>() +
+           " raised in a callable: " + DescribePythonError(e);
+}
+
+}  // namespace
+
 void PendingInterrupt::Store(const py::error_already_set& e) {
+    if (static_cast<long>(::getpid()) != owner_pid_) {
+        // A forked child (timeout=): its memory dies with it; the mapping is shared. No mutex:
+        // another thread of the parent may have held it at the fork.
+        int idle = 0;
+        if (!shared_->state.compare_exchange_strong(idle, 1)) return;  // one is there already
+        const std::string text = InterruptText(e);
+        const std::size_t n = std::min(text.size(), sizeof(shared_->text) - 1);
+        std::memcpy(shared_->text, text.data(), n);
+        shared_->text[n] = '\0';
+        shared_->state.store(2);
+        return;
+    }
     std::lock_guard<std::mutex> guard(mutex_);
     if (error_) return;
     if (!e.matches(PyExc_SystemExit)) {
@@ -17,12 +74,20 @@ void PendingInterrupt::Store(const py::error_already_set& e) {
     // docs/python.md: a SystemExit raised in a callable stops the run like Ctrl-C, raising
     // KeyboardInterrupt; rethrown as itself it left run() as SystemExit, which ends the
     // interpreter unless caught (issue 44). Called with the interpreter lock held.
-    PyErr_SetString(PyExc_KeyboardInterrupt,
-                    ("SystemExit raised in a callable: " + DescribePythonError(e)).c_str());
+    PyErr_SetString(PyExc_KeyboardInterrupt, InterruptText(e).c_str());
     error_.emplace();  // fetches the KeyboardInterrupt just set
 }
 
 void PendingInterrupt::RethrowIfAny() {
+    if (shared_->state.load() == 2) {
+        const GilAcquired gil;  // before the mutex, which Store takes with the lock held
+        std::lock_guard<std::mutex> guard(mutex_);
+        if (!error_) {
+            PyErr_SetString(PyExc_KeyboardInterrupt, shared_->text);
+            error_.emplace();  // fetches the KeyboardInterrupt just set
+        }
+        throw *error_;
+    }
     std::lock_guard<std::mutex> guard(mutex_);
     if (error_) throw *error_;
 }
@@ -77,13 +142,14 @@ void ReadCallableResult(const py::object& out, AlignResult* r) {
 AlignResult CallableMethod::DoAlign(const PointCloud& source, const PointCloud& target,
                                     const AlignContext& /*context*/) {
     const auto start = std::chrono::steady_clock::now();
-    py::gil_scoped_acquire gil;
+    const GilAcquired gil;
     const double waited =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     AlignResult r;
     try {
-        py::dict kwargs = JsonToPy(params_);
-        const py::object out = fn_(CloudToPy(source), CloudToPy(target), **kwargs);
+        const py::dict kwargs = JsonToPy(params_);
+        const py::object out =
+            CallOrPark(fn_, py::make_tuple(CloudToPy(source), CloudToPy(target)), kwargs);
         ReadCallableResult(out, &r);
     } catch (py::error_already_set& e) {
         if (!e.matches(PyExc_Exception)) {

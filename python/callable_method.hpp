@@ -19,13 +19,27 @@ namespace py = pybind11;
 /// A BaseException that is not an Exception (KeyboardInterrupt, SystemExit) raised inside a
 /// callable: it must end the run, not become a `failed` row. The callable stores it here and
 /// the runner's check_interrupt hook rethrows it after the call.
+///
+/// With `timeout=` the callable runs in a forked child, whose memory the parent never sees: a
+/// child stores what it caught in a shared anonymous mapping made before any fork, and the
+/// parent raises it as KeyboardInterrupt.
 class PendingInterrupt {
 public:
+    PendingInterrupt();  ///< throws std::runtime_error when the shared mapping cannot be made
+    ~PendingInterrupt();
+    PendingInterrupt(const PendingInterrupt&) = delete;
+    PendingInterrupt& operator=(const PendingInterrupt&) = delete;
+
+    /// Called with the interpreter lock held, in the run's process or in a forked child.
     void Store(const py::error_already_set& e);
-    /// Throws the stored exception, if any (any thread; no GIL needed).
+    /// Throws the stored exception, if any (any thread; takes the lock only to raise one that
+    /// a child stored).
     void RethrowIfAny();
 
 private:
+    struct Shared;
+    const long owner_pid_;  ///< the run's process: Store in any other is a forked child's
+    Shared* shared_;        ///< MAP_SHARED: written by a child, read by the run's process
     std::mutex mutex_;
     std::optional<py::error_already_set> error_;
 };

@@ -129,11 +129,10 @@ std::string ShapeText(const py::array& a) {
     return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-/// `value` as a NumPy array of floating-point dtype and `cols` columns (any rows when rows < 0).
-py::array_t<double, py::array::c_style | py::array::forcecast> FloatMatrix(py::handle value,
-                                                                           const std::string& which,
-                                                                           py::ssize_t rows,
-                                                                           py::ssize_t cols) {
+/// `value` as a NumPy array of floating-point dtype (or integer too, when `integers`) and
+/// `cols` columns (any rows when rows < 0), converted to float64.
+py::array_t<double, py::array::c_style | py::array::forcecast> FloatMatrix(
+    py::handle value, const std::string& which, py::ssize_t rows, py::ssize_t cols, bool integers) {
     const std::string expected =
         rows < 0 ? "(N, " + std::to_string(cols) + ")"
                  : "(" + std::to_string(rows) + ", " + std::to_string(cols) + ")";
@@ -147,7 +146,11 @@ py::array_t<double, py::array::c_style | py::array::forcecast> FloatMatrix(py::h
                               py::str(value.get_type().attr("__name__")).cast<std::string>());
     }
     const char kind = a.dtype().kind();
-    if (kind != 'f') {
+    if (integers && kind != 'f' && kind != 'i' && kind != 'u') {
+        throw py::value_error(which + " must have a floating-point or integer dtype, got " +
+                              py::str(a.dtype()).cast<std::string>());
+    }
+    if (!integers && kind != 'f') {
         throw py::value_error(which +
                               " must have a floating-point dtype (float32 or float64), got " +
                               py::str(a.dtype()).cast<std::string>());
@@ -161,7 +164,7 @@ py::array_t<double, py::array::c_style | py::array::forcecast> FloatMatrix(py::h
 }  // namespace
 
 PointCloud CloudFromPy(py::handle value, const std::string& which) {
-    const auto a = FloatMatrix(value, which, -1, 3);
+    const auto a = FloatMatrix(value, which, -1, 3, /*integers=*/false);
     PointCloud cloud(a.shape(0), 3);
     if (a.size() > 0) std::memcpy(cloud.data(), a.data(), sizeof(double) * a.size());
     const std::string problem = ValidateCloud(cloud, which);
@@ -170,7 +173,8 @@ PointCloud CloudFromPy(py::handle value, const std::string& which) {
 }
 
 Transform TransformFromPy(py::handle value, const std::string& which) {
-    const auto a = FloatMatrix(value, which, 4, 4);
+    // A 4x4 array-like: np.eye(4, dtype=int) and nested lists of ints are transforms too.
+    const auto a = FloatMatrix(value, which, 4, 4, /*integers=*/true);
     Transform T;
     const auto r = a.unchecked<2>();
     for (int i = 0; i < 4; ++i) {

@@ -31,8 +31,8 @@ nlohmann::json ParamsToJson(py::handle params, const std::string& what);
 /// Wrong shape, a non-float dtype, too few points or NaN/Inf raise ValueError naming `which`.
 PointCloud CloudFromPy(py::handle value, const std::string& which);
 
-/// A (4, 4) floating-point array as a transform; wrong shape, dtype or non-finite entries
-/// raise ValueError naming `which`.
+/// A (4, 4) array-like of a floating-point or integer dtype as a transform; wrong shape, another
+/// dtype (bool, complex, object) or non-finite entries raise ValueError naming `which`.
 Transform TransformFromPy(py::handle value, const std::string& which);
 
 /// A fresh, writable (N, 3) float64 copy of a cloud.

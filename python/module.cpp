@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -19,11 +20,13 @@
 #include "protocols/pair_file.hpp"
 #include "python/callable_method.hpp"
 #include "python/convert.hpp"
+#include "python/gil.hpp"
 #include "reports/versus.hpp"
 #include "runners/align_clouds.hpp"
 #include "runners/registry.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
+#include "runners/scale_guard.hpp"
 
 namespace regbench::python {
 namespace {
@@ -61,10 +64,11 @@ std::shared_ptr<PairFile> OpenPairFile(py::handle path_like) {
     f->path = PathOf(path_like);
     RequireFile(f->path, "pair file");
     try {
-        py::gil_scoped_release release;
-        auto set = std::make_shared<PairSet>(ReadPairFile(f->path));
-        f->data = DataTagOf(f->path, *set);  // checks the stored content hash
-        f->set = std::move(set);
+        WithoutGil([&] {
+            auto set = std::make_shared<PairSet>(ReadPairFile(f->path));
+            f->data = DataTagOf(f->path, *set);  // checks the stored content hash
+            f->set = std::move(set);
+        });
     } catch (const std::runtime_error& e) {
         throw py::value_error(e.what());  // the file's content: bad input
     }
@@ -156,11 +160,21 @@ struct AlignOutcome {
 
 AlignOutcome Align(py::handle source, py::handle target, const std::string& method,
                    py::handle params, std::uint64_t seed, int threads, std::uint64_t pair_index,
-                   bool normalize) {
+                   bool normalize, std::size_t max_points) {
     if (threads < 1) throw py::value_error("threads must be >= 1, got " + std::to_string(threads));
     const MethodSpec spec = BuiltinSpec(method, ParamsToJson(params, "params"));
     const PointCloud src = CloudFromPy(source, "source");
     const PointCloud tgt = CloudFromPy(target, "target");
+    // run()'s scale guard, before the method is made: rienet on 200,000 points asked for 160 GB
+    // and ended in a LibTorch backtrace.
+    try {
+        RequireCallScale(spec, static_cast<std::size_t>(src.rows()),
+                         static_cast<std::size_t>(tgt.rows()), max_points);
+    } catch (const std::invalid_argument& e) {
+        throw py::value_error(std::string("align: ") + e.what() +
+                              "; pass max_points=0 to run it as is (or a larger max_points), or "
+                              "downsample the clouds first");
+    }
     std::unique_ptr<RegistrationMethod> reg = CreateMethod(spec.name, spec.params);
     AlignContext context;
     context.seed = seed;
@@ -168,10 +182,7 @@ AlignOutcome Align(py::handle source, py::handle target, const std::string& meth
     context.threads = threads;
     SetOmpThreads(threads);  // setenv: before other threads may run
     AlignOutcome out{spec.name, spec.params, {}};
-    {
-        py::gil_scoped_release release;
-        out.result = AlignClouds(*reg, src, tgt, normalize, context);
-    }
+    out.result = WithoutGil([&] { return AlignClouds(*reg, src, tgt, normalize, context); });
     return out;
 }
 
@@ -196,12 +207,11 @@ py::dict Metrics(py::handle T_est, py::handle T_gt, py::handle source, py::handl
         labels =
             Eigen::Map<const Eigen::Matrix<std::uint8_t, Eigen::Dynamic, 1>>(a.data(), a.shape(0));
     }
-    PairMetrics m;
-    {
-        py::gil_scoped_release release;
-        m = ComputeMetrics(gt, est, src, tgt, convention);
-        m.overlap_rmse = OverlapRmse(gt, est, src, labels);
-    }
+    const PairMetrics m = WithoutGil([&] {
+        PairMetrics r = ComputeMetrics(gt, est, src, tgt, convention);
+        r.overlap_rmse = OverlapRmse(gt, est, src, labels);
+        return r;
+    });
     py::dict d;
     for (const auto& f : PerPairMetrics()) d[f.name] = m.*f.field;
     d["ccd_within_clip"] = m.ccd_within_clip;
@@ -212,7 +222,36 @@ py::dict Metrics(py::handle T_est, py::handle T_gt, py::handle source, py::handl
 // ---------------------------------------------------------------------------------------------
 // Runs
 
-/// The name a callable runs under: the tuple's name, else its __name__.
+/// A callable's method name as UTF-8, checked: every row, OUT.part (which resume reads back)
+/// and the report tables hold it. Throws ValueError naming the name (as repr) and the problem.
+std::string CheckedMethodName(const py::str& name) {
+    const std::string shown = py::repr(name).cast<std::string>();
+    // py::str -> std::string is a pybind11 cast error for a str that UTF-8 cannot encode.
+    const py::object utf8 = py::reinterpret_steal<py::object>(PyUnicode_AsUTF8String(name.ptr()));
+    if (!utf8) {
+        PyErr_Clear();
+        throw py::value_error("method name " + shown +
+                              " cannot be encoded as UTF-8 (a lone surrogate, as os.fsdecode "
+                              "makes of undecodable bytes); result rows are UTF-8 JSON");
+    }
+    const std::string s = utf8.cast<py::bytes>();
+    if (s.empty()) {
+        throw py::value_error("method name is empty: pass the callable as (name, callable)");
+    }
+    for (const unsigned char c : s) {
+        if (c < 0x20 || c == 0x7f) {
+            throw py::value_error("method name " + shown +
+                                  " contains a control character (a newline would split the "
+                                  "rows of the report tables)");
+        }
+    }
+    if (s.find_first_of(", ") != std::string::npos) {
+        throw py::value_error("method name " + shown + " must not contain commas or spaces");
+    }
+    return s;
+}
+
+/// The name a callable runs under: the tuple's name, else its __name__ (checked).
 std::string CallableName(py::handle item, py::handle* fn) {
     if (py::isinstance<py::tuple>(item)) {
         const py::tuple t = item.cast<py::tuple>();
@@ -220,16 +259,15 @@ std::string CallableName(py::handle item, py::handle* fn) {
             throw py::value_error("a method given as a tuple must be (name, callable)");
         }
         *fn = t[1];
-        return t[0].cast<std::string>();
+        return CheckedMethodName(t[0].cast<py::str>());
     }
     *fn = item;
-    const std::string name =
-        py::hasattr(item, "__name__") ? py::str(item.attr("__name__")).cast<std::string>() : "";
-    if (name.empty() || name == "<lambda>") {
+    const py::str name = py::hasattr(item, "__name__") ? py::str(item.attr("__name__")) : py::str();
+    if (py::len(name) == 0 || name.equal(py::str("<lambda>"))) {
         throw py::value_error("cannot name the callable " + py::repr(item).cast<std::string>() +
                               ": pass it as (name, callable)");
     }
-    return name;
+    return CheckedMethodName(name);
 }
 
 /// Adds `methods` to o.methods in the order given: names of built-in methods ("a,b" and "all"
@@ -265,9 +303,6 @@ void AddMethods(py::handle methods, const nlohmann::json& by_method,
         if (!PyCallable_Check(fn.ptr())) {
             throw py::type_error("methods must be names of built-in methods or callables, got " +
                                  py::repr(item).cast<std::string>());
-        }
-        if (name.find_first_of(", \t") != std::string::npos) {
-            throw py::value_error("method name '" + name + "' must not contain commas or spaces");
         }
         bool registered = true;
         try {
@@ -330,9 +365,13 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
         if (!py::isinstance<py::float_>(timeout) && !py::isinstance<py::int_>(timeout)) {
             throw py::type_error("timeout must be a number of seconds or None");
         }
-        o.timeout_seconds = timeout.cast<double>();
-        if (!(o.timeout_seconds > 0.0))
-            throw py::value_error("timeout must be > 0 seconds (or None)");
+        o.timeout_seconds = PyFloat_AsDouble(timeout.ptr());  // an int beyond a double: error
+        if (PyErr_Occurred()) PyErr_Clear();
+        // As --timeout: finite (rows record it as JSON, which has no inf; resume compares it).
+        if (!std::isfinite(o.timeout_seconds) || !(o.timeout_seconds > 0.0)) {
+            throw py::value_error("timeout must be a finite number of seconds > 0 (or None), got " +
+                                  py::repr(timeout).cast<std::string>());
+        }
     }
     const auto pending = std::make_shared<PendingInterrupt>();
     AddMethods(methods, ParamsToJson(params, "params"), pending, o);
@@ -342,15 +381,14 @@ py::dict Run(py::handle pairs, py::handle methods, py::handle out, py::handle pa
     o.check_interrupt = [pending, caller] {
         pending->RethrowIfAny();
         if (PyThread_get_thread_ident() == caller) {
-            py::gil_scoped_acquire gil;
+            const GilAcquired gil;
             if (PyErr_CheckSignals() != 0) throw py::error_already_set();
         }
     };
     SetOmpThreads(threads >= 1 ? threads : 1);
     RunSummary s;
     try {
-        py::gil_scoped_release release;
-        s = RunBenchmark(o);
+        s = WithoutGil([&] { return RunBenchmark(o); });
     } catch (const std::runtime_error& e) {
         // Problems of the pair file are bad input; the rest (locks, writes, resume) are not.
         const std::string what = e.what();
@@ -547,13 +585,17 @@ void BindAlign(py::module_& m) {
 
     m.def("align", &Align, py::arg("source"), py::arg("target"), py::arg("method") = "cpd",
           py::arg("params") = py::none(), py::arg("seed") = 0, py::arg("threads") = 1,
-          py::arg("pair_index") = 0, py::arg("normalize") = false,
+          py::arg("pair_index") = 0, py::arg("normalize") = false, py::kw_only(),
+          py::arg("max_points") = kDefaultMaxPoints,
           "align(source, target, method=\"cpd\", params=None, seed=0, threads=1, pair_index=0, "
-          "normalize=False) -> AlignResult\n\n"
+          "normalize=False, *, max_points=20000) -> AlignResult\n\n"
           "Registers source onto target with a built-in method, the interpreter lock released "
           "while C++ works. source, target: (N, 3) float arrays. seed and pair_index pick the "
           "method's random stream as `regbench run` does for pair `pair_index` of a file "
-          "generated with `seed`. normalize: as `regbench align --normalize`. A method that "
+          "generated with `seed`. normalize: as `regbench align --normalize`. max_points: "
+          "run()'s scale guard: a method that is O(N*M) at this setting (rienet, rgm, regtr; "
+          "cpd e_step dense, ...) on a cloud above max_points points raises ValueError (0 "
+          "turns the guard off). A method that "
           "fails returns status \"failed\" and a message; bad input (unknown method or "
           "parameter, wrong shape or dtype, NaN) raises ValueError.");
 

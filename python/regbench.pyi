@@ -146,6 +146,8 @@ def align(
     threads: int = 1,
     pair_index: int = 0,
     normalize: bool = False,
+    *,
+    max_points: int = 20000,
 ) -> AlignResult:
     """Registers source onto target with a built-in method (interpreter lock released)."""
 

@@ -25,6 +25,13 @@ void Stride(const PointCloud& in, const Eigen::Matrix<std::uint8_t, Eigen::Dynam
     }
 }
 
+/// NeedsScaleGuard for clouds of these sizes.
+bool QuadraticAbove(std::optional<CostClass> cost, std::size_t source_points,
+                    std::size_t target_points, std::size_t max_points) {
+    return max_points > 0 && cost == CostClass::kQuadratic &&
+           std::max(source_points, target_points) > max_points;
+}
+
 }  // namespace
 
 std::optional<CostClass> GuardedCost(const MethodSpec& method, const RunOptions& options) {
@@ -35,8 +42,23 @@ std::optional<CostClass> GuardedCost(const MethodSpec& method, const RunOptions&
 }
 
 bool NeedsScaleGuard(std::optional<CostClass> cost, const Pair& pair, std::size_t max_points) {
-    return max_points > 0 && cost == CostClass::kQuadratic &&
-           std::max(Points(pair.source), Points(pair.target)) > max_points;
+    return QuadraticAbove(cost, Points(pair.source), Points(pair.target), max_points);
+}
+
+void RequireCallScale(const MethodSpec& method, std::size_t source_points,
+                      std::size_t target_points, std::size_t max_points) {
+    if (!QuadraticAbove(MethodCost(method.name, method.params), source_points, target_points,
+                        max_points)) {
+        return;
+    }
+    const double nm = static_cast<double>(source_points) * static_cast<double>(target_points);
+    char line[512];
+    std::snprintf(line, sizeof(line),
+                  "%s is O(N*M): source has %zu points, target %zu, above max_points %zu (%.3g "
+                  "point pairs per iteration, %.3gx a 10,000-point pair, which takes CPD ~4.5 s "
+                  "on one thread)",
+                  method.name.c_str(), source_points, target_points, max_points, nm, nm / 1e8);
+    throw std::invalid_argument(line);
 }
 
 std::string CheckScale(const PairSet& set, const std::vector<std::size_t>& indices,

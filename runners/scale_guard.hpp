@@ -27,6 +27,13 @@ std::optional<CostClass> GuardedCost(const MethodSpec& method, const RunOptions&
 /// True when `cost` is O(N*M) and a cloud of `pair` has more than `max_points` points.
 bool NeedsScaleGuard(std::optional<CostClass> cost, const Pair& pair, std::size_t max_points);
 
+/// The same guard for one call of a registered method on clouds of `source_points` and
+/// `target_points` points outside a run (Python's regbench.align): throws std::invalid_argument
+/// "<method> is O(N*M): source has N points, target M, above max_points K (...)" when it would
+/// refuse; the caller adds how its users lift the guard.
+void RequireCallScale(const MethodSpec& method, std::size_t source_points,
+                      std::size_t target_points, std::size_t max_points);
+
 /// Checks every (pair, method) call of the run. Refuses (std::runtime_error with the expected
 /// cost: pairs affected, largest N x M) unless `downsample`; with it, returns the notice that
 /// says which calls will be downsampled (empty when none).

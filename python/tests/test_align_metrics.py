@@ -86,6 +86,29 @@ def test_align_refuses_bad_method_and_params(pair_file):
             regbench.align(pair.source, pair.target, "icp", {"max_correspondence_distance": bad})
 
 
+def test_align_has_the_scale_guard_of_run():
+    # run()'s guard: rienet on 200,000 points asked for 160 GB and ended in a backtrace.
+    rng = np.random.default_rng(1)
+    cloud = rng.standard_normal((30, 3))
+    dense = {"e_step": "dense"}  # CPD's dense E-step is O(N*M) at every size
+    with pytest.raises(ValueError) as e:
+        regbench.align(cloud, cloud[:25], "cpd", params=dense, max_points=28)
+    assert str(e.value).startswith(
+        "align: cpd is O(N*M): source has 30 points, target 25, above max_points 28 (750 point "
+        "pairs per iteration,")
+    assert str(e.value).endswith("pass max_points=0 to run it as is (or a larger max_points), "
+                                 "or downsample the clouds first")
+    assert regbench.align(cloud, cloud[:25], "cpd", params=dense, max_points=30).status == "ok"
+    assert regbench.align(cloud, cloud[:25], "cpd", params=dense, max_points=0).status == "ok"
+    # CPD's default E-step approximates at scale: not guarded, as in run().
+    assert regbench.align(cloud, cloud[:25], "cpd", max_points=28).status == "ok"
+    if "rienet" in [m["name"] for m in regbench.methods()]:  # builds with LibTorch
+        big = rng.standard_normal((200000, 3))
+        with pytest.raises(ValueError, match="align: rienet is O\\(N\\*M\\): source has 200000 "
+                                             "points, target 200000, above max_points 20000"):
+            regbench.align(big, big, "rienet")
+
+
 def test_align_releases_the_gil():
     """A Python thread runs while align works. The thread is woken just before the call; with
     the interpreter lock held by the call it could only run after the call's C++ work, i.e.

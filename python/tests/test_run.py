@@ -124,8 +124,11 @@ def test_bad_method_lists_are_refused(pair_file, tmp_path):
     with pytest.raises(ValueError, match=r"params\.icp\.max_correspondence_distance must be finite"):
         regbench.run(pair_file, ["icp"], out, params=inf)
     assert not out.exists()
-    with pytest.raises(ValueError, match="timeout must be > 0"):
-        regbench.run(pair_file, ["icp"], out, timeout=0)
+    # As --timeout: a finite number > 0 (a row records it as JSON, which has no inf).
+    for timeout in (0, -1.0, float("inf"), float("nan"), 10**400):
+        with pytest.raises(ValueError, match="timeout must be a finite number of seconds > 0 "
+                                             r"\(or None\), got " + repr(timeout)[:8]):
+            regbench.run(pair_file, ["icp"], out, timeout=timeout)
     with pytest.raises(TypeError, match="methods must be a list"):
         regbench.run(pair_file, 3, out)
     with pytest.raises(TypeError, match="timeout must be a number"):
@@ -318,3 +321,90 @@ def test_system_exit_in_a_callable_stops_the_run_as_keyboard_interrupt(pair_file
         regbench.run(pair_file, ["icp", leaves], out)
     assert not out.exists()
     assert os.path.exists(str(out) + ".part")  # the finished rows stay for resume
+
+
+def test_a_transform_whose_last_row_is_not_0_0_0_1_fails_the_call(pair_file, tmp_path):
+    def projective(source, target):
+        T = np.eye(4)
+        T[3, 0] = 0.5  # the rotation block is rigid: only the last row is wrong
+        return T
+
+    out = tmp_path / "last_row.jsonl"
+    summary = regbench.run(pair_file, [projective, ("eye", lambda s, t: np.eye(4))], out)
+    assert summary["failures"] == len(pair_file)
+    for r in read_jsonl(out):
+        if r["method"] == "projective":
+            assert r["status"] == "failed"
+            assert r["message"] == \
+                "projective: produced a transform whose last row is not (0, 0, 0, 1)"
+        else:
+            assert r["status"] == "ok"
+
+
+def test_method_names_that_rows_cannot_hold_are_refused_before_the_run(pair_file, tmp_path):
+    def fn(source, target):
+        return np.eye(4)
+
+    def unencodable(source, target):
+        return np.eye(4)
+
+    unencodable.__name__ = "\udcff"  # os.fsdecode(b"\xff")
+    out = tmp_path / "names.jsonl"
+    cases = [
+        (("", fn), "method name is empty"),  # left an OUT.part that resume could not read
+        (("\udcff", fn), r"method name '\\udcff' cannot be encoded as UTF-8"),
+        (unencodable, r"method name '\\udcff' cannot be encoded as UTF-8"),
+        (("a\nb", fn), r"method name 'a\\nb' contains a control character"),
+        (("a\tb", fn), r"method name 'a\\tb' contains a control character"),
+        (("a,b", fn), "method name 'a,b' must not contain commas or spaces"),
+    ]
+    for method, message in cases:
+        with pytest.raises(ValueError, match=message):
+            regbench.run(pair_file, ["identity", method], out)
+        assert not out.exists() and not os.path.exists(str(out) + ".part")
+    regbench.run(pair_file, [("é_1", fn)], out)  # any other UTF-8 name
+    assert {r["method"] for r in regbench.read_results(out, as_frame=False)} == {"é_1"}
+
+
+def test_an_integer_4x4_is_a_transform(pair_file, tmp_path):
+    out = tmp_path / "ints.jsonl"
+    summary = regbench.run(pair_file, [("int_eye", lambda s, t: np.eye(4, dtype=np.int64)),
+                                       ("list_eye", lambda s, t: np.eye(4, dtype=int).tolist()),
+                                       ("bool_eye", lambda s, t: np.eye(4, dtype=bool)),
+                                       "identity"], out)
+    assert summary["failures"] == len(pair_file)
+    rows = {(r["pair"], r["method"]): r for r in read_jsonl(out)}
+    for k in range(len(pair_file)):
+        for name in ("int_eye", "list_eye"):
+            assert rows[(k, name)]["status"] == "ok"
+            assert rows[(k, name)]["metrics"] == rows[(k, "identity")]["metrics"]
+        assert rows[(k, "bool_eye")]["message"] == \
+            "bool_eye: the returned transform must have a floating-point or integer dtype, " \
+            "got bool"
+    pair = pair_file[0]
+    assert regbench.metrics(np.eye(4, dtype=np.int32), pair.T_gt, pair.source, pair.target) == \
+        regbench.metrics(np.eye(4), pair.T_gt, pair.source, pair.target)
+
+
+@pytest.mark.parametrize("raised", ["KeyboardInterrupt", "SystemExit"])
+def test_interrupts_under_timeout_stop_the_run(pair_file, tmp_path, raised):
+    # With timeout= the callable runs in a forked child: its KeyboardInterrupt or SystemExit
+    # became a `failed` row and the run went on.
+    def stops(source, target):
+        if np.array_equal(source, pair_file[1].source):
+            raise KeyboardInterrupt("stop here") if raised == "KeyboardInterrupt" \
+                else SystemExit(3)
+        return np.eye(4)
+
+    assert not np.array_equal(pair_file[0].source, pair_file[1].source)
+    out = tmp_path / "stopped.jsonl"
+    message = "stop here" if raised == "KeyboardInterrupt" else \
+        "SystemExit raised in a callable: SystemExit: 3"
+    with pytest.raises(KeyboardInterrupt, match=message):
+        regbench.run(pair_file, ["identity", stops], out, timeout=60)
+    assert not out.exists()
+    kept = read_jsonl(str(out) + ".part")
+    # Pair 0 and identity on pair 1; the interrupted call is not written.
+    assert [(r["pair"], r["method"]) for r in kept] == [(0, "identity"), (0, "stops"),
+                                                         (1, "identity")]
+    assert all(r["status"] == "ok" for r in kept)
