@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <random>
 #include <thread>
 #include <vector>
 
@@ -47,6 +48,71 @@ TEST(Fgr, ConcurrentCallsMatchSequentialOnes) {
         for (auto& t : threads) t.join();
         for (int i = 0; i < kThreads; ++i) EXPECT_EQ(concurrent[i], sequential[i]) << i;
     }
+}
+
+/// `n` points uniform in the cube [-1, 1]^3 from `seed`: no shape, so no feature agrees.
+PointCloud UniformCube(int n, std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    PointCloud p(n, 3);
+    for (int i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) p(i, c) = u(rng);
+    }
+    return p;
+}
+
+TEST(Fgr, NoCorrespondencesIsAFailedCall) {
+    // Issue 54 item 5: FGR on clouds with nothing in common (independent uniform points, no
+    // shape) returned a transform with 0 inlier correspondences as `ok` (a run printed
+    // {"correspondences": 0, "fitness": 0.0} with status ok for each of these three seeds, and
+    // for the pairs of the overlap and density sweeps). Such a call fails, saying why, and
+    // carries the identity like every failed call.
+    for (std::uint64_t seed : {1, 2, 3}) {
+        SCOPED_TRACE(seed);
+        const AlignResult r =
+            CreateMethod("fgr")->Align(UniformCube(300, seed), UniformCube(300, seed + 10));
+        EXPECT_EQ(r.extra.at("correspondences").get<std::size_t>(), 0u);
+        EXPECT_EQ(r.status, AlignStatus::kFailed);
+        EXPECT_EQ(r.stop_reason, "no_correspondences");
+        EXPECT_EQ(r.T_target_source, Transform::Identity());
+        EXPECT_NE(r.message.find("no evidence for a transform: 0 correspondences within the max "
+                                 "correspondence distance 0.025"),
+                  std::string::npos)
+            << r.message;
+    }
+    // The same method on a clean pair finds its correspondences and stays ok.
+    const auto pair = CleanCompletePair(30.0, /*seed=*/5);
+    const AlignResult ok = CreateMethod("fgr")->Align(pair.source, pair.target);
+    EXPECT_EQ(ok.status, AlignStatus::kOk) << ok.message;
+    EXPECT_GE(ok.extra.at("correspondences").get<std::size_t>(), 3u);
+}
+
+TEST(Fgr, OpenThreeDsFallbackWithoutFeatureMatchesIsAFailedCall) {
+    // With fewer than 10 FPFH matches after its tuple test, Open3D's FGR skips the optimisation
+    // and returns the identity in its normalised frame: the unrotated centroid shift, its
+    // rotation block exactly I (6 of 10 overlap-sweep and 6 of 10 density pairs of the cgal
+    // test split, seed 1, were such `ok` rows). Here 20 points 0.3 apart from their copy
+    // (seed 2; a probe printed the exact identity rotation): the shift even lands on the
+    // target (20 inliers), but no feature evidence produced it, so the call fails.
+    const PointCloud source = UniformCube(20, 2);
+    PointCloud target = source;
+    target.col(0).array() += 0.3;
+    const AlignResult r = CreateMethod("fgr")->Align(source, target);
+    EXPECT_EQ(r.status, AlignStatus::kFailed);
+    EXPECT_EQ(r.stop_reason, "no_feature_matches");
+    EXPECT_NE(r.message.find("no evidence for a transform: fewer than 10 FPFH matches passed "
+                             "FGR's tuple test"),
+              std::string::npos)
+        << r.message;
+    EXPECT_NE(r.message.find("(20 correspondences within 0.025 after it)"), std::string::npos)
+        << r.message;
+    // Seed 1: FGR's optimisation ran (a rotation not exactly I) and the call stays ok.
+    const PointCloud other = UniformCube(20, 1);
+    PointCloud moved = other;
+    moved.col(0).array() += 0.3;
+    const AlignResult ok = CreateMethod("fgr")->Align(other, moved);
+    EXPECT_FALSE((ok.T_target_source.topLeftCorner<3, 3>() == Eigen::Matrix3d::Identity()));
+    EXPECT_EQ(ok.status, AlignStatus::kOk) << ok.message;
 }
 
 TEST(Fgr, TupleScaleIsValidated) {
