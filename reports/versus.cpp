@@ -143,8 +143,8 @@ Table VersusTable(const VersusResult& r) {
     described.euler = r.euler;
     Table t("versus:" + r.method_a + ":" + r.method_b, r.method_a + " vs " + r.method_b,
             fmt::format("Data: {}. Paired on the {} pairs both ran ({}: {} pairs, {}: {}; failed "
-                        "calls among them: {} {}, {} {}, scored with the transform they "
-                        "returned).",
+                        "calls among them: {} {}, {} {}, scored as the identity they carry, as "
+                        "`report` counts them).",
                         DescribeTable(described), r.common, r.method_a, r.pairs_a, r.method_b,
                         r.pairs_b, r.method_a, r.failed_a, r.method_b, r.failed_b));
     t.row_header = "metric";

@@ -52,8 +52,8 @@ struct VersusResult {
 
 /// Compares method `a` with method `b` on every pair file (content hash) and Euler convention
 /// both were measured on, one result each, matching rows by pair. Rows of failed calls take
-/// part with the metrics of the transform they returned (as `report` counts them); the
-/// counts of failed calls are in the result. Throws std::invalid_argument when `a` equals
+/// part with the metrics of the identity they carry (as `report` counts them); the counts of
+/// failed calls are in the result. Throws std::invalid_argument when `a` equals
 /// `b`, std::runtime_error naming the methods the rows hold when `a` or `b` has no rows,
 /// naming both methods' pair files when they share none, and naming the pair when a method
 /// has two rows of one pair (several parameter sets: compare the files separately).

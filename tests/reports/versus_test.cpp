@@ -45,7 +45,7 @@ std::vector<ResultRow> Rows() {
         rows.push_back(Row("icp", k, 9.0, 9.0));
     }
     rows.push_back(Row("b", 12, 100.0, 100.0));
-    rows[1].status = Status::kFailed;  // b on pair 0: counted, scored with its transform
+    rows[1].status = Status::kFailed;  // b on pair 0: counted (its metrics as the row has them)
     return rows;
 }
 
