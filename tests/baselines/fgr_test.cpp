@@ -91,12 +91,16 @@ TEST(Fgr, OpenThreeDsFallbackWithoutFeatureMatchesIsAFailedCall) {
     // With fewer than 10 FPFH matches after its tuple test, Open3D's FGR skips the optimisation
     // and returns the identity in its normalised frame: the unrotated centroid shift, its
     // rotation block exactly I (6 of 10 overlap-sweep and 6 of 10 density pairs of the cgal
-    // test split, seed 1, were such `ok` rows). Here 20 points 0.3 apart from their copy
-    // (seed 2; a probe printed the exact identity rotation): the shift even lands on the
-    // target (20 inliers), but no feature evidence produced it, so the call fails.
-    const PointCloud source = UniformCube(20, 2);
-    PointCloud target = source;
-    target.col(0).array() += 0.3;
+    // test split, seed 1, were such `ok` rows, with 6 to 40 of 717 points within the max
+    // correspondence distance after it). Here 15 shared points and 15 others on each side,
+    // the others' centroids equal (so the shift is 0): sparse points, no features, the
+    // fallback (a probe printed its exact identity rotation), half the source points land.
+    const PointCloud shared = UniformCube(15, 1), own_source = UniformCube(15, 101);
+    PointCloud own_target = UniformCube(15, 201);
+    own_target.rowwise() += own_source.colwise().mean() - own_target.colwise().mean();
+    PointCloud source(30, 3), target(30, 3);
+    source << shared, own_source;
+    target << shared, own_target;
     const AlignResult r = CreateMethod("fgr")->Align(source, target);
     EXPECT_EQ(r.status, AlignStatus::kFailed);
     EXPECT_EQ(r.stop_reason, "no_feature_matches");
@@ -104,15 +108,17 @@ TEST(Fgr, OpenThreeDsFallbackWithoutFeatureMatchesIsAFailedCall) {
                              "FGR's tuple test"),
               std::string::npos)
         << r.message;
-    EXPECT_NE(r.message.find("(20 correspondences within 0.025 after it)"), std::string::npos)
+    EXPECT_NE(r.message.find("(15 of 30 source points within 0.025 after it)"), std::string::npos)
         << r.message;
-    // Seed 1: FGR's optimisation ran (a rotation not exactly I) and the call stays ok.
-    const PointCloud other = UniformCube(20, 1);
-    PointCloud moved = other;
+    // The same fallback on a translated copy (seed 2: a probe printed the exact identity
+    // rotation too) aligns every point: the one case where the shift is evidence, kept ok.
+    const PointCloud copy = UniformCube(20, 2);
+    PointCloud moved = copy;
     moved.col(0).array() += 0.3;
-    const AlignResult ok = CreateMethod("fgr")->Align(other, moved);
-    EXPECT_FALSE((ok.T_target_source.topLeftCorner<3, 3>() == Eigen::Matrix3d::Identity()));
-    EXPECT_EQ(ok.status, AlignStatus::kOk) << ok.message;
+    const AlignResult kept = CreateMethod("fgr")->Align(copy, moved);
+    EXPECT_TRUE((kept.T_target_source.topLeftCorner<3, 3>() == Eigen::Matrix3d::Identity()));
+    EXPECT_EQ(kept.status, AlignStatus::kOk) << kept.message;
+    EXPECT_EQ(kept.extra.at("correspondences").get<std::size_t>(), 20u);
 }
 
 TEST(Fgr, TupleScaleIsValidated) {
