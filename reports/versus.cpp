@@ -125,8 +125,12 @@ std::string VersusVerdict(const VersusResult& r, const VersusMetric& m) {
                            "two)",
                            m.metric, m.pairs, m.pairs == 1 ? "" : "s", m.metric);
     }
-    const std::string numbers = fmt::format("{} = {:.4g}, 95% CI [{:.4g}, {:.4g}], p = {:.4f}",
-                                            diff, m.diff_mean, m.ci_lo, m.ci_hi, m.p_value);
+    // p = 0: no resampled mean reached 0, so p is below one resample's share.
+    const std::string p = m.p_value == 0.0
+                              ? fmt::format("p < {:.2g}", 1.0 / r.bootstrap_samples)
+                              : fmt::format("p = {:.4f}", m.p_value);
+    const std::string numbers = fmt::format("{} = {:.4g}, 95% CI [{:.4g}, {:.4g}], {}", diff,
+                                            m.diff_mean, m.ci_lo, m.ci_hi, p);
     if (!m.differs) {
         return fmt::format("{}: no difference shown between {} and {} ({}; the CI contains 0)",
                            m.metric, r.method_a, r.method_b, numbers);
