@@ -75,8 +75,9 @@ void SetupReportCommand(CLI::App* cmd) {
     auto versus = std::make_shared<std::string>();
     cmd->add_option("--versus", *versus,
                     "A,B: instead of the summary, method A against method B on the pairs both "
-                    "ran, per metric: A - B with a 95% bootstrap CI, the Wilcoxon signed-rank p "
-                    "and A's wins, ties and losses (one table per pair file)");
+                    "ran, per metric: the mean of A - B with its 95% CI and p from one paired "
+                    "bootstrap (they cannot disagree), A's wins, ties and losses and a verdict "
+                    "line (one table per pair file; docs/reports.md)");
     cmd->callback([=] {
         const auto comma = versus->find(',');
         const std::string a = versus->substr(0, comma);

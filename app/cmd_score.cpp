@@ -22,9 +22,19 @@ void SetupScoreCommand(CLI::App* cmd) {
     cmd->add_option("--pairs", o->pairs_path, "Frozen HDF5 pair file the transforms belong to")
         ->required();
     cmd->add_option("--transforms", o->transforms_path,
-                    "T.jsonl ({\"pair\": k, \"transform\": [[4x4]], \"seconds\": s} per line) or "
-                    "T.csv (pair,t00,...,t23[,seconds]: top 3 rows, row-major)")
-        ->required();
+                    "Format by extension: T.jsonl ({\"pair\": k, \"transform\": [[4x4]], "
+                    "\"seconds\": s} per line), T.csv (pair,t00,...,t23 or pair,t00,...,t33, "
+                    "row-major[,seconds]), T.log (3DMatch: 'i j n' then the 4 rows of the 4x4, "
+                    "record k = pair k) or T.npy (NumPy (P,4,4) float64/float32, element k = pair "
+                    "k); docs/metrics.md#scoring-external-transforms")
+        ->required()
+        ->check(CLI::Validator(
+            [](const std::string& path) {
+                return TransformsFormatOf(path) == TransformsFormat::kUnknown
+                           ? "'" + path + "': " + kTransformsExtensions
+                           : std::string();
+            },
+            "FORMAT", "transforms format"));
     cmd->add_option("--method", o->method, "Method name written in every row")->required();
     cmd->add_option("--params", *params, "JSON object of the method's parameters, recorded");
     cmd->add_option("--out", o->out_path, "Output JSONL (written atomically)")->required();

@@ -7,6 +7,8 @@
 #include <open3d/pipelines/registration/Registration.h>
 #include <open3d/utility/Random.h>
 
+#include <fmt/format.h>
+
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -18,6 +20,14 @@
 
 namespace regbench {
 namespace {
+
+/// Fewest inlier correspondences (source points within the max correspondence distance of the
+/// target after alignment) for an ok call: a rigid motion needs three non-collinear points.
+/// The other call from no evidence is Open3D's answer when fewer than 10 feature matches pass
+/// its tuple test: the identity in its normalised frame, i.e. the unrotated centroid shift
+/// (issue 54 item 5), recognised by its rotation block being exactly I; unless that shift
+/// aligns every source point, both are failed calls.
+constexpr std::size_t kMinCorrespondences = 3;
 
 /// Radii follow the Open3D tutorial (and the OGMM repo's unused FPFH helper) as multiples of
 /// one voxel size; the FGR solver settings are Open3D's Python defaults.
@@ -161,6 +171,31 @@ AlignResult AlignFgr(const FgrOptions& o, const PointCloud& source, const PointC
         {"resolved",
          {{"voxel_size", voxel}, {"voxel_downsample", downsample}, {"scale_rule", rule.ToJson()}}},
         {kExcludedSecondsKey, waited}};
+    // A transform from no evidence is a failed call (RegistrationMethod::Align then stores the
+    // identity, as for every failed call, and reports count it).
+    const std::size_t inliers = reg.correspondence_set_.size();
+    const double max_distance = o.max_correspondence_distance_voxels * voxel;
+    const std::size_t used = source_o3d->points_.size();
+    if (reg.transformation_.topLeftCorner<3, 3>() == Eigen::Matrix3d::Identity() &&
+        inliers < used) {
+        // Open3D's fallback (its Gauss-Newton steps end exactly on I only when the matched
+        // points already coincide). Kept only when the shift alone aligns every source point
+        // (identical or translated copies), the one case where it is evidence.
+        result.status = AlignStatus::kFailed;
+        result.stop_reason = "no_feature_matches";
+        result.message = fmt::format(
+            "no evidence for a transform: fewer than 10 FPFH matches passed FGR's tuple test, "
+            "so Open3D skipped the optimisation and returned the unrotated centroid shift ({} "
+            "of {} source points within {:.4g} after it)",
+            inliers, used, max_distance);
+    } else if (inliers < kMinCorrespondences) {
+        result.status = AlignStatus::kFailed;
+        result.stop_reason = "no_correspondences";
+        result.message = fmt::format(
+            "no evidence for a transform: {} correspondence{} within the max correspondence "
+            "distance {:.4g} after alignment (at least {} needed)",
+            inliers, inliers == 1 ? "" : "s", max_distance, kMinCorrespondences);
+    }
     return result;
 }
 

@@ -634,10 +634,11 @@ void BindRun(py::module_& m) {
           "compare_methods(results, a, b, bootstrap=2000, seed=20230103) -> list[dict]\n\n"
           "Method a against method b on the pairs both ran (results: one results file or a "
           "list of them), as `regbench report --versus a,b`: one dict per pair file with "
-          "method_a, method_b, data, euler, pairs_a, pairs_b, common, failed_a, failed_b and "
-          "metrics, a list of {metric, pairs, mean_a, mean_b, diff_mean (a - b), ci_lo, ci_hi "
-          "(95% paired bootstrap), p_value, statistic (two-sided Wilcoxon signed-rank), wins, "
-          "ties, losses (of a; lower error wins)}.");
+          "method_a, method_b, data, euler, pairs_a, pairs_b, common, failed_a, failed_b, "
+          "bootstrap_samples and metrics, a list of {metric, pairs, mean_a, mean_b, diff_mean "
+          "(a - b), ci_lo, ci_hi, p_value (95% CI and two-sided p of one paired bootstrap of "
+          "the mean difference), differs (the CI excludes 0), verdict (one line), wins, ties, "
+          "losses (of a; lower error wins)}.");
     m.def("read_results", &ReadResults, py::arg("path"), py::arg("as_frame") = py::none(),
           "read_results(path, as_frame=None) -> pandas.DataFrame | list[dict]\n\n"
           "Reads a results file (`run`, `score`, `merge`), each row validated by the C++ "

@@ -186,7 +186,8 @@ def compare_methods(results: _PathLike | Sequence[_PathLike], a: str, b: str,
                     bootstrap: int = 2000, seed: int = 20230103) -> list[dict[str, Any]]:
     """Method a against method b on their common pairs, one dict per pair file (as `regbench
     report --versus a,b`): metrics holds per metric mean_a, mean_b, diff_mean (a - b), ci_lo,
-    ci_hi, p_value (Wilcoxon), wins, ties, losses."""
+    ci_hi and p_value (one paired bootstrap of the mean difference), differs, verdict, wins,
+    ties, losses."""
 
 def read_results(path: _PathLike, as_frame: bool | None = None) -> Any:
     """A pandas DataFrame (when pandas imports and as_frame is not False) or a list of dicts."""

@@ -62,6 +62,31 @@ BootstrapCi BootstrapMean(const std::vector<double>& v, int samples, std::uint64
     return e;
 }
 
+PairedBootstrapTest PairedBootstrap(const std::vector<double>& d, int samples, std::uint64_t seed,
+                                    std::uint64_t stream) {
+    PairedBootstrapTest t;
+    t.mean = SampleMean(d);
+    const std::vector<double> means = SortedBootstrapMeans(d, samples, seed, stream);
+    if (means.empty()) {
+        t.lo = t.hi = t.p_value = std::nan("");
+        return t;
+    }
+    const std::size_t b = means.size();
+    const std::size_t k = b / 40;  // floor(0.025 B): the 2.5% tail in whole resamples
+    t.lo = means[k];
+    t.hi = means[b - 1 - k];
+    const auto at_most_zero = static_cast<std::size_t>(
+        std::upper_bound(means.begin(), means.end(), 0.0) - means.begin());
+    const auto below_zero = static_cast<std::size_t>(
+        std::lower_bound(means.begin(), means.end(), 0.0) - means.begin());
+    const std::size_t tail = std::min(at_most_zero, b - below_zero);
+    t.p_value = std::min(1.0, 2.0 * static_cast<double>(tail) / static_cast<double>(b));
+    // m[k] > 0 iff #{m <= 0} <= k; m[B-1-k] < 0 iff #{m >= 0} <= k; and 2 tail / B <= 0.05
+    // iff tail <= floor(B / 40) = k: the CI and p agree by construction.
+    t.differs = tail <= k;
+    return t;
+}
+
 BootstrapCi WilsonInterval(std::size_t k, std::size_t n) {
     BootstrapCi e;
     if (n == 0) {

@@ -45,6 +45,28 @@ double NearestRankQuantile(const std::vector<double>& sorted, double q);
 BootstrapCi BootstrapMean(const std::vector<double>& v, int samples, std::uint64_t seed,
                           std::uint64_t stream, double level = 0.95);
 
+/// The paired test of `report --versus` (method A against method B on the same pairs): one
+/// percentile bootstrap of the mean of the per-pair differences d = A - B gives both the 95%
+/// CI and the two-sided p-value, so they cannot disagree. From the B = `samples` sorted
+/// resampled means m (SortedBootstrapMeans: the same resamples as BootstrapMean) with
+/// k = floor(B / 40) (= floor(0.025 B)):
+///   CI = [m[k], m[B - 1 - k]]  (for B = 2000 the same order statistics, 50 and 1949, as
+///                              BootstrapMean's NearestRankQuantile at 0.025 and 0.975)
+///   p  = min(1, 2 min(#{m <= 0}, #{m >= 0}) / B)  (Efron & Tibshirani's achieved significance
+///                              level; 0 when no resampled mean reaches 0: p < 1 / B)
+/// and, since all are counts, p <= 0.05 exactly when the CI excludes 0 (`differs`).
+/// Below two differences there is no test: CI and p are NaN and `differs` is false.
+struct PairedBootstrapTest {
+    double mean = 0.0;     ///< mean of the differences
+    double lo = 0.0;       ///< 95% CI of the mean difference
+    double hi = 0.0;
+    double p_value = 1.0;  ///< two-sided, from the same resampled means
+    bool differs = false;  ///< 0 is outside [lo, hi], i.e. p <= 0.05
+};
+
+PairedBootstrapTest PairedBootstrap(const std::vector<double>& d, int samples, std::uint64_t seed,
+                                    std::uint64_t stream);
+
 /// The two-sided 95% normal quantile, Phi^-1(0.975) (scipy.stats.norm.ppf(0.975)).
 constexpr double kZ95 = 1.959963984540054;
 

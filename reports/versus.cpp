@@ -61,13 +61,12 @@ VersusMetric TestMetric(const std::vector<std::pair<const ResultRow*, const Resu
     if (d.empty()) return v;
     v.mean_a = SampleMean(a);
     v.mean_b = SampleMean(b);
-    const BootstrapCi ci = BootstrapMean(d, o.bootstrap_samples, o.seed, StreamId(stream));
-    v.diff_mean = ci.mean;
-    v.ci_lo = ci.lo;
-    v.ci_hi = ci.hi;
-    const WilcoxonResult w = WilcoxonSignedRank(d);
-    v.p_value = w.p_value;
-    v.statistic = w.statistic;
+    const PairedBootstrapTest t = PairedBootstrap(d, o.bootstrap_samples, o.seed, StreamId(stream));
+    v.diff_mean = t.mean;
+    v.ci_lo = t.lo;
+    v.ci_hi = t.hi;
+    v.p_value = t.p_value;
+    v.differs = t.differs;
     return v;
 }
 
@@ -104,6 +103,7 @@ std::vector<VersusResult> CompareMethods(const std::vector<ResultRow>& rows, con
             r.failed_b += row_b->second->status != Status::kOk;
         }
         r.common = matched.size();
+        r.bootstrap_samples = o.bootstrap_samples;
         if (matched.empty()) continue;
         for (const auto& metric : o.metrics) {
             r.metrics.push_back(TestMetric(matched, metric, a + "/" + b + "/" + metric, o));
@@ -118,14 +118,37 @@ std::vector<VersusResult> CompareMethods(const std::vector<ResultRow>& rows, con
     return out;
 }
 
+std::string VersusVerdict(const VersusResult& r, const VersusMetric& m) {
+    const std::string diff = r.method_a + " - " + r.method_b;
+    if (m.pairs < 2) {
+        return fmt::format("{}: no verdict ({} common pair{} with a finite {}; a paired test needs "
+                           "two)",
+                           m.metric, m.pairs, m.pairs == 1 ? "" : "s", m.metric);
+    }
+    // p = 0: no resampled mean reached 0, so p is below one resample's share.
+    const std::string p = m.p_value == 0.0
+                              ? fmt::format("p < {:.2g}", 1.0 / r.bootstrap_samples)
+                              : fmt::format("p = {:.4f}", m.p_value);
+    const std::string numbers = fmt::format("{} = {:.4g}, 95% CI [{:.4g}, {:.4g}], {}", diff,
+                                            m.diff_mean, m.ci_lo, m.ci_hi, p);
+    if (!m.differs) {
+        return fmt::format("{}: no difference shown between {} and {} ({}; the CI contains 0)",
+                           m.metric, r.method_a, r.method_b, numbers);
+    }
+    const bool a_better = m.diff_mean < 0.0;  // every metric is an error: lower is better
+    return fmt::format("{}: {} better than {} ({})", m.metric,
+                       a_better ? r.method_a : r.method_b, a_better ? r.method_b : r.method_a,
+                       numbers);
+}
+
 Table VersusTable(const VersusResult& r) {
     ReportTable described;
     described.data = r.data;
     described.euler = r.euler;
     Table t("versus:" + r.method_a + ":" + r.method_b, r.method_a + " vs " + r.method_b,
             fmt::format("Data: {}. Paired on the {} pairs both ran ({}: {} pairs, {}: {}; failed "
-                        "calls among them: {} {}, {} {}, scored with the transform they "
-                        "returned).",
+                        "calls among them: {} {}, {} {}, scored as the identity they carry, as "
+                        "`report` counts them).",
                         DescribeTable(described), r.common, r.method_a, r.pairs_a, r.method_b,
                         r.pairs_b, r.method_a, r.failed_a, r.method_b, r.failed_b));
     t.row_header = "metric";
@@ -138,7 +161,7 @@ Table VersusTable(const VersusResult& r) {
                  col("mean_b", r.method_b, 4),
                  col("diff_mean", r.method_a + " - " + r.method_b, 4),
                  col("diff", "95% CI", 4, CiStyle::kInterval),
-                 col("wilcoxon_p", "Wilcoxon p", 4),
+                 col("p", "p", 4),
                  col("wins", r.method_a + " better", 0),
                  col("ties", "ties", 0),
                  col("losses", r.method_b + " better", 0)};
@@ -150,7 +173,7 @@ Table VersusTable(const VersusResult& r) {
             return m.pairs == 0 ? Cell{} : MeasuredCell(v, m.pairs);
         };
         Cell diff = cell(m.diff_mean);
-        if (m.pairs != 0) {
+        if (m.pairs >= 2) {
             diff.ci_lo = m.ci_lo;
             diff.ci_hi = m.ci_hi;
         }
@@ -159,7 +182,7 @@ Table VersusTable(const VersusResult& r) {
                             {"mean_b", cell(m.mean_b)},
                             {"diff", diff},
                             {"diff_mean", cell(m.diff_mean)},
-                            {"wilcoxon_p", cell(m.p_value)},
+                            {"p", m.pairs < 2 ? Cell{} : cell(m.p_value)},
                             {"wins", cell(static_cast<double>(m.wins))},
                             {"ties", cell(static_cast<double>(m.ties))},
                             {"losses", cell(static_cast<double>(m.losses))}});
@@ -167,19 +190,35 @@ Table VersusTable(const VersusResult& r) {
     t.notes.push_back(
         "Lower is better for every metric; " + r.method_a + " - " + r.method_b + " < 0 favours " +
         r.method_a +
-        ". CI: percentile bootstrap of the mean paired difference; p: two-sided Wilcoxon "
-        "signed-rank test (zero differences dropped); ties: equal values.");
+        ". CI and p: one paired bootstrap of the mean difference (" +
+        std::to_string(r.bootstrap_samples) +
+        " resamples of the pairs; p = 2 x the share of resampled means on the far side of 0, so "
+        "p <= 0.05 exactly when the CI excludes 0); ties: equal values.");
+    for (const auto& m : r.metrics) t.notes.push_back("Verdict " + VersusVerdict(r, m) + ".");
     return t;
 }
 
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(VersusMetric, metric, pairs, mean_a, mean_b, diff_mean, ci_lo,
-                                   ci_hi, p_value, statistic, wins, ties, losses)
+                                   ci_hi, p_value, differs, wins, ties, losses)
 
 nlohmann::json VersusToJson(const VersusResult& r) {
-    return {{"method_a", r.method_a},     {"method_b", r.method_b}, {"data", r.data},
-            {"euler", ToString(r.euler)}, {"pairs_a", r.pairs_a},   {"pairs_b", r.pairs_b},
-            {"common", r.common},         {"failed_a", r.failed_a}, {"failed_b", r.failed_b},
-            {"metrics", r.metrics}};
+    nlohmann::json metrics = nlohmann::json::array();
+    for (const auto& m : r.metrics) {
+        nlohmann::json j = m;
+        j["verdict"] = VersusVerdict(r, m);
+        metrics.push_back(std::move(j));
+    }
+    return {{"method_a", r.method_a},
+            {"method_b", r.method_b},
+            {"data", r.data},
+            {"euler", ToString(r.euler)},
+            {"pairs_a", r.pairs_a},
+            {"pairs_b", r.pairs_b},
+            {"common", r.common},
+            {"failed_a", r.failed_a},
+            {"failed_b", r.failed_b},
+            {"bootstrap_samples", r.bootstrap_samples},
+            {"metrics", metrics}};
 }
 
 }  // namespace regbench

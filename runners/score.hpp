@@ -21,7 +21,7 @@ constexpr double kMaxRigidTolerance = 0.1;
 
 struct ScoreOptions {
     std::string pairs_path;       ///< frozen HDF5 pair file the transforms were computed on
-    std::string transforms_path;  ///< .jsonl or .csv (format by extension; see ReadTransforms)
+    std::string transforms_path;  ///< .jsonl, .csv, .log or .npy (by extension; ReadTransforms)
     std::string method;           ///< name written in every row
     nlohmann::json params = nlohmann::json::object();  ///< recorded in every row
     std::string out_path;                              ///< result JSONL (written atomically)
@@ -50,13 +50,27 @@ struct ExternalTransform {
     std::string content_hash;
 };
 
+/// The formats of a transforms file, chosen by its extension.
+enum class TransformsFormat { kJsonl, kCsv, kLog, kNpy, kUnknown };
+/// .jsonl and .json: kJsonl; .csv: kCsv; .log: kLog; .npy: kNpy; anything else kUnknown.
+TransformsFormat TransformsFormatOf(const std::string& path);
+/// What a transforms file's name must end in (the refusal of any other).
+inline constexpr const char* kTransformsExtensions =
+    "a transforms file must end in .jsonl (or .json), .csv, .log (3DMatch) or .npy (NumPy)";
+
 /// Reads a transforms file and validates it: JSONL rows {"pair": k, "transform": 4x4,
 /// "seconds": s} (a row with a "method" key other than `method` is skipped, so a `run` result
 /// file can be rescored; a file whose rows name methods but never `method` is refused naming
-/// the methods it holds) or CSV `pair,t00,...,t23[,seconds]` (first three rows of the 4x4,
-/// row-major; an optional header line starting with "pair"). Throws std::runtime_error naming
-/// file:line for a malformed line, a pair index outside [0, num_pairs), a pair given twice or
-/// a matrix that is not rigid (a similarity with `allow_scale`) within `rigid_tolerance`.
+/// the methods it holds), CSV `pair,t00,...,t23[,seconds]` (first three rows of the 4x4,
+/// row-major) or `pair,t00,...,t33[,seconds]` (all four rows; an optional header line starting
+/// with "pair"), a 3DMatch .log (per pair a line "i j n", then the 4 rows of the 4x4,
+/// whitespace-separated; the k-th record is pair k) or a NumPy .npy of shape (num_pairs, 4, 4),
+/// little-endian float64 or float32, C order (element k is pair k). '#' lines are comments in
+/// the text formats ("# content_hash: H" applies to the lines after it). Throws
+/// std::runtime_error naming file:line (file[k] for a .npy) for a malformed line or header, a
+/// pair index outside [0, num_pairs), a pair given twice, a .log or .npy without exactly one
+/// transform per pair, or a matrix that is not rigid (a similarity with `allow_scale`) within
+/// `rigid_tolerance`.
 std::vector<ExternalTransform> ReadTransforms(const std::string& path, std::size_t num_pairs,
                                               const std::string& method, double rigid_tolerance,
                                               bool allow_scale = false);

@@ -111,5 +111,39 @@ TEST(CliFlagNumbers, ScoreRefusesTranslationsBeyondTheCoordinateLimit) {
     fs::remove_all(dir);
 }
 
+TEST(CliFlagNumbers, ScoreTakesLogAndNpyAndRefusesAnotherExtensionAsUsage) {
+    // Issue 54 item 6: the format is chosen by the extension; any other is a usage error
+    // (exit 2, naming the file and the formats), a malformed .npy a data error (exit 1, naming
+    // the file and the problem); neither writes anything.
+    const fs::path dir = testing::FreshTempDir("flag_numbers_score_formats");
+    const std::string pairs = testing::SmallPairFile((dir / "p.h5").string(), 1);
+    const std::string out = (dir / "s.jsonl").string();
+    const std::string txt = (dir / "t.txt").string();
+    std::ofstream(txt) << "0 1 2\n";
+    CliResult r =
+        RunCli("score --pairs " + pairs + " --transforms " + txt + " --method x --out " + out);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("'" + txt + "': a transforms file must end in .jsonl (or .json), "
+                            ".csv, .log (3DMatch) or .npy (NumPy)"),
+              std::string::npos)
+        << r.output;
+    EXPECT_FALSE(fs::exists(out));
+    const std::string npy = (dir / "t.npy").string();
+    std::ofstream(npy) << "PK not numpy";
+    r = RunCli("score --pairs " + pairs + " --transforms " + npy +
+               " --method x --allow-unhashed --out " + out);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(npy + ": not a NumPy .npy file"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out));
+    // A one-pair 3DMatch .log (the identity) scores one row.
+    const std::string log = (dir / "t.log").string();
+    std::ofstream(log) << "0 1 2\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+    r = RunCli("score --pairs " + pairs + " --transforms " + log +
+               " --method x --allow-unhashed --out " + out);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("wrote 1 rows (0 missing)"), std::string::npos) << r.output;
+    fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace regbench

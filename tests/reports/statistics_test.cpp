@@ -151,5 +151,84 @@ TEST(Statistics, WilsonIntervalMatchesScipy) {
     EXPECT_TRUE(std::isnan(WilsonInterval(0, 0).lo));
 }
 
+TEST(PairedBootstrap, PValueAndCiMatchTheExactBootstrapDistribution) {
+    // Hand derivation (checked by enumerating itertools.product(d, repeat=3) in
+    // /usr/bin/python3): the 27 equally likely resamples of d = {-2, 1, 4} have means with
+    // #{mean <= 0} = 10 and #{mean >= 0} = 23, so the bootstrap p = 2 * 10 / 27 = 0.7407; the
+    // extreme means -2 and 4 each have probability 1/27 = 3.7% > 2.5%, so the 95% CI is
+    // [-2, 4]. With 2000 Monte Carlo resamples p has a standard error of 2 * sqrt(10/27 *
+    // 17/27 / 2000) = 0.022: the tolerance is three of them.
+    const PairedBootstrapTest t = PairedBootstrap({-2.0, 1.0, 4.0}, 2000, 11, StreamId("exact"));
+    EXPECT_DOUBLE_EQ(t.mean, 1.0);
+    EXPECT_NEAR(t.p_value, 20.0 / 27.0, 0.066);
+    EXPECT_DOUBLE_EQ(t.lo, -2.0);
+    EXPECT_DOUBLE_EQ(t.hi, 4.0);
+    EXPECT_FALSE(t.differs);
+    // By hand: a constant non-zero difference never resamples to 0 (p = 0 < 1/B, CI [c, c]);
+    // all-zero differences always do (p = 1); one difference is no test (NaN, no verdict).
+    const PairedBootstrapTest c = PairedBootstrap({0.5, 0.5, 0.5}, 2000, 11, StreamId("c"));
+    EXPECT_DOUBLE_EQ(c.p_value, 0.0);
+    EXPECT_DOUBLE_EQ(c.lo, 0.5);
+    EXPECT_DOUBLE_EQ(c.hi, 0.5);
+    EXPECT_TRUE(c.differs);
+    const PairedBootstrapTest z = PairedBootstrap({0.0, 0.0, 0.0, 0.0}, 2000, 11, StreamId("z"));
+    EXPECT_DOUBLE_EQ(z.p_value, 1.0);
+    EXPECT_FALSE(z.differs);
+    const PairedBootstrapTest one = PairedBootstrap({3.0}, 2000, 11, StreamId("one"));
+    EXPECT_TRUE(std::isnan(one.p_value));
+    EXPECT_TRUE(std::isnan(one.lo));
+    EXPECT_FALSE(one.differs);
+}
+
+TEST(PairedBootstrap, SkewedDifferencesNoLongerGetASmallPWithACiAroundZero) {
+    // Issue 54 item 5: 27 small negative differences and 3 large positive ones. The Wilcoxon
+    // signed-rank test (which `report --versus` used to print beside a bootstrap CI of the mean)
+    // calls this significant: scipy.stats.wilcoxon(d, method="approx", correction=False) ->
+    // p = 0.002762407466545288, and WilcoxonSignedRank agrees, while the mean -1e-5 has a CI
+    // well around 0. numpy, 400000 resamples (rng default_rng(0)): bootstrap p = 0.925, 95%
+    // percentile CI [-0.00137, 0.00167].
+    std::vector<double> d;
+    for (int k = 1; k <= 27; ++k) d.push_back(-0.0001 * k);
+    for (int k = 0; k < 3; ++k) d.push_back(0.0125);
+    EXPECT_NEAR(WilcoxonSignedRank(d).p_value, 0.002762407466545288, 1e-12);
+    const PairedBootstrapTest t = PairedBootstrap(d, 2000, kDefaultBootstrapSeed, StreamId("s"));
+    EXPECT_NEAR(t.mean, -1e-5, 1e-15);
+    EXPECT_NEAR(t.p_value, 0.925, 0.05);
+    EXPECT_NEAR(t.lo, -0.00137, 0.0002);
+    EXPECT_NEAR(t.hi, 0.00167, 0.0002);
+    EXPECT_FALSE(t.differs);
+}
+
+TEST(PairedBootstrap, PAndCiAgreeForEverySampleAndResampleCount) {
+    // The property the verdict rests on (no expected values needed): p <= 0.05 exactly when
+    // the 95% CI excludes 0, whatever the shift (scanned across the boundary), skew, zeros,
+    // ties and number of resamples (divisible by 40 or not, below 40).
+    std::size_t significant = 0, not_significant = 0;
+    for (const int b : {2000, 1000, 999, 1001, 41, 39, 7}) {
+        for (int shift = -30; shift <= 30; ++shift) {
+            std::vector<double> d;
+            for (int i = 0; i < 24; ++i) {
+                const double skewed = (i % 6 == 0) ? 2.5 : -0.4;  // mean 0 before the shift
+                d.push_back(i % 5 == 0 ? 0.0 : skewed + 0.05 * shift + 0.01 * std::sin(i));
+            }
+            const PairedBootstrapTest t = PairedBootstrap(d, b, 5, StreamId(std::to_string(b)));
+            const bool excludes = t.lo > 0.0 || t.hi < 0.0;
+            EXPECT_EQ(t.p_value <= 0.05, excludes) << "B " << b << " shift " << shift;
+            EXPECT_EQ(t.differs, excludes) << "B " << b << " shift " << shift;
+            EXPECT_LE(t.lo, t.hi);
+            (excludes ? significant : not_significant) += 1;
+        }
+    }
+    EXPECT_GT(significant, 50u);  // the scan crosses the boundary on both sides
+    EXPECT_GT(not_significant, 50u);
+    // At the default 2000 resamples the CI is BootstrapMean's, the CI of every other table.
+    std::vector<double> v;
+    for (int i = 0; i < 25; ++i) v.push_back(std::cos(i) + 0.1 * i);
+    const BootstrapCi ci = BootstrapMean(v, 2000, 3, StreamId("y"));
+    const PairedBootstrapTest t = PairedBootstrap(v, 2000, 3, StreamId("y"));
+    EXPECT_EQ(t.lo, ci.lo);
+    EXPECT_EQ(t.hi, ci.hi);
+}
+
 }  // namespace
 }  // namespace regbench

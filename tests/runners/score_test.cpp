@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -179,16 +182,178 @@ TEST_F(ScoreTest, InvalidFilesAreRejectedNamingFileAndLine) {
          "scaled.csv:1: transform of pair 0 is not a rotation"},
         {"mirror.csv", "0,-1,0,0,0,0,1,0,0,0,0,1,0\n", "det R = -1"},
         {"short.csv", "0,1,0,0\n", "short.csv:1: expected 13 or 14 fields"},
+        {"fifteen.csv", "0,1,0,0,0,0,1,0,0,0,0,1,0,0,0\n", "or 17 or 18 (pair,t00,...,t33"},
         {"text.csv", "0,1,0,0,0,0,1,0,0,0,0,1,abc\n", "field 13 ('abc') is not a number"},
         {"bad.jsonl", "{\"pair\": 0, \"transform\": [[1,0,0],[0,1,0],[0,0,1]]}\n",
          "bad.jsonl:1: transform is not 4x4"},
-        {"t.txt", "", "must end in .jsonl or .csv"},
+        {"t.txt", "", "must end in .jsonl (or .json), .csv, .log (3DMatch) or .npy (NumPy)"},
+        {"full.csv", "0,1,0,0,0,0,1,0,0,0,0,1,0,0,0,0.5,1\n",
+         "full.csv:1: transform of pair 0 has a bottom row other than (0, 0, 0, 1)"},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.file);
         Write(c.file, c.text);
         ExpectError(Options(c.file, "m"), c.needle);
     }
+}
+
+// Issue 54 item 6: the formats other tools write. The expected matrices are written by hand:
+// pair k gets Rz(90 deg)^k with translation (0.5 k, -0.25, 1), exact in float32 and float64.
+Transform HandTransform(int k) {
+    Transform T = Transform::Identity();
+    const int c[4] = {1, 0, -1, 0};  // cos(90 k deg)
+    const int s[4] = {0, 1, 0, -1};  // sin(90 k deg)
+    T(0, 0) = c[k];
+    T(0, 1) = -s[k];
+    T(1, 0) = s[k];
+    T(1, 1) = c[k];
+    T(0, 3) = 0.5 * k;
+    T(1, 3) = -0.25;
+    T(2, 3) = 1.0;
+    return T;
+}
+
+/// A .npy file as numpy.lib.format writes version 1.0: magic, version, little-endian uint16
+/// header length, the header dict padded with spaces and a newline to a multiple of 64 bytes,
+/// then the data.
+std::string NpyFile(const std::string& descr, const std::string& fortran, const std::string& shape,
+                    const std::string& data) {
+    std::string dict = "{'descr': '" + descr + "', 'fortran_order': " + fortran +
+                       ", 'shape': " + shape + ", }";
+    const std::size_t total = ((10 + dict.size() + 1 + 63) / 64) * 64;
+    dict += std::string(total - 10 - dict.size() - 1, ' ') + "\n";
+    std::string out = "\x93NUMPY";
+    out += '\x01';
+    out += '\x00';
+    out += static_cast<char>(dict.size() & 0xff);
+    out += static_cast<char>(dict.size() >> 8);
+    return out + dict + data;
+}
+
+/// The little-endian bytes of the 4 hand transforms, C order, as float32 or float64.
+std::string HandTransformBytes(bool float32) {
+    std::string out;
+    for (int k = 0; k < 4; ++k) {
+        const Transform T = HandTransform(k);
+        for (int r = 0; r < 4; ++r) {
+            for (int c = 0; c < 4; ++c) {
+                unsigned char b[8];
+                std::uint64_t raw = 0;
+                if (float32) {
+                    const float f = static_cast<float>(T(r, c));
+                    std::uint32_t u = 0;
+                    std::memcpy(&u, &f, 4);
+                    raw = u;
+                } else {
+                    std::memcpy(&raw, &T(r, c), 8);
+                }
+                const int n = float32 ? 4 : 8;
+                for (int i = 0; i < n; ++i) b[i] = static_cast<unsigned char>(raw >> (8 * i));
+                out.append(reinterpret_cast<const char*>(b), static_cast<std::size_t>(n));
+            }
+        }
+    }
+    return out;
+}
+
+TEST_F(ScoreTest, NumpyLogAndFullCsvFilesGiveTheHandWrittenTransformsInPairOrder) {
+    // The header numpy 1.24.2 writes for np.save(f, T) with T = np.zeros((4, 4, 4), "<f4")
+    // (/usr/bin/python3; the first 128 bytes of the file, verbatim): NpyFile builds the same.
+    const std::string numpy_header =
+        std::string("\x93NUMPY\x01\x00v\x00", 10) +
+        "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 4, 4), }" + std::string(55, ' ') +
+        "\n";
+    ASSERT_EQ(numpy_header.size(), 128u);
+    EXPECT_EQ(NpyFile("<f4", "False", "(4, 4, 4)", ""), numpy_header);
+    Write("t32.npy", NpyFile("<f4", "False", "(4, 4, 4)", HandTransformBytes(true)));
+    Write("t64.npy", NpyFile("<f8", "False", "(4, 4, 4)", HandTransformBytes(false)));
+    // 3DMatch .log: "i j n" then the 4 rows, tab- or space-separated, as the toolbox writes.
+    std::string log, csv = "pair,t00,t01,t02,t03,t10,t11,t12,t13,t20,t21,t22,t23,t30,t31,t32,t33\n";
+    for (int k = 0; k < 4; ++k) {
+        const Transform T = HandTransform(k);
+        log += fmt::format("{}\t{}\t 5\n", k, k + 1);
+        csv += std::to_string(k);
+        for (int r = 0; r < 4; ++r) {
+            log += fmt::format("{:.8e} {:.8e} {:.8e} {:.8e}\n", T(r, 0), T(r, 1), T(r, 2), T(r, 3));
+            for (int c = 0; c < 4; ++c) csv += fmt::format(",{}", T(r, c));
+        }
+        csv += "\n";
+    }
+    Write("t.log", log);
+    Write("t16.csv", csv);
+    for (const char* file : {"t32.npy", "t64.npy", "t.log", "t16.csv"}) {
+        SCOPED_TRACE(file);
+        const ScoreOptions o = Options(file, "ext");
+        const ScoreSummary summary = ScoreTransforms(o);
+        EXPECT_EQ(summary.rows, 4u);
+        EXPECT_EQ(summary.missing, 0u);
+        const auto rows = ReadResultRows(o.out_path);
+        ASSERT_EQ(rows.size(), 4u);
+        const PairSet set = ReadPairFile(pairs_);
+        for (std::size_t k = 0; k < 4; ++k) {
+            EXPECT_EQ(rows[k].status, Status::kOk);
+            EXPECT_EQ(rows[k].result.T_target_source, HandTransform(static_cast<int>(k))) << k;
+            EXPECT_EQ(rows[k].result.seconds, 0.0);
+            const PairMetrics m = MotionMetrics(set.pairs[k].T_gt, HandTransform(static_cast<int>(k)));
+            EXPECT_DOUBLE_EQ(rows[k].metrics.rre, m.rre) << k;
+        }
+        std::filesystem::remove(o.out_path);
+    }
+}
+
+TEST_F(ScoreTest, BadLogAndNpyFilesAreRefusedNamingTheFileAndTheProblem) {
+    const std::string rec = "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+    const std::string good_data = HandTransformBytes(false);
+    struct Case {
+        const char* file;
+        std::string text;
+        const char* needle;
+    };
+    const Case cases[] = {
+        {"three.log", "0 1 4\n" + rec + "1 2 4\n" + rec + "2 3 4\n" + rec,
+         "three.log: holds 3 records but the pair file has 4 pairs"},
+        {"five.log", "0 1 4\n" + rec + "0 2 4\n" + rec + "0 3 4\n" + rec + "1 2 4\n" + rec +
+                         "1 3 4\n" + rec,
+         "five.log:21: record 5 but the pair file has 4 pairs"},
+        {"cut.log", "0 1 4\n1 0 0 0\n0 1 0 0\n", "cut.log:1: the record ends after 2 of the 4 rows"},
+        {"header.log", "0 1\n" + rec, "header.log:1: expected a record header 'i j n'"},
+        {"frac.log", "0 1.5 4\n" + rec, "frac.log:1: expected a record header 'i j n'"},
+        {"row.log", "0 1 4\n1 0 0\n", "row.log:1 (4 numbers), got 3 fields"},  // row 1 of 4
+        {"word.log", "0 1 4\n1 0 zero 0\n", "word.log:2: field 3 ('zero') is not a number"},
+        {"scaled.log", "0 1 4\n2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n",
+         "scaled.log:1: transform of pair 0 is not a rotation"},
+        {"magic.npy", "not numpy at all", "magic.npy: not a NumPy .npy file"},
+        {"big.npy", NpyFile(">f8", "False", "(4, 4, 4)", good_data),
+         "big.npy: dtype '>f8' is not little-endian float64"},
+        {"int.npy", NpyFile("<i8", "False", "(4, 4, 4)", good_data), "dtype '<i8'"},
+        {"fortran.npy", NpyFile("<f8", "True", "(4, 4, 4)", good_data),
+         "fortran.npy: array is in Fortran order"},
+        {"shape.npy", NpyFile("<f8", "False", "(4, 16)", good_data),
+         "shape.npy: array has shape (4, 16); expected (P, 4, 4)"},
+        {"count.npy", NpyFile("<f8", "False", "(3, 4, 4)", good_data.substr(0, 3 * 128)),
+         "count.npy: holds 3 transforms but the pair file has 4 pairs"},
+        {"short.npy", NpyFile("<f8", "False", "(4, 4, 4)", good_data.substr(0, 500)),
+         "short.npy: holds 500 data bytes; shape (4, 4, 4) of '<f8' needs 512"},
+        {"nan.npy", NpyFile("<f8", "False", "(4, 4, 4)", [&] {
+             std::string d = good_data;
+             const double nan = std::nan("");
+             std::memcpy(&d[2 * 128 + 8], &nan, 8);  // pair 2, entry (0, 1)
+             return d;
+         }()),
+         "nan.npy[2]: transform of pair 2 has non-finite entries"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.file);
+        Write(c.file, c.text);
+        ExpectError(Options(c.file, "m"), c.needle);
+    }
+    // A .npy cannot record the pair file's hash: without --allow-unhashed it is refused, and
+    // the message says what to pass.
+    Write("ok.npy", NpyFile("<f8", "False", "(4, 4, 4)", good_data));
+    ScoreOptions strict = Options("ok.npy", "m");
+    strict.allow_unhashed = false;
+    ExpectError(strict, "ok.npy[0]: the transform records no content hash");
+    ExpectError(strict, "a .npy cannot record one");
 }
 
 TEST_F(ScoreTest, TransformsOfAnotherPairFileAreRefusedByTheirContentHash) {
