@@ -30,7 +30,7 @@ TEST(PaperLabels, EveryLabelIsARowOfThePaperAndNoRowIsFilledTwice) {
     }
     // The classical rows of Tab. 1, as the paper spells them (its file's row names).
     for (const char* row : {"ICP", "FGR", "CPD", "GMMReg", "SVR", "FilterReg"}) {
-        EXPECT_TRUE(filled_by.contains(row)) << row << " is filled by no method";
+        EXPECT_EQ(filled_by.count(row), 1u) << row << " is filled by no method";
     }
     EXPECT_EQ(filled_by["CPD"], "cpd");
 }
@@ -40,8 +40,9 @@ TEST(PaperLabels, VariantsTheTableDoesNotShowHaveNone) {
     // methods the paper did not run (gicp, ndt, identity), fill no row of it.
     const auto labels = PaperRowLabels();
     for (const auto& m : AllMethods()) {
-        if (m.name.ends_with("-noicp") || m.name == "gicp" || m.name == "identity") {
-            EXPECT_FALSE(labels.contains(m.name)) << m.name;
+        const bool noicp = m.name.size() > 6 && m.name.substr(m.name.size() - 6) == "-noicp";
+        if (noicp || m.name == "gicp" || m.name == "identity") {
+            EXPECT_EQ(labels.count(m.name), 0u) << m.name;
         }
     }
 }

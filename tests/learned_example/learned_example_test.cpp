@@ -15,6 +15,7 @@
 
 #include "core/rng.hpp"
 #include "core/transform.hpp"
+#include "networks/checkpoint/authors_checkpoint.hpp"
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/checkpoint/checkpoint.hpp"
 #include "networks/cost.hpp"

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "networks/checkpoint/authors_checkpoint.hpp"
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/checkpoint/checkpoint.hpp"
 #include "networks/layers/gmm_head.hpp"

@@ -18,6 +18,7 @@
 
 #include "core/point_cloud.hpp"
 #include "core/rng.hpp"
+#include "networks/checkpoint/authors_checkpoint.hpp"
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/checkpoint/checkpoint.hpp"
 #include "networks/inference.hpp"

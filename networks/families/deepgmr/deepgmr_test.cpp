@@ -10,7 +10,7 @@
 #include "core/rng.hpp"
 #include "core/synthetic_shapes.hpp"
 #include "core/transform.hpp"
-#include "formula_fixture.hpp"
+#include "tests/networks/formula_fixture.hpp"
 #include "networks/layers/gmm_head.hpp"
 #include "networks/zoo.hpp"
 

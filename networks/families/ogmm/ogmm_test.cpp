@@ -10,16 +10,14 @@
 
 #include "core/transform.hpp"
 #include "tests/networks/formula_fixture.hpp"
+#include "tests/networks/one_thread_test.hpp"
 
 namespace regbench::networks {
 namespace {
 
 using torch::indexing::Slice;
 
-class OgmmNetTest : public ::testing::Test {
-protected:
-    void SetUp() override { torch::set_num_threads(1); }
-};
+class OgmmNetTest : public OneThreadTest {};
 
 torch::Tensor RotationTensor(const Eigen::Matrix3d& R, torch::Dtype dtype) {
     torch::Tensor t = torch::empty({3, 3}, torch::kFloat64);

@@ -18,16 +18,14 @@
 #include "tests/networks/state_fixture.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
+#include "tests/networks/one_thread_test.hpp"
 
 namespace regbench::networks {
 namespace {
 
 using torch::indexing::Slice;
 
-class OmnetTest : public ::testing::Test {
-protected:
-    void SetUp() override { torch::set_num_threads(1); }
-};
+class OmnetTest : public OneThreadTest {};
 
 // ---- the authors' layout --------------------------------------------------------------------
 

@@ -16,16 +16,14 @@
 #include "tests/networks/state_fixture.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
+#include "tests/networks/one_thread_test.hpp"
 
 namespace regbench::networks {
 namespace {
 
 using torch::indexing::Slice;
 
-class RegtrTest : public ::testing::Test {
-protected:
-    void SetUp() override { torch::set_num_threads(1); }
-};
+class RegtrTest : public OneThreadTest {};
 
 std::string SourceDir() {
     const char* env = std::getenv("REGBENCH_SOURCE_DIR");

@@ -12,16 +12,14 @@
 #include "networks/layers/layers.hpp"
 #include "tests/networks/formula_fixture.hpp"
 #include "tests/networks/state_fixture.hpp"
+#include "tests/networks/one_thread_test.hpp"
 
 namespace regbench::networks {
 namespace {
 
 using torch::indexing::Slice;
 
-class RienetTest : public ::testing::Test {
-protected:
-    void SetUp() override { torch::set_num_threads(1); }
-};
+class RienetTest : public OneThreadTest {};
 
 // ---- the authors' layout --------------------------------------------------------------------
 
