@@ -401,7 +401,7 @@ TEST(PaperReport, CompleteTableOffersTheCleanSharedVariantBesideThePapersC2c) {
     const ResultSet a{"c2c", {Row(0, "cpd", 2.0), Row(1, "cpd", 4.0)}, noisy, ""};
     const ResultSet b{"c2c_clean", {Row(0, "cpd", 0.5), Row(1, "cpd", 1.5)}, clean, ""};
     const Table t = BuildPaperTable(FindPaperTableSpec("supp_complete"), {a, b},
-                                    LoadPaperTables(DefaultPaperTablesPath()), {});
+                                    LoadPaperTables(DefaultPaperTablesPath()), Options());
     const TableRow& cpd = RowNamed(t, "CPD");
     // Hand: (2 + 4) / 2 = 3 and (0.5 + 1.5) / 2 = 1.
     EXPECT_DOUBLE_EQ(cpd.Get("c2c.mae_r").value, 3.0);
@@ -438,7 +438,7 @@ TEST(PaperReport, CompleteTableOffersTheCleanSharedVariantBesideThePapersC2c) {
 
 TEST(PaperReport, TableWithoutPairsSaysItsFloorIsUnknown) {
     const Table t = BuildPaperTable(FindPaperTableSpec("table4_ablation_components"), {},
-                                    LoadPaperTables(DefaultPaperTablesPath()), {});
+                                    LoadPaperTables(DefaultPaperTablesPath()), Options());
     ASSERT_EQ(t.notes.size(), 1u);
     EXPECT_NE(t.notes[0].find("CCD floor: not known"), std::string::npos) << t.notes[0];
 }
@@ -454,7 +454,7 @@ TEST(PaperReport, AblationVariantsOnTheSamePairsAreDescribedOnce) {
     const Table t = BuildPaperTable(
         FindPaperTableSpec("table4_ablation_components"),
         {set("full", "p.h5"), set("no_SPE", "p.h5"), set("no_CSA", "p.h5"), set("no_OSP", "q.h5")},
-        LoadPaperTables(DefaultPaperTablesPath()), {});
+        LoadPaperTables(DefaultPaperTablesPath()), Options());
     EXPECT_NE(t.caption.find("ours / full, no_SPE, no_CSA: dataset `cgal`"), std::string::npos)
         << t.caption;
     EXPECT_NE(t.caption.find("; ours / no_OSP: dataset `cgal`"), std::string::npos) << t.caption;
@@ -479,7 +479,7 @@ TEST(PaperReport, GroupsOnTheSamePairsShareOneFloorNote) {
     };
     const Table t =
         BuildPaperTable(FindPaperTableSpec("supp_cluster_count"), {set("32"), set("8"), set("64")},
-                        LoadPaperTables(DefaultPaperTablesPath()), {});
+                        LoadPaperTables(DefaultPaperTablesPath()), Options());
     ASSERT_EQ(t.notes.size(), 1u);
     EXPECT_NE(t.notes[0].find("Ground-truth CCD floor (32, 8, 64): 0.1041"), std::string::npos)
         << t.notes[0];
