@@ -1,5 +1,6 @@
 #include "runners/result_row.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -318,8 +319,21 @@ void ForEachJsonlLine(
     const std::string& path, TornLastLine torn,
     const std::function<void(const std::string& where, const nlohmann::json& value)>& visit) {
     RequireRegularFile(path);
-    std::ifstream in(path);
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error(path + ": cannot open results file");
+    // A pair file given where result rows belong (`report pairs.h5`) is named as one, with the
+    // commands that read it, instead of "line 1: not JSON".
+    static constexpr char kHdf5Signature[] = "\x89HDF\r\n\x1a\n";
+    char head[8] = {};
+    in.read(head, sizeof head);
+    if (in.gcount() == 8 && std::equal(head, head + 8, kHdf5Signature)) {
+        throw std::runtime_error(path +
+                                 ": a pair file (HDF5), not JSONL result rows: `regbench inspect " +
+                                 path + "` describes it; `regbench run --pairs " + path +
+                                 " --methods ...` writes result rows from it");
+    }
+    in.clear();
+    in.seekg(0);
     std::string line;
     std::size_t lineno = 0;
     while (std::getline(in, line)) {
