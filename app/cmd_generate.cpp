@@ -17,6 +17,7 @@
 #include "core/output_rule.hpp"
 #include "core/sha256.hpp"
 #include "core/version.hpp"
+#include "datasets/dataset.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "protocols/generate.hpp"
 #include "runners/progress.hpp"
@@ -114,7 +115,8 @@ void SetupGenerateCommand(CLI::App* cmd) {
         ->capture_default_str();
     cmd->add_option(
         "--split", a->request.split,
-        "Dataset split (default: test; all for a single file or a folder of point files)");
+        "Dataset split (default: test; all for a single file or a folder of point files)")
+        ->check(ParsedBy(CheckSplitName, "SPLIT"));
     cmd->add_option("--data-dir", a->data_dir,
                     "Data directory for named datasets (default: ./data)");
     cmd->add_option("--pairs", a->pairs,

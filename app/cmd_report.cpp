@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "app/cli_numbers.hpp"
+#include "app/cli_params.hpp"
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/output_rule.hpp"
@@ -62,8 +63,9 @@ void SetupReportCommand(CLI::App* cmd) {
         ->check(PositiveWholeNumber());
     cmd->add_option("--paper", *paper,
                     "Also print the paper's cells side by side, with our pair counts: "
-                    "TABLE[:GROUP], e.g. table1_modelnet_partial:same_category (every format: one "
-                    "more table after each result table)");
+                    "TABLE[:GROUP], e.g. table1:same_category (TABLE: a table id or a prefix of "
+                    "one, as reproduce --tables takes them; GROUP: one of its column groups; "
+                    "every format: one more table after each result table)");
     cmd->add_flag("--common-pairs", o->common_pairs,
                   "When the methods of one pair file were run on different pairs (a shard, an "
                   "unfinished run), compare them on the pairs they share (the caption says so) "
@@ -94,6 +96,13 @@ void SetupReportCommand(CLI::App* cmd) {
         }
         // The one output rule (docs/usage.md, "Outputs") before reading anything; then one
         // writer per --out until the report is in place.
+        // --paper's table and group before anything is read (a usage error, exit 2).
+        nlohmann::json published;
+        PaperSelection selection;
+        if (!paper->empty()) {
+            published = LoadPaperTables(*paper_file);
+            selection = AsUsageError([&] { return ResolvePaperSelection(published, *paper); });
+        }
         std::optional<ClaimedOutput> claim;
         if (!out->empty()) claim.emplace(*out, *files, OutputRule{*force});
         std::vector<ResultRow> rows;
@@ -116,13 +125,9 @@ void SetupReportCommand(CLI::App* cmd) {
         }
         if (!paper->empty()) {
             // TABLE[:GROUP] of the paper beside each result table.
-            const auto colon = paper->find(':');
-            const std::string group = colon == std::string::npos ? "" : paper->substr(colon + 1);
-            const nlohmann::json published = LoadPaperTables(*paper_file);
             for (const auto& t : tables) {
-                out_tables.push_back(
-                    PaperComparisonTable(t, published, paper->substr(0, colon), group,
-                                         PaperRowLabels()));
+                out_tables.push_back(PaperComparisonTable(t, published, selection.table,
+                                                          selection.group, PaperRowLabels()));
             }
         }
         std::string text;

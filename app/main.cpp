@@ -14,6 +14,7 @@
 #include "app/commands.hpp"
 #include "core/memory_policy.hpp"
 #include "core/output_rule.hpp"
+#include "core/usage_error.hpp"
 #include "core/version.hpp"
 
 namespace {
@@ -48,6 +49,24 @@ void AddCommands(CLI::App& app) {
     std::sort(commands.begin(), commands.end(),
               [&](const auto& a, const auto& b) { return rank(a) < rank(b); });
     for (const auto& c : commands) c.setup(app.add_subcommand(c.name, c.summary));
+}
+
+/// The usage error for a first word that names no subcommand ("regbench frobnicate"), listing
+/// the subcommands in help order; empty when argv's first word that is not an option (the top
+/// level has --help and --version only) is a subcommand, or there is none. CLI11 would answer
+/// "A subcommand is required", as if none had been given.
+std::string UnknownSubcommand(CLI::App& app, int argc, char** argv) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string word = argv[i];
+        if (!word.empty() && word[0] == '-') continue;
+        std::string known;
+        for (const CLI::App* c : app.get_subcommands([](CLI::App*) { return true; })) {
+            if (c->get_name() == word) return "";
+            known += (known.empty() ? "" : ", ") + c->get_name();
+        }
+        return "unknown subcommand '" + word + "'; the subcommands are " + known;
+    }
+    return "";
 }
 
 }  // namespace
@@ -87,6 +106,10 @@ int main(int argc, char** argv) {
                                           " (git " + regbench::RegbenchGitSha() + ")");
     app.require_subcommand(1);
     AddCommands(app);
+    if (const std::string unknown = UnknownSubcommand(app, argc, argv); !unknown.empty()) {
+        std::cerr << "regbench: usage error: " << unknown << " (see regbench --help)\n";
+        return 2;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -104,9 +127,10 @@ int main(int argc, char** argv) {
         std::cerr << "regbench: usage error: " << regbench::app::OneLine(what)
                   << " (see regbench --help)\n";
         return 2;
-    } catch (const regbench::OutputPathError& e) {
-        // An output path that names no folder of its own (".", "..", the current folder): the
-        // command line is at fault, as with a refused flag value.
+    } catch (const regbench::UsageError& e) {
+        // Found below app/ (core/usage_error.hpp): an output path that names no folder of its
+        // own (".", "..", the current folder), an unknown `reproduce --tables` name. The command
+        // line is at fault, as with a refused flag value.
         std::cerr << "regbench: usage error: " << e.what() << "\n";
         return 2;
     } catch (const std::exception& e) {

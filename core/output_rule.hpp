@@ -6,14 +6,15 @@
 #include <vector>
 
 #include "core/file_lock.hpp"
+#include "core/usage_error.hpp"
 
 namespace regbench {
 
 /// A refusal of the path itself, not of what is on disk: the command line is wrong (the CLI
 /// reports it as a usage error, exit 2).
-class OutputPathError : public std::invalid_argument {
+class OutputPathError : public UsageError {
 public:
-    using std::invalid_argument::invalid_argument;
+    using UsageError::UsageError;
 };
 
 /// How one command's output may meet what is already on disk.

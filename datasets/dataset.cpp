@@ -443,6 +443,8 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path, const std:
 
 namespace regbench {
 
+void CheckSplitName(const std::string& split) { (void)detail::ParseSplit(split); }
+
 std::string DefaultSplit(const std::string& name_or_path) {
     const fs::path path(name_or_path);
     std::error_code ec;

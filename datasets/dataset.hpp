@@ -74,4 +74,9 @@ std::unique_ptr<Dataset> OpenDataset(const std::string& name_or_path,
 /// holding several datasets.
 std::string DefaultSplit(const std::string& name_or_path);
 
+/// Refuses (std::invalid_argument naming it and listing the forms) a split name no dataset
+/// has ("tset"): what `generate --split` checks before anything is read. Whether the dataset at
+/// hand has that split is OpenDataset's to say.
+void CheckSplitName(const std::string& split);
+
 }  // namespace regbench

@@ -19,6 +19,7 @@
 #include "core/atomic_file.hpp"
 #include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
+#include "core/usage_error.hpp"
 #include "core/version.hpp"
 #include "datasets/dataset_shapes.hpp"
 #include "experiments/experiment_file.hpp"
@@ -283,17 +284,17 @@ std::vector<std::string> ReproducibleTables() {
 namespace {
 
 /// Refuses table names that match no table of `files` and dataset paths that do not exist,
-/// before any work starts.
+/// before any work starts: a UsageError (exit 2), the command line being at fault.
 void ValidateOptions(const ReproduceOptions& o, const std::vector<ExperimentFile>& files) {
-    if (o.jobs < 1) throw std::invalid_argument("--jobs must be at least 1");
-    if (!(o.timeout_seconds >= 0.0)) throw std::invalid_argument("--timeout must be >= 0");
+    if (o.jobs < 1) throw UsageError("--jobs must be at least 1");
+    if (!(o.timeout_seconds >= 0.0)) throw UsageError("--timeout must be >= 0");
     for (const auto& t : o.tables) {
         bool known = false;
         for (const auto& f : files) known |= f.table.rfind(t, 0) == 0;
         if (!known) {
             std::string list;
             for (const auto& f : files) list += (list.empty() ? "" : ", ") + f.table;
-            throw std::invalid_argument("--tables: '" + t + "' names no table (" + list + ")");
+            throw UsageError("--tables: '" + t + "' names no table (" + list + ")");
         }
     }
     for (const auto& [flag, path] :
@@ -301,8 +302,7 @@ void ValidateOptions(const ReproduceOptions& o, const std::vector<ExperimentFile
           {"--7scenes", o.sevenscenes},
           {"--icl-nuim", o.icl_nuim}}) {
         if (!path.empty() && !fs::exists(path)) {
-            throw std::invalid_argument(std::string(flag) + " " + path +
-                                        ": no such file or folder");
+            throw UsageError(std::string(flag) + " " + path + ": no such file or folder");
         }
     }
 }

@@ -342,6 +342,23 @@ std::string PairProjectionSvg(const Pair& pair, const Transform& estimate, int m
     return s + "</svg>";
 }
 
+std::string PaperTablesLegend(const std::vector<Table>& tables) {
+    bool merged = false, alone = false;
+    for (const auto& t : tables) {
+        for (const auto& c : ShowTable(t, TableForm::kCompact, " ± ").columns) {
+            merged |= c.with_paper;
+            alone |= c.paper;
+        }
+    }
+    std::string s = "Measured here";
+    if (merged) {
+        s += "; in parentheses after a measured value, the paper's as published (a column whose "
+             "header ends in \"(paper)\" holds both)";
+    }
+    if (alone) s += "; grey columns: the paper's numbers alone, as published";
+    return s + ". Bold: the best measured cell of a column.";
+}
+
 // The page top to bottom (head and style, the paper tables, one section per experiment):
 // long because it is the document, each part a few lines of markup.
 std::string RenderHtmlReport(const HtmlReportOptions& o) {
@@ -361,8 +378,7 @@ std::string RenderHtmlReport(const HtmlReportOptions& o) {
         Escape(o.title) + "</h1>\n";
     for (const auto& p : o.intro) s += "<p>" + Escape(p) + "</p>\n";
     if (!o.tables.empty()) {
-        s += "<h2>The paper's tables</h2>\n<p class=\"note\">Grey columns: the paper's numbers "
-             "as published; the others measured here. Bold: best measured cell of a column."
+        s += "<h2>The paper's tables</h2>\n<p class=\"note\">" + Escape(PaperTablesLegend(o.tables)) +
              "</p>\n";
         for (const auto& t : o.tables) s += TableToHtml(t);
     }

@@ -35,8 +35,14 @@ struct HtmlReportOptions {
 /// The whole page; every character of it is produced here (no external resource).
 std::string RenderHtmlReport(const HtmlReportOptions& options);
 
-/// A table as an HTML <table> (best cell per column bold, paper cells in grey).
+/// A table as an HTML <table> (best cell per column bold, paper-only columns in grey).
 std::string TableToHtml(const Table& t, TableForm form = TableForm::kCompact);
+
+/// The legend above the paper's tables, saying what their compact HTML shows: the paper's
+/// values in parentheses after ours where a column holds both ("measured (paper)", its header
+/// ending in "(paper)"), grey columns only where a table has a paper column standing alone,
+/// and that bold marks the best measured cell of a column.
+std::string PaperTablesLegend(const std::vector<Table>& tables);
 
 /// Axis ticks at round numbers: linear, multiples of a step of 1, 2 or 5 times a power of ten
 /// (about four intervals) within [lo, hi]; log, the powers of ten within it (with their 2x and

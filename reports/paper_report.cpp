@@ -347,9 +347,23 @@ namespace {
 struct TimingRow {
     std::vector<double> cpu, network, gmac, floor;
     int threads = 1;
-    int points = 0;
+    /// Points per cloud of the timed calls, source and target alike (the rows'
+    /// source_points / target_points); empty when the rows predate them.
+    std::vector<std::size_t> points;
     std::string blas;
 };
+
+/// Tab. 6's `points` cell: the point count every timed call had, or "lo-hi" where they
+/// differ; blank for rows that do not record it (not the pair file's sampled count, which a
+/// crop reduces: 1024 sampled, 717 kept).
+Cell PointsCell(const std::vector<std::size_t>& points) {
+    Cell c;
+    if (points.empty()) return c;
+    const auto [lo, hi] = std::minmax_element(points.begin(), points.end());
+    c.value = static_cast<double>(*lo);
+    if (*lo != *hi) c.text = fmt::format("{}-{}", *lo, *hi);
+    return c;
+}
 
 double ExtraNumber(const ResultRow& row, const char* key) {
     if (!row.result.extra.is_object()) return std::nan("");
@@ -389,8 +403,10 @@ Timings CollectTimings(const std::vector<ResultSet>& sets) {
             if (!t.by_label.count(label)) t.order.push_back(label);
             TimingRow& row = t.by_label[label];
             row.threads = r.threads;
-            row.points = s.provenance.points;
             if (r.status != Status::kOk) continue;
+            for (const auto& n : {r.source_points, r.target_points}) {
+                if (n) row.points.push_back(*n);
+            }
             // Rows written before cpu_seconds existed read 0 s: no CPU time to show (as in
             // runners/timing_summary).
             if (r.result.cpu_seconds > 0.0) row.cpu.push_back(1e3 * r.result.cpu_seconds);
@@ -434,7 +450,8 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
     Timings timings = CollectTimings(sets);
     for (const auto& label : timings.order) {
         const TimingRow& m = timings.by_label[label];
-        Cell mean, median, network, gmac, floor, ratio, points, th, p;
+        Cell mean, median, network, gmac, floor, ratio, th, p;
+        Cell points = PointsCell(m.points);
         SetMeanWithCi(m.cpu, label + "/cpu_ms", &mean);
         median.value = m.cpu.empty() ? std::nan("") : SampleMedian(m.cpu);
         mean.pairs = median.pairs = m.cpu.size();
@@ -446,7 +463,6 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         if (!m.network.empty() && m.network.size() == m.floor.size())
             ratio.value = network.value / floor.value;
         network.pairs = gmac.pairs = floor.pairs = ratio.pairs = m.network.size();
-        points.value = m.points;
         th.value = m.threads;
         p.source = CellSource::kPaper;
         const std::string name = PaperRowName(paper_rows, label).value_or(label);
@@ -494,7 +510,8 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         "with the threads shown. For the learned methods, network CPU ms is the forward alone, "
         "GMAC its multiply-accumulates for this config and these point counts (networks/cost), "
         "floor ms those MACs at the single-thread fp32 GEMM rate measured in the same process, "
-        "and x floor = network CPU ms / floor ms. Ours: CPU {}; BLAS of the learned methods: "
+        "and x floor = network CPU ms / floor ms; points: the points per cloud the timed calls "
+        "had (source and target, from the rows; a range where they differ). Ours: CPU {}; BLAS of the learned methods: "
         "{}; classical methods: {}; CPU only (no GPU rows measured). Paper (ms): {}",
         cpu_model, learned.empty() ? "none measured" : learned, blas,
         paper.at("tables").at("table6_inference_time").value("caption", std::string()));

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
@@ -40,6 +41,72 @@ std::optional<std::string> PaperRowName(const PaperRows& rows, const std::string
     const auto it = rows.find(method);
     if (it == rows.end() || it->second.empty()) return std::nullopt;
     return it->second;
+}
+
+namespace {
+
+/// The column groups of a paper table ("same_category" of "same_category.mae_r"), in column
+/// order; `plain` is set when it has an ungrouped "mae_r" or "seconds" column.
+std::vector<std::string> ColumnGroups(const nlohmann::json& table, bool* plain) {
+    std::vector<std::string> groups;
+    *plain = false;
+    for (const auto& c : table.at("columns")) {
+        const std::string name = c.get<std::string>();
+        *plain |= name == "mae_r" || name == "seconds";
+        const auto dot = name.rfind('.');
+        if (dot == std::string::npos || name.substr(dot + 1) != "mae_r") continue;
+        const std::string g = name.substr(0, dot);
+        if (std::find(groups.begin(), groups.end(), g) == groups.end()) groups.push_back(g);
+    }
+    return groups;
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+    return out;
+}
+
+}  // namespace
+
+PaperSelection ResolvePaperSelection(const nlohmann::json& paper, const std::string& text) {
+    const auto colon = text.find(':');
+    const std::string name = text.substr(0, colon);
+    const std::string group = colon == std::string::npos ? "" : text.substr(colon + 1);
+    const auto& tables = paper.at("tables");
+    std::vector<std::string> known, matching;
+    for (const auto& t : tables.items()) {
+        known.push_back(t.key());
+        if (!name.empty() && t.key().rfind(name, 0) == 0) matching.push_back(t.key());
+    }
+    if (tables.contains(name)) matching = {name};
+    if (matching.empty()) {
+        throw std::invalid_argument("--paper " + text + ": '" + name +
+                                    "' names no paper table (tables: " + JoinNames(known) + ")");
+    }
+    if (matching.size() > 1) {
+        throw std::invalid_argument("--paper " + text + ": '" + name +
+                                    "' names several paper tables (" + JoinNames(matching) +
+                                    "): give one");
+    }
+    PaperSelection sel{matching.front(), group};
+    bool plain = false;
+    const std::vector<std::string> groups = ColumnGroups(tables.at(sel.table), &plain);
+    if (groups.empty() && !plain) {
+        throw std::invalid_argument("--paper " + text + ": paper table " + sel.table +
+                                    " has no MAE(R) or seconds column to compare with");
+    }
+    if (groups.empty() && !group.empty()) {
+        throw std::invalid_argument("--paper " + text + ": paper table " + sel.table +
+                                    " has no column groups; give it as " + sel.table);
+    }
+    if (!groups.empty() && std::find(groups.begin(), groups.end(), group) == groups.end()) {
+        throw std::invalid_argument(
+            "--paper " + text + ": paper table " + sel.table +
+            (group.empty() ? " needs a column group" : " has no column group '" + group + "'") +
+            ", TABLE:GROUP (groups: " + JoinNames(groups) + ")");
+    }
+    return sel;
 }
 
 Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,

@@ -148,6 +148,9 @@ struct ShownTable {
         bool left = false;   ///< left-aligned (an interval column)
         bool paper = false;  ///< the paper's numbers
         std::string group;   ///< its Table::column_groups entry, "" for none
+        /// Compact form: a measured column with the paper's column merged into it, each cell
+        /// "measured (paper)" and the header ending in " (paper)".
+        bool with_paper = false;
     };
     std::vector<ShownColumn> columns;
     std::vector<std::string> labels;              ///< one per row

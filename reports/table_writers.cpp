@@ -189,7 +189,7 @@ ShownTable ShowTable(const Table& t, TableForm form, const char* pm) {
         const Column& col = t.columns[c];
         out.columns.push_back({col.header + (paper >= 0 ? " (paper)" : ""),
                                col.ci == CiStyle::kInterval, col.source == CellSource::kPaper,
-                               ColumnGroup(t, col.key)});
+                               ColumnGroup(t, col.key), paper >= 0});
     }
     std::vector<int> best(t.columns.size());
     for (std::size_t c = 0; c < t.columns.size(); ++c) best[c] = BestRow(t, c);

@@ -1,5 +1,6 @@
 #include "runners/result_row.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -34,6 +35,18 @@ double NumberOrNaN(const nlohmann::json& j, const char* key) {
         throw std::invalid_argument(std::string("metrics.") + key + " is not a number");
     }
     return it->get<double>();
+}
+
+/// A point count that old rows may lack: nullopt when absent; anything but a whole number
+/// >= 0 throws naming the key.
+std::optional<std::size_t> OptionalCount(const nlohmann::json& j, const char* key) {
+    const auto it = j.find(key);
+    if (it == j.end()) return std::nullopt;
+    if (!it->is_number_unsigned()) {
+        throw std::invalid_argument(std::string(key) + " must be a whole number >= 0, got " +
+                                    it->dump());
+    }
+    return it->get<std::size_t>();
 }
 
 /// A number that old rows may lack: nullopt when absent; a key of another type throws.
@@ -98,6 +111,8 @@ const char* const kKnownKeys[] = {"pair",
                                   "category",
                                   "source_overlap_ratio",
                                   "target_overlap_ratio",
+                                  "source_points",
+                                  "target_points",
                                   "euler",
                                   "metrics",
                                   "gt_transform",
@@ -268,6 +283,8 @@ void to_json(nlohmann::json& j, const ResultRow& row) {
     j["category"] = row.category;
     if (row.source_overlap_ratio) j["source_overlap_ratio"] = *row.source_overlap_ratio;
     if (row.target_overlap_ratio) j["target_overlap_ratio"] = *row.target_overlap_ratio;
+    if (row.source_points) j["source_points"] = *row.source_points;
+    if (row.target_points) j["target_points"] = *row.target_points;
     j["euler"] = ToString(row.euler);
     j["metrics"] = MetricsToJson(row.metrics);
     if (row.gt_transform) j["gt_transform"] = TransformToJson(*row.gt_transform);
@@ -294,6 +311,8 @@ void from_json(const nlohmann::json& j, ResultRow& row) {
     row.category = j.value("category", "");
     row.source_overlap_ratio = OptionalNumber(j, "source_overlap_ratio");
     row.target_overlap_ratio = OptionalNumber(j, "target_overlap_ratio");
+    row.source_points = OptionalCount(j, "source_points");
+    row.target_points = OptionalCount(j, "target_points");
     // Rows from before the key existed were scored with the xyz decomposition.
     row.euler = j.contains("euler") ? ParseEulerConvention(j.at("euler").get<std::string>())
                                     : EulerConvention::kXyz;
@@ -318,8 +337,21 @@ void ForEachJsonlLine(
     const std::string& path, TornLastLine torn,
     const std::function<void(const std::string& where, const nlohmann::json& value)>& visit) {
     RequireRegularFile(path);
-    std::ifstream in(path);
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error(path + ": cannot open results file");
+    // A pair file given where result rows belong (`report pairs.h5`) is named as one, with the
+    // commands that read it, instead of "line 1: not JSON".
+    static constexpr char kHdf5Signature[] = "\x89HDF\r\n\x1a\n";
+    char head[8] = {};
+    in.read(head, sizeof head);
+    if (in.gcount() == 8 && std::equal(head, head + 8, kHdf5Signature)) {
+        throw std::runtime_error(path +
+                                 ": a pair file (HDF5), not JSONL result rows: `regbench inspect " +
+                                 path + "` describes it; `regbench run --pairs " + path +
+                                 " --methods ...` writes result rows from it");
+    }
+    in.clear();
+    in.seekg(0);
     std::string line;
     std::size_t lineno = 0;
     while (std::getline(in, line)) {

@@ -50,7 +50,8 @@ void to_json(nlohmann::json& j, const AlignResult& r);
 void from_json(const nlohmann::json& j, AlignResult& r);
 
 /// One JSONL line. Keys are those rows have always had (so old files read) plus `euler`,
-/// `source_overlap_ratio`, `target_overlap_ratio`, `cpu_seconds`, `cpu_scope`, `machine`; keys this
+/// `source_overlap_ratio`, `target_overlap_ratio`, `source_points`, `target_points`,
+/// `cpu_seconds`, `cpu_scope`, `machine`; keys this
 /// struct does not know are kept in `other` and written back, so a newer writer's columns survive a
 /// round trip.
 struct ResultRow {
@@ -68,6 +69,10 @@ struct ResultRow {
     /// recorded them (and then not written back).
     std::optional<double> source_overlap_ratio;
     std::optional<double> target_overlap_ratio;
+    /// Points of the source and target clouds the method was given (fewer than the pair's
+    /// under `run --downsample`); absent in rows written before rows recorded them.
+    std::optional<std::size_t> source_points;
+    std::optional<std::size_t> target_points;
     /// Euler angles behind metrics.mae_r / mse_r. Rows written before this key existed were
     /// computed with today's `xyz` decomposition, so a missing key reads as kXyz.
     EulerConvention euler = EulerConvention::kZyx;

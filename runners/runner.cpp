@@ -189,6 +189,8 @@ ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSp
     row.category = pair.category;
     row.source_overlap_ratio = pair.source_overlap_ratio;
     row.target_overlap_ratio = pair.target_overlap_ratio;
+    row.source_points = static_cast<std::size_t>(pair.source.rows());
+    row.target_points = static_cast<std::size_t>(pair.target.rows());
     row.euler = context.euler;
     row.metrics = ComputeMetrics(pair.T_gt, result.T_target_source, pair.source, pair.target,
                                  context.euler, context.metric_options);
@@ -403,6 +405,9 @@ ResultRow RunCall(const RunPlan& plan, RegistrationMethod& method, const MethodS
     row_context.status = outcome.status;
     ResultRow row = MakeResultRow(k, pair, spec, outcome.result, row_context);
     if (reduce) row.other["downsampled"] = downsampled;
+    // The points the call had (Tab. 6's `points`): the reduced clouds under --downsample.
+    row.source_points = static_cast<std::size_t>(input.source.rows());
+    row.target_points = static_cast<std::size_t>(input.target.rows());
     // What defines the row besides method, params and pair: --resume compares it.
     row.other["timeout"] = options.timeout_seconds;
     return row;

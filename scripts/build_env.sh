@@ -3,7 +3,9 @@
 jobs="${REGBENCH_BUILD_JOBS:-$(nproc)}"
 launcher=()
 # ccache (when installed) makes rebuilds and several worktrees cheap; CCACHE_BASEDIR lets
-# worktrees at different paths share hits.
+# worktrees at different paths share hits. scripts/install_deps.sh installs it in every mode
+# (--main too), so the main job and the test command configure build/ with the same launcher
+# and the second reuses the first's objects (tests/cli/build_config_same.sh).
 if command -v ccache >/dev/null 2>&1; then
   launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
   export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$(dirname "$root")}"

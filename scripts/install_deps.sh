@@ -6,8 +6,11 @@
 # needs to run probreg (more Python modules for /usr/bin/python3 and pybind11 to build probreg's
 # extensions; see docs/probreg-equivalence.md). The C++ build and tests do not need them. chromium renders the
 # HTML report headless in its test (docs/reports.md). clang + libclang-rt-14-dev build the
-# sanitizer + libFuzzer stage of the test command (scripts/ci_extra.sh); ccache makes rebuilds
-# (that stage, worktrees, re-runs) cheap.
+# sanitizer + libFuzzer stage of the test command (scripts/ci_extra.sh). ccache makes rebuilds
+# (that stage, worktrees, re-runs) cheap; it is in the --main list too, because
+# scripts/build_env.sh makes it the compiler launcher when installed: had only the full list
+# installed it, the test command's configure would change every compile command and recompile
+# all the main job built (tests/cli/build_config_same.sh).
 # --main installs only what the `regbench` binary and its data need (README command 1,
 # scripts/main_job.sh): about 860 MB fewer to fetch and unpack than the full list. libdlib-dev:
 # dlib's linear assignment (max_cost_assignment) for RGM's test time (networks/families/rgm/assignment.cpp).
@@ -19,13 +22,14 @@ PACKAGES=(
   libfmt-dev libspdlog-dev
   libopen3d-dev libpcl-dev libcgal-dev libcgal-demo
   libtorch-dev libopenblas0-openmp libopenblas-dev libsvm-dev zlib1g-dev libdlib-dev
+  ccache
 )
 if [ "${1:-}" != "--main" ]; then
   PACKAGES+=(
     libgtest-dev libgmock-dev libbenchmark-dev chromium
     python3-dev pybind11-dev python3-numpy python3-scipy python3-h5py python3-pandas
     python3-pytest python3-open3d python3-torch
-    clang libclang-rt-14-dev ccache
+    clang libclang-rt-14-dev
     slurmctld slurmd slurm-client munge
   )
 fi

@@ -271,5 +271,25 @@ TEST(CliCheckpointRefusal, ImportCheckpointNamesWhatItsInputIs) {
     fs::remove_all(dir);
 }
 
+// Issue 54, item 7: `import-checkpoint --help` and docs/methods.md named only DeepGMR and OGMM.
+// Expected: the help of both checkpoint commands names every family with an authors' format
+// (the registry's list, Formats()), and the summaries name none in particular.
+TEST(CliCheckpointRefusal, CheckpointHelpNamesEveryFamily) {
+    for (const char* command : {"import-checkpoint --help", "export-checkpoint --help"}) {
+        const CliResult r = RunCli(command);
+        EXPECT_EQ(r.exit_code, 0) << r.output;
+        for (const char* family : {"deepgmr", "ogmm", "omnet", "rienet", "rgm", "regtr"}) {
+            EXPECT_NE(r.output.find(family), std::string::npos) << command << ": " << family
+                                                                << "\n" << r.output;
+        }
+    }
+    const CliResult help = RunCli("--help");
+    EXPECT_EQ(help.exit_code, 0) << help.output;
+    EXPECT_NE(help.output.find("Import the authors' PyTorch weights (.pth) of a learned method"),
+              std::string::npos)
+        << help.output;
+    EXPECT_EQ(help.output.find("DeepGMR"), std::string::npos) << help.output;
+}
+
 }  // namespace
 }  // namespace regbench

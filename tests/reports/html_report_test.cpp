@@ -110,6 +110,46 @@ TEST(HtmlReport, WideTablesScrollInTheirBoxAndCurvesDifferByDash) {
     EXPECT_EQ(cdf.find(">11.2"), std::string::npos) << cdf;
 }
 
+/// A table with a measured MAE(R) column, the paper's beside it (merged in the compact form)
+/// and, with `lone`, a paper column of its own (Tab. 6's "paper ms": no measured twin).
+Table PaperTable(bool lone) {
+    Table t("paper_table", "Tab. X", "");
+    t.columns = {{"mae_r", "MAE(R)", CellSource::kMeasured, Better::kLower, 2},
+                 {"paper:mae_r", "paper MAE(R)", CellSource::kPaper, Better::kNone, 2}};
+    if (lone) t.columns.push_back({"paper:ms", "paper ms", CellSource::kPaper, Better::kNone, 0});
+    Cell ours, paper, ms;
+    ours.value = 7.25;
+    paper.value = 3.5;
+    paper.source = ms.source = CellSource::kPaper;
+    ms.value = 41;
+    RowCells cells = {{"mae_r", ours}, {"paper:mae_r", paper}};
+    if (lone) cells.push_back({"paper:ms", ms});
+    t.AddRow("ogmm", cells);
+    return t;
+}
+
+// Issue 54, item 7: the legend said "Grey columns: the paper's numbers", but the compact HTML
+// merges each paper column into the measured one before it ("7.25 (3.5)", header "(paper)"):
+// no grey column is left. The legend says what the page shows.
+TEST(HtmlReport, PaperLegendSaysWhatTheTablesShow) {
+    HtmlReportOptions o;
+    o.title = "legend";
+    o.tables = {PaperTable(false)};
+    const std::string html = RenderHtmlReport(o);
+    EXPECT_NE(html.find("<td><b>7.25 (3.5)</b></td>"), std::string::npos) << html;
+    EXPECT_EQ(html.find("class=\"paper\""), std::string::npos) << html;
+    EXPECT_NE(html.find("in parentheses after a measured value, the paper's as published"),
+              std::string::npos)
+        << html;
+    EXPECT_EQ(html.find("rey column"), std::string::npos) << html;
+    // A paper column with no measured twin stays a column of its own, in grey, and the legend
+    // then names grey columns too.
+    o.tables = {PaperTable(true)};
+    const std::string lone = RenderHtmlReport(o);
+    EXPECT_NE(lone.find("<td class=\"paper\">41</td>"), std::string::npos) << lone;
+    EXPECT_NE(lone.find("grey columns: the paper's numbers alone"), std::string::npos) << lone;
+}
+
 TEST(HtmlReport, NiceTicksAreRoundNumbers) {
     // Hand-computed: 45/4 = 11.25 -> step 10; 1/4 = 0.25 -> step 0.2; 18.9/4 = 4.7 -> step 5.
     EXPECT_EQ(NiceTicks(0.0, 45.0, false), (std::vector<double>{0, 10, 20, 30, 40}));

@@ -286,6 +286,8 @@ ResultRow TimedRow(int pair, const std::string& method, double cpu_seconds, doub
                    double macs = 0.0, double floor = 0.0) {
     ResultRow r = Row(pair, method, 1.0, 2 * cpu_seconds);  // wall: not what is shown
     r.result.cpu_seconds = cpu_seconds;
+    // The calls' clouds: 1024 points sampled (Prov), 70% kept by the crop.
+    r.source_points = r.target_points = 717;
     if (network > 0.0) {
         r.result.extra = {{"network_cpu_seconds", network},
                           {"macs", macs},
@@ -310,13 +312,36 @@ TEST(PaperReport, TimingTableMeanAndMedianByHand) {
     EXPECT_NEAR(t.rows[0].Get("cpu_ms_mean").value, 300.0, 1e-12);
     EXPECT_DOUBLE_EQ(t.rows[0].Get("cpu_ms_median").value, 200.0);
     EXPECT_EQ(t.rows[0].Get("cpu_ms_mean").pairs, 3u);
-    EXPECT_DOUBLE_EQ(t.rows[0].Get("points").value, 1024);
+    // Issue 54, item 7: the points the timed calls had (the rows'), not the 1024 the pair
+    // file sampled before cropping.
+    EXPECT_DOUBLE_EQ(t.rows[0].Get("points").value, 717);
+    EXPECT_EQ(t.rows[0].Get("points").text, "");
     EXPECT_DOUBLE_EQ(t.rows[0].Get("paper:ms").value, 4347.0);  // Tab. 6 CPD, 4.347 s
     EXPECT_NE(t.caption.find("Test CPU"), std::string::npos);
     EXPECT_NE(t.caption.find("OpenBLAS"), std::string::npos);
     // The timing table carries the CCD floor of its pairs too.
     ASSERT_EQ(t.notes.size(), 1u);
     EXPECT_NE(t.notes[0].find("0.1041"), std::string::npos) << t.notes[0];
+}
+
+// Tab. 6's points: a range where the timed calls' clouds differ (a target of another size, a
+// downsampled call), blank where the rows do not record them (never the pair file's count).
+TEST(PaperReport, TimingTablePointsComeFromTheRows) {
+    ResultRow other = TimedRow(1, "cpd", 0.2);
+    other.target_points = 700;
+    ResultRow old_icp = TimedRow(0, "icp", 0.1);
+    old_icp.source_points.reset();
+    old_icp.target_points.reset();
+    const ResultSet s{"", {TimedRow(0, "cpd", 0.1), other, old_icp}, Prov("same.h5"), ""};
+    const Table t = BuildTimingTable({s}, LoadPaperTables(DefaultPaperTablesPath()), "Test CPU",
+                                     "OpenBLAS", kPaperRows);
+    ASSERT_EQ(t.rows.size(), 2u);
+    EXPECT_EQ(t.rows[0].label, "cpd");
+    EXPECT_EQ(t.rows[0].Get("points").text, "700-717");
+    EXPECT_EQ(t.rows[1].label, "icp");
+    EXPECT_FALSE(t.rows[1].Get("points").HasValue());
+    EXPECT_NE(TablesToMarkdown({t}).find("| 700-717 |"), std::string::npos)
+        << TablesToMarkdown({t});
 }
 
 TEST(PaperReport, TimingTableShowsTheLearnedRowsFloorAndTheFullAttentionRow) {

@@ -316,8 +316,10 @@ TEST_F(Reliability, ScaleGuardRefusesQuadraticMethodsOnLargeCloudsOrDownsamplesT
             EXPECT_EQ(row["downsampled"]["rule"], "stride");
             EXPECT_EQ(row["downsampled"]["source_points"], nlohmann::json({40, 30}));
             EXPECT_EQ(row["status"], "ok");
+            EXPECT_EQ(row["source_points"], 30);  // what the timed call had
         } else {
             EXPECT_FALSE(row.contains("downsampled"));
+            EXPECT_EQ(row["source_points"], 40);
         }
     }
 }

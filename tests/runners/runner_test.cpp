@@ -82,6 +82,10 @@ TEST_F(RunnerTest, RowsRecordConventionOverlapAndGroundTruth) {
         EXPECT_EQ(rows[k].status, Status::kOk);
         EXPECT_EQ(rows[k].source_overlap_ratio, set.pairs[k].source_overlap_ratio);
         EXPECT_EQ(rows[k].target_overlap_ratio, set.pairs[k].target_overlap_ratio);
+        // The points the call had (Tab. 6's points column reads them).
+        EXPECT_EQ(raw[k]["source_points"], set.pairs[k].source.rows());
+        EXPECT_EQ(rows[k].source_points, static_cast<std::size_t>(set.pairs[k].source.rows()));
+        EXPECT_EQ(rows[k].target_points, static_cast<std::size_t>(set.pairs[k].target.rows()));
         ASSERT_TRUE(rows[k].gt_transform.has_value());
         EXPECT_EQ(*rows[k].gt_transform, set.pairs[k].T_gt);
         EXPECT_EQ(rows[k].origin, o.out_path + ":" + std::to_string(k + 1));
