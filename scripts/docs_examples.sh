@@ -18,6 +18,8 @@
 #   versus_python (fast) the same from Python: regbench.compare_methods
 #   python_run  (slow) Open3D's Python ICP beside icp and cpd in one regbench.run
 #   quick_run   (slow) the main job: reproduce --quick, its Tab. 1 and where the report is
+#   estimate    (fast) a small reproduce --quick folder sized for a 32-task array
+#               (scripts/estimate_full_run.py; docs/cluster.md)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 fast=0
@@ -34,7 +36,7 @@ outdir="$(mkdir -p "$1" && cd "$1" && pwd)"
 shift
 wanted=("$@")
 if [ ${#wanted[@]} -eq 0 ]; then
-  wanted=(align score deepgmr_import versus versus_python)
+  wanted=(align score deepgmr_import versus versus_python estimate)
   [ "$fast" = 1 ] || wanted+=(python_run quick_run)
 fi
 bin="$build/app/regbench"
@@ -130,6 +132,13 @@ example_quick_run() {
   rm -rf out/reproduce out/reproduce.lock
   show "regbench reproduce --quick --jobs 2 --out out/reproduce"
   show "sed -n '/^### Tab. 1/,/^### Tab. 2/p' out/reproduce/tables.md | head -n 16"
+}
+
+example_estimate() {
+  rm -rf out/qsmall out/qsmall.lock
+  quiet "regbench reproduce --quick --tables table1 --pairs 4 --methods identity,icp,ogmm \
+--out out/qsmall"
+  show "/usr/bin/python3 scripts/estimate_full_run.py out/qsmall --tasks 32 --cores 1"
 }
 
 # The examples call scripts/ and build/python by relative path, as the documentation shows them.
