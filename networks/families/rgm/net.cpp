@@ -4,10 +4,12 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "core/params.hpp"
 #include "networks/layers/layers.hpp"
 #include "networks/families/rgm/assignment.hpp"
+#include "networks/families/rgm/kernels.hpp"
 
 namespace regbench::networks {
 
@@ -67,6 +69,17 @@ torch::Tensor IdentityWhereFew(const torch::Tensor& T, const torch::Tensor& pair
     return torch::where(few, torch::eye(4, T.options()).expand_as(T), T);
 }
 
+/// softmax(scale x, -1) for scale > 0 by the fused row kernel (networks/families/rgm/kernels.hpp)
+/// over x's own storage, which it overwrites (when contiguous); no autograd.
+torch::Tensor ScaledSoftmaxInPlace(torch::Tensor x, double scale) {
+    x = x.contiguous();
+    const int64_t m = x.size(-1);
+    AT_DISPATCH_FLOATING_TYPES(x.scalar_type(), "rgm_softmax", [&] {
+        ScaledSoftmaxRows(x.data_ptr<scalar_t>(), x.numel() / m, m, scale, nullptr);
+    });
+    return x;
+}
+
 }  // namespace
 
 nlohmann::json ToJson(const RgmConfig& c) {
@@ -124,8 +137,10 @@ torch::Tensor RgmAttentionImpl::forward(const torch::Tensor& x, const torch::Ten
         return linears_->ptr<nn::LinearImpl>(i)->forward(in).view({B, n, heads_, dk}).transpose(1, 2);
     };
     const torch::Tensor q = project(0, x, P), k = project(1, memory, Q), v = project(2, memory, Q);
-    const torch::Tensor p =
-        torch::softmax(torch::matmul(q, k.transpose(2, 3)) / std::sqrt(static_cast<double>(dk)), -1);
+    const torch::Tensor scores = torch::matmul(q, k.transpose(2, 3));
+    const double root = std::sqrt(static_cast<double>(dk));
+    const torch::Tensor p = torch::GradMode::is_enabled() ? torch::softmax(scores / root, -1)
+                                                          : ScaledSoftmaxInPlace(scores, 1.0 / root);
     const torch::Tensor o = torch::matmul(p, v).transpose(1, 2).reshape({B, P, d});
     return linears_->ptr<nn::LinearImpl>(3)->forward(o);
 }
@@ -267,6 +282,39 @@ torch::Tensor SinkhornSlack(const torch::Tensor& log_alpha, int iterations) {
     return la.narrow(1, 0, N).narrow(2, 0, M);
 }
 
+torch::Tensor SinkhornSlackExpInPlace(torch::Tensor log_alpha, int iterations) {
+    if (torch::GradMode::is_enabled()) return SinkhornSlack(log_alpha, iterations).exp();
+    log_alpha = log_alpha.contiguous();
+    const int64_t B = log_alpha.size(0), N = log_alpha.size(1), M = log_alpha.size(2);
+    AT_DISPATCH_FLOATING_TYPES(log_alpha.scalar_type(), "rgm_sinkhorn", [&] {
+        std::vector<scalar_t> work(static_cast<size_t>(N + 3 * M));
+        scalar_t* l = log_alpha.data_ptr<scalar_t>();
+        for (int64_t b = 0; b < B; ++b) {
+            SinkhornSlackExp(l + b * N * M, N, M, iterations, work.data());
+        }
+    });
+    return log_alpha;
+}
+
+torch::Tensor SoftAdjacency(torch::Tensor gram, double scale) {
+    if (torch::GradMode::is_enabled()) {
+        const torch::Tensor a = torch::softmax(gram * scale, -1);
+        return a / a.sum(1, true).clamp_min(1e-12);
+    }
+    gram = gram.contiguous();
+    const int64_t B = gram.size(0), P = gram.size(1), Q = gram.size(2);
+    AT_DISPATCH_FLOATING_TYPES(gram.scalar_type(), "rgm_adjacency", [&] {
+        std::vector<scalar_t> sums(static_cast<size_t>(Q));
+        scalar_t* g = gram.data_ptr<scalar_t>();
+        for (int64_t b = 0; b < B; ++b) {
+            std::fill(sums.begin(), sums.end(), scalar_t(0));
+            ScaledSoftmaxRows(g + b * P * Q, P, Q, scale, sums.data());
+            DivideColumns(g + b * P * Q, P, Q, sums.data());
+        }
+    });
+    return gram;
+}
+
 torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& target) {
     torch::Tensor emb_src = Features(source), emb_tgt = Features(target);
     torch::Tensor s;
@@ -275,8 +323,7 @@ torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& ta
         const double scale = 1.0 / std::sqrt(static_cast<double>(src_e.size(1)));
         // The soft adjacency, its columns then normalised to sum 1 (F.normalize p=1, dim -2).
         const auto adjacency = [&](const torch::Tensor& e) {
-            const torch::Tensor a = torch::softmax(torch::bmm(e.transpose(1, 2), e) * scale, -1);
-            return a / a.sum(1, true).clamp_min(1e-12);
+            return SoftAdjacency(torch::bmm(e.transpose(1, 2), e), scale);
         };
         const auto gconv = [&](const torch::Tensor& A, const torch::Tensor& x) {
             return torch::bmm(A, Apply(a_fc_[i], x).relu()) + Apply(u_fc_[i], x).relu();
@@ -290,7 +337,7 @@ torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& ta
         const torch::Tensor var = aff.var({1, 2}, /*unbiased=*/false, /*keepdim=*/true);
         aff = (aff - mean) / torch::sqrt(var + kInstanceNormEps) * norm_weight_[i] +
               norm_bias_[i];
-        s = SinkhornSlack(aff, config_.sinkhorn_iterations).exp();
+        s = SinkhornSlackExpInPlace(aff, config_.sinkhorn_iterations);
         if (i == 0) {
             const torch::Tensor src_new =
                 Apply(cross_graph_, torch::cat({emb_src, torch::bmm(s, emb_tgt)}, 2));

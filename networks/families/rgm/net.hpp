@@ -169,6 +169,16 @@ private:
 /// real block [B, N, M] (log).
 torch::Tensor SinkhornSlack(const torch::Tensor& log_alpha, int iterations);
 
+/// exp(SinkhornSlack(log_alpha, iterations)). With autograd that LibTorch composition; without,
+/// the fused kernel (networks/families/rgm/kernels.hpp) over log_alpha's own storage (when
+/// contiguous), which it overwrites.
+torch::Tensor SinkhornSlackExpInPlace(torch::Tensor log_alpha, int iterations);
+
+/// RGM's soft adjacency of a Gram matrix [B, P, P] (E^T E): softmax(scale gram, -1), then each
+/// column divided by its sum (F.normalize(p=1, dim=-2), sums clamped at 1e-12). With autograd
+/// LibTorch's composition; without, the fused row kernels over gram's own storage.
+torch::Tensor SoftAdjacency(torch::Tensor gram, double scale);
+
 /// The weighted Kabsch of the authors' SVDslover: pairs (P_i, Q_i) of P [B, N, 3], Q [B, N, 3]
 /// with weights w [B, N] normalised by (sum + 1e-5); T [B, 4, 4] maps P onto Q. A batch entry
 /// whose weights sum to 0 gets the identity.

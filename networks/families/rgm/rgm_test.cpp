@@ -101,6 +101,70 @@ TEST_F(RgmTest, SinkhornWithSlackKeepsRowAndColumnMassAtMostOne) {
     EXPECT_NEAR(c.max().item<double>(), c.min().item<double>(), 1e-12);
 }
 
+// The fused inference kernels (networks/families/rgm/kernels.hpp) against the plain LibTorch
+// formulations they replace, which run when autograd records (the expected values: LibTorch's
+// softmax, logsumexp and padding, an independent computation of the same formula).
+TEST_F(RgmTest, FusedSinkhornMatchesTheLibTorchComposition) {
+    torch::manual_seed(3);
+    for (const double spread : {1.0, 3.0, 30.0}) {  // 30: rows whose entries span ~200 in log
+        const torch::Tensor x = torch::randn({2, 37, 29}, torch::kDouble) * spread;
+        const torch::Tensor want = SinkhornSlack(x, 20).exp();
+        torch::NoGradGuard no_grad;
+        const torch::Tensor got = SinkhornSlackExpInPlace(x.clone(), 20);
+        EXPECT_TRUE(torch::allclose(got, want, 1e-9, 1e-12)) << spread;
+        // Float, exp by FastExp (relative error < 3e-7): against the double reference.
+        const torch::Tensor f = SinkhornSlackExpInPlace(x.to(torch::kFloat), 20).to(torch::kDouble);
+        EXPECT_LT((f - want).abs().max().item<double>(), 2e-5) << spread;
+    }
+    // At the bench's size, 717 x 717 in float: the two float computations agree.
+    const torch::Tensor x = torch::randn({1, 717, 717}) * 2;
+    const torch::Tensor want = SinkhornSlack(x.to(torch::kDouble), 20).exp();
+    torch::NoGradGuard no_grad;
+    const torch::Tensor got = SinkhornSlackExpInPlace(x.clone(), 20).to(torch::kDouble);
+    const torch::Tensor plain = SinkhornSlack(x, 20).exp().to(torch::kDouble);
+    EXPECT_LT((got - want).abs().max().item<double>(), 1e-5);
+    EXPECT_LT((plain - want).abs().max().item<double>(), 1e-5);
+}
+
+TEST_F(RgmTest, FusedAdjacencyAndAttentionMatchLibTorch) {
+    torch::manual_seed(4);
+    const torch::Tensor e = torch::randn({2, 16, 40}, torch::kDouble);
+    const torch::Tensor gram = torch::bmm(e.transpose(1, 2), e);
+    const double scale = 0.25;
+    const torch::Tensor a = torch::softmax(gram * scale, -1);
+    const torch::Tensor want = a / a.sum(1, true);
+    {
+        torch::NoGradGuard no_grad;
+        EXPECT_TRUE(torch::allclose(SoftAdjacency(gram.clone(), scale), want, 1e-12, 1e-14));
+        const torch::Tensor f = SoftAdjacency(gram.to(torch::kFloat), scale).to(torch::kDouble);
+        EXPECT_TRUE(torch::allclose(f, want, 1e-5, 1e-7));
+    }
+    // Attention: the module with autograd on (LibTorch's softmax) and off (the fused rows).
+    RgmAttention attention(32, 4);
+    const torch::Tensor x = torch::randn({2, 50, 32}), memory = torch::randn({2, 60, 32});
+    const torch::Tensor plain = attention->forward(x, memory).detach();
+    torch::NoGradGuard no_grad;
+    EXPECT_TRUE(torch::allclose(attention->forward(x, memory), plain, 1e-4, 1e-6));
+}
+
+TEST_F(RgmTest, MatchWithoutAutogradMatchesMatchWithIt) {
+    // The whole match (rgm-small's widths) through the fused kernels and through LibTorch's
+    // compositions, in double so that only the formulations differ.
+    RgmConfig c;
+    c.width_divisor = 8;
+    RgmNet net(c);
+    net.to(torch::kDouble);
+    net.eval();
+    torch::manual_seed(5);
+    const torch::Tensor src = torch::rand({1, 90, 3}, torch::kDouble) - 0.5;
+    const torch::Tensor tgt = torch::rand({1, 80, 3}, torch::kDouble) - 0.5;
+    const torch::Tensor plain = net.Match(src, tgt).detach();
+    torch::NoGradGuard no_grad;
+    const torch::Tensor fused = net.Match(src, tgt);
+    EXPECT_TRUE(torch::allclose(fused, plain, 1e-9, 1e-12))
+        << (fused - plain).abs().max().item<double>();
+}
+
 TEST_F(RgmTest, WeightedRigidRecoversAMotionExactly) {
     torch::manual_seed(2);
     const torch::Tensor P = torch::rand({1, 12, 3}, torch::kDouble) - 0.5;

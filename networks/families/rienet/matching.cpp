@@ -1,47 +1,17 @@
 #include "networks/families/rienet/matching.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <vector>
 
 #include "gmm/gauss_sum.hpp"
 #include "gmm/simd_exp.hpp"
+#include "networks/layers/row_reduce.hpp"
 
 namespace regbench::networks {
 namespace {
 
 inline float Exp(float x) { return FastExp(x); }
 inline double Exp(double x) { return ExpClamped(x); }
-
-// Reductions over a row with eight explicit partial results, which the compiler maps onto
-// vector lanes; a plain `acc += x[j]` loop stays scalar without -ffast-math (it may not
-// reassociate), and at m = 717 that scalar chain cost as much as the exp pass.
-constexpr int kLanes = 8;
-
-template <typename T, typename Op>
-__attribute__((always_inline)) inline T Reduce(const T* x, int64_t m, T init, Op op) {
-    T acc[kLanes];
-    for (T& a : acc) a = init;
-    int64_t j = 0;
-    for (; j + kLanes <= m; j += kLanes) {
-        for (int l = 0; l < kLanes; ++l) acc[l] = op(acc[l], x[j + l]);
-    }
-    for (; j < m; ++j) acc[0] = op(acc[0], x[j]);
-    T r = acc[0];
-    for (int l = 1; l < kLanes; ++l) r = op(r, acc[l]);
-    return r;
-}
-
-template <typename T>
-__attribute__((always_inline)) inline T RowMin(const T* x, int64_t m) {
-    return Reduce(x, m, std::numeric_limits<T>::infinity(),
-                  [](T a, T b) { return b < a ? b : a; });
-}
-
-template <typename T>
-__attribute__((always_inline)) inline T RowSum(const T* x, int64_t m) {
-    return Reduce(x, m, T(0), [](T a, T b) { return a + b; });
-}
 
 /// x[j] = exp(x[j] - top) / sum over j of the same, in place.
 template <typename T>
