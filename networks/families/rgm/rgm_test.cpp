@@ -1,14 +1,19 @@
 #include "networks/families/rgm/net.hpp"
 
+#include <dlib/matrix.h>
+#include <dlib/optimization/max_cost_assignment.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "networks/checkpoint/authors_checkpoint.hpp"
@@ -87,6 +92,45 @@ TEST_F(RgmTest, AssignmentMaximisesTheWeightOnRectangles) {
     EXPECT_TRUE(MaxWeightAssignment({}, 0, 4).empty());
     EXPECT_THROW(MaxWeightAssignment({0.1, 0.2}, 2, 2), std::invalid_argument);
     EXPECT_THROW(MaxWeightAssignment({std::nan("")}, 1, 1), std::invalid_argument);
+}
+
+TEST_F(RgmTest, AssignmentTotalsEqualDlibsHungarian) {
+    // The optimum's total against dlib's max_cost_assignment (the Hungarian algorithm, an
+    // independent implementation) on random rectangles and a 300 x 300 Sinkhorn-like matrix;
+    // weights on a 1e-6 grid, so dlib's integer costs are exact.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    std::lognormal_distribution<double> skewed(0.0, 1.0);
+    for (const auto& [rows, cols, heavy] : std::vector<std::tuple<int64_t, int64_t, bool>>{
+             {1, 1, false}, {5, 9, false}, {9, 5, false}, {40, 40, false}, {37, 61, true},
+             {300, 300, true}}) {
+        std::vector<double> w(static_cast<size_t>(rows * cols));
+        for (double& x : w) x = std::round(1e6 * (heavy ? skewed(rng) / 20 : uniform(rng))) / 1e6;
+        for (double& x : w) x = std::min(x, 1.0);
+        const int64_t n = std::max(rows, cols);
+        dlib::matrix<long> cost(n, n);
+        cost = 0;
+        for (int64_t r = 0; r < rows; ++r) {
+            for (int64_t c = 0; c < cols; ++c) cost(r, c) = std::lround(w[r * cols + c] * 1e6);
+        }
+        const std::vector<long> theirs = dlib::max_cost_assignment(cost);
+        const std::vector<int64_t> ours = MaxWeightAssignment(w, rows, cols);
+        long want = 0, got = 0;
+        std::vector<char> used(static_cast<size_t>(cols), 0);
+        int64_t pairs = 0;
+        for (int64_t r = 0; r < rows; ++r) {
+            if (theirs[r] < cols) want += cost(r, theirs[r]);
+            const int64_t c = ours[static_cast<size_t>(r)];
+            if (c < 0) continue;
+            ASSERT_LT(c, cols);
+            ASSERT_FALSE(used[static_cast<size_t>(c)]) << "column " << c << " twice";
+            used[static_cast<size_t>(c)] = 1;
+            got += cost(r, c);
+            ++pairs;
+        }
+        EXPECT_EQ(pairs, std::min(rows, cols)) << rows << " x " << cols;
+        EXPECT_EQ(got, want) << rows << " x " << cols;
+    }
 }
 
 TEST_F(RgmTest, SinkhornWithSlackKeepsRowAndColumnMassAtMostOne) {
@@ -194,7 +238,7 @@ TEST_F(RgmTest, ImportedStandInMatchesItsForwardPipelineAndLoss) {
     // seeded float32 weights, and the stand-in's own float64 results on two pairs (40 + 40
     // points, and 48 + 35: N != M, where the authors' code fails): the first match's soft
     // correspondence, the loss, and the whole test-time pipeline's pairs and transform (scipy's
-    // linear_sum_assignment there, dlib's here).
+    // linear_sum_assignment there, regbench's shortest augmenting paths here).
     const char* env = std::getenv("REGBENCH_SOURCE_DIR");
     const std::string source = env != nullptr ? env : ".";
     const std::filesystem::path dir = regbench::testing::FreshTempDir("rgm_standin");
