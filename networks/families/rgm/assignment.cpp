@@ -37,15 +37,16 @@ std::vector<int64_t> ShortestAugmentingPaths(const std::vector<double>& cost, in
             int64_t pick = -1;
             for (int64_t k = 0; k < left; ++k) {
                 const int64_t j = remaining[static_cast<size_t>(k)];
-                const double r = reach + c[j] - u[static_cast<size_t>(i)] - v[static_cast<size_t>(j)];
+                const double r =
+                    reach + c[j] - u[static_cast<size_t>(i)] - v[static_cast<size_t>(j)];
                 if (r < dist[static_cast<size_t>(j)]) {
                     path[static_cast<size_t>(j)] = i;
                     dist[static_cast<size_t>(j)] = r;
                 }
                 // Ties go to a free column (shorter augmentations).
-                if (dist[static_cast<size_t>(j)] < lowest ||
-                    (dist[static_cast<size_t>(j)] == lowest && row4col[static_cast<size_t>(j)] < 0)) {
-                    lowest = dist[static_cast<size_t>(j)];
+                const double dj = dist[static_cast<size_t>(j)];
+                if (dj < lowest || (dj == lowest && row4col[static_cast<size_t>(j)] < 0)) {
+                    lowest = dj;
                     pick = k;
                 }
             }

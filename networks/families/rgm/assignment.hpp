@@ -1,11 +1,11 @@
 #pragma once
 // Maximum-weight linear assignment for RGM's test-time correspondences
-// (networks/families/rgm/net.hpp): shortest augmenting paths on the float weights (the Jonker-Volgenant family that scipy's
-// linear_sum_assignment, the authors' solver, also belongs to; written from the algorithm's
-// description: Crouse, "On implementing 2D rectangular assignment algorithms", IEEE TAES 2016).
-// It replaced dlib's max_cost_assignment (the O(n^3) Hungarian algorithm on integer costs),
-// which took far longer than scipy's on RGM's 717 x 717 correspondences (docs/performance.md, "RGM
-// against its floor").
+// (networks/families/rgm/net.hpp): shortest augmenting paths on the float weights (the
+// Jonker-Volgenant family that scipy's linear_sum_assignment, the authors' solver, also belongs
+// to; written from the algorithm's description: Crouse, "On implementing 2D rectangular
+// assignment algorithms", IEEE TAES 2016). It replaced dlib's max_cost_assignment (the O(n^3)
+// Hungarian algorithm on integer costs), slower on RGM's 717 x 717 correspondences
+// (docs/performance.md, "RGM against its floor").
 #include <cstdint>
 #include <vector>
 

@@ -79,34 +79,49 @@ __attribute__((always_inline)) inline void Columns(T* x, int64_t n, int64_t m, c
     }
 }
 
+template <typename T>
+__attribute__((always_inline)) inline void LayerNorm(const T* x, T* out, int64_t n, int64_t d,
+                                                     const T* a, const T* b, double eps) {
+    for (int64_t i = 0; i < n; ++i) {
+        const T* r = x + i * d;
+        T* o = out + i * d;
+        const T mean = RowSum(r, d) / static_cast<T>(d);
+        T dev[kReduceLanes] = {};
+        int64_t j = 0;
+        for (; j + kReduceLanes <= d; j += kReduceLanes) {
+            for (int l = 0; l < kReduceLanes; ++l) dev[l] += (r[j + l] - mean) * (r[j + l] - mean);
+        }
+        for (; j < d; ++j) dev[0] += (r[j] - mean) * (r[j] - mean);
+        T squares = 0;
+        for (const T v : dev) squares += v;
+        const T std = std::sqrt(squares / static_cast<T>(std::max<int64_t>(d - 1, 1)));
+        const T inv = T(1) / (std + static_cast<T>(eps));
+        for (j = 0; j < d; ++j) o[j] = a[j] * (r[j] - mean) * inv + b[j];
+    }
+}
+
 }  // namespace
 
-REGBENCH_SIMD_CLONES void SinkhornSlackExp(float* L, int64_t n, int64_t m, int iterations,
-                                           float* work) {
-    Sinkhorn(L, n, m, iterations, work);
-}
+// Every kernel in float and in double, each compiled for every SIMD level.
+#define REGBENCH_RGM_KERNELS(T)                                                                 \
+    REGBENCH_SIMD_CLONES void SinkhornSlackExp(T* L, int64_t n, int64_t m, int iterations,      \
+                                               T* work) {                                      \
+        Sinkhorn(L, n, m, iterations, work);                                                   \
+    }                                                                                          \
+    REGBENCH_SIMD_CLONES void ScaledSoftmaxRows(T* x, int64_t n, int64_t m, double scale,      \
+                                                T* column_sums) {                              \
+        SoftmaxRows(x, n, m, scale, column_sums);                                              \
+    }                                                                                          \
+    REGBENCH_SIMD_CLONES void DivideColumns(T* x, int64_t n, int64_t m, const T* sums) {       \
+        Columns(x, n, m, sums);                                                                \
+    }                                                                                          \
+    REGBENCH_SIMD_CLONES void LayerNormRows(const T* x, T* out, int64_t n, int64_t d,          \
+                                            const T* a, const T* b, double eps) {              \
+        LayerNorm(x, out, n, d, a, b, eps);                                                    \
+    }
 
-REGBENCH_SIMD_CLONES void SinkhornSlackExp(double* L, int64_t n, int64_t m, int iterations,
-                                           double* work) {
-    Sinkhorn(L, n, m, iterations, work);
-}
-
-REGBENCH_SIMD_CLONES void ScaledSoftmaxRows(float* x, int64_t n, int64_t m, double scale,
-                                            float* column_sums) {
-    SoftmaxRows(x, n, m, scale, column_sums);
-}
-
-REGBENCH_SIMD_CLONES void ScaledSoftmaxRows(double* x, int64_t n, int64_t m, double scale,
-                                            double* column_sums) {
-    SoftmaxRows(x, n, m, scale, column_sums);
-}
-
-REGBENCH_SIMD_CLONES void DivideColumns(float* x, int64_t n, int64_t m, const float* sums) {
-    Columns(x, n, m, sums);
-}
-
-REGBENCH_SIMD_CLONES void DivideColumns(double* x, int64_t n, int64_t m, const double* sums) {
-    Columns(x, n, m, sums);
-}
+REGBENCH_RGM_KERNELS(float)
+REGBENCH_RGM_KERNELS(double)
+#undef REGBENCH_RGM_KERNELS
 
 }  // namespace regbench::networks

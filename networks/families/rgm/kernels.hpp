@@ -36,4 +36,12 @@ void ScaledSoftmaxRows(double* x, int64_t n, int64_t m, double scale, double* co
 void DivideColumns(float* x, int64_t n, int64_t m, const float* column_sums);
 void DivideColumns(double* x, int64_t n, int64_t m, const double* column_sums);
 
+/// The authors' LayerNorm on `n` rows of `d` (row-major), out = a (x - mean) / (std + eps) + b
+/// with the unbiased standard deviation (two passes: the mean, then the squared deviations);
+/// a and b hold d values. `out` may be `x`.
+void LayerNormRows(const float* x, float* out, int64_t n, int64_t d, const float* a,
+                   const float* b, double eps);
+void LayerNormRows(const double* x, double* out, int64_t n, int64_t d, const double* a,
+                   const double* b, double eps);
+
 }  // namespace regbench::networks

@@ -139,8 +139,9 @@ torch::Tensor RgmAttentionImpl::forward(const torch::Tensor& x, const torch::Ten
     const torch::Tensor q = project(0, x, P), k = project(1, memory, Q), v = project(2, memory, Q);
     const torch::Tensor scores = torch::matmul(q, k.transpose(2, 3));
     const double root = std::sqrt(static_cast<double>(dk));
-    const torch::Tensor p = torch::GradMode::is_enabled() ? torch::softmax(scores / root, -1)
-                                                          : ScaledSoftmaxInPlace(scores, 1.0 / root);
+    const torch::Tensor p = torch::GradMode::is_enabled()
+                                ? torch::softmax(scores / root, -1)
+                                : ScaledSoftmaxInPlace(scores, 1.0 / root);
     const torch::Tensor o = torch::matmul(p, v).transpose(1, 2).reshape({B, P, d});
     return linears_->ptr<nn::LinearImpl>(3)->forward(o);
 }
@@ -151,6 +152,17 @@ RgmLayerNormImpl::RgmLayerNormImpl(int64_t d) {
 }
 
 torch::Tensor RgmLayerNormImpl::forward(const torch::Tensor& x) {
+    if (!torch::GradMode::is_enabled()) {  // the fused row kernel (kernels.hpp)
+        const torch::Tensor in = x.contiguous();
+        const torch::Tensor a = a_2_.contiguous(), b = b_2_.contiguous();
+        torch::Tensor out = torch::empty_like(in);
+        const int64_t d = in.size(-1);
+        AT_DISPATCH_FLOATING_TYPES(in.scalar_type(), "rgm_layer_norm", [&] {
+            LayerNormRows(in.data_ptr<scalar_t>(), out.data_ptr<scalar_t>(), in.numel() / d, d,
+                          a.data_ptr<scalar_t>(), b.data_ptr<scalar_t>(), kLayerNormEps);
+        });
+        return out;
+    }
     const torch::Tensor mean = x.mean(-1, true);
     const torch::Tensor std = x.std(-1, /*unbiased=*/true, /*keepdim=*/true);
     return a_2_ * (x - mean) / (std + kLayerNormEps) + b_2_;

@@ -34,8 +34,9 @@
 //    unmatched rows with the unmatched columns and fails unless N == M; regbench takes the
 //    matched pairs only (the unmatched ones have weight 0 in their SVD: the same transform);
 //  - the linear assignment is regbench's shortest augmenting paths
-//    (networks/families/rgm/assignment.hpp) instead of scipy's (an optimum either way); a step with fewer than 3 matched pairs keeps the cloud where it is
-//    (theirs runs the SVD on a zero covariance);
+//    (networks/families/rgm/assignment.hpp) instead of scipy's (an optimum either way); a
+//    step with fewer than 3 matched pairs keeps the cloud where it is (theirs runs the SVD on
+//    a zero covariance);
 //  - the last iteration's SVD, which their loop computes and discards, is skipped;
 //  - fewer points than k: every point is a neighbour (theirs fails);
 //  - in training mode Forward runs one match (no assignment) and T is a soft weighted SVD;

@@ -183,6 +183,19 @@ TEST_F(RgmTest, FusedAdjacencyAndAttentionMatchLibTorch) {
         const torch::Tensor f = SoftAdjacency(gram.to(torch::kFloat), scale).to(torch::kDouble);
         EXPECT_TRUE(torch::allclose(f, want, 1e-5, 1e-7));
     }
+    // The authors' LayerNorm, autograd on (LibTorch's mean and std) and off (the fused rows).
+    RgmLayerNorm norm(24);
+    {
+        torch::NoGradGuard no_grad;
+        norm->named_parameters()["a_2"].uniform_(0.5, 2.0);
+        norm->named_parameters()["b_2"].uniform_(-1.0, 1.0);
+    }
+    const torch::Tensor rows = torch::randn({2, 30, 24}) * 3 + 1;
+    const torch::Tensor normed = norm->forward(rows).detach();
+    {
+        torch::NoGradGuard no_grad;
+        EXPECT_TRUE(torch::allclose(norm->forward(rows), normed, 1e-5, 1e-6));
+    }
     // Attention: the module with autograd on (LibTorch's softmax) and off (the fused rows).
     RgmAttention attention(32, 4);
     const torch::Tensor x = torch::randn({2, 50, 32}), memory = torch::randn({2, 60, 32});
