@@ -5,7 +5,7 @@
 // MACs from RienetForwardMacs. BM_OmnetForward: OMNet
 // (networks/families/omnet/net.hpp) at the authors' widths and omnet-small's. BM_RgmForward: RGM (networks/families/rgm/net.hpp)
 // at the authors' widths and rgm-small's, the whole test-time pipeline (four matches, their
-// assignments and SVDs); BM_RgmAssignment: dlib's assignment alone on a points x points matrix
+// assignments and SVDs); BM_RgmAssignment: the assignment alone on a points x points matrix
 // (not in the MACs: the part of the pipeline the GEMM floor does not bound).
 // BM_RegtrForward: REGTR (networks/families/regtr/net.hpp) with the authors' ModelNet config and regtr-small's.
 // BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
