@@ -179,6 +179,12 @@ protected:
     AlignResult DoAlign(const PointCloud& data_source, const PointCloud& data_target,
                         const AlignContext& context) override {
         AlignResult result;
+        result.extra["checkpoint"] = checkpoint_;
+        if (!checkpoint_label_.empty()) result.extra["checkpoint_label"] = checkpoint_label_;
+        if (!checkpoint_sha256_.empty()) {
+            result.extra["checkpoint_sha256"] = checkpoint_sha256_;
+            result.extra["checkpoint_source"] = checkpoint_source_;
+        }
         // The whole method (network and ICP) runs on the normalised pair; the estimate is
         // mapped back at the end.
         const PairNormalization frame = options_.normalize

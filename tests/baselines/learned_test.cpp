@@ -157,6 +157,7 @@ TEST(Learned, ScaledAndShiftedCopyGivesTheSameRotationAndTheTranslationScaled) {
         ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
         ASSERT_EQ(r_mm.status, AlignStatus::kOk) << r_mm.message;
         ASSERT_TRUE(r.extra.contains("normalization"));
+        EXPECT_EQ(r_mm.extra.at("checkpoint"), dir.string());  // what every row names
         EXPECT_NEAR(r_mm.extra["normalization"]["scale"].get<double>(),
                     a * r.extra["normalization"]["scale"].get<double>(), 1e-9);
         const Eigen::Matrix3d R = r.T_target_source.topLeftCorner<3, 3>();
