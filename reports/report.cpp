@@ -418,8 +418,8 @@ std::string ThresholdsCaption(const ReportTable& rt, const ReportOptions& o) {
     const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
     std::string caption = fmt::format(
         "; thresholds in the data's length unit: recall mae_r < {:g} deg and mae_t < {:g}; "
-        "success rre < {:g} deg and rte < {:g}; CCD clip {:g} (the paper's 0.1, 0.1 and 0.1 are "
-        "for unit-sphere objects).",
+        "success rre < {:g} deg and rte < {:g}; CCD clip {:g} (the paper's translation "
+        "thresholds and clip are 0.1, for unit-sphere objects).",
         o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte, clip);
     if (rt.methods.empty()) return caption;
     const auto every = [&rt](auto&& pred) {
@@ -437,7 +437,7 @@ std::string ThresholdsCaption(const ReportTable& rt, const ReportOptions& o) {
     };
     if (zero(&MethodSummary::recall) || zero(&MethodSummary::success)) {
         caption += fmt::format(
-            " Saturated: {} 0 for every method; its thresholds may not fit the data's units "
+            " Saturated: {} 0 for every method; the thresholds may not fit the data's units "
             "(`report --recall-t`, `--success-rte`).",
             zero(&MethodSummary::recall) && zero(&MethodSummary::success) ? "recall and success are"
             : zero(&MethodSummary::recall)                                ? "recall is"
