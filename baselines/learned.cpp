@@ -56,8 +56,8 @@ PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& ta
     if (source.rows() == 0 || (inside(source) && inside(target))) return n;
     n.applied = true;
     n.centre = source.colwise().mean().transpose();
-    const double radius = std::sqrt(
-        (source.rowwise() - n.centre.transpose()).rowwise().squaredNorm().maxCoeff());
+    const double radius =
+        std::sqrt((source.rowwise() - n.centre.transpose()).rowwise().squaredNorm().maxCoeff());
     n.scale = radius > 0.0 ? radius : 1.0;
     return n;
 }
@@ -187,9 +187,8 @@ protected:
         }
         // The whole method (network and ICP) runs on the normalised pair; the estimate is
         // mapped back at the end.
-        const PairNormalization frame = options_.normalize
-                                            ? NormalizationOf(data_source, data_target)
-                                            : PairNormalization{};
+        const PairNormalization frame =
+            options_.normalize ? NormalizationOf(data_source, data_target) : PairNormalization{};
         const PointCloud source = NormalizeCloud(data_source, frame);
         const PointCloud target = NormalizeCloud(data_target, frame);
         if (frame.applied) {

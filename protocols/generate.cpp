@@ -47,8 +47,9 @@ void CheckMeasuredScale(const GenerateRequest& request, double radius) {
     throw UsageError(
         "generate: the clouds of '" + request.dataset + "' have radius " + ThreeDigits(radius) +
         " (median over the pairs of the source's largest distance from its centroid), but the "
-        "protocol's lengths (translation up to " + ThreeDigits(o.max_translation * request.scale) +
-        ", noise sigma " + ThreeDigits(o.noise_sigma * request.scale) + ", overlap radius eta " +
+        "protocol's lengths (translation up to " +
+        ThreeDigits(o.max_translation * request.scale) + ", noise sigma " +
+        ThreeDigits(o.noise_sigma * request.scale) + ", overlap radius eta " +
         ThreeDigits(o.eta * request.scale) + ") are for clouds of radius " +
         ThreeDigits(request.scale) + ": pass --scale " + ThreeDigits(radius) +
         " to multiply them by the data's size (or rescale the data into the unit sphere)");

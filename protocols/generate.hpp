@@ -28,7 +28,7 @@ struct GenerateRequest {
     /// protocol's lengths (max_translation, noise_sigma, noise_clip, eta) are multiplied by it;
     /// 1 leaves the paper's protocol as it is, bit for bit.
     double scale = 1.0;
-    std::string out;          ///< output HDF5 path
+    std::string out;  ///< output HDF5 path
     /// Extra provenance merged in verbatim (e.g. {"regbench_version", "git_sha"}). Must not hold
     /// anything time- or machine-dependent: the same request must give byte-identical files.
     nlohmann::json extra_provenance = nlohmann::json::object();

@@ -150,8 +150,8 @@ TEST(Generate, ScaleMultipliesTheProtocolsLengthsAndOffScaleCloudsAreRefused) {
         EXPECT_EQ(a.pairs[k].target_overlap, b.pairs[k].target_overlap);
     }
     // Scale 1 is the paper's protocol as it was: the pairs GeneratePairs makes of its options.
-    const PairSet direct = GeneratePairs(PointShapesTimes(1.0)("", ""), unit.options, unit.seed,
-                                         unit.num_pairs);
+    const PairSet direct =
+        GeneratePairs(PointShapesTimes(1.0)("", ""), unit.options, unit.seed, unit.num_pairs);
     for (std::size_t k = 0; k < a.pairs.size(); ++k) {
         EXPECT_EQ(a.pairs[k].source, direct.pairs[k].source);
         EXPECT_EQ(a.pairs[k].target, direct.pairs[k].target);
