@@ -44,12 +44,14 @@ void CheckMeasuredScale(const GenerateRequest& request, double radius) {
     const double ratio = radius / request.scale;
     if (ratio <= kScaleTolerance && ratio >= 1.0 / kScaleTolerance) return;
     const ProtocolOptions& o = request.options;
+    const std::string noise = ProtocolAddsNoise(o.protocol)
+                                  ? ", noise sigma " + ThreeDigits(o.noise_sigma * request.scale)
+                                  : std::string();
     throw UsageError(
         "generate: the clouds of '" + request.dataset + "' have radius " + ThreeDigits(radius) +
         " (median over the pairs of the source's largest distance from its centroid), but the "
         "protocol's lengths (translation up to " +
-        ThreeDigits(o.max_translation * request.scale) + ", noise sigma " +
-        ThreeDigits(o.noise_sigma * request.scale) + ", overlap radius eta " +
+        ThreeDigits(o.max_translation * request.scale) + noise + ", overlap radius eta " +
         ThreeDigits(o.eta * request.scale) + ") are for clouds of radius " +
         ThreeDigits(request.scale) + ": pass --scale " + ThreeDigits(radius) +
         " to multiply them by the data's size (or rescale the data into the unit sphere)");
