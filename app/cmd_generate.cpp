@@ -150,6 +150,12 @@ void SetupGenerateCommand(CLI::App* cmd) {
                     "Pairing: independent | shared | stored (the file's own source/target/"
                     "transform, e.g. ICL-NUIM test) (independent)")
         ->check(ParsedBy(ParsePairing, "PAIRING"));
+    cmd->add_option("--scale", a->request.scale,
+                    "The data's size over the paper's unit-sphere objects (e.g. 150 for objects "
+                    "of radius 150 mm): --max-translation, --noise-sigma, --noise-clip and --eta "
+                    "are multiplied by it; generate refuses clouds whose radius is more than 10 "
+                    "times off it (1)")
+        ->check(PositiveReal());
     cmd->add_option("--eta", a->flags.eta, "Overlap label radius (0.1)")->check(PositiveReal());
     cmd->add_option("--density-keep", a->flags.density_keep, "density: distinct fraction (0.5)")
         ->check(PositiveReal());

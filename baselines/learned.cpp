@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
@@ -46,6 +47,35 @@ Transform IcpRefine(const PointCloud& source, const PointCloud& target, const Tr
     return r.T_target_source * initial;
 }
 
+PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& target) {
+    PairNormalization n;
+    const double limit2 = kTrainingFrameRadius * kTrainingFrameRadius;
+    const auto inside = [limit2](const PointCloud& c) {
+        return c.rows() == 0 || c.rowwise().squaredNorm().maxCoeff() <= limit2;
+    };
+    if (source.rows() == 0 || (inside(source) && inside(target))) return n;
+    n.applied = true;
+    n.centre = source.colwise().mean().transpose();
+    const double radius =
+        std::sqrt((source.rowwise() - n.centre.transpose()).rowwise().squaredNorm().maxCoeff());
+    n.scale = radius > 0.0 ? radius : 1.0;
+    return n;
+}
+
+PointCloud NormalizeCloud(const PointCloud& cloud, const PairNormalization& n) {
+    if (!n.applied) return cloud;
+    return (cloud.rowwise() - n.centre.transpose()) / n.scale;
+}
+
+Transform DenormalizeTransform(const Transform& T_normalized, const PairNormalization& n) {
+    if (!n.applied) return T_normalized;
+    Transform T = T_normalized;
+    const Eigen::Matrix3d R = T_normalized.topLeftCorner<3, 3>();
+    T.topRightCorner<3, 1>() =
+        n.scale * T_normalized.topRightCorner<3, 1>() + n.centre - R * n.centre;
+    return T;
+}
+
 namespace {
 
 /// The parameters every learned method has. The variants with ICP refinement (`ogmm`,
@@ -58,12 +88,18 @@ struct LearnedOptions {
     std::string checkpoint;
     double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius
     int icp_max_iterations = 30;                    ///< ICP iterations
+    bool normalize = true;  ///< PairNormalization: pairs outside the training frame mapped in
 
     template <class F>
     void Fields(F&& f) {
         // MakeInfo appends the shipped folder of the method's model to this doc.
         f("checkpoint", checkpoint,
           "checkpoint directory from `regbench train`; \"\" = the shipped one, ");
+        f("normalize", normalize,
+          "map a pair outside the training frame (a point farther than 2 from the origin: "
+          "millimetres, a scan in its camera frame) into the unit sphere (both clouds minus the "
+          "source's centroid, over its radius) and the estimate back (docs/learned-methods.md); "
+          "false: the data as given");
         if constexpr (kIcp) {
             f("icp_max_correspondence_distance", icp_max_correspondence_distance,
               "ICP refinement radius; 0.07 = 2 * overlap_radius of the OGMM code");
@@ -119,7 +155,7 @@ public:
           icp_(kIcp),
           params_(ParamsToJson(options)),  // "" = shipped; the path used is in each row's extra
           options_{options.checkpoint, options.icp_max_correspondence_distance,
-                   options.icp_max_iterations},
+                   options.icp_max_iterations, options.normalize},
           inference_(inference.overrides) {
         params_.update(inference.all);
         checkpoint_ =
@@ -140,7 +176,7 @@ public:
     nlohmann::json Params() const override { return params_; }
 
 protected:
-    AlignResult DoAlign(const PointCloud& source, const PointCloud& target,
+    AlignResult DoAlign(const PointCloud& data_source, const PointCloud& data_target,
                         const AlignContext& context) override {
         AlignResult result;
         result.extra["checkpoint"] = checkpoint_;
@@ -148,6 +184,17 @@ protected:
         if (!checkpoint_sha256_.empty()) {
             result.extra["checkpoint_sha256"] = checkpoint_sha256_;
             result.extra["checkpoint_source"] = checkpoint_source_;
+        }
+        // The whole method (network and ICP) runs on the normalised pair; the estimate is
+        // mapped back at the end.
+        const PairNormalization frame =
+            options_.normalize ? NormalizationOf(data_source, data_target) : PairNormalization{};
+        const PointCloud source = NormalizeCloud(data_source, frame);
+        const PointCloud target = NormalizeCloud(data_target, frame);
+        if (frame.applied) {
+            result.extra["normalization"] = {
+                {"centre", {frame.centre.x(), frame.centre.y(), frame.centre.z()}},
+                {"scale", frame.scale}};
         }
         if (!Load(result)) return result;
         const auto t0 = std::chrono::steady_clock::now();
@@ -192,6 +239,7 @@ protected:
             result.stop_reason = "icp_" + icp.stop_reason;
             result.extra["icp"] = icp.extra;
         }
+        result.T_target_source = DenormalizeTransform(result.T_target_source, frame);
         return result;
     }
 
@@ -226,6 +274,7 @@ private:
         std::string checkpoint;
         double icp_max_correspondence_distance;
         int icp_max_iterations;
+        bool normalize;
     };
 
     std::string name_;

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "core/enum_names.hpp"
+#include "core/usage_error.hpp"
 #include "datasets/dataset_impl.hpp"
 #include "datasets/off_reader.hpp"
 #include "datasets/point_file.hpp"
@@ -64,12 +65,17 @@ detail::EntryLoader PointLoader() {
     };
 }
 
+/// A split the dataset does not have is a usage error naming the splits it has (`generate
+/// --split test` on a folder of point files: exit 2, "... has only split 'all' ...").
 void RequireSplit(const SplitSpec& split, const std::string& where, bool has_train_test) {
     const bool ok = split.protocol == "all" ||
                     (has_train_test && split.protocol == "same_category" && split.part != "val");
     if (!ok) {
-        throw std::invalid_argument(where + ": split '" + split.text + "' not available (use " +
-                                    (has_train_test ? "all, train or test)" : "all)"));
+        throw UsageError(where + ": split '" + split.text + "' not available: " +
+                         (has_train_test
+                              ? "this dataset has splits 'all', 'train' and 'test'"
+                              : "a single file or a folder of point files has only split 'all' "
+                                "(every file; pass --split all or leave --split out)"));
     }
 }
 

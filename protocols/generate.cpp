@@ -1,16 +1,69 @@
 #include "protocols/generate.hpp"
 
+#include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
+#include "core/metrics.hpp"
+#include "core/usage_error.hpp"
 #include "protocols/pair_file.hpp"
 #include "protocols/pair_hash.hpp"
 
 namespace regbench {
 
+double MeasuredSourceRadius(const PairSet& set) {
+    std::vector<const PointCloud*> sources;
+    sources.reserve(set.pairs.size());
+    for (const Pair& pair : set.pairs) sources.push_back(&pair.source);
+    return MedianCloudRadius(sources);
+}
+
+ProtocolOptions ScaledProtocolOptions(ProtocolOptions options, double scale) {
+    options.max_translation *= scale;
+    options.noise_sigma *= scale;
+    options.noise_clip *= scale;
+    options.eta *= scale;
+    return options;
+}
+
+namespace {
+
+/// `value` with 3 significant digits, as the refusal suggests it for --scale.
+std::string ThreeDigits(double value) {
+    std::ostringstream out;
+    out.precision(3);
+    out << value;
+    return out.str();
+}
+
+/// UsageError when the clouds' measured radius is far from what `scale` says.
+void CheckMeasuredScale(const GenerateRequest& request, double radius) {
+    if (!std::isfinite(radius)) return;  // no points: nothing to measure
+    const double ratio = radius / request.scale;
+    if (ratio <= kScaleTolerance && ratio >= 1.0 / kScaleTolerance) return;
+    const ProtocolOptions& o = request.options;
+    const std::string noise = ProtocolAddsNoise(o.protocol)
+                                  ? ", noise sigma " + ThreeDigits(o.noise_sigma * request.scale)
+                                  : std::string();
+    throw UsageError(
+        "generate: the clouds of '" + request.dataset + "' have radius " + ThreeDigits(radius) +
+        " (median over the pairs of the source's largest distance from its centroid), but the "
+        "protocol's lengths (translation up to " +
+        ThreeDigits(o.max_translation * request.scale) + noise + ", overlap radius eta " +
+        ThreeDigits(o.eta * request.scale) + ") are for clouds of radius " +
+        ThreeDigits(request.scale) + ": pass --scale " + ThreeDigits(radius) +
+        " to multiply them by the data's size (or rescale the data into the unit sphere)");
+}
+
+}  // namespace
+
 void CheckGenerateRequest(const GenerateRequest& request) {
-    ValidateProtocolOptions(request.options);
+    if (!std::isfinite(request.scale) || request.scale <= 0.0) {
+        throw std::invalid_argument("generate: --scale must be a finite number > 0");
+    }
+    ValidateProtocolOptions(ScaledProtocolOptions(request.options, request.scale));
     if (!request.one_per_item && request.num_pairs < 1)
         throw std::invalid_argument("generate: --pairs must be >= 1");
     if (request.num_pairs > kMaxGeneratedPairs) {
@@ -45,7 +98,12 @@ void GenerateToFile(const GenerateRequest& request, const ShapeLoader& load_shap
                                     std::to_string(num_pairs) + " pairs, more than the supported " +
                                     std::to_string(kMaxGeneratedPairs));
     }
-    PairSet set = GeneratePairs(shapes, request.options, request.seed, num_pairs, progress);
+    PairSet set = GeneratePairs(shapes, ScaledProtocolOptions(request.options, request.scale),
+                                request.seed, num_pairs, progress);
+    const double radius = MeasuredSourceRadius(set);
+    CheckMeasuredScale(request, radius);
+    set.provenance["scale"] = request.scale;
+    if (std::isfinite(radius)) set.provenance["source_radius"] = radius;
     set.provenance["pair_selection"] = request.one_per_item ? "one-per-item" : "cycle";
     set.provenance["dataset"] = request.dataset;
     set.provenance["split"] = request.split;

@@ -24,7 +24,11 @@ struct GenerateRequest {
     bool one_per_item = false;
     std::uint64_t seed = 0;   ///< benchmark seed: pair k uses MakePairRng(seed, k)
     ProtocolOptions options;  ///< protocol and its parameters
-    std::string out;          ///< output HDF5 path
+    /// The data's size in units of the paper's unit-sphere objects (`generate --scale`): the
+    /// protocol's lengths (max_translation, noise_sigma, noise_clip, eta) are multiplied by it;
+    /// 1 leaves the paper's protocol as it is, bit for bit.
+    double scale = 1.0;
+    std::string out;  ///< output HDF5 path
     /// Extra provenance merged in verbatim (e.g. {"regbench_version", "git_sha"}). Must not hold
     /// anything time- or machine-dependent: the same request must give byte-identical files.
     nlohmann::json extra_provenance = nlohmann::json::object();
@@ -34,16 +38,30 @@ struct GenerateRequest {
 /// million 1024-point pairs are already ~330 GB, so more is a typo, not a benchmark.
 inline constexpr std::size_t kMaxGeneratedPairs = 10000000;
 
+/// How far the clouds' measured radius (MeasuredSourceRadius) may lie from `scale` (a factor,
+/// either way) before generate refuses: the protocol's lengths would not mean what they say.
+inline constexpr double kScaleTolerance = 10.0;
+
+/// The clouds' size as generate measures it: the median over the pairs of the source's radius
+/// (largest distance of a source point from the source's centroid); NaN for no pairs.
+double MeasuredSourceRadius(const PairSet& set);
+
+/// `options` with its lengths (max_translation, noise_sigma, noise_clip, eta) times `scale`.
+ProtocolOptions ScaledProtocolOptions(ProtocolOptions options, double scale);
+
 /// The request's numbers, before any work: ValidateProtocolOptions and --pairs in
 /// [1, kMaxGeneratedPairs] (unless one_per_item). Throws std::invalid_argument naming the value;
 /// `regbench generate` reports it as a usage error.
 void CheckGenerateRequest(const GenerateRequest& request);
 
 /// Checks the request (options, num_pairs >= 1, output directory exists) before any work, then
-/// loads the shapes, generates the pairs and writes `out` atomically. On any failure nothing is
-/// left at `out` (an existing file there is not replaced). Provenance: ProtocolProvenance plus
-/// seed, num_pairs, num_shapes, dataset, split, pair_selection ("one-per-item" for
-/// one_per_item, else "cycle": pair k uses item k mod items) and extra_provenance.
+/// loads the shapes, generates the pairs (options scaled by `scale`) and writes `out`
+/// atomically. When the measured radius (MeasuredSourceRadius) is more than kScaleTolerance
+/// times above or below `scale`, nothing is written: UsageError naming the radius and the
+/// `--scale` that fits. On any failure nothing is left at `out` (an existing file there is not
+/// replaced). Provenance: ProtocolProvenance (of the scaled options) plus seed, num_pairs,
+/// num_shapes, dataset, split, pair_selection ("one-per-item" for one_per_item, else "cycle":
+/// pair k uses item k mod items), scale, source_radius and extra_provenance.
 void GenerateToFile(const GenerateRequest& request, const ShapeLoader& load_shapes,
                     const ProgressCallback& progress = nullptr);
 

@@ -412,12 +412,46 @@ void AddFailureNotes(const ReportTable& rt, Table& t) {
     }
 }
 
+/// The thresholds of the table in the data's own length unit, and a sentence for each metric
+/// that saturated for every method (issue 54 item 1): CCD at its ceiling 2 * clip, a rate at 0.
+std::string ThresholdsCaption(const ReportTable& rt, const ReportOptions& o) {
+    const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
+    std::string caption = fmt::format(
+        "; thresholds in the data's length unit: recall mae_r < {:g} deg and mae_t < {:g}; "
+        "success rre < {:g} deg and rte < {:g}; CCD clip {:g} (the paper's translation "
+        "thresholds and clip are 0.1, for unit-sphere objects).",
+        o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte, clip);
+    if (rt.methods.empty()) return caption;
+    const auto every = [&rt](auto&& pred) {
+        return std::all_of(rt.methods.begin(), rt.methods.end(), pred);
+    };
+    if (every([clip](const MethodSummary& m) { return m.ccd.mean >= 0.999 * 2.0 * clip; })) {
+        caption += fmt::format(
+            " Saturated: CCD is at its ceiling 2 x clip = {:g} for every method, so it ranks "
+            "nothing here; give `run --ccd-clip` in the data's units (about 10% of the clouds' "
+            "radius).",
+            2.0 * clip);
+    }
+    const auto zero = [&every](Estimate MethodSummary::*rate) {
+        return every([rate](const MethodSummary& m) { return (m.*rate).mean == 0.0; });
+    };
+    if (zero(&MethodSummary::recall) || zero(&MethodSummary::success)) {
+        caption += fmt::format(
+            " Saturated: {} 0 for every method; the thresholds may not fit the data's units "
+            "(`report --recall-t`, `--success-rte`).",
+            zero(&MethodSummary::recall) && zero(&MethodSummary::success) ? "recall and success are"
+            : zero(&MethodSummary::recall)                                ? "recall is"
+                                                                          : "success is");
+    }
+    return caption;
+}
+
 }  // namespace
 
 Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     Table t;
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
-    t.caption = "Data: " + DescribeTable(rt);
+    t.caption = "Data: " + DescribeTable(rt) + ThresholdsCaption(rt, o);
     const double threshold = InlierThreshold(rt);
     t.columns = SummaryColumns(rt, o, threshold);
     for (const auto& s : rt.methods) {

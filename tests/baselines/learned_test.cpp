@@ -94,6 +94,96 @@ TEST(Learned, RunsACheckpointThroughTheRegistryDeterministically) {
     fs::remove_all(dir);
 }
 
+// Issue 54 item 1: the per-pair normalisation's inverse, derived by hand. Normalised frame
+// x' = (x - c) / s, y' = (y - c) / s with c = (1, 2, 3), s = 2; the estimate there R' = 90 deg
+// about z ((x, y, z) -> (-y, x, z)), t' = (1, 0, 0). Then y = s (R' (x - c) / s + t') + c =
+// R' x + s t' + c - R' c, and R' c = (-2, 1, 3), so t = (2, 0, 0) + (1, 2, 3) - (-2, 1, 3) =
+// (5, 1, 0).
+TEST(Learned, DenormalizeInvertsThePairNormalisationExactly) {
+    PairNormalization n;
+    n.applied = true;
+    n.centre = {1.0, 2.0, 3.0};
+    n.scale = 2.0;
+    Transform T_normalized = Transform::Identity();
+    T_normalized.topLeftCorner<3, 3>() << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+    T_normalized.topRightCorner<3, 1>() << 1, 0, 0;
+    const Transform T = DenormalizeTransform(T_normalized, n);
+    const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+    EXPECT_EQ(R, Eigen::Matrix3d(T_normalized.topLeftCorner<3, 3>()));
+    EXPECT_EQ(Eigen::Vector3d(T.topRightCorner<3, 1>()), Eigen::Vector3d(5.0, 1.0, 0.0));
+    // A point: x = (3, 2, 3) -> x' = (1, 0, 0) -> y' = (0, 1, 0) + (1, 0, 0) = (1, 1, 0)
+    // -> y = 2 (1, 1, 0) + c = (3, 4, 3); T maps x there.
+    const Eigen::Vector3d x(3.0, 2.0, 3.0);
+    EXPECT_EQ(Eigen::Vector3d(R * x + T.topRightCorner<3, 1>()), Eigen::Vector3d(3.0, 4.0, 3.0));
+    // Not applied: the estimate as it is.
+    EXPECT_EQ(DenormalizeTransform(T_normalized, PairNormalization{}), T_normalized);
+}
+
+TEST(Learned, NormalisationMapsOnlyPairsOutsideTheTrainingFrame) {
+    const auto pair = testing::CleanCompletePair(20.0);  // a bumpy ellipsoid in the unit ball
+    EXPECT_FALSE(NormalizationOf(pair.source, pair.target).applied);
+    const PointCloud far = pair.source.rowwise() + Eigen::RowVector3d(0.0, 0.0, 2.6);
+    const PairNormalization n = NormalizationOf(far, pair.target);  // a scan in camera frame
+    ASSERT_TRUE(n.applied);
+    const PointCloud unit = NormalizeCloud(far, n);
+    // Centred on the source's centroid, the farthest source point at distance 1 exactly.
+    EXPECT_LT(unit.colwise().mean().norm(), 1e-12);
+    EXPECT_NEAR(unit.rowwise().norm().maxCoeff(), 1.0, 1e-12);
+    const PairNormalization mm = NormalizationOf(150.0 * pair.source, 150.0 * pair.target);
+    EXPECT_TRUE(mm.applied);
+}
+
+// A scaled and shifted copy of a pair (x -> a x + d on both clouds) normalises to the same
+// clouds, so each learned method returns the same R and t' = a t + (I - R) d (from
+// y = R x + t: a y + d = R (a x + d) + a t + d - R d); a pair inside the training frame runs
+// bit-identically with normalize true and false.
+TEST(Learned, ScaledAndShiftedCopyGivesTheSameRotationAndTheTranslationScaled) {
+    const fs::path dir = SaveUntrainedCheckpoint("deepgmr-small", 3);
+    const auto unit = testing::CleanCompletePair(20.0);
+    AlignContext context;
+    context.seed = 9;
+    const Eigen::RowVector3d shift(0.0, 0.0, 2.6);  // outside the frame: normalised
+    const PointCloud source = unit.source.rowwise() + shift;
+    const PointCloud target = unit.target.rowwise() + shift;
+    const double a = 150.0;
+    const Eigen::Vector3d d(-40.0, 7.0, 300.0);
+    const PointCloud source_mm = (a * source).rowwise() + d.transpose();
+    const PointCloud target_mm = (a * target).rowwise() + d.transpose();
+    for (const char* name : {"deepgmr", "deepgmr-noicp"}) {
+        auto method = CreateMethod(name, {{"checkpoint", dir.string()}});
+        EXPECT_EQ(method->Params().at("normalize"), true);
+        const AlignResult r = method->Align(source, target, context);
+        const AlignResult r_mm = method->Align(source_mm, target_mm, context);
+        ASSERT_EQ(r.status, AlignStatus::kOk) << r.message;
+        ASSERT_EQ(r_mm.status, AlignStatus::kOk) << r_mm.message;
+        ASSERT_TRUE(r.extra.contains("normalization"));
+        EXPECT_EQ(r_mm.extra.at("checkpoint"), dir.string());  // what every row names
+        EXPECT_NEAR(r_mm.extra["normalization"]["scale"].get<double>(),
+                    a * r.extra["normalization"]["scale"].get<double>(), 1e-9);
+        const Eigen::Matrix3d R = r.T_target_source.topLeftCorner<3, 3>();
+        const Eigen::Vector3d t = r.T_target_source.topRightCorner<3, 1>();
+        // The normalised clouds agree to rounding (1e-15 relative); the network's float32
+        // arithmetic keeps that well under 1e-5.
+        EXPECT_LT((r_mm.T_target_source.topLeftCorner<3, 3>() - R).cwiseAbs().maxCoeff(), 1e-5)
+            << name;
+        const Eigen::Vector3d expected_t = a * t + (Eigen::Matrix3d::Identity() - R) * d;
+        EXPECT_LT((Eigen::Vector3d(r_mm.T_target_source.topRightCorner<3, 1>()) - expected_t)
+                      .cwiseAbs()
+                      .maxCoeff(),
+                  1e-5 * a)
+            << name;
+        // Inside the frame: the pair as given, bit for bit.
+        auto raw = CreateMethod(name, {{"checkpoint", dir.string()}, {"normalize", false}});
+        const AlignResult in = method->Align(unit.source, unit.target, context);
+        const AlignResult in_raw = raw->Align(unit.source, unit.target, context);
+        EXPECT_FALSE(in.extra.contains("normalization"));
+        EXPECT_EQ(in.T_target_source, in_raw.T_target_source) << name;
+        // normalize false on the shifted pair: no normalisation recorded.
+        EXPECT_FALSE(raw->Align(source, target, context).extra.contains("normalization"));
+    }
+    fs::remove_all(dir);
+}
+
 TEST(Learned, CheckpointOfTheOtherFamilyIsRefused) {
     // A DeepGMR checkpoint (config.arch "deepgmr") under ogmm would run DeepGMR's network
     // under OGMM's name (issue 26 saw the reverse); both directions are refused.

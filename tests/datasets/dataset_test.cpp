@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "core/usage_error.hpp"
 #include "tests/datasets/test_files.hpp"
 
 namespace regbench {
@@ -285,6 +286,15 @@ TEST(OpenDataset, GenericPointFilesAndErrors) {
     ASSERT_EQ(single->size(), 1u);
     EXPECT_EQ(single->Get(0).points.rows(), 3);
     EXPECT_THROW(OpenDataset(root.string(), "train"), std::invalid_argument);
+    // Issue 54 item 1: `generate --split test` on a folder says which split it has, as a
+    // usage error (exit 2).
+    try {
+        OpenDataset(root.string(), "test");
+        ADD_FAILURE() << "split test of a folder accepted";
+    } catch (const UsageError& e) {
+        EXPECT_NE(std::string(e.what()).find("has only split 'all'"), std::string::npos)
+            << e.what();
+    }
     EXPECT_THROW(OpenDataset("procedural", "bogus"), std::invalid_argument);
     const std::string missing = (root / "nowhere").string();
     ExpectThrowsWith([&] { OpenDataset(missing); }, missing);

@@ -174,6 +174,37 @@ TEST(Report, MethodsOnDifferentPairsOfOneFileAreRefusedNamingThem) {
                                                   "--common-pairs");
 }
 
+// Issue 54 item 1: the caption states the thresholds in the data's units and says when a
+// metric saturated for every method (CCD at 2 x clip = 0.2 by its definition, a rate at 0).
+TEST(Report, CaptionStatesThresholdsAndSaturatedMetrics) {
+    std::vector<ResultRow> rows = Numbered({Row("a", 10.0, 20.0, 1.0), Row("a", 12.0, 30.0, 1.0)});
+    for (auto r : Numbered({Row("b", 11.0, 25.0, 1.0), Row("b", 9.0, 40.0, 1.0)})) {
+        rows.push_back(r);
+    }
+    for (auto& r : rows) r.metrics.ccd = 0.2;  // every call at the clip on both sides
+    ReportOptions o;
+    o.recall_t = 15.0;
+    o.success_rte = 15.0;
+    const std::string caption = SummaryTable(BuildTables(rows, o)[0], o).caption;
+    EXPECT_NE(caption.find("recall mae_r < 1 deg and mae_t < 15; success rre < 5 deg and rte "
+                           "< 15; CCD clip 0.1"),
+              std::string::npos)
+        << caption;
+    EXPECT_NE(caption.find("CCD is at its ceiling 2 x clip = 0.2 for every method"),
+              std::string::npos)
+        << caption;
+    // mae_r >= 9 deg everywhere: recall (< 1 deg) and success (rre = 2 mae_r < 5) are 0.
+    EXPECT_NE(caption.find("recall and success are 0 for every method"), std::string::npos)
+        << caption;
+    // One method below the ceiling and recalled once: neither note.
+    rows[0].metrics.ccd = 0.05;
+    rows[0].metrics.mae_r = 0.5;
+    rows[0].metrics.rre = 1.0;
+    rows[0].metrics.mae_t = rows[0].metrics.rte = 0.01;
+    const std::string mixed = SummaryTable(BuildTables(rows, o)[0], o).caption;
+    EXPECT_EQ(mixed.find("Saturated"), std::string::npos) << mixed;
+}
+
 TEST(Report, CommonPairsRestrictsEveryMethodAndSaysSoInTheCaption) {
     std::vector<ResultRow> rows = OnPairs("icp", 0, 29);
     for (auto& r : OnPairs("ogmm", 0, 9)) rows.push_back(r);
