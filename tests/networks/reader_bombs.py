@@ -1,5 +1,6 @@
 """Writes the torch.save reader bombs of issue 55 item 5 into the folder argv[1] (standard
-library only; tests/networks/torch_save_limits_test.cpp and fuzz/corpus/torch_save use them).
+library only; tests/networks/torch_save_limits_test.cpp and tests/app's ReaderBombs use them;
+with --seeds, small files of the same shapes: fuzz/corpus/torch_save/bomb_*).
 
 Each file is small and names, in a comment below, what it declares and what regbench must do:
 refuse it naming the file before it allocates what it declares, or read it in well under a
@@ -82,28 +83,30 @@ def crc_of_zeros(mib):
     return crc
 
 
-def main(folder):
+def main(folder, small=False):
+    """The bombs; `small`: the same shapes with few repetitions (the fuzz seeds)."""
     folder = Path(folder)
+    many = 4 if small else 64
     folder.mkdir(parents=True, exist_ok=True)
     version = stored("version", b"3\n")
 
     # 64 storages of 512 MiB (134217728 floats) each, 32 GiB in all, in a 9 KB zip whose
     # records hold 4 bytes each. Refused: a storage's declared bytes differ from its record's.
-    big = [("w%d" % k, str(k), 1 << 27, 1 << 27) for k in range(64)]
+    big = [("w%d" % k, str(k), 1 << 27, 1 << 27) for k in range(many)]
     records = [stored("data.pkl", state_dict(big))]
-    records += [stored("data/%d" % k, bytes(4)) for k in range(64)]
+    records += [stored("data/%d" % k, bytes(4)) for k in range(many)]
     (folder / "storages_64x512mib.pth").write_bytes(zip_archive(records + [version]))
 
     # The same pickle in the legacy stream, which ends after the first storage's count.
     magic = b"\x80\x02\x8a\x0a" + bytes.fromhex("6cfc9c46f9206aa85019") + b"."
     legacy = magic + b"\x80\x02M\xe9\x03." + b"\x80\x02}(" + s("little_endian") + b"\x88u."
-    legacy += state_dict(big) + b"\x80\x02](" + b"".join(s(str(k)) for k in range(64)) + b"e."
+    legacy += state_dict(big) + b"\x80\x02](" + b"".join(s(str(k)) for k in range(many)) + b"e."
     legacy += struct.pack("<q", 1 << 27)
     (folder / "storages_64x512mib_legacy.pth").write_bytes(legacy)
 
     # 389 KB of deflated bytes that declare 5 GiB (zip64): more than deflate's 1032:1 can give.
     payload = zlib.compress(bytes(range(256)) * 2000, 1)[2:-4]
-    payload = (payload * 400)[: 389 * 1024]
+    payload = (payload * 400)[: (4 if small else 389) * 1024]
     records = [stored("data.pkl", state_dict([("w", "0", 5 << 28, 5 << 28)]))]
     records += [("data/0", 8, payload, 5 << 30, 0), version]
     (folder / "declares_5gib.pth").write_bytes(zip_archive(records))
@@ -111,7 +114,7 @@ def main(folder):
     # Three storages of 800 MiB of deflated zeros (2.4 GiB; each within 1032:1), a 2.4 MB
     # file: more than the reader's budget in all. Their CRCs are not computed (0): the reader
     # must refuse the file from the declared sizes, before it inflates a byte.
-    mib = 800
+    mib = 1 if small else 800
     stream = deflated_zeros(mib)
     n = mib << 18  # floats
     records = [stored("data.pkl", state_dict([("w%d" % k, str(k), n, n) for k in range(3)]))]
@@ -121,15 +124,16 @@ def main(folder):
     # A record that declares 24 bytes (its storage's 6 floats) whose deflate stream goes on
     # for 64 MiB: inflating must stop at the declared size.
     records = [stored("data.pkl", state_dict([("w", "0", 6, 6)]))]
-    records += [("data/0", 8, deflated_zeros(64), 24, zlib.crc32(bytes(24))), version]
+    records += [("data/0", 8, deflated_zeros(1 if small else 64), 24, zlib.crc32(bytes(24))), version]
     (folder / "inflates_past_declared.pth").write_bytes(zip_archive(records))
 
     # 20,000 tensors sharing one storage of the floats 0 .. 99,999 (400 KB), tensor tK a
     # one-element view at offset K (so it holds K); the storage, the function and OrderedDict
     # kept in the memo (1, 2, 3). Must be read, quickly: each storage is read once.
-    pid = b"(" + s("storage") + FLOAT + s("0") + s("cpu") + i(100000) + b"tQ"
+    tensors, floats = (200, 1000) if small else (20000, 100000)
+    pid = b"(" + s("storage") + FLOAT + s("0") + s("cpu") + i(floats) + b"tQ"
     pickle = bytearray(b"\x80\x02}(")
-    for k in range(20000):
+    for k in range(tensors):
         first = k == 0
         fn = REBUILD + b"q\x02" if first else b"h\x02"
         storage = pid + b"q\x01" if first else b"h\x01"
@@ -137,9 +141,9 @@ def main(folder):
         args = b"(" + storage + i(k) + b"(" + i(1) + b"t(" + i(1) + b"t\x89" + od
         pickle += s("t%d" % k) + fn + args + b")Rt" + b"R"
     pickle += b"u."
-    floats = array.array("f", range(100000))
     assert sys.byteorder == "little"
-    records = [stored("data.pkl", bytes(pickle)), stored("data/0", floats.tobytes()), version]
+    storage = array.array("f", range(floats)).tobytes()
+    records = [stored("data.pkl", bytes(pickle)), stored("data/0", storage), version]
     (folder / "shared_20k.pth").write_bytes(zip_archive(records))
 
     # A million REDUCE calls of _rebuild_tensor_v2 on one argument tuple (kept in the memo)
@@ -149,16 +153,16 @@ def main(folder):
     # memo 0: the list, 1: the function, 2: the arguments; the first call from the stack.
     pickle = bytearray(b"\x80\x02]r\x00\x00\x00\x00" + REBUILD + b"r\x01\x00\x00\x00")
     pickle += args + b"r\x02\x00\x00\x00Ra"
-    pickle += (b"j\x01\x00\x00\x00j\x02\x00\x00\x00Ra") * 999999 + b"."
-    records = [stored("data.pkl", bytes(pickle)), stored("data/0", bytes(400000)), version]
+    pickle += (b"j\x01\x00\x00\x00j\x02\x00\x00\x00Ra") * (999 if small else 999999) + b"."
+    records = [stored("data.pkl", bytes(pickle)), stored("data/0", bytes(4 * floats)), version]
     (folder / "reduce_1m_wide.pth").write_bytes(zip_archive(records))
 
     # The same million calls with the regular 6 arguments.
     args = b"(" + pid + i(0) + b"(" + i(1) + b"t(" + i(1) + b"t\x89" + ORDERED_DICT + b")Rt"
     pickle = bytearray(b"\x80\x02]r\x00\x00\x00\x00" + REBUILD + b"r\x01\x00\x00\x00")
     pickle += args + b"r\x02\x00\x00\x00Ra"
-    pickle += (b"j\x01\x00\x00\x00j\x02\x00\x00\x00Ra") * 999999 + b"."
-    records = [stored("data.pkl", bytes(pickle)), stored("data/0", bytes(400000)), version]
+    pickle += (b"j\x01\x00\x00\x00j\x02\x00\x00\x00Ra") * (999 if small else 999999) + b"."
+    records = [stored("data.pkl", bytes(pickle)), stored("data/0", bytes(4 * floats)), version]
     (folder / "reduce_1m.pth").write_bytes(zip_archive(records))
 
     # One float viewed with stride 0 as 2^30 of them: 4 GiB once copied out.
@@ -170,4 +174,4 @@ def main(folder):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main(sys.argv[1], "--seeds" in sys.argv[2:])

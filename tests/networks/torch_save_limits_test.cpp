@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
-#include <chrono>
+#include <ctime>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -83,7 +83,8 @@ TEST(TorchSaveLimits, AZipWithAHugeVersionRecordIsNamed) {
 
 // Issue 55 item 5, the bombs inside a file: written by tests/networks/reader_bombs.py (each
 // described there), each refused naming the file before it allocates what it declares, or read
-// correctly, in well under a second (measured on the 2-core VM: at most 0.6 s, reduce_1m).
+// correctly, in under a second of CPU time (the reading thread's, so that other jobs on the
+// machine do not count; measured on the 2-core VM: 0.9 s for the three pickle cases together).
 class ReaderBombs : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
@@ -98,7 +99,7 @@ protected:
     /// Reads bomb `file`, timed; returns the error ("" when it was read).
     static std::string Refusal(const std::string& file, TorchSaveContents* read = nullptr) {
         const std::string path = (dir_ / file).string();
-        const auto start = std::chrono::steady_clock::now();
+        const double start = ThreadSeconds();
         std::string e;
         try {
             TorchSaveContents c = ReadTorchSaveFile(path);
@@ -107,10 +108,13 @@ protected:
             e = x.what();
             EXPECT_EQ(e.rfind(path + ": ", 0), 0u) << e;  // named
         }
-        const double s =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        EXPECT_LT(s, 1.5) << file;  // under load; about 0.6 s at most alone
+        EXPECT_LT(ThreadSeconds() - start, 1.0) << file;
         return e;
+    }
+    static double ThreadSeconds() {
+        timespec ts{};
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+        return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
     }
     static fs::path dir_;
 };
