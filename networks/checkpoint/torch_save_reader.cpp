@@ -774,8 +774,8 @@ uint64_t StorageBytes(const Unpickler& u, int o, const std::string& name) {
 }
 
 /// Tensors of the state dict `sd`: views of `storages` (flat tensors by key), copied out. Every
-/// view is checked against its storage, and the views' bytes in all against kMaxTorchSaveBytes,
-/// before the first is copied (a view with stride 0 may declare any size over one element).
+/// view is checked against its storage (within it, no more elements than it has), and the
+/// views' bytes in all against kMaxTorchSaveBytes, before the first is copied.
 StateDict BuildTensors(const Unpickler& u, int sd,
                        const std::map<std::string, torch::Tensor>& storages,
                        const std::string& name) {
@@ -814,6 +814,14 @@ StateDict BuildTensors(const Unpickler& u, int sd,
                                std::to_string(kMaxTorchSaveBytes) + " bytes a checkpoint may hold");
             }
             count *= static_cast<uint64_t>(s);
+        }
+        // A state dict's tensors are views within their storages; one with more elements than
+        // its storage (stride 0, as expand() makes) would let a few bytes of file ask for the
+        // whole budget.
+        if (!empty && count > static_cast<uint64_t>(numel)) {
+            Fail(name, "tensor " + key + " has " + std::to_string(count) +
+                           " elements, more than the " + std::to_string(numel) +
+                           " of its storage (a view that repeats elements)");
         }
         total += empty ? 0 : count * element;
         if (total > kMaxTorchSaveBytes) {

@@ -294,6 +294,7 @@ TEST(CliCheckpointRefusal, ReaderBombsAreRefusedUnderAMemoryCap) {
         {"declares_5gib.pth", "more than deflate can give"},
         {"deflated_2400mib.pth", "its storages declare more than the 2147483648 bytes"},
         {"stride0_4gib.pth", "tensor w declares more than the 2147483648 bytes"},
+        {"stride0_2gib.pth", "tensor w has 536870912 elements, more than the 1 of its storage"},
         {"reduce_1m.pth", "pickle makes more than 524288 objects"},
         {"reduce_1m_wide.pth", "called with 1006 arguments"},
     };

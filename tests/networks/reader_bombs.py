@@ -165,12 +165,14 @@ def main(folder, small=False):
     records = [stored("data.pkl", bytes(pickle)), stored("data/0", bytes(4 * floats)), version]
     (folder / "reduce_1m.pth").write_bytes(zip_archive(records))
 
-    # One float viewed with stride 0 as 2^30 of them: 4 GiB once copied out.
-    pid = b"(" + s("storage") + FLOAT + s("0") + s("cpu") + i(1) + b"tQ"
-    args = b"(" + pid + i(0) + b"(" + i(1 << 30) + b"t(" + i(0) + b"t\x89" + ORDERED_DICT
-    pickle = b"\x80\x02}(" + s("w") + REBUILD + args + b")Rt" + b"Ru."
-    records = [stored("data.pkl", pickle), stored("data/0", bytes(4)), version]
-    (folder / "stride0_4gib.pth").write_bytes(zip_archive(records))
+    # One float viewed with stride 0 as 2^30 of them (4 GiB once copied out, beyond the
+    # budget) and as 2^29 (2 GiB, within it).
+    for log2, gib in ((30, 4), (29, 2)):
+        pid = b"(" + s("storage") + FLOAT + s("0") + s("cpu") + i(1) + b"tQ"
+        args = b"(" + pid + i(0) + b"(" + i(1 << log2) + b"t(" + i(0) + b"t\x89" + ORDERED_DICT
+        pickle = b"\x80\x02}(" + s("w") + REBUILD + args + b")Rt" + b"Ru."
+        records = [stored("data.pkl", pickle), stored("data/0", bytes(4)), version]
+        (folder / ("stride0_%dgib.pth" % gib)).write_bytes(zip_archive(records))
 
 
 if __name__ == "__main__":

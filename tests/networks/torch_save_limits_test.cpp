@@ -143,6 +143,10 @@ TEST_F(ReaderBombs, DeclaredSizesBeyondDeflateOrTheBudgetAreRefusedBeforeInflati
     EXPECT_NE(Refusal("stride0_4gib.pth")
                   .find("tensor w declares more than the 2147483648 bytes"),
               std::string::npos);
+    // The same view of 2^29 floats (2 GiB, within the budget) repeats one element.
+    EXPECT_NE(Refusal("stride0_2gib.pth")
+                  .find("tensor w has 536870912 elements, more than the 1 of its storage"),
+              std::string::npos);
 }
 
 TEST_F(ReaderBombs, InflatingStopsAtTheDeclaredSize) {
