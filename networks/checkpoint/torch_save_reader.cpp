@@ -889,7 +889,8 @@ TorchSaveContents ReadZip(const std::shared_ptr<caffe2::serialize::ReadAdapterIn
             }
             // Inflating writes into the declared size and stops there (miniz's
             // extract_to_mem); the record's bytes become the storage without a copy.
-            auto holder = std::make_shared<at::DataPtr>(std::get<0>(reader.getRecord("data/" + key)));
+            auto holder =
+                std::make_shared<at::DataPtr>(std::get<0>(reader.getRecord("data/" + key)));
             storages[key] = torch::from_blob(holder->get(), {st.i}, [holder](void*) {}, opts);
         }
         TorchSaveContents out;
@@ -945,7 +946,8 @@ TorchSaveContents ReadLegacy(const std::string& bytes, const std::string& name) 
         // Within the file, which is within the budget: checked before it is allocated.
         const uint64_t size = StorageBytes(u, it->second, name);
         if (size > bytes.size() - pos) Fail(name, "file ends inside storage " + u.at(k).s);
-        torch::Tensor s = torch::empty({numel}, torch::TensorOptions().dtype(u.at(it->second).dtype));
+        torch::Tensor s =
+            torch::empty({numel}, torch::TensorOptions().dtype(u.at(it->second).dtype));
         if (size > 0) std::memcpy(s.data_ptr(), bytes.data() + pos, size);
         storages[u.at(k).s] = s;
         pos += size;

@@ -97,8 +97,8 @@ TEST(CliContract, AlignHasTheScaleGuardOfRun) {
     EXPECT_TRUE(fs::exists(out));
     EXPECT_EQ(RunCli(dense + " --max-points 200 --force").exit_code, 0);  // not above it
     for (const char* method : {"icp", "cpd"}) {
-        const CliResult r = RunCli("align " + cloud + " " + cloud + " --method " + method +
-                                   " --max-points 100");
+        const CliResult r =
+            RunCli("align " + cloud + " " + cloud + " --method " + method + " --max-points 100");
         EXPECT_EQ(r.exit_code, 0) << method << ": " << r.output;
     }
     fs::remove_all(dir);

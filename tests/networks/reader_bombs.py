@@ -124,7 +124,8 @@ def main(folder, small=False):
     # A record that declares 24 bytes (its storage's 6 floats) whose deflate stream goes on
     # for 64 MiB: inflating must stop at the declared size.
     records = [stored("data.pkl", state_dict([("w", "0", 6, 6)]))]
-    records += [("data/0", 8, deflated_zeros(1 if small else 64), 24, zlib.crc32(bytes(24))), version]
+    stream = deflated_zeros(1 if small else 64)
+    records += [("data/0", 8, stream, 24, zlib.crc32(bytes(24))), version]
     (folder / "inflates_past_declared.pth").write_bytes(zip_archive(records))
 
     # 20,000 tensors sharing one storage of the floats 0 .. 99,999 (400 KB), tensor tK a

@@ -90,9 +90,10 @@ protected:
     static void SetUpTestSuite() {
         dir_ = testing::FreshTempDir("torch_save_bombs");
         const char* src = std::getenv("REGBENCH_SOURCE_DIR");
-        const std::string script =
-            (src != nullptr ? fs::path(src) : fs::current_path()) / "tests/networks/reader_bombs.py";
-        const auto [rc, out] = testing::RunShell("python3 " + script + " " + dir_.string() + " 2>&1");
+        const fs::path root = src != nullptr ? fs::path(src) : fs::current_path();
+        const std::string script = (root / "tests/networks/reader_bombs.py").string();
+        const auto [rc, out] =
+            testing::RunShell("python3 " + script + " " + dir_.string() + " 2>&1");
         ASSERT_EQ(rc, 0) << out;
     }
     static void TearDownTestSuite() { fs::remove_all(dir_); }
