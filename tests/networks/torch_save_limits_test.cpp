@@ -8,9 +8,15 @@
 #include <ctime>
 #include <cstdlib>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "networks/checkpoint/checkpoint.hpp"
 #include "networks/checkpoint/torch_save_reader.hpp"
+#include "networks/net.hpp"
+#include "networks/zoo.hpp"
 #include "tests/testing/files.hpp"
 #include "tests/testing/shell.hpp"
 
@@ -169,6 +175,29 @@ TEST_F(ReaderBombs, PickleWorkIsLinearAndBounded) {
     for (const int k : {0, 1, 12345, 19999}) {  // tK views element K of 0, 1, 2, ...
         EXPECT_EQ(c.tensors[k].first, "t" + std::to_string(k));
         EXPECT_TRUE(torch::equal(c.tensors[k].second, torch::full({1}, float(k))));
+    }
+}
+
+// A checkpoint folder's weights.pt is read by LibTorch's own loader, which allocates what a
+// record declares: the same directory checks run first (CheckTorchZipSizes). The bombs replace
+// a saved checkpoint's weights (weights_bytes updated, so only the zip's contents are wrong).
+TEST_F(ReaderBombs, CheckpointWeightsPassTheSameChecksBeforeLibTorchLoadsThem) {
+    const fs::path ck = dir_ / "ck";
+    auto net = MakeNet("deepgmr-orig-xyz");
+    SaveCheckpoint(ck.string(), *net, {});
+    const fs::path weights = ck / "weights.pt";
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"declares_5gib.pth", "more than deflate can give (1032 to 1)"},
+        {"deflated_2400mib.pth", "its records declare more than the 2147483648 bytes"},
+    };
+    for (const auto& [file, why] : cases) {
+        fs::copy_file(dir_ / file, weights, fs::copy_options::overwrite_existing);
+        nlohmann::json j = nlohmann::json::parse(testing::ReadBytes(ck / "checkpoint.json"));
+        j["weights_bytes"] = fs::file_size(weights);
+        testing::WriteBytes(ck / "checkpoint.json", j.dump());
+        const std::string e = ErrorOf([&] { LoadCheckpoint(ck.string(), *net); });
+        EXPECT_EQ(e.rfind(weights.string() + ": ", 0), 0u) << e;
+        EXPECT_NE(e.find(why), std::string::npos) << e;
     }
 }
 
