@@ -19,6 +19,7 @@
 #include "protocols/xyz_io.hpp"
 #include "runners/align_clouds.hpp"
 #include "runners/registry.hpp"
+#include "runners/scale_guard.hpp"
 
 namespace regbench::app {
 namespace {
@@ -58,6 +59,7 @@ void SetupAlignCommand(CLI::App* cmd) {
     auto threads = std::make_shared<int>(1);
     auto nan_points = std::make_shared<std::string>("drop");
     auto force = std::make_shared<bool>(false);
+    auto max_points = std::make_shared<std::size_t>(kDefaultMaxPoints);
     cmd->add_option("source", *src, "Source point file (.ply .pcd .xyz .txt .off)")->required();
     cmd->add_option("target", *tgt, "Target point file")->required();
     cmd->add_option("--method", *method, "Method name (see `regbench methods`)")->required();
@@ -88,6 +90,12 @@ void SetupAlignCommand(CLI::App* cmd) {
                     "giving their count) | refuse (the file, naming it and the count)")
         ->check(CLI::IsMember({"drop", "refuse"}))
         ->capture_default_str();
+    cmd->add_option("--max-points", *max_points,
+                    "Scale guard, as run's: an O(N*M) method (rienet, rgm, regtr; cpd, gmmreg, "
+                    "svr in their dense modes) on a cloud above this many points is refused "
+                    "before it runs; 0 = no guard")
+        ->check(WholeNumber())
+        ->capture_default_str();
     cmd->callback([=] {
         // One writer per output file, the one output rule (docs/usage.md, "Outputs") before
         // work; the other output counts as an input of each.
@@ -113,6 +121,17 @@ void SetupAlignCommand(CLI::App* cmd) {
         const PointCloud target = ReadCloudFile(*tgt, non_finite);
         RefuseDegenerateCloud(*src, source);  // before any method runs; nothing is written
         RefuseDegenerateCloud(*tgt, target);
+        // run()'s scale guard, one predicate with run and Python's align: rienet on 200,000
+        // points asked for 160 GB and ended in a LibTorch backtrace.
+        try {
+            RequireCallScale(MethodSpec{*method, reg->Params()},
+                             static_cast<std::size_t>(source.rows()),
+                             static_cast<std::size_t>(target.rows()), *max_points);
+        } catch (const std::invalid_argument& e) {
+            throw std::runtime_error(std::string("align: ") + e.what() +
+                                     "; pass --max-points 0 to run it as is (or a larger "
+                                     "--max-points), or downsample the clouds first");
+        }
         const Transform T_gt = gt->empty() ? Transform::Identity() : ReadTransformTxt(*gt);
         AlignContext context;
         context.seed = *seed;

@@ -1,7 +1,9 @@
 #include "core/sha256.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
@@ -25,57 +27,79 @@ uint32_t Rotr(uint32_t x, int n) { return (x >> n) | (x << (32 - n)); }
 
 }  // namespace
 
-std::string Sha256Hex(const std::string& bytes) {
-    uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
-                     0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
-    std::string m = bytes;
-    const uint64_t bits = static_cast<uint64_t>(bytes.size()) * 8;
-    m += static_cast<char>(0x80);
-    while (m.size() % 64 != 56) m += '\0';
-    for (int j = 7; j >= 0; --j) m += static_cast<char>((bits >> (8 * j)) & 0xff);
-    for (size_t off = 0; off < m.size(); off += 64) {
-        uint32_t w[64];
-        for (int j = 0; j < 16; ++j) {
-            w[j] = (uint32_t(uint8_t(m[off + 4 * j])) << 24) |
-                   (uint32_t(uint8_t(m[off + 4 * j + 1])) << 16) |
-                   (uint32_t(uint8_t(m[off + 4 * j + 2])) << 8) |
-                   uint32_t(uint8_t(m[off + 4 * j + 3]));
-        }
-        for (int j = 16; j < 64; ++j) {
-            const uint32_t s0 = Rotr(w[j - 15], 7) ^ Rotr(w[j - 15], 18) ^ (w[j - 15] >> 3);
-            const uint32_t s1 = Rotr(w[j - 2], 17) ^ Rotr(w[j - 2], 19) ^ (w[j - 2] >> 10);
-            w[j] = w[j - 16] + s0 + w[j - 7] + s1;
-        }
-        uint32_t a = h[0], b = h[1], c = h[2], d = h[3], e = h[4], f = h[5], g = h[6], hh = h[7];
-        for (int j = 0; j < 64; ++j) {
-            const uint32_t t1 =
-                hh + (Rotr(e, 6) ^ Rotr(e, 11) ^ Rotr(e, 25)) + ((e & f) ^ (~e & g)) + kK[j] + w[j];
-            const uint32_t t2 =
-                (Rotr(a, 2) ^ Rotr(a, 13) ^ Rotr(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
-            hh = g;
-            g = f;
-            f = e;
-            e = d + t1;
-            d = c;
-            c = b;
-            b = a;
-            a = t1 + t2;
-        }
-        h[0] += a;
-        h[1] += b;
-        h[2] += c;
-        h[3] += d;
-        h[4] += e;
-        h[5] += f;
-        h[6] += g;
-        h[7] += hh;
+void Sha256::Block(const unsigned char* p) {
+    uint32_t w[64];
+    for (int j = 0; j < 16; ++j) {
+        w[j] = (uint32_t(p[4 * j]) << 24) | (uint32_t(p[4 * j + 1]) << 16) |
+               (uint32_t(p[4 * j + 2]) << 8) | uint32_t(p[4 * j + 3]);
     }
+    for (int j = 16; j < 64; ++j) {
+        const uint32_t s0 = Rotr(w[j - 15], 7) ^ Rotr(w[j - 15], 18) ^ (w[j - 15] >> 3);
+        const uint32_t s1 = Rotr(w[j - 2], 17) ^ Rotr(w[j - 2], 19) ^ (w[j - 2] >> 10);
+        w[j] = w[j - 16] + s0 + w[j - 7] + s1;
+    }
+    uint32_t a = h_[0], b = h_[1], c = h_[2], d = h_[3], e = h_[4], f = h_[5], g = h_[6],
+             hh = h_[7];
+    for (int j = 0; j < 64; ++j) {
+        const uint32_t t1 =
+            hh + (Rotr(e, 6) ^ Rotr(e, 11) ^ Rotr(e, 25)) + ((e & f) ^ (~e & g)) + kK[j] + w[j];
+        const uint32_t t2 =
+            (Rotr(a, 2) ^ Rotr(a, 13) ^ Rotr(a, 22)) + ((a & b) ^ (a & c) ^ (b & c));
+        hh = g;
+        g = f;
+        f = e;
+        e = d + t1;
+        d = c;
+        c = b;
+        b = a;
+        a = t1 + t2;
+    }
+    h_[0] += a;
+    h_[1] += b;
+    h_[2] += c;
+    h_[3] += d;
+    h_[4] += e;
+    h_[5] += f;
+    h_[6] += g;
+    h_[7] += hh;
+}
+
+void Sha256::Update(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    total_ += n;
+    while (n > 0) {
+        const std::size_t take = std::min(n, sizeof(buf_) - fill_);
+        std::memcpy(buf_ + fill_, p, take);
+        fill_ += take;
+        p += take;
+        n -= take;
+        if (fill_ == sizeof(buf_)) {
+            Block(buf_);
+            fill_ = 0;
+        }
+    }
+}
+
+std::string Sha256::Hex() {
+    const uint64_t bits = total_ * 8;
+    const unsigned char one = 0x80, zero = 0;
+    Update(&one, 1);
+    while (fill_ != 56) Update(&zero, 1);
+    unsigned char length[8];
+    for (int j = 0; j < 8; ++j) length[j] = static_cast<unsigned char>(bits >> (56 - 8 * j));
+    Update(length, 8);
     static const char* kHex = "0123456789abcdef";
     std::string out;
-    for (const uint32_t v : h) {
+    for (const uint32_t v : h_) {
         for (int j = 28; j >= 0; j -= 4) out += kHex[(v >> j) & 0xf];
     }
     return out;
+}
+
+std::string Sha256Hex(const std::string& bytes) {
+    Sha256 h;
+    h.Update(bytes.data(), bytes.size());
+    return h.Hex();
 }
 
 std::string Sha256File(const std::string& path) {

@@ -20,6 +20,7 @@
 #include "core/input_file.hpp"
 #include "core/version.hpp"
 #include "networks/checkpoint/checkpoint_json.hpp"
+#include "networks/checkpoint/torch_save_reader.hpp"
 #include "networks/family.hpp"
 #include "networks/net.hpp"
 #include "networks/zoo.hpp"
@@ -349,6 +350,9 @@ nlohmann::json LoadCheckpointAs(const std::string& dir, RegistrationNet& net,
     const auto params = net.parameters();
     const torch::Device device = params.empty() ? torch::Device(torch::kCPU) : params[0].device();
     try {
+        // Its records' declared sizes against the file and the reader's budget first:
+        // LibTorch's reader allocates what a record declares.
+        CheckTorchZipSizes(weights.string());
         torch::serialize::InputArchive archive;
         archive.load_from(weights.string(), device);
         net.load(archive);
@@ -371,6 +375,7 @@ nlohmann::json LoadCheckpointAs(const std::string& dir, RegistrationNet& net,
     if (optimizer != nullptr) {
         const fs::path opt = fs::path(dir) / kOptimizerFile;
         try {
+            if (fs::exists(opt)) CheckTorchZipSizes(opt.string());
             torch::load(*optimizer, opt.string(), device);
         } catch (const c10::Error& e) {
             throw std::runtime_error("optimizer state " + opt.string() +
@@ -424,6 +429,9 @@ std::string CheckCheckpointModel(const std::string& dir, const nlohmann::json& i
         net.erase("train");
         family.check_config(net);
         return family.arch;
+    } catch (const c10::Error& e) {  // the message without LibTorch's stack dump
+        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
+                                 ": cannot build its model: " + e.what_without_backtrace());
     } catch (const std::exception& e) {
         throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
                                  ": cannot build its model: " + e.what());
@@ -436,6 +444,9 @@ std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(const std::string& dir,
     std::shared_ptr<RegistrationNet> net;
     try {
         net = MakeNetFromConfig(config);
+    } catch (const c10::Error& e) {  // the message without LibTorch's stack dump
+        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
+                                 ": cannot build its model: " + e.what_without_backtrace());
     } catch (const std::exception& e) {
         throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
                                  ": cannot build its model: " + e.what());

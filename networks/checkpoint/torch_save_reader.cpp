@@ -5,7 +5,8 @@
 #include <unistd.h>
 
 #include <caffe2/serialize/inline_container.h>
-#include <caffe2/serialize/istream_adapter.h>
+#include <caffe2/serialize/in_memory_adapter.h>
+#include <caffe2/serialize/read_adapter_interface.h>
 
 #include <algorithm>
 #include <array>
@@ -15,6 +16,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -24,6 +26,168 @@ namespace {
 
 [[noreturn]] void Fail(const std::string& name, const std::string& what) {
     throw std::runtime_error(name + ": " + what);
+}
+
+// --------------------------------------------------------------------------- file access
+
+/// The opened file, read with pread where asked (LibTorch's zip reader reads through it).
+class FdReadAdapter final : public caffe2::serialize::ReadAdapterInterface {
+public:
+    FdReadAdapter(int fd, std::uint64_t size, std::string name)
+        : fd_(fd), size_(size), name_(std::move(name)) {}
+    size_t size() const override { return size_; }
+    size_t read(uint64_t pos, void* buf, size_t n, const char* /*what*/) const override {
+        auto* out = static_cast<char*>(buf);
+        size_t done = 0;
+        while (done < n) {
+            const ssize_t got = ::pread(fd_, out + done, n - done, static_cast<off_t>(pos + done));
+            if (got < 0 && errno == EINTR) continue;
+            // An EIO (/proc/self/mem) ended as a bare "basic_filebuf::underflow".
+            if (got < 0) Fail(name_, std::string("read error: ") + std::strerror(errno));
+            if (got == 0) Fail(name_, "ends early: the file shrank while it was read");
+            done += static_cast<size_t>(got);
+        }
+        return n;
+    }
+
+private:
+    int fd_;
+    std::uint64_t size_;
+    std::string name_;
+};
+
+std::string ReadAt(const caffe2::serialize::ReadAdapterInterface& in, uint64_t pos, size_t n) {
+    std::string s(n, '\0');
+    if (n > 0) in.read(pos, &s[0], n);
+    return s;
+}
+
+uint64_t Le(const std::string& b, size_t at, int n) {
+    uint64_t v = 0;
+    for (int j = n - 1; j >= 0; --j) v = (v << 8) | static_cast<uint8_t>(b[at + j]);
+    return v;
+}
+
+// ----------------------------------------------------------------- zip central directory
+
+/// What the central directory declares of one record.
+struct ZipEntry {
+    uint16_t method = 0;
+    uint64_t compressed = 0, size = 0, offset = 0;
+};
+
+/// Deflate expands at most 1032 to 1 (zlib's technical details, "Maximum compression
+/// factor"): a record that declares more than that from its compressed bytes is lying.
+constexpr uint64_t kMaxDeflateRatio = 1032;
+
+/// The central directory of the zip archive `in` (APPNOTE.TXT 4.3.12-4.3.16, zip64 included),
+/// every record checked against the file before anything it declares is read: a record lies
+/// inside the file, a stored one declares as many bytes as it holds, a deflated one no more
+/// than 1032 times its compressed bytes, and records other than storages (data/...) at most
+/// kMaxTorchSavePickleBytes each. Records by name; `first` receives the first one's name.
+std::map<std::string, ZipEntry> ReadZipDirectory(const caffe2::serialize::ReadAdapterInterface& in,
+                                                 const std::string& name, std::string* first) {
+    const uint64_t file = in.size();
+    const auto bad = [&](const std::string& what) { Fail(name, "corrupt zip archive: " + what); };
+    // The end-of-central-directory record: 22 bytes and a comment of at most 65535.
+    const uint64_t tail_size = std::min<uint64_t>(file, 22 + 65535);
+    const std::string tail = ReadAt(in, file - tail_size, tail_size);
+    size_t eocd = std::string::npos;
+    for (size_t j = tail.size() >= 22 ? tail.size() - 22 + 1 : 0; j-- > 0;) {
+        if (Le(tail, j, 4) == 0x06054b50) {
+            eocd = j;
+            break;
+        }
+    }
+    if (eocd == std::string::npos) bad("no end-of-central-directory record");
+    uint64_t entries = Le(tail, eocd + 10, 2);
+    uint64_t cd_size = Le(tail, eocd + 12, 4);
+    uint64_t cd_offset = Le(tail, eocd + 16, 4);
+    const uint64_t eocd_at = file - tail_size + eocd;
+    if (entries == 0xffff || cd_size == 0xffffffff || cd_offset == 0xffffffff) {
+        // zip64: a locator 20 bytes before, pointing at the zip64 end record.
+        if (eocd_at < 20) bad("zip64 locator missing");
+        const std::string loc = ReadAt(in, eocd_at - 20, 20);
+        if (Le(loc, 0, 4) != 0x07064b50) bad("zip64 locator missing");
+        const uint64_t at = Le(loc, 8, 8);
+        if (at > file || file - at < 56) bad("zip64 end record outside the file");
+        const std::string z = ReadAt(in, at, 56);
+        if (Le(z, 0, 4) != 0x06064b50) bad("zip64 end record missing");
+        entries = Le(z, 32, 8);
+        cd_size = Le(z, 40, 8);
+        cd_offset = Le(z, 48, 8);
+    }
+    if (cd_offset > file || cd_size > file - cd_offset) {
+        bad("its central directory lies outside the file");
+    }
+    if (cd_size > kMaxTorchSavePickleBytes) {
+        bad("central directory of " + std::to_string(cd_size) + " bytes, more than the " +
+            std::to_string(kMaxTorchSavePickleBytes) + " regbench reads");
+    }
+    const std::string cd = ReadAt(in, cd_offset, cd_size);
+    std::map<std::string, ZipEntry> out;
+    size_t p = 0;
+    for (uint64_t k = 0; k < entries; ++k) {
+        if (cd.size() - p < 46 || Le(cd, p, 4) != 0x02014b50) bad("truncated central directory");
+        ZipEntry e;
+        e.method = static_cast<uint16_t>(Le(cd, p + 10, 2));
+        e.compressed = Le(cd, p + 20, 4);
+        e.size = Le(cd, p + 24, 4);
+        e.offset = Le(cd, p + 42, 4);
+        const size_t name_len = Le(cd, p + 28, 2), extra_len = Le(cd, p + 30, 2);
+        const size_t record = 46 + name_len + extra_len + Le(cd, p + 32, 2);
+        if (cd.size() - p < record) bad("truncated central directory");
+        const std::string rname = cd.substr(p + 46, name_len);
+        if (k == 0) *first = rname;
+        // zip64 extended information (header 1): 8-byte values for the fields set to ~0.
+        for (size_t x = p + 46 + name_len; x + 4 <= p + 46 + name_len + extra_len;) {
+            const uint64_t id = Le(cd, x, 2), len = Le(cd, x + 2, 2);
+            if (x + 4 + len > p + 46 + name_len + extra_len) bad("malformed extra field");
+            if (id == 1) {
+                size_t f = x + 4;
+                for (uint64_t* v : {&e.size, &e.compressed, &e.offset}) {
+                    if (*v != 0xffffffff) continue;
+                    if (f + 8 > x + 4 + len) bad("malformed zip64 field of " + rname);
+                    *v = Le(cd, f, 8);
+                    f += 8;
+                }
+            }
+            x += 4 + len;
+        }
+        p += record;
+        const std::string what = "record " + rname + " ";
+        if (e.method != 0 && e.method != 8) {
+            Fail(name, what + "is compressed with zip method " + std::to_string(e.method) +
+                           "; torch.save files hold stored or deflated records only");
+        }
+        if (e.offset > cd_offset || e.compressed > cd_offset - e.offset) {
+            Fail(name, what + "declares " + std::to_string(e.compressed) + " bytes at offset " +
+                           std::to_string(e.offset) + ", beyond the file's " +
+                           std::to_string(file) + " bytes");
+        }
+        if (e.method == 0 && e.size != e.compressed) {
+            Fail(name, what + "is stored but declares " + std::to_string(e.size) +
+                           " bytes for the " + std::to_string(e.compressed) + " it holds");
+        }
+        if (e.method == 8 && e.size / kMaxDeflateRatio > e.compressed) {
+            Fail(name, what + "declares " + std::to_string(e.size) + " bytes from " +
+                           std::to_string(e.compressed) +
+                           " deflated ones, more than deflate can give (1032 to 1)");
+        }
+        if (e.size > kMaxTorchSaveBytes) {
+            Fail(name, what + "declares " + std::to_string(e.size) + " bytes, more than the " +
+                           std::to_string(kMaxTorchSaveBytes) + " a checkpoint may hold");
+        }
+        const size_t slash = rname.find('/');
+        const bool storage = slash != std::string::npos && rname.compare(slash, 6, "/data/") == 0;
+        if (!storage && e.size > kMaxTorchSavePickleBytes) {
+            Fail(name, what + "declares " + std::to_string(e.size) + " bytes, more than the " +
+                           std::to_string(kMaxTorchSavePickleBytes) +
+                           " a pickle or header record may have");
+        }
+        out[rname] = e;
+    }
+    return out;
 }
 
 // ------------------------------------------------------------------------- pickle objects
@@ -58,6 +222,9 @@ struct Obj {
     int storage = -1;                                // kTensor: its kStorage object
     std::vector<int64_t> sizes, strides;             // kTensor
 };
+
+/// Most dimensions a tensor of a state dict may have.
+constexpr size_t kMaxDims = 16;
 
 /// The tensor types a state dict may hold; each is pickled as the storage class
 /// torch.<c10::toString(type)>Storage (FloatStorage, BFloat16Storage, ...).
@@ -120,6 +287,7 @@ public:
                     Take(8);
                     break;  // FRAME
                 case '(':
+                    Bound(marks_.size(), "marks");
                     marks_.push_back(stack_.size());
                     break;   // MARK
                 case '.': {  // STOP
@@ -205,13 +373,13 @@ public:
                     break;
                 }
                 case 'q':
-                    memo_[Byte()] = Top();
+                    Put(Byte());
                     break;  // BINPUT
                 case 'r':
-                    memo_[LittleUnsigned(4)] = Top();
+                    Put(LittleUnsigned(4));
                     break;  // LONG_BINPUT
                 case 0x94:
-                    memo_[memo_.size()] = Top();
+                    Put(memo_.size());
                     break;  // MEMOIZE
                 case 'h':
                     Push(Memo(Byte()));
@@ -309,19 +477,37 @@ private:
         return v;
     }
     std::string Line() {
-        const size_t end = data_.find('\n', pos_);
-        if (end == std::string::npos || end - pos_ > 256) Bad("malformed GLOBAL in pickle");
-        std::string s = data_.substr(pos_, end - pos_);
-        pos_ = end + 1;
+        // Looked for in the next 257 bytes only: a search to the end per opcode was quadratic.
+        const size_t end = data_.substr(pos_, 257).find('\n');
+        if (end == std::string::npos) Bad("malformed GLOBAL in pickle");
+        std::string s = data_.substr(pos_, end);
+        pos_ += end + 1;
         return s;
+    }
+    /// Refuses the pickle when a structure of `count` entries would grow past
+    /// kMaxPickleObjects: its memory is then bounded whatever the file holds.
+    void Bound(size_t count, const char* what) const {
+        if (count >= kMaxPickleObjects) {
+            Bad("pickle makes more than " + std::to_string(kMaxPickleObjects) + " " + what +
+                ", more than a state dict of 40,000 tensors");
+        }
+    }
+    void Put(uint64_t key) {
+        const int o = Top();
+        if (memo_.count(key) == 0) Bound(memo_.size(), "memo entries");
+        memo_[key] = o;
     }
     int New(Kind k) {
         // Every opcode makes at most one object and consumes at least one byte.
+        Bound(arena_.size(), "objects");
         arena_.emplace_back();
         arena_.back().kind = k;
         return static_cast<int>(arena_.size() - 1);
     }
-    void Push(int o) { stack_.push_back(o); }
+    void Push(int o) {
+        Bound(stack_.size(), "stack entries");
+        stack_.push_back(o);
+    }
     size_t Floor() const { return marks_.empty() ? 0 : marks_.back(); }
     int Pop() {
         if (stack_.size() <= Floor()) Bad("malformed pickle (stack underflow)");
@@ -397,6 +583,12 @@ private:
     }
     std::vector<int64_t> IntTuple(int o, const char* what) const {
         if (at(o).kind != Kind::kTuple) Bad(std::string("tensor ") + what + " is not a tuple");
+        // Checked before the copy: a long tuple in the memo, passed to a million calls, made
+        // the reading quadratic.
+        if (at(o).items.size() > kMaxDims) {
+            Bad(std::string("tensor ") + what + " has " + std::to_string(at(o).items.size()) +
+                " dimensions, more than " + std::to_string(kMaxDims));
+        }
         std::vector<int64_t> v;
         for (const int x : at(o).items) {
             if (at(x).kind != Kind::kInt || at(x).i < 0) {
@@ -464,6 +656,11 @@ private:
             Bad("pickle calls something other than a known global");
         }
         const std::string g = at(fn).s;
+        // No global a state dict uses takes more than 7 arguments; refused before the copy (a
+        // million calls with a long tuple from the memo were quadratic).
+        if (at(args).items.size() > 8) {
+            Bad(g + " called with " + std::to_string(at(args).items.size()) + " arguments");
+        }
         const std::vector<int> a = at(args).items;
         if (g == "collections.OrderedDict") {
             if (!a.empty()) Bad("OrderedDict built from arguments");
@@ -488,7 +685,7 @@ private:
         t.dtype = at(a[0]).dtype;
         t.sizes = IntTuple(a[2], "size");
         t.strides = IntTuple(a[3], "stride");
-        if (t.sizes.size() != t.strides.size() || t.sizes.size() > 16 || t.i < 0) {
+        if (t.sizes.size() != t.strides.size() || t.i < 0) {
             Bad(g + ": size and stride of different lengths, or a negative offset");
         }
         arena_[o] = std::move(t);
@@ -563,21 +760,34 @@ int FindStateDict(const Unpickler& u, int top, const std::string& name, std::str
     Fail(name, "holds no state dict (a dict of parameter names to tensors)");
 }
 
-/// Tensors of the state dict `sd` from the storages' bytes.
+/// Bytes of the storage object `o` (its elements times their size), refused beyond the budget.
+uint64_t StorageBytes(const Unpickler& u, int o, const std::string& name) {
+    const Obj& st = u.at(o);
+    const uint64_t element = c10::elementSize(st.dtype);
+    const auto numel = static_cast<uint64_t>(st.i);
+    if (numel > kMaxTorchSaveBytes / element) {
+        Fail(name, "storage " + st.s + " declares " + std::to_string(numel) + " elements of " +
+                       std::to_string(element) + " bytes, more than the " +
+                       std::to_string(kMaxTorchSaveBytes) + " a checkpoint may hold");
+    }
+    return numel * element;
+}
+
+/// Tensors of the state dict `sd`: views of `storages` (flat tensors by key), copied out. Every
+/// view is checked against its storage (within it, no more elements than it has), and the
+/// views' bytes in all against kMaxTorchSaveBytes, before the first is copied.
 StateDict BuildTensors(const Unpickler& u, int sd,
-                       const std::map<std::string, std::string>& storage_bytes,
+                       const std::map<std::string, torch::Tensor>& storages,
                        const std::string& name) {
-    StateDict out;
-    std::map<std::string, bool> seen;
     const auto& items = u.at(sd).items;
+    std::set<std::string> seen;
+    uint64_t total = 0;
     for (size_t j = 0; j < items.size(); j += 2) {
-        const std::string key = u.at(items[j]).s;
-        if (seen[key]) Fail(name, "tensor " + key + " appears twice");
-        seen[key] = true;
+        const std::string& key = u.at(items[j]).s;
+        if (!seen.insert(key).second) Fail(name, "tensor " + key + " appears twice");
         const Obj& t = u.at(items[j + 1]);
         const Obj& st = u.at(t.storage);
-        const auto bytes = storage_bytes.find(st.s);
-        if (bytes == storage_bytes.end()) Fail(name, "storage of tensor " + key + " is missing");
+        if (storages.count(st.s) == 0) Fail(name, "storage of tensor " + key + " is missing");
         const int64_t numel = st.i;
         // Largest element index the view touches, overflow-checked.
         int64_t last = t.i;
@@ -592,62 +802,101 @@ StateDict BuildTensors(const Unpickler& u, int sd,
                 last += (t.sizes[d] - 1) * t.strides[d];
             }
         }
-        int64_t count = 1;
-        for (const int64_t s : t.sizes) {
-            if (s > 0 && count > std::numeric_limits<int64_t>::max() / s) {
-                Fail(name, "tensor " + key + " has an impossible shape");
-            }
-            count *= s;
-        }
         if (!empty && last >= numel) {
             Fail(name, "tensor " + key + " reaches past the end of its storage (element " +
                            std::to_string(last) + " of " + std::to_string(numel) + ")");
         }
-        const auto opts = torch::TensorOptions().dtype(st.dtype);
-        const size_t element = c10::elementSize(st.dtype);
-        if (bytes->second.size() % element != 0 ||
-            bytes->second.size() / element != static_cast<uint64_t>(numel)) {
-            Fail(name, "storage of tensor " + key + " has " + std::to_string(bytes->second.size()) +
-                           " bytes for " + std::to_string(numel) + " elements");
+        const uint64_t element = c10::elementSize(st.dtype);
+        uint64_t count = 1;
+        for (const int64_t s : t.sizes) {
+            if (s > 0 && count > kMaxTorchSaveBytes / element / static_cast<uint64_t>(s)) {
+                Fail(name, "tensor " + key + " declares more than the " +
+                               std::to_string(kMaxTorchSaveBytes) + " bytes a checkpoint may hold");
+            }
+            count *= static_cast<uint64_t>(s);
         }
-        torch::Tensor storage = torch::empty({numel}, opts);
-        if (numel > 0) std::memcpy(storage.data_ptr(), bytes->second.data(), bytes->second.size());
-        torch::Tensor v = empty ? torch::empty(t.sizes, opts)
+        // A state dict's tensors are views within their storages; one with more elements than
+        // its storage (stride 0, as expand() makes) would let a few bytes of file ask for the
+        // whole budget.
+        if (!empty && count > static_cast<uint64_t>(numel)) {
+            Fail(name, "tensor " + key + " has " + std::to_string(count) +
+                           " elements, more than the " + std::to_string(numel) +
+                           " of its storage (a view that repeats elements)");
+        }
+        total += empty ? 0 : count * element;
+        if (total > kMaxTorchSaveBytes) {
+            Fail(name, "its tensors take more than the " + std::to_string(kMaxTorchSaveBytes) +
+                           " bytes a checkpoint may hold (tensor " + key + " passes it)");
+        }
+    }
+    StateDict out;
+    for (size_t j = 0; j < items.size(); j += 2) {
+        const Obj& t = u.at(items[j + 1]);
+        const torch::Tensor& storage = storages.at(u.at(t.storage).s);
+        const bool empty = std::find(t.sizes.begin(), t.sizes.end(), 0) != t.sizes.end();
+        torch::Tensor v = empty ? torch::empty(t.sizes, storage.options())
                                 : storage.as_strided(t.sizes, t.strides, t.i).clone();
-        out.emplace_back(key, v.contiguous());
+        out.emplace_back(u.at(items[j]).s, v.contiguous());
     }
     return out;
 }
 
-TorchSaveContents ReadZip(const std::string& bytes, const std::string& name) {
-    std::istringstream in(bytes);
-    std::map<std::string, std::string> storage_bytes;
-    std::string pickle;
+// Long on purpose: one checked sequence (directory, pickle, every storage's declared size
+// against its record and the budget, then the records), each step using the previous one's.
+TorchSaveContents ReadZip(const std::shared_ptr<caffe2::serialize::ReadAdapterInterface>& in,
+                          const std::string& name) {
+    std::string first;
+    const std::map<std::string, ZipEntry> entries = ReadZipDirectory(*in, name, &first);
+    const std::string folder = first.substr(0, first.find('/'));  // as LibTorch's reader takes it
     try {
-        caffe2::serialize::PyTorchStreamReader reader(
-            std::make_shared<caffe2::serialize::IStreamAdapter>(&in));
+        caffe2::serialize::PyTorchStreamReader reader(in);
         if (reader.hasRecord("constants.pkl") || reader.hasRecord("code/__torch__.py")) {
             Fail(name, "is a TorchScript archive (torch.jit.save), not a torch.save state dict");
         }
         if (!reader.hasRecord("data.pkl"))
             Fail(name, "zip archive without data.pkl: not a torch.save file");
-        const auto record = [&](const std::string& r) {
-            auto [ptr, size] = reader.getRecord(r);
-            return std::string(static_cast<const char*>(ptr.get()), size);
-        };
-        pickle = record("data.pkl");
+        auto [pickle_ptr, pickle_size] = reader.getRecord("data.pkl");  // checked: <= 64 MiB
+        const std::string pickle(static_cast<const char*>(pickle_ptr.get()), pickle_size);
+        pickle_ptr.clear();
         Unpickler u(pickle, name);
         const int top = u.Run();
+        // Every storage's declared size against its record and, in all, the budget, before any
+        // is read: a 1 MB zip of deflated records expanded to 2-3 GB before any check.
+        uint64_t total = 0;
         for (const auto& [key, obj] : u.storages()) {
-            (void)obj;
-            if (!reader.hasRecord("data/" + key))
-                Fail(name, "storage record data/" + key + " is missing");
-            storage_bytes[key] = record("data/" + key);
+            const uint64_t bytes = StorageBytes(u, obj, name);
+            const auto it = entries.find(folder + "/data/" + key);
+            if (it == entries.end()) Fail(name, "storage record data/" + key + " is missing");
+            if (it->second.size != bytes) {
+                Fail(name, "storage " + key + " declares " + std::to_string(bytes) + " bytes (" +
+                               std::to_string(u.at(obj).i) + " elements), its record " +
+                               it->first + " holds " + std::to_string(it->second.size));
+            }
+            total += bytes;
+            if (total > kMaxTorchSaveBytes) {
+                Fail(name, "its storages declare more than the " +
+                               std::to_string(kMaxTorchSaveBytes) +
+                               " bytes a checkpoint may hold (storage " + key + " passes it)");
+            }
+        }
+        std::map<std::string, torch::Tensor> storages;
+        for (const auto& [key, obj] : u.storages()) {
+            const Obj& st = u.at(obj);
+            const auto opts = torch::TensorOptions().dtype(st.dtype);
+            if (st.i == 0) {
+                storages[key] = torch::empty({0}, opts);
+                continue;
+            }
+            // Inflating writes into the declared size and stops there (miniz's
+            // extract_to_mem); the record's bytes become the storage without a copy.
+            auto holder =
+                std::make_shared<at::DataPtr>(std::get<0>(reader.getRecord("data/" + key)));
+            storages[key] = torch::from_blob(holder->get(), {st.i}, [holder](void*) {}, opts);
         }
         TorchSaveContents out;
         out.format = "zip";
         const int sd = FindStateDict(u, top, name, &out.wrapper);
-        out.tensors = BuildTensors(u, sd, storage_bytes, name);
+        out.tensors = BuildTensors(u, sd, storages, name);
         return out;
     } catch (const c10::Error& e) {
         Fail(name, std::string("corrupt zip archive: ") + e.what_without_backtrace());
@@ -678,12 +927,13 @@ TorchSaveContents ReadLegacy(const std::string& bytes, const std::string& name) 
     const int top = u.Run();
     const int keys = u.Run();
     if (u.at(keys).kind != Kind::kList) Fail(name, "malformed storage key list");
-    std::map<std::string, std::string> storage_bytes;
+    std::map<std::string, torch::Tensor> storages;
     size_t pos = u.pos();
     for (const int k : u.at(keys).items) {
         if (u.at(k).kind != Kind::kStr) Fail(name, "malformed storage key list");
         const auto it = u.storages().find(u.at(k).s);
         if (it == u.storages().end()) Fail(name, "storage " + u.at(k).s + " is not referenced");
+        if (storages.count(u.at(k).s)) Fail(name, "storage " + u.at(k).s + " listed twice");
         if (bytes.size() - pos < 8) Fail(name, "file ends before storage " + u.at(k).s);
         int64_t numel = 0;
         std::memcpy(&numel, bytes.data() + pos, 8);
@@ -693,18 +943,19 @@ TorchSaveContents ReadLegacy(const std::string& bytes, const std::string& name) 
             Fail(name, "storage " + u.at(k).s + " holds " + std::to_string(numel) +
                            " elements, its tensors declare " + std::to_string(declared));
         }
-        const size_t element = c10::elementSize(u.at(it->second).dtype);
-        if (static_cast<uint64_t>(numel) > (bytes.size() - pos) / element) {
-            Fail(name, "file ends inside storage " + u.at(k).s);
-        }
-        const size_t size = static_cast<size_t>(numel) * element;
-        storage_bytes[u.at(k).s] = bytes.substr(pos, size);
+        // Within the file, which is within the budget: checked before it is allocated.
+        const uint64_t size = StorageBytes(u, it->second, name);
+        if (size > bytes.size() - pos) Fail(name, "file ends inside storage " + u.at(k).s);
+        torch::Tensor s =
+            torch::empty({numel}, torch::TensorOptions().dtype(u.at(it->second).dtype));
+        if (size > 0) std::memcpy(s.data_ptr(), bytes.data() + pos, size);
+        storages[u.at(k).s] = s;
         pos += size;
     }
     TorchSaveContents out;
     out.format = "legacy";
     const int sd = FindStateDict(u, top, name, &out.wrapper);
-    out.tensors = BuildTensors(u, sd, storage_bytes, name);
+    out.tensors = BuildTensors(u, sd, storages, name);
     return out;
 }
 
@@ -750,14 +1001,14 @@ private:
     std::string out_;
 };
 
-}  // namespace
-
-TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string& name) {
+/// Reads the torch.save file behind `in` (a zip lazily, a legacy stream whole).
+TorchSaveContents ReadFrom(const std::shared_ptr<caffe2::serialize::ReadAdapterInterface>& in,
+                           const std::string& name) {
+    const std::string head = ReadAt(*in, 0, std::min<uint64_t>(in->size(), 262));
     try {
-        if (bytes.size() >= 4 && bytes.compare(0, 4, "PK\x03\x04") == 0)
-            return ReadZip(bytes, name);
-        if (!bytes.empty() && static_cast<uint8_t>(bytes[0]) == 0x80)
-            return ReadLegacy(bytes, name);
+        if (head.size() >= 4 && head.compare(0, 4, "PK\x03\x04") == 0) return ReadZip(in, name);
+        if (!head.empty() && static_cast<uint8_t>(head[0]) == 0x80)
+            return ReadLegacy(ReadAt(*in, 0, in->size()), name);
     } catch (const std::bad_alloc&) {
         Fail(name, "declares more data than fits in memory (corrupt file)");
     } catch (const c10::Error& e) {
@@ -767,60 +1018,105 @@ TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string
         // non-numeric one ended as "regbench: error: stoull", without the file.
         Fail(name, std::string("corrupt file (") + e.what() + " on one of its records)");
     }
-    if (bytes.size() >= 262 && bytes.compare(257, 5, "ustar") == 0) {
+    if (head.size() >= 262 && head.compare(257, 5, "ustar") == 0) {
         Fail(name, "is a tar archive (torch.save of PyTorch < 0.4), which is not supported");
     }
-    Fail(name, bytes.empty() ? "is empty" : "is neither a zip-format nor a legacy torch.save file");
+    Fail(name, head.empty() ? "is empty" : "is neither a zip-format nor a legacy torch.save file");
+}
+
+/// `path` opened once, without blocking, and checked as opened: a check by name and a later
+/// open let a symbolic link flipped to a FIFO in between block for ever.
+struct OpenedFile {
+    explicit OpenedFile(const std::string& path) {
+        fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+        if (fd < 0) {
+            if (errno == ENOENT) Fail(path, "no such file");
+            Fail(path, std::string("cannot be opened: ") + std::strerror(errno));
+        }
+        if (::fstat(fd, &st) != 0) {
+            const int err = errno;
+            ::close(fd);
+            Fail(path, std::string("cannot be read: ") + std::strerror(err));
+        }
+        std::string problem;
+        if (S_ISDIR(st.st_mode)) {
+            problem = "is a directory, not a file";
+        } else if (!S_ISREG(st.st_mode)) {
+            problem = "not a regular file (a FIFO, socket or device); regbench reads inputs from "
+                      "regular files only";
+        } else if (static_cast<uint64_t>(st.st_size) > kMaxTorchSaveBytes) {
+            // A 30 GB sparse file with a zip header was read into memory until the OOM killer.
+            problem = "is " + std::to_string(st.st_size) + " bytes, more than the " +
+                      std::to_string(kMaxTorchSaveBytes) +
+                      " a checkpoint regbench reads may have (the largest authors' file is under "
+                      "100 MB)";
+        }
+        if (!problem.empty()) {
+            ::close(fd);
+            Fail(path, problem);
+        }
+    }
+    ~OpenedFile() { ::close(fd); }
+    OpenedFile(const OpenedFile&) = delete;
+    OpenedFile& operator=(const OpenedFile&) = delete;
+    int fd = -1;
+    struct stat st {};
+};
+
+}  // namespace
+
+TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string& name) {
+    return ReadFrom(
+        std::make_shared<caffe2::serialize::MemoryReadAdapter>(bytes.data(), bytes.size()), name);
 }
 
 TorchSaveContents ReadTorchSaveFile(const std::string& path) {
-    // Opened once, without blocking, and the opened file is the one checked and read: a check
-    // by name and a later open let a symbolic link flipped to a FIFO in between block for ever.
-    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) {
-        if (errno == ENOENT) Fail(path, "no such file");
-        Fail(path, std::string("cannot be opened: ") + std::strerror(errno));
-    }
-    struct Closer {
-        int fd;
-        ~Closer() { ::close(fd); }
-    } closer{fd};
-    struct stat st {};
-    if (::fstat(fd, &st) != 0) Fail(path, std::string("cannot be read: ") + std::strerror(errno));
-    if (S_ISDIR(st.st_mode)) Fail(path, "is a directory, not a file");
-    if (!S_ISREG(st.st_mode)) {
-        Fail(path,
-             "not a regular file (a FIFO, socket or device); regbench reads inputs from regular "
-             "files only");
-    }
-    // Read whole, so bounded first: a 30 GB sparse file with a zip header was read into memory
-    // until the OOM killer came.
-    const auto limit = [&](std::uint64_t size) {
-        if (size > kMaxTorchSaveFileBytes) {
-            Fail(path, "is " + std::to_string(size) + " bytes, more than the " +
-                           std::to_string(kMaxTorchSaveFileBytes) +
-                           " a checkpoint regbench imports may have (the largest authors' file "
-                           "is under 100 MB)");
-        }
-    };
-    limit(static_cast<std::uint64_t>(st.st_size));
-    std::string bytes;
-    std::vector<char> buf(1 << 16);
+    const OpenedFile f(path);
+    // The hash, streamed through the opened file to its end (a /proc file reports size 0).
+    Sha256 hash;
+    uint64_t size = 0;
+    std::vector<char> buf(1 << 20);
     for (;;) {
-        const ssize_t n = ::read(fd, buf.data(), buf.size());
+        const ssize_t n = ::read(f.fd, buf.data(), buf.size());
         if (n == 0) break;
         if (n < 0) {
             if (errno == EINTR) continue;
             // An EIO (/proc/self/mem) ended as a bare "basic_filebuf::underflow".
             Fail(path, std::string("read error: ") + std::strerror(errno));
         }
-        bytes.append(buf.data(), static_cast<std::size_t>(n));
-        limit(bytes.size());  // a file that grows while read
+        hash.Update(buf.data(), static_cast<size_t>(n));
+        size += static_cast<uint64_t>(n);
+        if (size > static_cast<uint64_t>(f.st.st_size)) break;
     }
-    TorchSaveContents contents = ReadTorchSaveBytes(bytes, path);
-    contents.sha256 = Sha256Hex(bytes);
-    contents.bytes = bytes.size();
+    const auto changed = [&] {
+        struct stat now {};
+        return size != static_cast<uint64_t>(f.st.st_size) || ::fstat(f.fd, &now) != 0 ||
+               now.st_size != f.st.st_size || now.st_mtim.tv_sec != f.st.st_mtim.tv_sec ||
+               now.st_mtim.tv_nsec != f.st.st_mtim.tv_nsec;
+    };
+    if (changed()) Fail(path, "changed while it was read; read it again when it is complete");
+    TorchSaveContents contents =
+        ReadFrom(std::make_shared<FdReadAdapter>(f.fd, size, path), path);
+    // The hash is of the bytes read only if the file did not change in between.
+    if (changed()) Fail(path, "changed while it was read; read it again when it is complete");
+    contents.sha256 = hash.Hex();
+    contents.bytes = size;
     return contents;
+}
+
+void CheckTorchZipSizes(const std::string& path) {
+    const OpenedFile f(path);
+    const FdReadAdapter in(f.fd, static_cast<uint64_t>(f.st.st_size), path);
+    if (in.size() < 4 || ReadAt(in, 0, 4) != "PK\x03\x04") return;  // LibTorch names the rest
+    std::string first;
+    uint64_t total = 0;
+    for (const auto& [name, e] : ReadZipDirectory(in, path, &first)) {
+        total += e.size;  // each <= kMaxTorchSaveBytes: no overflow
+        if (total > kMaxTorchSaveBytes) {
+            Fail(path, "its records declare more than the " + std::to_string(kMaxTorchSaveBytes) +
+                           " bytes a checkpoint may hold (record " + name + " passes it)");
+        }
+    }
 }
 
 std::string WriteTorchSaveZip(const StateDict& tensors) {

@@ -17,6 +17,7 @@
 // state dict.
 #include <torch/torch.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -37,16 +38,33 @@ struct TorchSaveContents {
     std::uint64_t bytes = 0;  ///< how many were read (ReadTorchSaveFile only)
 };
 
-/// The largest file ReadTorchSaveFile reads (it reads the file whole): 2 GiB, twenty times the
-/// largest authors' checkpoint regbench imports. A larger file is refused naming it.
-constexpr std::uint64_t kMaxTorchSaveFileBytes = std::uint64_t{2} << 30;
+/// The memory budget of one read (docs/learned-methods.md, "Reader limits"): 2 GiB, twenty
+/// times the largest authors' checkpoint regbench imports. A file larger than it, a zip record
+/// that declares more, storages that declare more in all, or tensors that would take more in
+/// all are refused naming the file, before anything of that size is allocated.
+constexpr std::uint64_t kMaxTorchSaveBytes = std::uint64_t{2} << 30;
+/// A zip record other than a storage (data.pkl, version) and the zip's central directory may
+/// hold at most 64 MiB (a state dict of 20,000 tensors pickles to under 2 MB).
+constexpr std::uint64_t kMaxTorchSavePickleBytes = std::uint64_t{64} << 20;
+/// The pickle may make at most this many objects (and hold as many memo entries, stack entries
+/// and marks): a state dict takes about 11 per tensor, so 524,288 is 40,000 tensors, forty
+/// times the largest authors' file.
+constexpr std::size_t kMaxPickleObjects = std::size_t{1} << 19;
 
 /// Reads `path`, opened once without blocking and checked as opened: a folder, a FIFO or a
-/// device is refused by name (never waited on), as is a file larger than
-/// kMaxTorchSaveFileBytes (before it is read) or one that cannot be read. Errors name `path`.
+/// device is refused by name (never waited on), as is a file larger than kMaxTorchSaveBytes
+/// (before it is read) or one that cannot be read. A zip archive is read lazily: its central
+/// directory, then the records it needs, each checked against the file's size and the budgets
+/// above before it is read or inflated (inflating stops at the declared size); a legacy file is
+/// read whole (it is at most kMaxTorchSaveBytes). Errors name `path`.
 TorchSaveContents ReadTorchSaveFile(const std::string& path);
 /// Same for bytes in memory (fuzzing, tests); errors name `name`.
 TorchSaveContents ReadTorchSaveBytes(const std::string& bytes, const std::string& name);
+
+/// Checks the zip archive `path` (a LibTorch-written file: regbench's weights.pt) against the
+/// same limits before LibTorch's reader loads it: its size, and every record's declared size
+/// against the file and kMaxTorchSaveBytes (in all). Throws std::runtime_error naming `path`.
+void CheckTorchZipSizes(const std::string& path);
 
 /// Serialises a state dict in PyTorch's zip format (what `torch.save(sd)` of PyTorch >= 1.6
 /// writes; `torch.load` returns a dict of str -> Tensor in this order). Tensors are made

@@ -271,6 +271,51 @@ TEST(CliCheckpointRefusal, ImportCheckpointNamesWhatItsInputIs) {
     fs::remove_all(dir);
 }
 
+// Issue 55, item 5: the reader bombs (tests/networks/reader_bombs.py; a 30 GB sparse file with
+// a zip header was read whole until the OOM killer, 3 x 800 MiB of deflated zeros took 24.6 s
+// and 3.5 GB before an allocation failure) through import-checkpoint under a 1 GiB
+// address-space cap (prlimit --as; the binary itself needs about 0.8 GiB). Expected: each
+// refused naming the file and the problem without a LibTorch backtrace, exit 1, nothing
+// written. OPENBLAS_NUM_THREADS=1: OpenBLAS's thread pool hung at exit under the cap.
+TEST(CliCheckpointRefusal, ReaderBombsAreRefusedUnderAMemoryCap) {
+    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
+    ASSERT_NE(src, nullptr);
+    const fs::path dir = testing::FreshTempDir("reader_bombs_cli");
+    const CliResult made = testing::RunShell("python3 " + std::string(src) +
+                                             "/tests/networks/reader_bombs.py " + dir.string());
+    ASSERT_EQ(made.exit_code, 0) << made.output;
+    const fs::path sparse = dir / "sparse_30gb.pth";
+    Put(sparse, std::string("PK\x03\x04", 4));
+    fs::resize_file(sparse, std::uintmax_t{30} << 30);  // sparse: no disk
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {"sparse_30gb.pth", "is 32212254720 bytes, more than the 2147483648"},
+        {"storages_64x512mib.pth", "storage 0 declares 536870912 bytes"},
+        {"storages_64x512mib_legacy.pth", "file ends inside storage 0"},
+        {"declares_5gib.pth", "more than deflate can give"},
+        {"deflated_2400mib.pth", "its storages declare more than the 2147483648 bytes"},
+        {"stride0_4gib.pth", "tensor w declares more than the 2147483648 bytes"},
+        {"stride0_2gib.pth", "tensor w has 536870912 elements, more than the 1 of its storage"},
+        {"reduce_1m.pth", "pickle makes more than 524288 objects"},
+        {"reduce_1m_wide.pth", "called with 1006 arguments"},
+    };
+    const fs::path out = dir / "out";
+    for (const auto& [file, why] : cases) {
+        SCOPED_TRACE(file);
+        const std::string path = (dir / file).string();
+        const CliResult r = testing::RunShell(
+            "OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 timeout 60 prlimit --as=1073741824 " +
+            std::string(REGBENCH_CLI) + " import-checkpoint " + path + " --from deepgmr --out " +
+            out.string() + " 2>&1");
+        EXPECT_EQ(r.exit_code, 1) << r.output;
+        EXPECT_NE(r.output.find("error: " + path + ": "), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find(why), std::string::npos) << r.output;
+        EXPECT_EQ(r.output.find("Exception raised from"), std::string::npos) << r.output;
+        EXPECT_FALSE(fs::exists(out));
+        EXPECT_FALSE(fs::exists(out.string() + ".tmp"));
+    }
+    fs::remove_all(dir);
+}
+
 // Issue 54, item 7: `import-checkpoint --help` and docs/methods.md named only DeepGMR and OGMM.
 // Expected: the help of both checkpoint commands names every family with an authors' format
 // (the registry's list, Formats()), and the summaries name none in particular.

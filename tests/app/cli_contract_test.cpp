@@ -67,6 +67,43 @@ void ExpectUsageError(const CliResult& r, const std::string& what) {
     EXPECT_EQ(r.output.find("1797693"), std::string::npos) << r.output;
 }
 
+// Issue 55, item 6: `regbench align` had no scale guard (Python's align got one; rienet on
+// 200,000 points asked for 160 GB and printed a 34-frame backtrace). Expected: the guard of
+// run and Python's align (runners/scale_guard RequireCallScale): an O(N*M) call on a cloud
+// above --max-points (default 20,000) is refused before it runs, naming the method, both point
+// counts and the limit, exit 1, nothing written; --max-points 0 lifts it; a method that is not
+// O(N*M) (icp; cpd in its default mode) is not guarded.
+TEST(CliContract, AlignHasTheScaleGuardOfRun) {
+    const fs::path dir = testing::FreshTempDir("align_scale_guard");
+    const std::string cloud = (dir / "cloud.xyz").string();
+    std::string xyz;
+    for (int k = 0; k < 200; ++k) {  // 200 distinct points in the unit cube
+        xyz += std::to_string(k / 200.0) + " " + std::to_string((k * 7 % 200) / 200.0) + " " +
+               std::to_string((k * 13 % 200) / 200.0) + "\n";
+    }
+    testing::WriteBytes(cloud, xyz);
+    const std::string out = (dir / "T.txt").string();
+    const std::string dense = "align " + cloud + " " + cloud +
+                              " --method cpd --params '{\"e_step\": \"dense\"}' --out " + out;
+    const CliResult refused = RunCli(dense + " --max-points 100");
+    EXPECT_EQ(refused.exit_code, 1) << refused.output;
+    EXPECT_NE(refused.output.find("align: cpd is O(N*M): source has 200 points, target 200, "
+                                  "above max_points 100"),
+              std::string::npos)
+        << refused.output;
+    EXPECT_NE(refused.output.find("pass --max-points 0"), std::string::npos) << refused.output;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_EQ(RunCli(dense + " --max-points 0").exit_code, 0);
+    EXPECT_TRUE(fs::exists(out));
+    EXPECT_EQ(RunCli(dense + " --max-points 200 --force").exit_code, 0);  // not above it
+    for (const char* method : {"icp", "cpd"}) {
+        const CliResult r =
+            RunCli("align " + cloud + " " + cloud + " --method " + method + " --max-points 100");
+        EXPECT_EQ(r.exit_code, 0) << method << ": " << r.output;
+    }
+    fs::remove_all(dir);
+}
+
 TEST(CliContract, CompareFailsWhenEveryCandidateCallFailed) {
     const fs::path base = Dir() / "base2.jsonl", bad = Dir() / "bad2.jsonl";
     WriteRows(base, 2, 0.0, Status::kOk);

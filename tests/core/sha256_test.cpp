@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 
 namespace regbench {
@@ -16,6 +17,25 @@ TEST(Sha256, MatchesTheStandardsExamples) {
               "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
     EXPECT_EQ(Sha256Hex(std::string(1000000, 'a')),
               "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+// The same digests from bytes given in pieces of every size from 1 to 130 (across the 64-byte
+// blocks and the padding's 56-byte boundary).
+TEST(Sha256, PiecesGiveTheDigestOfTheWhole) {
+    const std::string million(1000000, 'a');
+    for (std::size_t piece = 1; piece <= 130; ++piece) {
+        Sha256 h;
+        for (std::size_t at = 0; at < million.size(); at += piece) {
+            h.Update(million.data() + at, std::min(piece, million.size() - at));
+        }
+        ASSERT_EQ(h.Hex(), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0")
+            << piece;
+    }
+    const std::string two = "abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq";  // 56 bytes
+    Sha256 h;
+    h.Update(two.data(), 55);
+    h.Update(two.data() + 55, 1);
+    EXPECT_EQ(h.Hex(), "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
 }
 
 TEST(Sha256, UnreadableFileIsNamed) {
