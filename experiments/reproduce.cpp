@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "core/atomic_file.hpp"
+#include "core/cpu_time.hpp"
 #include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
 #include "core/usage_error.hpp"
