@@ -5,12 +5,10 @@
 #include <Eigen/Core>
 #include <string>
 
-// LibTorch's headers are on the include path only when networks/ is built (REGBENCH_WITH_TORCH).
-#if __has_include(<torch/version.h>)
-#include <torch/version.h>
-
+// Defined for this file when networks/ is built (baselines/CMakeLists.txt); LibTorch itself
+// stays inside networks/.
+#ifdef REGBENCH_LIBRARY_VERSIONS_TORCH
 #include "networks/gemm_floor.hpp"
-#define REGBENCH_LIBRARY_VERSIONS_TORCH 1
 #endif
 
 namespace regbench {
@@ -21,7 +19,7 @@ nlohmann::json LibraryVersions() {
                  "." + std::to_string(EIGEN_MINOR_VERSION);
     v["open3d"] = OPEN3D_VERSION;
 #ifdef REGBENCH_LIBRARY_VERSIONS_TORCH
-    v["libtorch"] = TORCH_VERSION;
+    v["libtorch"] = networks::LibTorchVersion();
     v["blas"] = networks::BlasDescription();
 #else
     v["libtorch"] = "not built";

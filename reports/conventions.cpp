@@ -158,4 +158,12 @@ std::string DescribeConventions(const ReportTable& t, const ReportOptions& o) {
     return out;
 }
 
+std::string PaperTableConventions() {
+    return "Conventions: every mean over all pairs with finite metrics (a failed call scored as "
+           "the identity it returns); MAE(R) the mean absolute Euler-angle error without "
+           "wrapping in the rows' convention (the paper's: scipy as_euler('zyx')), MAE(t) the "
+           "mean absolute per-axis translation error, CCD clipped at the rows' clip "
+           "(docs/metrics.md).";
+}
+
 }  // namespace regbench

@@ -73,4 +73,8 @@ SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte)
 BootstrapCi Rate(const std::vector<bool>& hits, const std::vector<std::string>& groups,
                  RatePer per, int samples, std::uint64_t stream, std::size_t* groups_out);
 
+/// The caption line of the paper tables (reproduce's tables.md): what their means average
+/// over and which convention their metrics follow.
+std::string PaperTableConventions();
+
 }  // namespace regbench

@@ -70,6 +70,14 @@ std::string DescribeEnvironment(const std::vector<const ResultRow*>& rows) {
     return out;
 }
 
+std::string SetsEnvironment(const std::vector<ResultSet>& sets) {
+    std::vector<const ResultRow*> rows;
+    for (const ResultSet& s : sets) {
+        for (const ResultRow& r : s.rows) rows.push_back(&r);
+    }
+    return DescribeEnvironment(rows);
+}
+
 Table TimingTable(const ReportTable& rt) {
     Table t;
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler) + ":timing";

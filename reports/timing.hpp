@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "reports/paper_report.hpp"
 #include "reports/report.hpp"
 #include "reports/table.hpp"
 #include "runners/result_row.hpp"
@@ -15,6 +16,9 @@ namespace regbench {
 /// " / ", when the rows were run on several machines or builds); rows without them (written
 /// before rows recorded them, or by `score`) are counted as such.
 std::string DescribeEnvironment(const std::vector<const ResultRow*>& rows);
+
+/// DescribeEnvironment of every row of the sets (Tab. 6's caption).
+std::string SetsEnvironment(const std::vector<ResultSet>& sets);
 
 /// A table "<pairs file>:timing" with a row per summary row: pairs, median and 95th
 /// percentile of wall seconds and of CPU seconds per call (MethodSummary; SampleQuantile's
