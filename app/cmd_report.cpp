@@ -148,6 +148,10 @@ void SetupReportCommand(CLI::App* cmd) {
                 "--versus compares the rows as scored (their own Euler convention); it takes "
                 "neither --paper nor --euler");
         }
+        if (!versus->empty() && (*curves || *breakdown)) {
+            throw CLI::ValidationError("--versus prints the comparison only; it takes neither "
+                                       "--curves nor --breakdown");
+        }
         // The one output rule (docs/usage.md, "Outputs") before reading anything; then one
         // writer per --out until the report is in place.
         // --paper's table and group before anything is read (a usage error, exit 2).

@@ -9,6 +9,7 @@
 #include <optional>
 #include <set>
 
+#include "core/enum_names.hpp"
 #include "core/math_constants.hpp"
 #include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
@@ -212,14 +213,13 @@ Table OverlapTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o
     return t;
 }
 
-const char* ToString(Difficulty d) {
-    switch (d) {
-        case Difficulty::kRotation: return "rotation";
-        case Difficulty::kTranslation: return "translation";
-        case Difficulty::kOverlap: return "overlap";
-    }
-    return "?";
-}
+namespace {
+constexpr EnumName<Difficulty> kDifficultyNames[] = {{Difficulty::kRotation, "rotation"},
+                                                     {Difficulty::kTranslation, "translation"},
+                                                     {Difficulty::kOverlap, "overlap"}};
+}  // namespace
+
+const char* ToString(Difficulty d) { return EnumToString(kDifficultyNames, d); }
 
 std::optional<double> DifficultyOf(const ResultRow& r, Difficulty axis) {
     if (axis == Difficulty::kOverlap) return MeasuredOverlap(r);

@@ -6,33 +6,27 @@
 #include <map>
 #include <stdexcept>
 
+#include "core/enum_names.hpp"
 #include "reports/report.hpp"
 
 namespace regbench {
 
-const char* ToString(ErrorPairs e) { return e == ErrorPairs::kAll ? "all" : "successful"; }
+namespace {
+constexpr EnumName<ErrorPairs> kErrorPairsNames[] = {{ErrorPairs::kAll, "all"},
+                                                     {ErrorPairs::kSuccessful, "successful"}};
+constexpr EnumName<RatePer> kRatePerNames[] = {
+    {RatePer::kPair, "pair"}, {RatePer::kScene, "scene"}, {RatePer::kCategory, "category"}};
+}  // namespace
+
+const char* ToString(ErrorPairs e) { return EnumToString(kErrorPairsNames, e); }
 
 ErrorPairs ParseErrorPairs(const std::string& name) {
-    if (name == "all") return ErrorPairs::kAll;
-    if (name == "successful") return ErrorPairs::kSuccessful;
-    throw std::invalid_argument("rre/rte pairs '" + name + "': expected all or successful");
+    return ParseEnum(kErrorPairsNames, "rre/rte pairs", name);
 }
 
-const char* ToString(RatePer r) {
-    switch (r) {
-        case RatePer::kPair: return "pair";
-        case RatePer::kScene: return "scene";
-        case RatePer::kCategory: return "category";
-    }
-    return "?";
-}
+const char* ToString(RatePer r) { return EnumToString(kRatePerNames, r); }
 
-RatePer ParseRatePer(const std::string& name) {
-    for (RatePer r : {RatePer::kPair, RatePer::kScene, RatePer::kCategory}) {
-        if (name == ToString(r)) return r;
-    }
-    throw std::invalid_argument("rates per '" + name + "': expected pair, scene or category");
-}
+RatePer ParseRatePer(const std::string& name) { return ParseEnum(kRatePerNames, "rates per", name); }
 
 bool SuccessRule::Passes(const PairMetrics& m) const {
     // A NaN compares false: a miss.

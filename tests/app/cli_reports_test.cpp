@@ -152,5 +152,35 @@ TEST(CliReports, AlignSavesTheMovedSourceAndTheTargetAsOnePly) {
     EXPECT_EQ(Slurp(dir / "a.xyz"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
 }
 
+// Issue 54: the conventions line, the time per pair table (no CPU time in these rows: "-"),
+// --curves and --breakdown, and a per-scene rate on pairs that name no scene refused.
+TEST(CliReports, ConventionsTimingCurvesAndBreakdowns) {
+    const fs::path rows = WriteRows();
+    const auto r = RunCli("report " + rows.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("\nConventions: rre/rte averaged over all pairs"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("| method | pairs | median wall s | p95 wall s | median CPU s | "
+                            "p95 CPU s | threads |"),
+              std::string::npos)
+        << r.output;
+    // Wall seconds 0.01 .. 0.30: np.median 0.155, np.quantile(v, 0.95) = 0.2855 (its third
+    // digit is a rounding tie, so the test reads two); no CPU time recorded: "-".
+    const auto icp = r.output.find("| icp | 30 | 0.155 | 0.28");
+    ASSERT_NE(icp, std::string::npos) << r.output;
+    const std::string line = r.output.substr(icp, r.output.find('\n', icp) - icp);
+    EXPECT_EQ(line.substr(line.size() - 14), " | - | - | 1 |") << line;
+    const auto extra = RunCli("report " + rows.string() + " --curves --breakdown");
+    ASSERT_EQ(extra.exit_code, 0) << extra.output;
+    for (const char* part : {"AUC@15°", "AUC@0.3", "easy [0, 30)", "hard [0, 0.5)",
+                             "60 rows carry no ground truth"}) {
+        EXPECT_NE(extra.output.find(part), std::string::npos) << part << ": " << extra.output;
+    }
+    const auto scene = RunCli("report " + rows.string() + " --rates-per scene");
+    EXPECT_EQ(scene.exit_code, 1) << scene.output;
+    EXPECT_NE(scene.output.find("records no scene id"), std::string::npos) << scene.output;
+    EXPECT_EQ(RunCli("report " + rows.string() + " --success-rule kiti").exit_code, 2);
+}
+
 }  // namespace
 }  // namespace regbench
