@@ -255,7 +255,7 @@ Table DifficultyTable(const std::vector<ResultRow>& rows, const BreakdownOptions
         const std::string hi = edges[b + 1] >= 1e300 ? "inf" : fmt::format("{:g}", edges[b + 1]);
         t.columns.push_back(
             {fmt::format("{}[{:g},{})", ToString(axis), edges[b], hi),
-             fmt::format("{} [{:g}, {}{}", name, edges[b], hi, last ? "]" : ")"),
+             fmt::format("{} [{:g}, {}{}", name, edges[b], hi, last && hi != "inf" ? "]" : ")"),
              CellSource::kMeasured, Better::kLower, FindMetric(o.key_metric).decimals});
     }
     // Overlap bins run hard to easy: shown easy first like the others.

@@ -239,6 +239,7 @@ TEST(Difficulty, BinsByRotationTranslationAndOverlapByHand) {
     // Translation 0.1, 0.4, 0.7, 0.2, 1.0, 0.5, 0.35, 0.65: easy {0, 3}, medium {1, 5, 6},
     // hard {2, 4, 7}.
     const Table tr = DifficultyTable(Rows(), o, Difficulty::kTranslation);
+    EXPECT_EQ(tr.columns[2].header, "hard [0.6, inf)");
     EXPECT_NEAR(tr.rows[0].Get(tr.columns[0].key).value, 0.65, 1e-12);
     EXPECT_NEAR(tr.rows[0].Get(tr.columns[2].key).value, 13.2 / 3, 1e-12);
     EXPECT_EQ(tr.rows[0].Get(tr.columns[2].key).pairs, 3u);
