@@ -10,14 +10,41 @@
 #include "app/commands.hpp"
 #include "core/atomic_file.hpp"
 #include "core/output_rule.hpp"
+#include "reports/breakdown.hpp"
+#include "reports/curves.hpp"
 #include "reports/paper_tables.hpp"
 #include "reports/report.hpp"
+#include "reports/timing.hpp"
 #include "reports/versus.hpp"
 #include "runners/registry.hpp"
 #include "runners/result_row.hpp"
 
 namespace regbench::app {
 namespace {
+
+/// `--curves` and `--breakdown`: for each result table, its success curves and difficulty
+/// tables over its own rows, titled with its pair file when there are several.
+std::vector<Table> ExtraTables(const std::vector<ReportTable>& tables, bool curves,
+                               bool breakdown) {
+    std::vector<Table> out;
+    for (const ReportTable& rt : tables) {
+        std::vector<ResultRow> rows;
+        for (const ResultRow* r : rt.rows) rows.push_back(*r);
+        std::vector<Table> extra;
+        if (curves) {
+            for (const auto& c : DefaultSuccessCurves()) extra.push_back(SuccessCurveTable(rows, c));
+        }
+        if (breakdown) {
+            for (auto& t : DifficultyTables(rows, BreakdownOptions{})) extra.push_back(t);
+        }
+        for (auto& t : extra) {
+            t.id = rt.data.pairs_file + ":" + t.id;
+            if (tables.size() > 1) t.title += " (" + rt.data.pairs_file + ")";
+            out.push_back(std::move(t));
+        }
+    }
+    return out;
+}
 
 // Long on purpose: a flat list of the command's options (CLI11), one statement each, in the
 // order --help prints them; the work is in reports/.
@@ -51,6 +78,33 @@ void SetupReportCommand(CLI::App* cmd) {
     cmd->add_option("--success-rte", o->success_rte, "success: rte < this (and rre)")
         ->capture_default_str()
         ->check(PositiveReal());
+    cmd->add_option("--success-rule", o->success_rule,
+                    "The success column's rule: rre-rte (--success-rre/--success-rte) or a "
+                    "preset: paper-recall (mae_r<1, mae_t<0.1), 3dmatch-rmse (RMSE of the "
+                    "ground-truth correspondences < 0.2), kitti (rre<5, rte<2), 3dmatch-rre-rte "
+                    "(rre<15, rte<0.3); docs/metrics.md, \"Conventions\"")
+        ->capture_default_str()
+        ->check(CLI::IsMember(SuccessRuleNames()));
+    auto rre_rte_over = std::make_shared<std::string>("all");
+    cmd->add_option("--rre-rte-over", *rre_rte_over,
+                    "Pairs the rre/rte means average over: all (with finite metrics) or "
+                    "successful (those the success rule accepts, as GeoTransformer's KITTI eval)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"all", "successful"}));
+    auto rates_per = std::make_shared<std::string>("pair");
+    cmd->add_option("--rates-per", *rates_per,
+                    "Rates (recall, success) over pairs, or the mean of per-scene (the pairs' "
+                    "shape) or per-category rates, as 3DMatch's scene-averaged recall")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"pair", "scene", "category"}));
+    auto curves = std::make_shared<bool>(false);
+    cmd->add_flag("--curves", *curves,
+                  "Add success rate against threshold (rre to 15 deg, rte to 0.3) with the area "
+                  "under each curve, per pair file");
+    auto breakdown = std::make_shared<bool>(false);
+    cmd->add_flag("--breakdown", *breakdown,
+                  "Add mae_r per easy / medium / hard bin of the ground truth's rotation and "
+                  "translation and of the overlap, with counts, per pair file (docs/reports.md)");
     cmd->add_flag("--recall-3dmatch", o->recall_3dmatch,
                   "Add the 3DMatch-style recall: overlap RMSE < 0.2, rre < 15 deg, rte < 0.3");
     cmd->add_option("--euler", *euler,
@@ -94,6 +148,10 @@ void SetupReportCommand(CLI::App* cmd) {
                 "--versus compares the rows as scored (their own Euler convention); it takes "
                 "neither --paper nor --euler");
         }
+        if (!versus->empty() && (*curves || *breakdown)) {
+            throw CLI::ValidationError("--versus prints the comparison only; it takes neither "
+                                       "--curves nor --breakdown");
+        }
         // The one output rule (docs/usage.md, "Outputs") before reading anything; then one
         // writer per --out until the report is in place.
         // --paper's table and group before anything is read (a usage error, exit 2).
@@ -113,6 +171,8 @@ void SetupReportCommand(CLI::App* cmd) {
         if (rows.empty()) throw std::runtime_error("no result rows in " + files->front());
         ReportOptions opts = *o;
         if (!euler->empty()) opts.euler = ParseEulerConvention(*euler);
+        opts.rre_rte_over = ParseErrorPairs(*rre_rte_over);
+        opts.rates_per = ParseRatePer(*rates_per);
         std::vector<ReportTable> tables;
         std::vector<Table> out_tables;
         if (!versus->empty()) {
@@ -122,6 +182,10 @@ void SetupReportCommand(CLI::App* cmd) {
         } else {
             tables = BuildTables(rows, opts);
             out_tables = SummaryTables(tables, opts);
+            for (auto& t : TimingTables(tables)) out_tables.push_back(std::move(t));
+            for (auto& t : ExtraTables(tables, *curves, *breakdown)) {
+                out_tables.push_back(std::move(t));
+            }
         }
         if (!paper->empty()) {
             // TABLE[:GROUP] of the paper beside each result table.

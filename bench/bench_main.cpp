@@ -3,23 +3,12 @@
 #include <omp.h>
 
 #include <cstdlib>
-#include <fstream>
 #include <string>
 #include <thread>
 
+#include "core/cpu_time.hpp"
 #include "core/memory_policy.hpp"
 #include "core/version.hpp"
-
-namespace {
-std::string CpuModel() {
-    std::ifstream in("/proc/cpuinfo");
-    std::string line;
-    while (std::getline(in, line)) {
-        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-    }
-    return "unknown";
-}
-}  // namespace
 
 int main(int argc, char** argv) {
     // As `regbench` runs: freed memory kept for reuse (core/memory_policy.hpp); REGBENCH_MALLOC=
@@ -30,7 +19,7 @@ int main(int argc, char** argv) {
     }
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-    benchmark::AddCustomContext("cpu_model", CpuModel());
+    benchmark::AddCustomContext("cpu_model", regbench::CpuModel());
     benchmark::AddCustomContext("compiler", __VERSION__);
     benchmark::AddCustomContext("git_sha", regbench::RegbenchGitSha());
     benchmark::AddCustomContext("hardware_threads",

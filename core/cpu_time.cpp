@@ -50,4 +50,20 @@ MachineLoad ReadMachineLoad() {
     return load;
 }
 
+std::string CpuModel() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind("model name", 0) == 0) {
+            const auto colon = line.find(':');
+            if (colon != std::string::npos) {
+                std::string v = line.substr(colon + 1);
+                v.erase(0, v.find_first_not_of(' '));
+                return v;
+            }
+        }
+    }
+    return "unknown CPU";
+}
+
 }  // namespace regbench

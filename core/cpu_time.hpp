@@ -43,4 +43,8 @@ struct MachineLoad {
 };
 MachineLoad ReadMachineLoad();
 
+/// The CPU model from /proc/cpuinfo's first "model name" ("unknown CPU" when unreadable):
+/// timing provenance of result rows, Tab. 6 and the benchmarks.
+std::string CpuModel();
+
 }  // namespace regbench

@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "core/atomic_file.hpp"
+#include "core/cpu_time.hpp"
 #include "core/file_lock.hpp"
 #include "core/json_limits.hpp"
 #include "core/usage_error.hpp"
@@ -30,6 +31,7 @@
 #include "protocols/pair_hash.hpp"
 #include "protocols/pair_summary.hpp"
 #include "reports/breakdown.hpp"
+#include "reports/curves.hpp"
 #include "reports/html_report.hpp"
 #include "reports/paper_report.hpp"
 #include "reports/paper_tables.hpp"
@@ -623,6 +625,10 @@ void WriteBreakdownsAndHtml(const fs::path& out, const std::string& intro,
         sec.rows = rows;
         sec.tables = {DistributionTable(rows, bo), StatusTable(rows), RecallTable(rows, bo),
                       CategoryTable(rows, bo), OverlapTable(rows, bo)};
+        // Difficulty bins and success-rate curves (issue 54 items 3 and 4).
+        for (auto& t : DifficultyTables(rows, bo)) sec.tables.push_back(std::move(t));
+        sec.curves = DefaultSuccessCurves();
+        for (const auto& c : sec.curves) sec.tables.push_back(SuccessCurveTable(rows, c));
         const PairSet* set = &x.pairs[id];
         sec.pair_lookup = [set](const ResultRow& row) -> const Pair* {
             return row.pair < set->pairs.size() ? &set->pairs[row.pair] : nullptr;

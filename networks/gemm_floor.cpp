@@ -3,6 +3,7 @@
 #include <ATen/Version.h>
 #include <dlfcn.h>
 #include <torch/torch.h>
+#include <torch/version.h>
 
 #include <algorithm>
 
@@ -78,5 +79,7 @@ std::string BlasDescription() {
                                     : p == 2 ? " (OpenMP)"
                                              : "");
 }
+
+std::string LibTorchVersion() { return TORCH_VERSION; }
 
 }  // namespace regbench::networks

@@ -35,4 +35,7 @@ void SetBlasThreads(int threads);
 /// OpenBLAS.
 std::string BlasDescription();
 
+/// The LibTorch version this binary was built with (TORCH_VERSION, e.g. "1.13.0").
+std::string LibTorchVersion();
+
 }  // namespace regbench::networks

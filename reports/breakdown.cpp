@@ -9,6 +9,8 @@
 #include <optional>
 #include <set>
 
+#include "core/enum_names.hpp"
+#include "core/math_constants.hpp"
 #include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
 
@@ -209,6 +211,82 @@ Table OverlapTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o
             missing));
     }
     return t;
+}
+
+namespace {
+constexpr EnumName<Difficulty> kDifficultyNames[] = {{Difficulty::kRotation, "rotation"},
+                                                     {Difficulty::kTranslation, "translation"},
+                                                     {Difficulty::kOverlap, "overlap"}};
+}  // namespace
+
+const char* ToString(Difficulty d) { return EnumToString(kDifficultyNames, d); }
+
+std::optional<double> DifficultyOf(const ResultRow& r, Difficulty axis) {
+    if (axis == Difficulty::kOverlap) return MeasuredOverlap(r);
+    if (!r.gt_transform) return std::nullopt;
+    if (axis == Difficulty::kTranslation) return r.gt_transform->block<3, 1>(0, 3).norm();
+    // The geodesic angle of the ground-truth rotation, as rre measures it against identity.
+    const double c = 0.5 * (r.gt_transform->block<3, 3>(0, 0).trace() - 1.0);
+    return std::acos(std::clamp(c, -1.0, 1.0)) / kDegToRad;
+}
+
+Table DifficultyTable(const std::vector<ResultRow>& rows, const BreakdownOptions& o,
+                      Difficulty axis) {
+    const std::vector<double>& edges = axis == Difficulty::kRotation      ? o.rotation_edges
+                                       : axis == Difficulty::kTranslation ? o.translation_edges
+                                                                          : o.difficulty_overlap_edges;
+    const char* what = axis == Difficulty::kRotation
+                           ? "the rotation angle of the pair's ground truth (geodesic, degrees)"
+                       : axis == Difficulty::kTranslation
+                           ? "the length of the ground truth's translation (data units)"
+                           : "the pair's measured overlap, min(source ratio, target ratio)";
+    Table t{std::string("difficulty:") + ToString(axis),
+            "Mean " + o.key_metric + " by " + ToString(axis) + " difficulty",
+            std::string("bins of ") + what +
+                "; each cell averages the pairs in the bin (n: how many; also the JSON/CSV "
+                "`pairs` field); bins are [lo, hi), the last one closed"};
+    // Easy first: a small motion, or a large overlap.
+    static const char* kLevels[] = {"easy", "medium", "hard"};
+    const std::size_t bins = edges.size() - 1;
+    for (std::size_t b = 0; b < bins; ++b) {
+        const std::size_t level = axis == Difficulty::kOverlap ? bins - 1 - b : b;
+        const std::string name = bins == 3 ? kLevels[level] : fmt::format("bin {}", b + 1);
+        const bool last = b + 1 == bins;
+        const std::string hi = edges[b + 1] >= 1e300 ? "inf" : fmt::format("{:g}", edges[b + 1]);
+        t.columns.push_back(
+            {fmt::format("{}[{:g},{})", ToString(axis), edges[b], hi),
+             fmt::format("{} [{:g}, {}{}", name, edges[b], hi, last && hi != "inf" ? "]" : ")"),
+             CellSource::kMeasured, Better::kLower, FindMetric(o.key_metric).decimals});
+    }
+    // Overlap bins run hard to easy: shown easy first like the others.
+    if (axis == Difficulty::kOverlap) std::reverse(t.columns.begin(), t.columns.end());
+    std::size_t missing = 0;
+    AddMeanRows(t, rows, o, [&](const ResultRow& r) -> std::optional<std::size_t> {
+        const auto v = DifficultyOf(r, axis);
+        if (!v) {
+            ++missing;
+            return std::nullopt;
+        }
+        for (std::size_t b = 0; b < bins; ++b) {
+            const bool last = b + 1 == bins;
+            if (*v >= edges[b] && (*v < edges[b + 1] || (last && *v <= edges[b + 1]))) {
+                return axis == Difficulty::kOverlap ? bins - 1 - b : b;
+            }
+        }
+        return std::nullopt;
+    });
+    if (missing > 0) {
+        t.notes.push_back(fmt::format(
+            "{} rows carry no {} (written before rows recorded them) and are left out.", missing,
+            axis == Difficulty::kOverlap ? "overlap ratios" : "ground truth"));
+    }
+    return t;
+}
+
+std::vector<Table> DifficultyTables(const std::vector<ResultRow>& rows, const BreakdownOptions& o) {
+    return {DifficultyTable(rows, o, Difficulty::kRotation),
+            DifficultyTable(rows, o, Difficulty::kTranslation),
+            DifficultyTable(rows, o, Difficulty::kOverlap)};
 }
 
 }  // namespace regbench

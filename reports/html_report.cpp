@@ -185,11 +185,38 @@ double MaeROrInf(const ResultRow& r) {
     return std::isfinite(e) ? e : std::numeric_limits<double>::infinity();
 }
 
-/// MaeROrInf of every row of `method`.
-std::vector<double> MaeROf(const std::vector<ResultRow>& rows, const std::string& method) {
+/// The metric of every row of `method`, +inf where it is not finite (a miss at any threshold).
+std::vector<double> MetricOf(const std::vector<ResultRow>& rows, const std::string& method,
+                             const MetricField& metric) {
     std::vector<double> v;
-    for (const ResultRow* r : RowsOf(rows, method)) v.push_back(MaeROrInf(*r));
+    for (const ResultRow* r : RowsOf(rows, method)) {
+        v.push_back(metric.Of(r->metrics).value_or(std::numeric_limits<double>::infinity()));
+    }
     return v;
+}
+
+/// The section's success-rate curves, one figure each, captioned with their AUC per method.
+std::string CurveFigures(const HtmlSection& sec) {
+    std::string s;
+    for (const SuccessCurve& c : sec.curves) {
+        const bool degrees = c.metric == "rre" || c.metric == "mae_r";
+        const std::string unit = degrees ? " [deg]" : "";
+        std::string auc;
+        for (const auto& method : MethodOrder(sec.rows)) {
+            std::vector<double> e;
+            for (const ResultRow* r : RowsOf(sec.rows, method)) {
+                e.push_back(FindMetric(c.metric).Of(r->metrics).value_or(std::nan("")));
+            }
+            auc += fmt::format("{}{} {:.3f}", auc.empty() ? "" : ", ", method, SuccessAuc(e, c.max));
+        }
+        s += "<figure>" + SuccessCurveSvg(sec.rows, c, c.metric + " threshold" + unit) +
+             "<figcaption>" +
+             Escape(fmt::format("Success rate: fraction of all pairs with {} below x; AUC on "
+                                "[0, {:g}]: {}",
+                                c.metric, c.max, auc)) +
+             "</figcaption></figure>";
+    }
+    return s;
 }
 
 }  // namespace
@@ -223,11 +250,18 @@ std::string TableToHtml(const Table& t, TableForm form) {
 }
 
 std::string ErrorCdfSvg(const std::vector<ResultRow>& rows, double max_deg) {
+    return SuccessCurveSvg(rows, {"mae_r", max_deg}, "MAE(R) threshold [deg]");
+}
+
+std::string SuccessCurveSvg(const std::vector<ResultRow>& rows, const SuccessCurve& curve,
+                            const std::string& axis) {
+    const MetricField& metric = FindMetric(curve.metric);
+    const double max_deg = curve.max;
     const auto methods = MethodOrder(rows);
     const Plot p = Plot::For(0.0, max_deg, 0.0, 1.0, methods.size());
-    std::string s = p.Open("MAE(R) threshold [deg]", "fraction of pairs below");
+    std::string s = p.Open(axis, "fraction of pairs below");
     for (std::size_t i = 0; i < methods.size(); ++i) {
-        std::vector<double> v = MaeROf(rows, methods[i]);
+        std::vector<double> v = MetricOf(rows, methods[i], metric);
         std::sort(v.begin(), v.end());
         // A step curve: after the k-th smallest error the fraction is k / n.
         std::string pts = fmt::format("{:.1f},{:.1f}", p.X(0), p.Y(0));
@@ -392,7 +426,8 @@ std::string RenderHtmlReport(const HtmlReportOptions& o) {
              "<figcaption>MAE(R) vs the pair's measured overlap</figcaption></figure><figure>" +
              TimeVsAccuracySvg(sec.rows) +
              "<figcaption>Accuracy vs time (median seconds per pair, one thread)</figcaption>"
-             "</figure></div>\n";
+             "</figure>" +
+             CurveFigures(sec) + "</div>\n";
         for (const auto& t : sec.tables) s += TableToHtml(t);
         if (!sec.pair_lookup) continue;
         s += "<h3>Worst pairs per method</h3><p class=\"note\">x-y projection; grey target, "

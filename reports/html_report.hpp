@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "protocols/pair.hpp"
+#include "reports/curves.hpp"
 #include "reports/table.hpp"
 #include "runners/result_row.hpp"
 
@@ -20,6 +21,7 @@ struct HtmlSection {
     std::vector<ResultRow> rows;
     std::vector<Table> tables;
     PairLookup pair_lookup;  ///< for the gallery; empty: no gallery
+    std::vector<SuccessCurve> curves;  ///< success-rate curves drawn beside the error CDF
 };
 
 struct HtmlReportOptions {
@@ -51,6 +53,11 @@ std::vector<double> NiceTicks(double lo, double hi, bool log);
 
 /// Error CDF: fraction of pairs with mae_r below x, one curve per method (inline <svg>).
 std::string ErrorCdfSvg(const std::vector<ResultRow>& rows, double max_deg);
+
+/// Success rate against threshold: the fraction of all pairs with curve.metric below x for x
+/// in [0, curve.max] (a non-finite metric never counts), one step curve per method.
+std::string SuccessCurveSvg(const std::vector<ResultRow>& rows, const SuccessCurve& curve,
+                            const std::string& axis);
 
 /// mae_r against the pair's measured overlap (min of both ratios), one colour per method.
 std::string ErrorVsOverlapSvg(const std::vector<ResultRow>& rows);

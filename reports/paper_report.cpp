@@ -12,6 +12,7 @@
 #include "reports/paper_tables.hpp"
 #include "reports/row_access.hpp"
 #include "reports/statistics.hpp"
+#include "reports/timing.hpp"
 
 namespace regbench {
 namespace {
@@ -143,6 +144,7 @@ void DescribeSides(const PaperTableSpec& spec, const nlohmann::json& pt, bool pu
         spec.caption.empty() ? pt.value("caption", std::string()) : spec.caption,
         ours.empty() ? "no result rows" : ours, paper_side,
         published ? " or not in the paper" : "");
+    t->caption += "\n" + PaperTableConventions();
 }
 
 }  // namespace
@@ -515,23 +517,8 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
         "{}; classical methods: {}; CPU only (no GPU rows measured). Paper (ms): {}",
         cpu_model, learned.empty() ? "none measured" : learned, blas,
         paper.at("tables").at("table6_inference_time").value("caption", std::string()));
+    t.caption += "\nAs the rows record it: " + SetsEnvironment(sets) + ".";
     return t;
-}
-
-std::string CpuModel() {
-    std::ifstream in("/proc/cpuinfo");
-    std::string line;
-    while (std::getline(in, line)) {
-        if (line.rfind("model name", 0) == 0) {
-            const auto colon = line.find(':');
-            if (colon != std::string::npos) {
-                std::string v = line.substr(colon + 1);
-                v.erase(0, v.find_first_not_of(' '));
-                return v;
-            }
-        }
-    }
-    return "unknown CPU";
 }
 
 }  // namespace regbench

@@ -83,7 +83,4 @@ Table BuildTimingTable(const std::vector<ResultSet>& sets, const nlohmann::json&
                        const std::string& cpu_model, const std::string& blas,
                        const PaperRows& paper_rows);
 
-/// The CPU model from /proc/cpuinfo ("unknown CPU" when unreadable).
-std::string CpuModel();
-
 }  // namespace regbench

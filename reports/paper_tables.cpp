@@ -9,6 +9,7 @@
 
 #include "core/data_dir.hpp"
 #include "core/input_file.hpp"
+#include "reports/conventions.hpp"
 #include "reports/row_access.hpp"
 
 namespace regbench {
@@ -152,6 +153,7 @@ Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
     t.id = "paper:" + table + (group.empty() ? "" : ":" + group);
     t.caption = fmt::format("Paper: {} ({}){}", table, pt.value("caption", ""),
                             group.empty() ? "" : ", columns " + group);
+    t.caption += "\n" + PaperTableConventions();
     const auto measured = [](const std::string& key, int decimals) {
         return Column{key, key, CellSource::kMeasured, Better::kNone, decimals};
     };

@@ -10,6 +10,7 @@
 
 #include "core/metrics.hpp"
 #include "reports/row_access.hpp"
+#include "reports/timing.hpp"
 #include "reports/statistics.hpp"
 
 namespace regbench {
@@ -86,6 +87,34 @@ void SummarizeMetricOptions(const std::vector<const ResultRow*>& group,
     s->inlier_rmse = SampleMean(rmse);
 }
 
+/// The scene (`shape`) or category a row's rates group by ("" for per-pair rates); refuses a
+/// row whose pair file records none.
+std::string RateGroup(const ResultRow& r, RatePer per) {
+    if (per == RatePer::kPair) return "";
+    const std::string& id = per == RatePer::kScene ? r.shape : r.category;
+    if (id.empty()) {
+        throw std::runtime_error(fmt::format(
+            "{}: the pair file records no {} id for pair {} (its `{}` is empty), so rates "
+            "cannot be averaged per {}; use --rates-per pair",
+            Where(r), ToString(per), r.pair, per == RatePer::kScene ? "shape" : "category",
+            ToString(per)));
+    }
+    return id;
+}
+
+/// CPU median and 95th percentile per call; NaN when the rows recorded no CPU time.
+void SummarizeCpuTime(const std::vector<double>& wall, const std::vector<double>& cpu,
+                      MethodSummary* s) {
+    const bool any_cpu = std::any_of(cpu.begin(), cpu.end(), [](double x) { return x > 0; });
+    const bool any_wall = std::any_of(wall.begin(), wall.end(), [](double x) { return x > 0; });
+    if (!any_cpu && any_wall) {
+        s->median_cpu_seconds = s->p95_cpu_seconds = std::nan("");
+        return;
+    }
+    s->median_cpu_seconds = SampleMedian(cpu);
+    s->p95_cpu_seconds = SampleQuantile(cpu, 0.95);
+}
+
 /// Rows of one (method, params) set, sorted by pair.
 MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOptions& o,
                            const std::string& data_key, std::vector<std::string>* notes) {
@@ -96,10 +125,19 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
     s.label = s.method;
     s.params = group.front()->params;
     s.pairs = group.size();
-    std::vector<PairMetrics> finite;  // the rows whose metrics are numbers
-    std::vector<double> secs;
-    std::size_t recalled = 0, succeeded = 0, recalled_3dm = 0;
+    std::vector<PairMetrics> finite;     // the rows whose metrics are numbers
+    std::vector<PairMetrics> successes;  // those the success rule accepts
+    std::vector<double> secs, cpu;
+    // Per row (in pair order): hit or miss of each rate, and the scene the rate groups by.
+    std::vector<bool> recalled, succeeded, recalled_3dm;
+    std::vector<std::string> groups;
+    const SuccessRule rule = FindSuccessRule(o.success_rule, o.success_rre_deg, o.success_rte);
     for (const ResultRow* r : group) {
+        groups.push_back(RateGroup(*r, o.rates_per));
+        recalled.push_back(false);
+        succeeded.push_back(false);
+        recalled_3dm.push_back(false);
+        cpu.push_back(r->result.cpu_seconds);
         if (r->status != Status::kOk && s.first_failure.empty()) {
             s.first_failure = fmt::format(
                 "pair {}: {}: {}", r->pair, ToString(r->status),
@@ -121,8 +159,14 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
         }
         if (r->status != Status::kOk) ++s.failed;
         finite.push_back(m);
-        if (m.mae_r < o.recall_r_deg && m.mae_t < o.recall_t) ++recalled;
-        if (m.rre < o.success_rre_deg && m.rte < o.success_rte) ++succeeded;
+        recalled.back() = m.mae_r < o.recall_r_deg && m.mae_t < o.recall_t;
+        if (!std::isinf(rule.overlap_rmse) && !std::isfinite(m.overlap_rmse)) {
+            throw std::runtime_error(
+                Where(*r) + ": row has no metrics.overlap_rmse (written before it existed); "
+                            "rescore it with `regbench score` for the success rule " + rule.name);
+        }
+        succeeded.back() = rule.Passes(m);
+        if (succeeded.back()) successes.push_back(m);
         if (o.recall_3dmatch) {
             if (!std::isfinite(m.overlap_rmse)) {
                 throw std::runtime_error(
@@ -130,32 +174,38 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
                     ": row has no metrics.overlap_rmse (written before it existed); "
                     "rescore it with `regbench score` for the 3DMatch-style recall");
             }
-            if (m.overlap_rmse < kRecall3dmatchRmse && m.rre < kRecall3dmatchRreDeg &&
-                m.rte < kRecall3dmatchRte) {
-                ++recalled_3dm;
-            }
+            recalled_3dm.back() = m.overlap_rmse < kRecall3dmatchRmse &&
+                                  m.rre < kRecall3dmatchRreDeg && m.rte < kRecall3dmatchRte;
         }
     }
     // The stream names the pair file and the metric, not the method: every method on the same
     // pairs draws the same resamples (a paired bootstrap), so two methods with equal values
     // get equal CIs. The values are in pair order, so a CI does not depend on row order.
     const std::string id = data_key + "\n";
-    const auto column = [&](const char* name) {
+    const auto column = [&](const char* name, const std::vector<PairMetrics>& of) {
         const auto field = FindMetric(name).field;
         std::vector<double> v;
-        v.reserve(finite.size());
-        for (const PairMetrics& m : finite) v.push_back(m.*field);
+        v.reserve(of.size());
+        for (const PairMetrics& m : of) v.push_back(m.*field);
         return v;
     };
     const auto boot = [&](const char* name) {
-        return BootstrapMean(column(name), o.bootstrap_samples, kDefaultBootstrapSeed,
+        return BootstrapMean(column(name, finite), o.bootstrap_samples, kDefaultBootstrapSeed,
                              StreamId(id + name));
     };
     s.mae_r = boot("mae_r");
     s.mae_t = boot("mae_t");
     s.ccd = boot("ccd");
-    s.rre = boot("rre");
-    s.rte = boot("rte");
+    s.successful = successes.size();
+    if (o.rre_rte_over == ErrorPairs::kAll) {
+        s.rre = boot("rre");
+        s.rte = boot("rte");
+    } else {
+        for (auto [e, name] : {std::pair{&s.rre, "rre"}, std::pair{&s.rte, "rte"}}) {
+            *e = BootstrapMean(column(name, successes), o.bootstrap_samples,
+                               kDefaultBootstrapSeed, StreamId(id + name + "/successful"));
+        }
+    }
     s.chamfer = boot("chamfer");
     // sqrt is increasing, so the root of the mean square's percentile interval is the root
     // mean square's.
@@ -163,11 +213,16 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
         const Estimate e = boot(mse);
         *rmse = {std::sqrt(e.mean), std::sqrt(e.lo), std::sqrt(e.hi)};
     }
-    const std::size_t n = group.size();
-    s.recall = WilsonInterval(recalled, n);
-    s.success = WilsonInterval(succeeded, n);
-    s.recall_3dmatch = WilsonInterval(recalled_3dm, n);
+    const auto rate = [&](const std::vector<bool>& hits, const char* name) {
+        return Rate(hits, groups, o.rates_per, o.bootstrap_samples,
+                    StreamId(id + name + "/per-" + ToString(o.rates_per)), &s.rate_groups);
+    };
+    s.recall = rate(recalled, "recall");
+    s.success = rate(succeeded, "success");
+    s.recall_3dmatch = rate(recalled_3dm, "recall_3dmatch");
     s.median_seconds = SampleMedian(secs);
+    s.p95_seconds = SampleQuantile(secs, 0.95);
+    SummarizeCpuTime(secs, cpu, &s);
     s.mean_seconds =
         BootstrapMean(secs, o.bootstrap_samples, kDefaultBootstrapSeed, StreamId(id + "seconds"));
     SummarizeMetricOptions(group, finite, &s);
@@ -287,6 +342,8 @@ std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const R
             if (!file.empty() && files.insert(file).second) t.files.push_back(file);
         }
         t.methods = SummarizeGroup(group, o, DataKey(t.data), &t.notes);
+        t.rows = group;
+        t.environment = DescribeEnvironment(group);
         tables.push_back(std::move(t));
     }
     return tables;
@@ -351,18 +408,19 @@ double InlierThreshold(const ReportTable& rt) {
 std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o,
                                    double threshold) {
     // Every number with its 95% CI: means by bootstrap, rates by Wilson (docs/reports.md).
+    const std::string over = o.rre_rte_over == ErrorPairs::kAll ? "" : " (successful)";
     std::vector<Column> columns = {
         Col("pairs", "pairs", 0), Col("failed", "failed", 0),
         MetricCol("mae_r", "mae_r", "mae_r [deg]"),
         // The interval's bounds at 3 decimals, as the documented table has always shown them.
         Col("mae_r.ci95", "mae_r 95% CI", 3, CiStyle::kInterval),
         MetricCol("mae_t", "mae_t", "mae_t"), MetricCol("ccd", "ccd", "ccd"),
-        MetricCol("rre", "rre", "rre [deg]", false), MetricCol("rte", "rte", "rte", false),
+        MetricCol("rre", "rre", "rre [deg]" + over, false), MetricCol("rte", "rte", "rte" + over, false),
         MetricCol("rmse_r", "mse_r", "rmse_r", false),
         MetricCol("rmse_t", "mse_t", "rmse_t", false),
         RateCol("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t)),
         RateCol("success",
-                fmt::format("success(rre<{:g},rte<{:g})", o.success_rre_deg, o.success_rte))};
+                FindSuccessRule(o.success_rule, o.success_rre_deg, o.success_rte).Header())};
     if (o.recall_3dmatch) columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
     // A clip other than the paper's is in the header; Open3D's pair only when measured.
     const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
@@ -393,6 +451,11 @@ std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o
     for (std::size_t c = columns.size() - 3; c < columns.size(); ++c)
         columns[c].shown = false;
     return columns;
+}
+
+/// The pairs behind a row's rre / rte means: all of them, or the successful ones.
+std::size_t ErrorPairsCount(const MethodSummary& s, const ReportOptions& o) {
+    return o.rre_rte_over == ErrorPairs::kAll ? s.pairs : s.successful;
 }
 
 /// Why rows failed: the first message per method, and the rows counted as failed.
@@ -452,6 +515,7 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
     Table t;
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
     t.caption = "Data: " + DescribeTable(rt) + ThresholdsCaption(rt, o);
+    t.caption += "\n" + DescribeConventions(rt, o);
     const double threshold = InlierThreshold(rt);
     t.columns = SummaryColumns(rt, o, threshold);
     for (const auto& s : rt.methods) {
@@ -462,8 +526,8 @@ Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
                           {"mae_r.ci95", Mean(s.mae_r, n)},
                           {"mae_t", Mean(s.mae_t, n)},
                           {"ccd", Mean(s.ccd, n)},
-                          {"rre", Mean(s.rre, n)},
-                          {"rte", Mean(s.rte, n)},
+                          {"rre", Mean(s.rre, ErrorPairsCount(s, o))},
+                          {"rte", Mean(s.rte, ErrorPairsCount(s, o))},
                           {"rmse_r", Mean(s.rmse_r, n)},
                           {"rmse_t", Mean(s.rmse_t, n)},
                           {"recall", Mean(s.recall, n)},

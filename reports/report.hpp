@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "reports/conventions.hpp"
 #include "reports/statistics.hpp"
 #include "reports/table.hpp"
 #include "runners/result_row.hpp"
@@ -36,6 +37,13 @@ struct ReportOptions {
     /// run) are refused by BuildTables, naming them; with this set, every method of such a
     /// table is restricted to the pairs all of them have, and the caption says so.
     bool common_pairs = false;
+    /// The success column's rule: "rre-rte" (success_rre_deg / success_rte) or a preset of
+    /// reports/conventions.hpp (kitti, 3dmatch-rmse, ...).
+    std::string success_rule = "rre-rte";
+    /// Pairs the rre / rte means average over: all with finite metrics, or the successful ones.
+    ErrorPairs rre_rte_over = ErrorPairs::kAll;
+    /// Rates (recall, success, 3DMatch recall) per pair, or the mean of per-scene rates.
+    RatePer rates_per = RatePer::kPair;
 };
 
 /// Mean with its 95% bootstrap confidence interval (BootstrapMean, reports/statistics.hpp).
@@ -60,6 +68,12 @@ struct MethodSummary {
     Estimate recall_3dmatch;  ///< 3DMatch-style (only with ReportOptions::recall_3dmatch)
     double median_seconds = 0.0;
     Estimate mean_seconds;  ///< seconds per call over all pairs, with its bootstrap CI
+    /// Wall and CPU seconds per call over all pairs: 95th percentiles and the CPU median
+    /// (SampleQuantile, numpy's linear definition). CPU NaN when no row recorded CPU time
+    /// (every cpu_seconds 0 while some wall time is not: rows from before it existed, `score`).
+    double p95_seconds = 0.0, median_cpu_seconds = 0.0, p95_cpu_seconds = 0.0;
+    std::size_t successful = 0;  ///< pairs the success rule accepts (rre/rte over successful)
+    std::size_t rate_groups = 0;  ///< scenes or categories the rates averaged over (pairs: n)
     int threads = 1;
     double ccd_clip = kCcdClip;     ///< the clip every row's ccd was measured with
     double inlier_threshold = 0.0;  ///< > 0: the rows carry Open3D's fitness / inlier RMSE
@@ -76,6 +90,11 @@ struct ReportTable {
     /// Empty, or (with ReportOptions::common_pairs) how the table was restricted to the pairs
     /// every method has, e.g. "restricted to the 10 pairs every method has (icp: 30 -> 10)".
     std::string subset;
+    /// The rows behind the table (after any common-pairs restriction), pointing into the
+    /// vector given to BuildTables: valid while it lives. For the breakdowns of `report`.
+    std::vector<const ResultRow*> rows;
+    /// Threads, CPU model and library versions the rows record (DescribeEnvironment).
+    std::string environment;
 };
 
 /// Groups rows by pair file (content hash; file name and provenance for old rows without
@@ -92,6 +111,11 @@ std::vector<MethodSummary> Summarize(const std::vector<ResultRow>& rows,
 
 /// One line describing a table's data and convention, e.g. for captions.
 std::string DescribeTable(const ReportTable& table);
+
+/// One caption line naming the conventions a summary table used: the pairs rre/rte average
+/// over, what rates average over (with the number of scenes), the success and recall rules
+/// with where they come from (docs/metrics.md, "Conventions").
+std::string DescribeConventions(const ReportTable& table, const ReportOptions& o);
 
 /// A ReportTable as a report table (reports/table.hpp): caption "Data: " + DescribeTable, a row
 /// per (method, params), the means with their CIs, recall, success and seconds; chamfer, threads

@@ -20,6 +20,15 @@ double SampleMedian(std::vector<double> v) {
     return v.size() % 2 == 1 ? v[mid] : 0.5 * (v[mid - 1] + v[mid]);
 }
 
+double SampleQuantile(std::vector<double> v, double q) {
+    if (v.empty()) return std::nan("");
+    std::sort(v.begin(), v.end());
+    const double h = q * static_cast<double>(v.size() - 1);
+    const auto lo = static_cast<std::size_t>(std::floor(h));
+    if (lo + 1 >= v.size()) return v.back();
+    return v[lo] + (h - static_cast<double>(lo)) * (v[lo + 1] - v[lo]);
+}
+
 double SampleStd(const std::vector<double>& v) {
     if (v.size() < 2) return 0.0;
     const double m = SampleMean(v);

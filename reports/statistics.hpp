@@ -13,6 +13,11 @@ double SampleMean(const std::vector<double>& v);
 /// Median (mean of the two middle values for an even count); NaN for an empty sample.
 double SampleMedian(std::vector<double> v);
 
+/// The q-quantile (q in [0, 1]) by linear interpolation between order statistics: with the
+/// values sorted, h = q (n - 1) and x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h])
+/// (numpy.quantile's default, method="linear"; q = 0.5 is SampleMedian). NaN when empty.
+double SampleQuantile(std::vector<double> v, double q);
+
 /// Sample standard deviation (n - 1 denominator, as numpy's std(ddof=1)); 0 below two values.
 double SampleStd(const std::vector<double>& v);
 

@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "baselines/library_versions.hpp"
 #include "core/atomic_file.hpp"
 #include "core/cpu_time.hpp"
 #include "core/file_lock.hpp"
@@ -490,7 +491,8 @@ void WriteSortedRows(const RunOptions& options, const std::string& part_path,
 
 /// The row tags every call of this run shares. The machine's load when the run started is
 /// timing provenance: a reader can tell whether wall times were taken on a busy machine
-/// (docs/performance.md).
+/// (docs/performance.md); so are the CPU model and the library versions the calls ran on
+/// (shown in `report`'s timing caption, issue 54).
 RowContext RunRowContext(const RunOptions& options, const DataTag& data_tag) {
     const MachineLoad load = ReadMachineLoad();
     RowContext context;
@@ -500,7 +502,9 @@ RowContext RunRowContext(const RunOptions& options, const DataTag& data_tag) {
     context.data = data_tag;
     context.machine = {{"loadavg", {load.load1, load.load5, load.load15}},
                        {"cores", load.cores},
-                       {"jobs", options.jobs}};
+                       {"jobs", options.jobs},
+                       {"cpu", CpuModel()},
+                       {"libraries", LibraryVersions()}};
     return context;
 }
 

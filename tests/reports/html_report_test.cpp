@@ -88,6 +88,23 @@ TEST(HtmlReport, IsSelfContained) {
     EXPECT_NE(html.find("<table>"), std::string::npos);
 }
 
+// Issue 54: a section's success curves are drawn with their AUC per method in the caption;
+// expected AUCs from numpy.trapz of the step curve on 1500001 points of [0, 15] over 15 (icp
+// 0.19000016, cpd 0.65666684, svr 0.45666680), shown at 3 decimals.
+TEST(HtmlReport, SuccessCurvesShowTheirAuc) {
+    HtmlReportOptions o;
+    HtmlSection s;
+    s.title = "ring pairs";
+    s.rows = Rows();
+    s.curves = {{"rre", 15.0}};
+    o.sections = {s};
+    const std::string html = RenderHtmlReport(o);
+    EXPECT_NE(html.find("fraction of all pairs with rre below x; AUC on [0, 15]: icp 0.190, "
+                        "cpd 0.657, svr 0.457</figcaption>"),
+              std::string::npos);
+    EXPECT_NE(html.find("rre threshold [deg]"), std::string::npos);
+}
+
 TEST(HtmlReport, WideTablesScrollInTheirBoxAndCurvesDifferByDash) {
     const std::string html = Render();
     // Every table sits in a box that scrolls sideways (at 1200 px a wide table no longer

@@ -232,3 +232,20 @@ TEST(PairedBootstrap, PAndCiAgreeForEverySampleAndResampleCount) {
 
 }  // namespace
 }  // namespace regbench
+
+namespace regbench {
+namespace {
+
+TEST(SampleQuantile, MatchesNumpyLinear) {
+    // numpy 1.24 (/usr/bin/python3): np.quantile(v, q), default method="linear".
+    EXPECT_NEAR(SampleQuantile({0.1, 0.3, 0.2, 0.5, 0.4, 0.6, 0.7, 2.0}, 0.95),
+                1.5449999999999993, 1e-12);
+    EXPECT_NEAR(SampleQuantile({3, 1, 2}, 0.3), 1.6, 1e-12);
+    EXPECT_NEAR(SampleQuantile({1, 2, 3, 4}, 0.95), 3.85, 1e-12);
+    EXPECT_DOUBLE_EQ(SampleQuantile({5.0}, 0.95), 5.0);
+    EXPECT_DOUBLE_EQ(SampleQuantile({4, 1, 3, 2}, 0.5), SampleMedian({4, 1, 3, 2}));
+    EXPECT_TRUE(std::isnan(SampleQuantile({}, 0.5)));
+}
+
+}  // namespace
+}  // namespace regbench

@@ -51,6 +51,11 @@ TEST(RunnerTiming, EveryOkRowHasPositiveCpuSecondsAndTheMachineLoad) {
             ASSERT_TRUE(row.contains("machine"));
             EXPECT_EQ(row["machine"]["loadavg"].size(), 3u);
             EXPECT_GE(row["machine"]["cores"].get<int>(), 1);
+            // Timing provenance (issue 54): the CPU model and the libraries' versions.
+            EXPECT_FALSE(row["machine"]["cpu"].get<std::string>().empty());
+            for (const char* lib : {"eigen", "open3d", "libtorch", "blas"}) {
+                EXPECT_FALSE(row["machine"]["libraries"][lib].get<std::string>().empty()) << lib;
+            }
         }
     }
     std::filesystem::remove_all(dir);
