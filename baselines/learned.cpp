@@ -47,35 +47,6 @@ Transform IcpRefine(const PointCloud& source, const PointCloud& target, const Tr
     return r.T_target_source * initial;
 }
 
-PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& target) {
-    PairNormalization n;
-    const double limit2 = kTrainingFrameRadius * kTrainingFrameRadius;
-    const auto inside = [limit2](const PointCloud& c) {
-        return c.rows() == 0 || c.rowwise().squaredNorm().maxCoeff() <= limit2;
-    };
-    if (source.rows() == 0 || (inside(source) && inside(target))) return n;
-    n.applied = true;
-    n.centre = source.colwise().mean().transpose();
-    const double radius =
-        std::sqrt((source.rowwise() - n.centre.transpose()).rowwise().squaredNorm().maxCoeff());
-    n.scale = radius > 0.0 ? radius : 1.0;
-    return n;
-}
-
-PointCloud NormalizeCloud(const PointCloud& cloud, const PairNormalization& n) {
-    if (!n.applied) return cloud;
-    return (cloud.rowwise() - n.centre.transpose()) / n.scale;
-}
-
-Transform DenormalizeTransform(const Transform& T_normalized, const PairNormalization& n) {
-    if (!n.applied) return T_normalized;
-    Transform T = T_normalized;
-    const Eigen::Matrix3d R = T_normalized.topLeftCorner<3, 3>();
-    T.topRightCorner<3, 1>() =
-        n.scale * T_normalized.topRightCorner<3, 1>() + n.centre - R * n.centre;
-    return T;
-}
-
 namespace {
 
 /// The parameters every learned method has. The variants with ICP refinement (`ogmm`,

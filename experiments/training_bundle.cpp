@@ -7,6 +7,7 @@
 
 #include "core/atomic_file.hpp"
 #include "core/input_file.hpp"
+#include "core/pair_normalization.hpp"
 
 namespace regbench {
 namespace {
@@ -78,10 +79,13 @@ std::vector<ShapeSource> ShapesFromJson(const nlohmann::json& a, const char* key
 }  // namespace
 
 networks::TrainSample ToTrainSample(const Pair& p) {
+    // The frame the learned methods run in (core/pair_normalization.hpp): a pair outside the
+    // training frame, e.g. an indoor scan in its camera frame, is trained on as it is run.
+    const PairNormalization frame = NormalizationOf(p.source, p.target);
     networks::TrainSample s;
-    s.source = p.source;
-    s.target = p.target;
-    s.T_gt = p.T_gt;
+    s.source = NormalizeCloud(p.source, frame);
+    s.target = NormalizeCloud(p.target, frame);
+    s.T_gt = NormalizeGroundTruth(p.T_gt, frame);
     s.source_overlap = p.source_overlap.cast<double>();
     s.target_overlap = p.target_overlap.cast<double>();
     return s;

@@ -32,7 +32,8 @@ struct TrainingBundle {
     bool length_given = false;
 };
 
-/// A protocol pair as the trainer takes it.
+/// A protocol pair as the trainer takes it: in the learned methods' frame (a pair outside the
+/// training frame normalised as at inference, core/pair_normalization.hpp; others unchanged).
 networks::TrainSample ToTrainSample(const Pair& p);
 
 /// The training stream and validation pairs of `b` (what `regbench train` trains on).
