@@ -5,15 +5,11 @@
 #include <limits>
 #include <stdexcept>
 
-#include "core/params.hpp"
-#include "networks/layers/layers.hpp"
 #include "networks/families/rgm/assignment.hpp"
+#include "networks/family_config.hpp"
+#include "networks/layers/layers.hpp"
 
 namespace regbench::networks {
-
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RgmConfig, name, width_divisor, k, heads,
-                                                sinkhorn_iterations, estimate_iterations, cycle,
-                                                inlier_threshold, label_dist)
 
 namespace {
 
@@ -69,36 +65,29 @@ torch::Tensor IdentityWhereFew(const torch::Tensor& T, const torch::Tensor& pair
 
 }  // namespace
 
-nlohmann::json ToJson(const RgmConfig& c) {
-    nlohmann::json j = c;
-    j["arch"] = "rgm";
-    return j;
+// Ranges: the authors run k 20, 4 heads, 20 Sinkhorn iterations and 2 estimate rounds at their
+// full widths (divisor 1); the bounds are 6 to 50 times those.
+void RgmConfig::Validate(ParamCheck& c) const {
+    InRange(c, "width_divisor", width_divisor, 1, 64);
+    c.Require(width_divisor >= 1 && 64 % width_divisor == 0, "width_divisor",
+              "must divide 64 (1, 2, ..., 64), got " + std::to_string(width_divisor));
+    InRange(c, "k", k, 1, 128);
+    InRange(c, "heads", heads, 1, 64);
+    if (width_divisor >= 1 && 64 % width_divisor == 0) {
+        const RgmWidths w(width_divisor);
+        c.Require(w.gnn % heads == 0 && (w.node + w.edge) % heads == 0, "heads",
+                  "must divide the widths " + std::to_string(w.node + w.edge) + " and " +
+                      std::to_string(w.gnn) + ", got " + std::to_string(heads));
+    }
+    InRange(c, "sinkhorn_iterations", sinkhorn_iterations, 1, 1000);
+    InRange(c, "estimate_iterations", estimate_iterations, 1, 32);
+    NonNegative(c, "inlier_threshold", inlier_threshold);
+    Positive(c, "label_dist", label_dist);
 }
 
-RgmConfig RgmConfigFromJson(const nlohmann::json& j) {
-    const auto c = ParseNetworkConfig<RgmConfig>(j, "rgm");
-    if (c.width_divisor < 1 || 64 % c.width_divisor != 0) {
-        throw std::invalid_argument("rgm config: width_divisor must divide 64 (1, 2, ..., 64), got " +
-                                    std::to_string(c.width_divisor));
-    }
-    const RgmWidths w(c.width_divisor);
-    if (c.heads < 1 || w.gnn % c.heads != 0 || (w.node + w.edge) % c.heads != 0) {
-        throw std::invalid_argument("rgm config: heads must divide the widths " +
-                                    std::to_string(w.node + w.edge) + " and " +
-                                    std::to_string(w.gnn) + ", got " + std::to_string(c.heads));
-    }
-    if (c.k < 1 || c.sinkhorn_iterations < 1 || c.estimate_iterations < 1) {
-        throw std::invalid_argument(
-            "rgm config: k, sinkhorn_iterations and estimate_iterations must be positive: " +
-            ToJson(c).dump());
-    }
-    if (!(c.inlier_threshold >= 0) || !(c.label_dist > 0)) {
-        throw std::invalid_argument(
-            "rgm config: inlier_threshold must be >= 0 and label_dist positive: " +
-            ToJson(c).dump());
-    }
-    return c;
-}
+nlohmann::json ToJson(const RgmConfig& c) { return NetConfigJson(c, "rgm"); }
+
+RgmConfig RgmConfigFromJson(const nlohmann::json& j) { return ParseNetConfig<RgmConfig>(j, "rgm"); }
 
 RgmWidths::RgmWidths(int d)
     : c1(64 / d),
@@ -121,11 +110,14 @@ torch::Tensor RgmAttentionImpl::forward(const torch::Tensor& x, const torch::Ten
     const int64_t B = x.size(0), P = x.size(1), Q = memory.size(1), d = x.size(2);
     const int64_t dk = d / heads_;
     const auto project = [&](int i, const torch::Tensor& in, int64_t n) {
-        return linears_->ptr<nn::LinearImpl>(i)->forward(in).view({B, n, heads_, dk}).transpose(1, 2);
+        return linears_->ptr<nn::LinearImpl>(i)
+            ->forward(in)
+            .view({B, n, heads_, dk})
+            .transpose(1, 2);
     };
     const torch::Tensor q = project(0, x, P), k = project(1, memory, Q), v = project(2, memory, Q);
-    const torch::Tensor p =
-        torch::softmax(torch::matmul(q, k.transpose(2, 3)) / std::sqrt(static_cast<double>(dk)), -1);
+    const torch::Tensor p = torch::softmax(
+        torch::matmul(q, k.transpose(2, 3)) / std::sqrt(static_cast<double>(dk)), -1);
     const torch::Tensor o = torch::matmul(p, v).transpose(1, 2).reshape({B, P, d});
     return linears_->ptr<nn::LinearImpl>(3)->forward(o);
 }
@@ -294,8 +286,8 @@ torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& ta
         if (i == 0) {
             const torch::Tensor src_new =
                 Apply(cross_graph_, torch::cat({emb_src, torch::bmm(s, emb_tgt)}, 2));
-            const torch::Tensor tgt_new =
-                Apply(cross_graph_, torch::cat({emb_tgt, torch::bmm(s.transpose(1, 2), emb_src)}, 2));
+            const torch::Tensor tgt_new = Apply(
+                cross_graph_, torch::cat({emb_tgt, torch::bmm(s.transpose(1, 2), emb_src)}, 2));
             emb_src = src_new;
             emb_tgt = tgt_new;
         }
@@ -303,7 +295,8 @@ torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& ta
     return s;
 }
 
-torch::Tensor WeightedRigid(const torch::Tensor& P, const torch::Tensor& Q, const torch::Tensor& w) {
+torch::Tensor WeightedRigid(const torch::Tensor& P, const torch::Tensor& Q,
+                            const torch::Tensor& w) {
     const torch::Tensor total = w.sum(1, true);
     const torch::Tensor wn = (w / (total + kSvdWeightEps)).unsqueeze(2);  // [B, N, 1]
     const torch::Tensor cp = (P * wn).sum(1), cq = (Q * wn).sum(1);       // [B, 3]
@@ -448,15 +441,7 @@ LossTerms RgmNet::Loss(const PairBatch& batch, const NetOutput& output) {
     return {{"perm", bce}, {"total", bce}};
 }
 
-void LoadRgmStateDict(RgmNet& net, const StateDict& tensors, const std::string& file) {
-    LoadStrictStateDict(net, tensors, file, "RGM");
-}
-
-std::map<std::string, int64_t> RgmForwardMacs(const nlohmann::json& config, int64_t n, int64_t m) {
-    if (n < 1 || m < 1) {
-        throw std::invalid_argument("rgm forward cost: point counts must be positive");
-    }
-    const RgmConfig c = RgmConfigFromJson(config);
+std::map<std::string, int64_t> RgmForwardMacs(const RgmConfig& c, int64_t n, int64_t m) {
     const RgmWidths w(c.width_divisor);
     std::map<std::string, int64_t> macs;
     const auto pass = [&](int64_t a, int64_t b) {  // one match, source a, target b points
@@ -467,10 +452,12 @@ std::map<std::string, int64_t> RgmForwardMacs(const nlohmann::json& config, int6
         }
         for (int i = 0; i < 2; ++i) {
             const int64_t d = i == 0 ? w.node + w.edge : w.gnn;
-            const auto enc = [&](int64_t p) { return 4 * p * d * d + 2 * p * p * d + 2 * p * d * w.ff; };
+            const auto enc = [&](int64_t p) {
+                return 4 * p * d * d + 2 * p * p * d + 2 * p * d * w.ff;
+            };
             const auto dec = [&](int64_t p, int64_t q) {
-                return 4 * p * d * d + 2 * p * p * d + 2 * p * d * d + 2 * q * d * d + 2 * p * q * d +
-                       2 * p * d * w.ff;
+                return 4 * p * d * d + 2 * p * p * d + 2 * p * d * d + 2 * q * d * d +
+                       2 * p * q * d + 2 * p * d * w.ff;
             };
             macs["transformer"] += enc(a) + enc(b) + dec(a, b) + dec(b, a);
             macs["adjacency"] += (a * a + b * b) * d;
