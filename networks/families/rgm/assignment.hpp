@@ -1,8 +1,8 @@
 #pragma once
-// Maximum-weight linear assignment for RGM's test-time correspondences
-// (networks/families/rgm/net.hpp), by dlib's max_cost_assignment (Debian libdlib-dev, the Hungarian
-// algorithm in O(n^3)). Kept in its own translation unit, free of LibTorch: dlib's matrix headers
-// are large and only this file includes them.
+// Maximum-weight linear assignment for RGM's test-time correspondences (networks/families/rgm/net.hpp), by
+// dlib's max_cost_assignment (Debian libdlib-dev, the Hungarian algorithm in O(n^3)). Kept in
+// its own translation unit, free of LibTorch: dlib's matrix headers are large and only this
+// file includes them.
 #include <cstdint>
 #include <vector>
 

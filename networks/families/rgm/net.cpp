@@ -5,9 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include "networks/families/rgm/assignment.hpp"
-#include "networks/family_config.hpp"
+#include "core/params.hpp"
 #include "networks/layers/layers.hpp"
+#include "networks/families/rgm/assignment.hpp"
 
 namespace regbench::networks {
 
@@ -110,14 +110,11 @@ torch::Tensor RgmAttentionImpl::forward(const torch::Tensor& x, const torch::Ten
     const int64_t B = x.size(0), P = x.size(1), Q = memory.size(1), d = x.size(2);
     const int64_t dk = d / heads_;
     const auto project = [&](int i, const torch::Tensor& in, int64_t n) {
-        return linears_->ptr<nn::LinearImpl>(i)
-            ->forward(in)
-            .view({B, n, heads_, dk})
-            .transpose(1, 2);
+        return linears_->ptr<nn::LinearImpl>(i)->forward(in).view({B, n, heads_, dk}).transpose(1, 2);
     };
     const torch::Tensor q = project(0, x, P), k = project(1, memory, Q), v = project(2, memory, Q);
-    const torch::Tensor p = torch::softmax(
-        torch::matmul(q, k.transpose(2, 3)) / std::sqrt(static_cast<double>(dk)), -1);
+    const torch::Tensor p =
+        torch::softmax(torch::matmul(q, k.transpose(2, 3)) / std::sqrt(static_cast<double>(dk)), -1);
     const torch::Tensor o = torch::matmul(p, v).transpose(1, 2).reshape({B, P, d});
     return linears_->ptr<nn::LinearImpl>(3)->forward(o);
 }
@@ -286,8 +283,8 @@ torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& ta
         if (i == 0) {
             const torch::Tensor src_new =
                 Apply(cross_graph_, torch::cat({emb_src, torch::bmm(s, emb_tgt)}, 2));
-            const torch::Tensor tgt_new = Apply(
-                cross_graph_, torch::cat({emb_tgt, torch::bmm(s.transpose(1, 2), emb_src)}, 2));
+            const torch::Tensor tgt_new =
+                Apply(cross_graph_, torch::cat({emb_tgt, torch::bmm(s.transpose(1, 2), emb_src)}, 2));
             emb_src = src_new;
             emb_tgt = tgt_new;
         }
@@ -295,8 +292,7 @@ torch::Tensor RgmNet::Match(const torch::Tensor& source, const torch::Tensor& ta
     return s;
 }
 
-torch::Tensor WeightedRigid(const torch::Tensor& P, const torch::Tensor& Q,
-                            const torch::Tensor& w) {
+torch::Tensor WeightedRigid(const torch::Tensor& P, const torch::Tensor& Q, const torch::Tensor& w) {
     const torch::Tensor total = w.sum(1, true);
     const torch::Tensor wn = (w / (total + kSvdWeightEps)).unsqueeze(2);  // [B, N, 1]
     const torch::Tensor cp = (P * wn).sum(1), cq = (Q * wn).sum(1);       // [B, 3]
@@ -452,12 +448,10 @@ std::map<std::string, int64_t> RgmForwardMacs(const RgmConfig& c, int64_t n, int
         }
         for (int i = 0; i < 2; ++i) {
             const int64_t d = i == 0 ? w.node + w.edge : w.gnn;
-            const auto enc = [&](int64_t p) {
-                return 4 * p * d * d + 2 * p * p * d + 2 * p * d * w.ff;
-            };
+            const auto enc = [&](int64_t p) { return 4 * p * d * d + 2 * p * p * d + 2 * p * d * w.ff; };
             const auto dec = [&](int64_t p, int64_t q) {
-                return 4 * p * d * d + 2 * p * p * d + 2 * p * d * d + 2 * q * d * d +
-                       2 * p * q * d + 2 * p * d * w.ff;
+                return 4 * p * d * d + 2 * p * p * d + 2 * p * d * d + 2 * q * d * d + 2 * p * q * d +
+                       2 * p * d * w.ff;
             };
             macs["transformer"] += enc(a) + enc(b) + dec(a, b) + dec(b, a);
             macs["adjacency"] += (a * a + b * b) * d;

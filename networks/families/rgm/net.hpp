@@ -33,9 +33,9 @@
 //  - clouds of different sizes: their correspondence gather (calcorrespondpc) pairs the
 //    unmatched rows with the unmatched columns and fails unless N == M; regbench takes the
 //    matched pairs only (the unmatched ones have weight 0 in their SVD: the same transform);
-//  - the linear assignment is dlib's (integer weights, resolution 1e-9:
-//    networks/families/rgm/assignment.hpp) instead of scipy's; a step with fewer than 3 matched
-//    pairs keeps the cloud where it is (theirs runs the SVD on a zero covariance);
+//  - the linear assignment is dlib's (integer weights, resolution 1e-9: networks/families/rgm/assignment.hpp)
+//    instead of scipy's; a step with fewer than 3 matched pairs keeps the cloud where it is
+//    (theirs runs the SVD on a zero covariance);
 //  - the last iteration's SVD, which their loop computes and discards, is skipped;
 //  - fewer points than k: every point is a neighbour (theirs fails);
 //  - in training mode Forward runs one match (no assignment) and T is a soft weighted SVD;
@@ -47,8 +47,8 @@
 #include <string>
 #include <vector>
 
-#include "core/params.hpp"
 #include "networks/checkpoint/torch_save_reader.hpp"
+#include "networks/family_config.hpp"
 #include "networks/net.hpp"
 
 namespace regbench::networks {
