@@ -281,8 +281,8 @@ torch::Tensor PooledEdgeStages(torch::Tensor rows,
     const bool training = !stages.empty() && stages.front().second->is_training();
     if (training && rows.device().is_cpu() &&
         (rows.scalar_type() == torch::kFloat || rows.scalar_type() == torch::kDouble)) {
-        // Training: the edge stages with batch statistics (networks/layers/edge_stages.hpp), fused into
-        // one autograd Function unless a test asks for the LibTorch composition.
+        // Training: the edge stages with batch statistics (networks/layers/edge_stages.hpp), fused
+        // into one autograd Function unless a test asks for the LibTorch composition.
         std::vector<EdgeStage> edge_stages;
         for (const auto& [conv, bn] : stages) edge_stages.push_back(EdgeStageOf(conv, bn));
         return FusedEdgeStages() ? EdgeStagesFused(rows, edge_stages, k)

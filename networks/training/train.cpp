@@ -386,7 +386,8 @@ void KeepMetricsOfCheckpoint(const fs::path& dir, const nlohmann::json& checkpoi
 /// 1e30 became -9.2e18 through the int64 conversion and disabled --max-steps), every other
 /// number finite and >= 0. Throws std::invalid_argument naming the key and the value.
 TrainerState TrainerStateFromJson(nlohmann::json j) {
-    CheckTrainerStateJson(j);  // networks/checkpoint/checkpoint_json.cpp: every counter, named when refused
+    // networks/checkpoint/checkpoint_json.cpp: every counter, named when refused.
+    CheckTrainerStateJson(j);
     for (auto it = j.begin(); it != j.end();) it = it->is_null() ? j.erase(it) : std::next(it);
     return j.get<TrainerState>();
 }
@@ -540,7 +541,8 @@ void Trainer::Start() {
 /// `--no-jitter`, or on another dataset, would carry on silently on other data. The checkpoint's
 /// `data` (the provenance it was trained with) must agree on the datasets, the splits and the
 /// pair protocol; the first difference is named with both values.
-void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint, const fs::path& last) const {
+void Trainer::RefuseOtherTrainingPairs(const nlohmann::json& checkpoint,
+                                       const fs::path& last) const {
     if (!checkpoint.contains("data") || !checkpoint.at("data").is_object()) return;
     nlohmann::json was, now;
     for (const char* key : {"dataset", "split", "val_split", "protocol"}) {

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -20,6 +21,7 @@
 #include "networks/checkpoint/checkpoint.hpp"
 #include "networks/cost.hpp"
 #include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/net.hpp"
 #include "networks/training/train.hpp"
 #include "networks/zoo.hpp"
@@ -34,14 +36,27 @@ namespace regbench::networks {
 // EXAMPLE BEGIN
 using torch::indexing::Slice;
 
+/// Its config, declared once (networks/family_config.hpp): from Fields and Validate come the
+/// JSON, the checks, `train --list-models`' docs and ranges.
+struct CentroidNetConfig {
+    std::string name = "centroid-net";  ///< zoo model it came from
+    bool bias = true;                   ///< the learned 3x3 map has a bias
+
+    template <class F>
+    void Fields(F&& f) {
+        f("name", name, "zoo model it came from");
+        f("bias", bias, "the learned 3x3 map has a bias");
+    }
+    void Validate(ParamCheck& /*c*/) const {}  // no numbers, so no ranges
+};
+
 /// A toy network: the offset between the clouds' centroids through a learned 3x3 map (and
 /// bias); the rotation is the identity.
 class CentroidNet : public RegistrationNet {
 public:
-    explicit CentroidNet(const nlohmann::json& config) : config_(config) {
-        const bool bias = config.at("bias").get<bool>();
-        offset_ =
-            register_module("offset", torch::nn::Linear(torch::nn::LinearOptions(3, 3).bias(bias)));
+    explicit CentroidNet(const CentroidNetConfig& config) : config_(config) {
+        offset_ = register_module(
+            "offset", torch::nn::Linear(torch::nn::LinearOptions(3, 3).bias(config.bias)));
     }
     NetOutput Forward(const PairBatch& batch) override {
         const torch::Tensor d = batch.target.mean(1) - batch.source.mean(1);  // [B, 3]
@@ -61,42 +76,37 @@ public:
         terms["total"] = terms["translation"];
         return terms;
     }
-    nlohmann::json Config() const override { return config_; }
+    nlohmann::json Config() const override { return NetConfigJson(config_, "centroid-net"); }
 
 private:
-    nlohmann::json config_;
+    CentroidNetConfig config_;
     torch::nn::Linear offset_{nullptr};
 };
 
-/// Keys: "arch", "name" and "bias" (the 3x3 map has a bias: true or false).
-void CheckCentroidNetConfig(const nlohmann::json& c) {
-    for (const auto& [key, value] : c.items()) {
-        if (key != "arch" && key != "name" && key != "bias") {
-            throw std::invalid_argument("centroid-net config: unknown key '" + key + "'");
-        }
-    }
-    if (!c.contains("bias") || !c.at("bias").is_boolean()) {
-        throw std::invalid_argument("centroid-net config: 'bias' must be true or false");
-    }
+/// The zoo model: the config and its training recipe.
+nlohmann::json CentroidNetModel(const std::string& model) {
+    CentroidNetConfig c;
+    c.name = model;
+    nlohmann::json j = NetConfigJson(c, "centroid-net");
+    j["train"] = {{"lr", 0.05},
+                  {"batch", 4},
+                  {"epochs", 2},
+                  {"pairs_per_epoch", 16},
+                  {"schedule", "constant"}};
+    return j;
 }
 
-nlohmann::json CentroidNetConfig(const std::string& model) {
-    return {{"arch", "centroid-net"},
-            {"name", model},
-            {"bias", true},
-            {"train",
-             {{"lr", 0.05},
-              {"batch", 4},
-              {"epochs", 2},
-              {"pairs_per_epoch", 16},
-              {"schedule", "constant"}}}};
+/// Multiply-accumulates by part: the 3x3 map; the two means are additions.
+std::map<std::string, int64_t> CentroidNetMacs(const CentroidNetConfig& /*c*/, int64_t /*n*/,
+                                               int64_t /*m*/) {
+    return {{"offset", 9}};
 }
 
 /// The "authors'" layout: one nn.Linear(3, 3) named fc.
 nlohmann::json InferCentroidNetConfig(const StateDict& sd, const std::string& file,
                                       const nlohmann::json& /*settings*/) {
     RequireAuthorsTensor(sd, "fc.weight", 2, file, "a CentroidNet");
-    nlohmann::json c = CentroidNetConfig("centroid-net");
+    nlohmann::json c = CentroidNetModel("centroid-net");
     c["bias"] = false;
     for (const auto& [key, tensor] : sd) c["bias"] = c["bias"] || key == "fc.bias";
     return c;
@@ -108,18 +118,9 @@ NetworkFamily CentroidNetFamily() {
     f.summary = "worked example: a learned map of the centroid offset";
     f.models = {"centroid-net"};
     f.shipped_model = "centroid-net";
-    f.named_config = CentroidNetConfig;
-    f.config_docs = {{"bias", "the learned 3x3 map has a bias"}};
-    f.check_config = CheckCentroidNetConfig;
-    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
-        return std::make_shared<CentroidNet>(c);
-    };
-    f.forward_cost = [](const nlohmann::json& /*config*/, int64_t /*n*/, int64_t /*m*/) {
-        ForwardCost cost;
-        AddMacs(cost, "offset", 9);  // the 3x3 map; the two means are additions
-        return cost;
-    };
-    f.cost_class = CostClass::kNearLinear;  // two means: O(N + M)
+    f.named_config = CentroidNetModel;
+    BindConfig<CentroidNetConfig, CentroidNet>(f, CentroidNetMacs);  // docs, checks, build, cost
+    f.cost_class = CostClass::kNearLinear;                             // two means: O(N + M)
     f.methods = {{"centroid-net", false, "worked example: centroid offset, learned 3x3 map"}};
     auto authors = std::make_shared<AuthorsFormat>();
     authors->module = "CentroidNet (fc = nn.Linear(3, 3))";

@@ -3,16 +3,21 @@
 #include "networks/family.hpp"
 
 #include <gtest/gtest.h>
+#include <torch/torch.h>
 
+#include <filesystem>
 #include <set>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "networks/checkpoint/authors_checkpoint.hpp"
+#include "networks/checkpoint/torch_save_reader.hpp"
 #include "networks/cost.hpp"
 #include "networks/net.hpp"
 #include "networks/zoo.hpp"
 #include "tests/testing/expect_throw.hpp"
+#include "tests/testing/files.hpp"
 
 namespace regbench::networks {
 namespace {
@@ -100,7 +105,8 @@ TEST(Family, EveryModelChecksBuildsAndHasACost) {
 
 TEST(Family, AbsurdSizesAreRefusedBeforeAnythingIsBuilt) {
     // Issue 44: checkpoint configs with clusters 1e9 used to fail every row of a run (exit 0);
-    // the families' checks refuse them by name (limits: networks/families/ogmm/net.cpp, networks/families/deepgmr/net.cpp).
+    // the families' checks refuse them by name (limits: networks/families/ogmm/net.cpp,
+    // networks/families/deepgmr/net.cpp).
     for (const auto& [model, key, value] :
          std::vector<std::tuple<std::string, std::string, double>>{
              {"ogmm-tiny", "clusters", 1e9},
@@ -121,6 +127,31 @@ TEST(Family, AbsurdSizesAreRefusedBeforeAnythingIsBuilt) {
         testing::ExpectThrowsWith<std::invalid_argument>([&] { FamilyOfConfig(c).check_config(c); },
                                                          key);
     }
+}
+
+// Every family with an authors' format refuses, naming the file and writing nothing, a file cut
+// short and the state dict of another network (a tensor no family has): the generic half of
+// each family's import test, which keeps what is particular to it.
+TEST(Family, AuthorsImportRefusesACutFileAndAnotherNetworkByName) {
+    const std::filesystem::path dir = testing::FreshTempDir("family_authors_refusals");
+    const std::string other = WriteTorchSaveZip({{"unrelated.weight", torch::zeros({4, 3})}});
+    testing::WriteBytes(dir / "other.pth", other);
+    testing::WriteBytes(dir / "cut.pth", other.substr(0, other.size() / 2));
+    for (const std::string& arch : AuthorsFormats()) {
+        ImportOptions options;
+        options.from = arch;
+        for (const char* name : {"cut.pth", "other.pth"}) {
+            const std::string pth = (dir / name).string();
+            const std::string e = testing::ErrorOf(
+                [&] { ImportAuthorsCheckpoint(pth, (dir / "out").string(), options); });
+            EXPECT_NE(e.find(pth), std::string::npos) << arch << ": " << e;
+            if (std::string(name) == "other.pth") {
+                EXPECT_NE(e.find("has no tensor"), std::string::npos) << arch << ": " << e;
+            }
+            EXPECT_FALSE(std::filesystem::exists(dir / "out")) << arch;
+        }
+    }
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -7,8 +7,8 @@
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/cost.hpp"
 #include "networks/families/deepgmr/net.hpp"
-#include "networks/families/deepgmr/rri.hpp"
 #include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/training/recipes.hpp"
 
 namespace regbench::networks {
@@ -23,35 +23,31 @@ nlohmann::json OriginalRecipe() {
             {"lr_gamma", 0.5}, {"plateau_patience", 10},  {"min_lr", 1e-6}};
 }
 
-nlohmann::json Named(const std::string& name) {
-    DeepGmrConfig c;
-    c.name = name;
-    nlohmann::json train = OriginalRecipe();
-    if (name == "deepgmr-orig") {
-        c.features = DeepGmrFeatures::kRri;
-    } else if (name == "deepgmr-orig-xyz") {
-        c.features = DeepGmrFeatures::kXyz;
-    } else if (name == "deepgmr" || name == "deepgmr-small") {
-        c.features = DeepGmrFeatures::kDgcnn;
-        c.loss = DeepGmrLoss::kPose;
-        c.clusters = 128;
-        c.emb_dims = 512;
-        c.head_hidden = 256;
-        train = OgmmTrainingRecipe();  // the OGMM authors trained their DeepGMR baseline so
-        if (name == "deepgmr-small") {
-            // Width of ogmm-small, the shipped (CPU-trained) OGMM: d = 128, J = 32; a CPU budget
-            // of minutes needs lr 1e-3 to move at all, and small batches to take many steps.
-            c.clusters = 32;
-            c.emb_dims = 128;
-            c.head_hidden = 128;
-            train = CampaignTrainingRecipe();
-        }
-    } else {
-        throw std::invalid_argument("deepgmr: unknown model '" + name + "'");
-    }
-    nlohmann::json j = ToJson(c);
-    j["train"] = train;
-    return j;
+/// The OGMM paper's variant: OGMM's DGCNN features and the pose loss, at a width of `d`,
+/// `clusters` components and a head of `hidden`.
+void PaperVariant(DeepGmrConfig& c, int d, int clusters, int hidden) {
+    c.features = DeepGmrFeatures::kDgcnn;
+    c.loss = DeepGmrLoss::kPose;
+    c.emb_dims = d;
+    c.clusters = clusters;
+    c.head_hidden = hidden;
+}
+
+/// "deepgmr": the OGMM paper's variant as the OGMM authors trained their DeepGMR baseline.
+/// "deepgmr-small": the width of ogmm-small, the shipped (CPU-trained) OGMM: d = 128, J = 32; a
+/// CPU budget of minutes needs lr 1e-3 to move at all, and small batches to take many steps.
+/// "deepgmr-orig" / "-xyz": the original on RRI / centred-xyz features and its recipe.
+const std::vector<ZooModel<DeepGmrConfig>>& Models() {
+    static const std::vector<ZooModel<DeepGmrConfig>> kModels = {
+        {"deepgmr", [](DeepGmrConfig& c) { PaperVariant(c, 512, 128, 256); },
+         OgmmTrainingRecipe()},
+        {"deepgmr-small", [](DeepGmrConfig& c) { PaperVariant(c, 128, 32, 128); },
+         CampaignTrainingRecipe()},
+        {"deepgmr-orig", [](DeepGmrConfig& c) { c.features = DeepGmrFeatures::kRri; },
+         OriginalRecipe()},
+        {"deepgmr-orig-xyz", [](DeepGmrConfig& c) { c.features = DeepGmrFeatures::kXyz; },
+         OriginalRecipe()}};
+    return kModels;
 }
 
 /// The original's DeepGMR(args): xyz or RRI input from the first conv's channels, d_model and J
@@ -71,11 +67,11 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
     const int64_t d_in = first.size(1);
     nlohmann::json c;
     if (d_in == 3) {
-        c = Named("deepgmr-orig-xyz");
+        c = ZooModelConfig(Models(), "deepgmr-orig-xyz", ToJson);
     } else if (d_in >= 8 && d_in % 4 == 0) {
-        c = Named("deepgmr-orig");
+        c = ZooModelConfig(Models(), "deepgmr-orig", ToJson);
         c["rri_k"] = d_in / 4;
-        c["rri_variant"] = ToString(ParseRriVariant(settings.at("rri_variant").get<std::string>()));
+        c["rri_variant"] = settings.at("rri_variant");  // checked with the whole config
     } else {
         RefuseAuthorsFile(file, "tensor backbone.encoder.0.0.weight has " + std::to_string(d_in) +
                                     " input channels: neither xyz (3) nor RRI (4k)");
@@ -123,29 +119,9 @@ NetworkFamily DeepGmrFamily() {
     NetworkFamily f;
     f.arch = "deepgmr";
     f.summary = "DeepGMR (Yuan et al., ECCV 2020): learned GMM correspondences, closed-form pose";
-    f.models = {"deepgmr", "deepgmr-small", "deepgmr-orig", "deepgmr-orig-xyz"};
+    BindModels(f, Models(), ToJson);
     f.shipped_model = "deepgmr";
-    f.named_config = Named;
-    f.config_docs = {
-        {"features",
-         "\"rri\" (original: PointNet on RRI features), \"xyz\" (original on "
-         "centred xyz) or \"dgcnn\" (the OGMM paper's variant: DGCNN, CONV3 head)"},
-        {"clusters", "GMM components J"},
-        {"rri_k", "RRI neighbours (features rri)"},
-        {"d_model",
-         "PointNet feature width (rri, xyz; the original's --d_model; written only "
-         "when not 1024)"},
-        {"rri_variant", "RRI phi orientation: \"cuda\" (released models) or \"numpy\""},
-        {"emb_dims", "DGCNN feature width (features dgcnn)"},
-        {"dgcnn_k", "DGCNN neighbours, the point itself included (features dgcnn)"},
-        {"head_hidden", "CONV3 head hidden width (features dgcnn)"},
-        {"loss",
-         "\"transform\" (original: T12 and T21 against T_gt) or \"pose\" (DCP style: "
-         "rotation and translation)"}};
-    f.check_config = [](const nlohmann::json& c) { DeepGmrConfigFromJson(c); };
-    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
-        return std::make_shared<DeepGmrNet>(DeepGmrConfigFromJson(c));
-    };
+    BindConfig<DeepGmrConfig, DeepGmrNet>(f);
     f.forward_cost = Cost;
     f.methods = {
         {"deepgmr", true, "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement",

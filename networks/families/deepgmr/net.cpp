@@ -1,57 +1,14 @@
 #include "networks/families/deepgmr/net.hpp"
 
 #include <stdexcept>
-#include <tuple>
 
-#include "core/enum_names.hpp"
-#include "core/params.hpp"
+#include "networks/family_config.hpp"
 #include "networks/layers/gmm_head.hpp"
 
 namespace regbench::networks {
 namespace {
 
 using torch::indexing::Slice;
-
-constexpr EnumName<DeepGmrFeatures> kFeatureNames[] = {
-    {DeepGmrFeatures::kRri, "rri"},
-    {DeepGmrFeatures::kXyz, "xyz"},
-    {DeepGmrFeatures::kDgcnn, "dgcnn"},
-};
-constexpr EnumName<DeepGmrLoss> kLossNames[] = {
-    {DeepGmrLoss::kTransform, "transform"},
-    {DeepGmrLoss::kPose, "pose"},
-};
-
-std::string ToString(DeepGmrFeatures f) { return EnumToString(kFeatureNames, f); }
-
-DeepGmrFeatures ParseFeatures(const std::string& s) {
-    return ParseEnum(kFeatureNames, "features", s, "deepgmr: ");
-}
-
-std::string ToString(DeepGmrLoss l) { return EnumToString(kLossNames, l); }
-
-DeepGmrLoss ParseLoss(const std::string& s) {
-    return ParseEnum(kLossNames, "loss", s, "deepgmr: ");
-}
-
-}  // namespace
-
-// JSON names of the config's enums, strict on reading (nlohmann's enum macro would map an
-// unknown name to the first value).
-static void to_json(nlohmann::json& j, DeepGmrFeatures f) { j = ToString(f); }
-static void from_json(const nlohmann::json& j, DeepGmrFeatures& f) {
-    f = ParseFeatures(j.get<std::string>());
-}
-static void to_json(nlohmann::json& j, DeepGmrLoss l) { j = ToString(l); }
-static void from_json(const nlohmann::json& j, DeepGmrLoss& l) {
-    l = ParseLoss(j.get<std::string>());
-}
-static void to_json(nlohmann::json& j, RriVariant v) { j = ToString(v); }
-static void from_json(const nlohmann::json& j, RriVariant& v) {
-    v = ParseRriVariant(j.get<std::string>());
-}
-
-namespace {
 
 /// CBR(i, o): 1x1 Conv1d without bias -> BatchNorm1d -> ReLU (the original's building block).
 /// Children "0" and "1" give the original's state-dict keys (encoder.0.0.weight, ...).
@@ -80,41 +37,28 @@ torch::Tensor Translation(const torch::Tensor& T) { return T.index({Slice(), Sli
 
 }  // namespace
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(DeepGmrConfig, name, features, clusters, rri_k,
-                                                d_model, rri_variant, emb_dims, dgcnn_k,
-                                                head_hidden, loss)
+// Ranges: the original's models have J 16, d_model 1024, rri_k 20; the OGMM paper's variant
+// J 128, DGCNN width 512, head 256, k 20 (wentaoyuan/deepgmr, gfmei/ogmm). The bounds are 4
+// (widths) to 8 (J) times those: no trained configuration comes near them, and a network built
+// above them would not fit in memory (clusters 1e9 asks for terabytes), so a checkpoint or an
+// authors' file with such a size is refused before anything is built.
+void DeepGmrConfig::Validate(ParamCheck& c) const {
+    InRange(c, "clusters", clusters, 1, 1024);
+    InRange(c, "rri_k", rri_k, 2, 128);
+    InRange(c, "d_model", d_model, 1, 4096);
+    InRange(c, "emb_dims", emb_dims, 1, 4096);
+    InRange(c, "dgcnn_k", dgcnn_k, 1, 128);
+    InRange(c, "head_hidden", head_hidden, 1, 4096);
+}
 
 nlohmann::json ToJson(const DeepGmrConfig& c) {
-    nlohmann::json j = c;
+    nlohmann::json j = NetConfigJson(c, "deepgmr");
     if (c.d_model == 1024) j.erase("d_model");
-    j["arch"] = "deepgmr";
     return j;
 }
 
 DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j) {
-    const auto c = ParseNetworkConfig<DeepGmrConfig>(j, "deepgmr");
-    if (c.clusters < 1 || c.rri_k < 2 || c.emb_dims < 1 || c.dgcnn_k < 1 || c.head_hidden < 1 ||
-        c.d_model < 1) {
-        throw std::invalid_argument(
-            "deepgmr config: clusters, rri_k, d_model, emb_dims, dgcnn_k, head_hidden "
-            "must be positive (rri_k >= 2): " +
-            ToJson(c).dump());
-    }
-    // No trained configuration comes near these; a network built above them would not fit in
-    // memory (clusters 1e9 asks for terabytes), so they are refused before anything is built.
-    for (const auto& [key, v, most] : {std::tuple<const char*, int, int>{"clusters", c.clusters,
-                                                                         1 << 16},
-                                       {"d_model", c.d_model, 1 << 16},
-                                       {"emb_dims", c.emb_dims, 1 << 16},
-                                       {"head_hidden", c.head_hidden, 1 << 16},
-                                       {"rri_k", c.rri_k, 1 << 10},
-                                       {"dgcnn_k", c.dgcnn_k, 1 << 10}}) {
-        if (v > most) {
-            throw std::invalid_argument("deepgmr config: '" + std::string(key) + "' must be <= " +
-                                        std::to_string(most) + ", got " + std::to_string(v));
-        }
-    }
-    return c;
+    return ParseNetConfig<DeepGmrConfig>(j, "deepgmr");
 }
 
 DeepGmrNet::DeepGmrNet(const DeepGmrConfig& config) : config_(config) {

@@ -8,9 +8,11 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/enum_names.hpp"
+#include "core/params.hpp"
+#include "networks/families/deepgmr/rri.hpp"
 #include "networks/layers/layers.hpp"
 #include "networks/net.hpp"
-#include "networks/families/deepgmr/rri.hpp"
 
 namespace regbench::networks {
 
@@ -20,13 +22,19 @@ enum class DeepGmrFeatures {
     kXyz,    ///< original: PointNet on the centred xyz
     kDgcnn,  ///< OGMM paper: OGMM's static DGCNN on raw xyz, CONV3 head
 };
+REGBENCH_CHOICES(DeepGmrFeatures, {{DeepGmrFeatures::kRri, "rri"},
+                                   {DeepGmrFeatures::kXyz, "xyz"},
+                                   {DeepGmrFeatures::kDgcnn, "dgcnn"}})
 
 /// Training loss.
 enum class DeepGmrLoss {
     kTransform,  ///< original: mean((T12 T_gt^-1 - I)^2) + mean((T21 T_gt - I)^2)
     kPose,       ///< DCP style: mean((R^T R_gt - I)^2) + mean((t - t_gt)^2)
 };
+REGBENCH_CHOICES(DeepGmrLoss,
+                 {{DeepGmrLoss::kTransform, "transform"}, {DeepGmrLoss::kPose, "pose"}})
 
+/// The ranges (Validate) are in networks/families/deepgmr/net.cpp.
 struct DeepGmrConfig {
     std::string name = "deepgmr-orig";                 ///< zoo name it came from
     DeepGmrFeatures features = DeepGmrFeatures::kRri;  ///< encoder input / kind
@@ -39,11 +47,33 @@ struct DeepGmrConfig {
     int dgcnn_k = 20;                            ///< DGCNN neighbours, self included (kDgcnn)
     int head_hidden = 256;                       ///< CONV3 head hidden width (kDgcnn)
     DeepGmrLoss loss = DeepGmrLoss::kTransform;  ///< training loss
+
+    template <class F>
+    void Fields(F&& f) {
+        f("name", name, "zoo name it came from");
+        f("features", features,
+          "\"rri\" (original: PointNet on RRI features), \"xyz\" (original on centred xyz) or "
+          "\"dgcnn\" (the OGMM paper's variant: DGCNN, CONV3 head)");
+        f("clusters", clusters, "GMM components J");
+        f("rri_k", rri_k, "RRI neighbours (features rri)");
+        f("d_model", d_model,
+          "PointNet feature width (rri, xyz; the original's --d_model; written only when not "
+          "1024)");
+        f("rri_variant", rri_variant, "RRI phi orientation: cuda (released models) or numpy");
+        f("emb_dims", emb_dims, "DGCNN feature width (features dgcnn)");
+        f("dgcnn_k", dgcnn_k, "DGCNN neighbours, the point itself included (features dgcnn)");
+        f("head_hidden", head_hidden, "CONV3 head hidden width (features dgcnn)");
+        f("loss", loss,
+          "\"transform\" (original: T12 and T21 against T_gt) or \"pose\" (DCP style: rotation "
+          "and translation)");
+    }
+    void Validate(ParamCheck& c) const;
 };
 
-/// {"arch": "deepgmr", "name", "features", "clusters", ...}; every field always present.
+/// {"arch": "deepgmr", "name", "features", "clusters", ...}; every field present but d_model
+/// at 1024.
 nlohmann::json ToJson(const DeepGmrConfig& c);
-/// Reads the keys of `j` over the defaults; unknown keys or bad values throw
+/// Reads the keys of `j` over the defaults (ParseNetConfig); unknown keys or bad values throw
 /// std::invalid_argument naming them.
 DeepGmrConfig DeepGmrConfigFromJson(const nlohmann::json& j);
 

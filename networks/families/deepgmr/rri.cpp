@@ -7,25 +7,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/enum_names.hpp"
 #include "core/kd_tree.hpp"
 
 namespace regbench::networks {
-
-namespace {
-
-constexpr EnumName<RriVariant> kVariantNames[] = {
-    {RriVariant::kCuda, "cuda"},
-    {RriVariant::kNumpy, "numpy"},
-};
-
-}  // namespace
-
-std::string ToString(RriVariant v) { return EnumToString(kVariantNames, v); }
-
-RriVariant ParseRriVariant(const std::string& name) {
-    return ParseEnum(kVariantNames, "rri_variant", name);
-}
 
 namespace {
 

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "core/enum_names.hpp"
 #include "core/point_cloud.hpp"
 
 namespace regbench::networks {
@@ -14,9 +15,7 @@ namespace regbench::networks {
 /// for the released models) takes atan2((T_j x T_m) . p_hat, T_j . T_m); its numpy fallback the
 /// mirror image (T_m x T_j).
 enum class RriVariant { kCuda, kNumpy };
-std::string ToString(RriVariant v);
-/// "cuda" | "numpy"; throws std::invalid_argument naming the value otherwise.
-RriVariant ParseRriVariant(const std::string& name);
+REGBENCH_CHOICES(RriVariant, {{RriVariant::kCuda, "cuda"}, {RriVariant::kNumpy, "numpy"}})
 
 /// RRI features of one cloud: row i holds 4k values, entry 4j+f with f in (r_p, r_q_j, theta_j,
 /// phi_j) for the j-th nearest neighbour (self excluded) of point i of the *centred* cloud.

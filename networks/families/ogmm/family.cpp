@@ -7,8 +7,9 @@
 
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/cost.hpp"
-#include "networks/family.hpp"
 #include "networks/families/ogmm/net.hpp"
+#include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/training/recipes.hpp"
 
 namespace regbench::networks {
@@ -25,16 +26,6 @@ nlohmann::json Named(const std::string& name) {
     j["name"] = name;
     j["train"] = name == "ogmm" ? OgmmTrainingRecipe() : CampaignTrainingRecipe();
     return j;
-}
-
-/// The network keys of a zoo config: without "arch" and "name".
-nlohmann::json NetKeys(const nlohmann::json& config) {
-    nlohmann::json net = config;
-    if (net.is_object()) {
-        net.erase("arch");
-        net.erase("name");
-    }
-    return net;
 }
 
 /// Attention block, n queries onto a keys of width d: Q and merge (2 d^2 per query), the update
@@ -174,32 +165,7 @@ NetworkFamily OgmmFamily() {
     f.models = {"ogmm", "ogmm-small", "ogmm-tiny"};
     f.shipped_model = "ogmm";
     f.named_config = Named;
-    f.config_docs = {
-        {"emb_dims", "feature width d (even, divisible by heads)"},
-        {"anchors", "FPS anchors each clustered attention block attends to"},
-        {"clusters", "GMM components J fitted per cloud"},
-        {"heads", "attention heads"},
-        {"k", "DGCNN neighbours (the point itself included)"},
-        {"spe_k", "neighbours of the spherical positional encoding's angle branch"},
-        {"spe", "spherical positional encoding added to the DGCNN features (ablation)"},
-        {"csa", "the two self-attention blocks; false keeps CONV3_a only (ablation)"},
-        {"attention", "\"clustered\" (FPS anchors) or \"full\" (every point); same weights"},
-        {"osp", "overlap scores; false weighs every point 1 and drops L_ovl (ablation)"},
-        {"fix_overlap_index", "the paper's overlap indexing instead of the authors' code's"},
-        {"gmm_iterations", "Sinkhorn k-means rounds of the overlap-guided GMM fit"},
-        {"sinkhorn_epsilon", "entropic regularisation of the GMM fit's Sinkhorn"},
-        {"sinkhorn_threshold", "Sinkhorn stops when sum |du| + sum |dv| is below this"},
-        {"sinkhorn_iterations", "Sinkhorn iterations per GMM round (at most)"},
-        {"match_temperature", "softmax temperature of the cluster-feature matching"},
-        {"w_pose", "weight of L_pose"},
-        {"w_clu", "weight of L_clu (NT-Xent on cluster features)"},
-        {"w_ovl", "weight of L_ovl (MSE on overlap scores)"},
-        {"w_welsch", "weight of L_W (Welsch on the top-labelled points)"},
-        {"nt_xent_temperature", "tau of L_clu"},
-        {"welsch_alpha", "alpha of the Welsch loss (the authors' mu)"},
-        {"welsch_keypoints", "top-labelled points per cloud in L_W (at most N)"}};
-    f.check_config = [](const nlohmann::json& c) { ParseOgmmConfig(NetKeys(c)); };
-    f.build = [](const nlohmann::json& c) { return MakeOgmmNet(NetKeys(c)); };
+    BindConfig<OgmmConfig, OgmmNet>(f);
     f.forward_cost = OgmmCost;
     f.inference_params = {
         {"attention",

@@ -11,12 +11,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "core/params.hpp"
 #include "networks/layers/layers.hpp"
 #include "networks/net.hpp"
 
 namespace regbench::networks {
 
-/// OGMM architecture and loss configuration. Defaults are the authors' ModelNet config.
+/// OGMM architecture and loss configuration. Defaults are the authors' ModelNet config; the
+/// ranges (Validate) are in networks/families/ogmm/net.cpp.
 struct OgmmConfig {
     int64_t emb_dims = 512;  ///< feature width d (even, divisible by `heads`)
     int64_t anchors = 128;   ///< FPS anchors per attention block ("clusters" of the attention)
@@ -41,11 +43,48 @@ struct OgmmConfig {
     double nt_xent_temperature = 0.1;     ///< tau of L_clu
     double welsch_alpha = 10.0;           ///< alpha of the Welsch loss (the code's `mu`)
     int64_t welsch_keypoints = 512;       ///< top-labelled points per cloud in L_W (min with N)
+
+    template <class F>
+    void Fields(F&& f) {
+        f("emb_dims", emb_dims, "feature width d (even, divisible by heads)");
+        f("anchors", anchors, "FPS anchors each clustered attention block attends to");
+        f("clusters", clusters, "GMM components J fitted per cloud");
+        f("heads", heads, "attention heads");
+        f("k", k, "DGCNN neighbours (the point itself included)");
+        f("spe_k", spe_k, "neighbours of the spherical positional encoding's angle branch");
+        f("spe", spe, "spherical positional encoding added to the DGCNN features (ablation)");
+        f("csa", csa, "the two self-attention blocks; false keeps CONV3_a only (ablation)");
+        f("attention", attention,
+          "\"clustered\" (FPS anchors) or \"full\" (every point); same weights");
+        f("osp", osp, "overlap scores; false weighs every point 1 and drops L_ovl (ablation)");
+        f("fix_overlap_index", fix_overlap_index,
+          "the paper's overlap indexing instead of the authors' code's");
+        f("gmm_iterations", gmm_iterations,
+          "Sinkhorn k-means rounds of the overlap-guided GMM fit");
+        f("sinkhorn_epsilon", sinkhorn_epsilon,
+          "entropic regularisation of the GMM fit's Sinkhorn");
+        f("sinkhorn_threshold", sinkhorn_threshold,
+          "Sinkhorn stops when sum |du| + sum |dv| is below this");
+        f("sinkhorn_iterations", sinkhorn_iterations,
+          "Sinkhorn iterations per GMM round (at most)");
+        f("match_temperature", match_temperature,
+          "softmax temperature of the cluster-feature matching");
+        f("w_pose", w_pose, "weight of L_pose");
+        f("w_clu", w_clu, "weight of L_clu (NT-Xent on cluster features)");
+        f("w_ovl", w_ovl, "weight of L_ovl (MSE on overlap scores)");
+        f("w_welsch", w_welsch, "weight of L_W (Welsch on the top-labelled points)");
+        f("nt_xent_temperature", nt_xent_temperature, "tau of L_clu");
+        f("welsch_alpha", welsch_alpha, "alpha of the Welsch loss (the authors' mu)");
+        f("welsch_keypoints", welsch_keypoints, "top-labelled points per cloud in L_W (at most N)");
+    }
+    void Validate(ParamCheck& c) const;
 };
 
-/// Parses and validates a config; unknown keys, wrong types and bad values throw
-/// std::invalid_argument naming the key. Absent keys keep OgmmConfig's defaults.
+/// Parses and validates a config (ParseNetConfig: "arch" and "name" allowed); unknown keys,
+/// wrong types and bad values throw std::invalid_argument naming the key. Absent keys keep
+/// OgmmConfig's defaults.
 OgmmConfig ParseOgmmConfig(const nlohmann::json& config);
+/// Every field; no "arch" (OGMM's checkpoints predate the key).
 nlohmann::json OgmmConfigToJson(const OgmmConfig& config);
 
 /// The named configs: "ogmm" (authors' code: d 512, 128 anchors, J 128), "ogmm-small"

@@ -8,8 +8,9 @@
 
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/cost.hpp"
-#include "networks/family.hpp"
 #include "networks/families/omnet/net.hpp"
+#include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/training/recipes.hpp"
 
 namespace regbench::networks {
@@ -20,22 +21,18 @@ namespace {
 /// gamma 1; batch 64). "omnet-small": every width / 4 (3.4 M parameters), trained with
 /// ogmm-small's CPU recipe (lr 1e-3, batch 8, 512 pairs an epoch, 40 epochs, multistep) so
 /// the learned rows of the tables come from one recipe.
-nlohmann::json Named(const std::string& name) {
-    OmnetConfig c;
-    c.name = name;
-    nlohmann::json train;
-    if (name == "omnet") {
-        train = {{"lr", 1e-4},    {"weight_decay", 0.0},     {"batch", 64},
-                 {"epochs", 100}, {"pairs_per_epoch", 4096}, {"schedule", "constant"}};
-    } else if (name == "omnet-small") {
-        c.width_divisor = 4;
-        train = CampaignTrainingRecipe();
-    } else {
-        throw std::invalid_argument("omnet: unknown model '" + name + "'");
-    }
-    nlohmann::json j = ToJson(c);
-    j["train"] = train;
-    return j;
+const std::vector<ZooModel<OmnetConfig>>& Models() {
+    static const std::vector<ZooModel<OmnetConfig>> kModels = {
+        {"omnet",
+         [](OmnetConfig&) {},
+         {{"lr", 1e-4},
+          {"weight_decay", 0.0},
+          {"batch", 64},
+          {"epochs", 100},
+          {"pairs_per_epoch", 4096},
+          {"schedule", "constant"}}},
+        {"omnet-small", [](OmnetConfig& c) { c.width_divisor = 4; }, CampaignTrainingRecipe()}};
+    return kModels;
 }
 
 /// The authors' OMNet: the width from the first encoder convolution (64 / divisor output
@@ -55,14 +52,10 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
         (void)tensor;
         if (key.rfind("encoder.", 0) == 0) encoders.insert(key.substr(8, key.find('.', 8) - 8));
     }
-    nlohmann::json c = Named("omnet");
+    nlohmann::json c = ZooModelConfig(Models(), "omnet", ToJson);
     c["width_divisor"] = 64 / w;
     c["iterations"] = static_cast<int>(encoders.size());
     return c;
-}
-
-ForwardCost Cost(const nlohmann::json& c, std::int64_t n, std::int64_t m) {
-    return CostOfParts(OmnetForwardMacs(c, n, m));
 }
 
 }  // namespace
@@ -73,24 +66,9 @@ NetworkFamily OmnetFamily() {
     f.summary =
         "OMNet (Xu et al., ICCV 2021): learned overlap masks, iterative global-feature pose "
         "regression";
-    f.models = {"omnet", "omnet-small"};
+    BindModels(f, Models(), ToJson);
     f.shipped_model = "omnet";
-    f.named_config = Named;
-    f.config_docs = {
-        {"iterations", "refinement iterations, each with its own weights (the authors' titer)"},
-        {"width_divisor",
-         "every hidden width / this (1: the authors' 53.7 M parameters; 4: 3.4 M); divides 64"},
-        {"mask_delay", "first iterations that use no overlap mask (the authors': 2)"},
-        {"overlap_dist",
-         "training labels: a point overlaps when nearer than this to the other cloud under "
-         "the true motion [unit-sphere units]"},
-        {"quat_weight", "weight of the L1 quaternion loss (the authors' loss_alpha1)"},
-        {"trans_weight", "weight of the squared translation loss (the authors' loss_alpha2)"}};
-    f.check_config = [](const nlohmann::json& c) { OmnetConfigFromJson(c); };
-    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
-        return std::make_shared<OmnetNet>(OmnetConfigFromJson(c));
-    };
-    f.forward_cost = Cost;
+    BindConfig<OmnetConfig, OmnetNet>(f, OmnetForwardMacs);
     // Per-point convolutions and max-pooling: linear in N + M (no kNN, no N x M term).
     f.cost_class = CostClass::kNearLinear;
     f.methods = {

@@ -31,27 +31,46 @@
 #include <string>
 #include <vector>
 
-#include "networks/net.hpp"
+#include "core/params.hpp"
 #include "networks/checkpoint/torch_save_reader.hpp"
+#include "networks/net.hpp"
 
 namespace regbench::networks {
 
-/// The authors' hyper-parameters (experiments/experiment_omnet/params.json), names in comments.
+/// The authors' hyper-parameters (experiments/experiment_omnet/params.json), names in comments;
+/// the ranges (Validate) are in networks/families/omnet/net.cpp.
 struct OmnetConfig {
     std::string name = "omnet";  ///< zoo name it came from
     int iterations = 4;          ///< titer; each iteration has its own weights
     int width_divisor = 1;       ///< every hidden width / this (1: the authors' widths)
     int mask_delay = 2;          ///< iterations that use no mask (theirs: 2)
-    double overlap_dist =
-        0.1;  ///< training labels: overlapping when nearer than this (overlap_dist)
-    double quat_weight = 1.0;   ///< L1 quaternion loss weight (loss_alpha1)
-    double trans_weight = 4.0;  ///< squared translation loss weight (loss_alpha2)
+    double overlap_dist = 0.1;   ///< training labels: overlapping when nearer (overlap_dist)
+    double quat_weight = 1.0;    ///< L1 quaternion loss weight (loss_alpha1)
+    double trans_weight = 4.0;   ///< squared translation loss weight (loss_alpha2)
+
+    template <class F>
+    void Fields(F&& f) {
+        f("name", name, "zoo name it came from");
+        f("iterations", iterations,
+          "refinement iterations, each with its own weights (the authors' titer)");
+        f("width_divisor", width_divisor,
+          "every hidden width / this (1: the authors' 53.7 M parameters; 4: 3.4 M); divides 64");
+        f("mask_delay", mask_delay, "first iterations that use no overlap mask (the authors': 2)");
+        f("overlap_dist", overlap_dist,
+          "training labels: a point overlaps when nearer than this to the other cloud under the "
+          "true motion [unit-sphere units]");
+        f("quat_weight", quat_weight,
+          "weight of the L1 quaternion loss (the authors' loss_alpha1)");
+        f("trans_weight", trans_weight,
+          "weight of the squared translation loss (the authors' loss_alpha2)");
+    }
+    void Validate(ParamCheck& c) const;
 };
 
 /// {"arch": "omnet", "name", "iterations", ...}; every field always present.
 nlohmann::json ToJson(const OmnetConfig& c);
-/// Reads the keys of `j` over the defaults; unknown keys or bad values throw
-/// std::invalid_argument naming them (width_divisor must divide 64).
+/// Reads the keys of `j` over the defaults (ParseNetConfig); unknown keys or bad values throw
+/// std::invalid_argument naming them.
 OmnetConfig OmnetConfigFromJson(const nlohmann::json& j);
 
 /// The hidden widths of a config: the authors' 64, 128, 256, 512, 1024, 2048 / width_divisor.
@@ -146,15 +165,10 @@ torch::Tensor QuaternionToMatrix(const torch::Tensor& q);
 /// translation R_then t_first + t_then): the authors' torch_transform_pose(first, then).
 torch::Tensor ComposePoses(const torch::Tensor& first, const torch::Tensor& then);
 
-/// Copies the authors' state dict (regbench's names, DataParallel's "module." prefix already
-/// removed) into `net`: every parameter and buffer must be present with its shape and nothing
-/// else may be; throws std::runtime_error naming `file` and the first offending key otherwise.
-void LoadOmnetStateDict(OmnetNet& net, const StateDict& tensors, const std::string& file);
-
 /// Multiply-accumulates of one batch-1 forward on N source and M target points, by part
-/// (config: an OmnetConfig in JSON), counted like networks/cost.hpp: every convolution and linear
+/// counted like networks/cost.hpp: every convolution and linear
 /// layer; element-wise work and max-pooling are not. "encoder", "fusion" (the per-point part
 /// and the per-cloud global part), "decoder", "regression".
-std::map<std::string, int64_t> OmnetForwardMacs(const nlohmann::json& config, int64_t n, int64_t m);
+std::map<std::string, int64_t> OmnetForwardMacs(const OmnetConfig& c, int64_t n, int64_t m);
 
 }  // namespace regbench::networks

@@ -1,13 +1,14 @@
 #!/usr/bin/env python3
 """Stand-in for OMNet (Xu et al., ICCV 2021; the PyTorch port hxwork/OMNet_Pytorch) in PyTorch,
-for the parity test networks/families/omnet/omnet_test.cpp. Written here from a reading of the authors'
-model/module.py and model/net.py: the same module tree and state-dict keys as their OMNet
+for the parity test networks/families/omnet/omnet_test.cpp. Written here from a reading of the
+authors' model/module.py and model/net.py: the same module tree and state-dict keys as their OMNet
 (encoder.I, fusion.I, decoder.I, regression.I of Conv1d/Linear-BN-ReLU Sequentials), and an
 independent forward pass of their inference: four iterations, masks from the third on, the
 source moved by each iteration's pose (quaternion rotation of the points, as theirs) and the
 poses composed with a quaternion product.
 
-Where it departs from the authors' code, on purpose and as regbench does (networks/families/omnet/net.hpp):
+Where it departs from the authors' code, on purpose and as regbench does
+(networks/families/omnet/net.hpp):
 clouds of different sizes are max-pooled each over its own points before the regressor (theirs
 concatenates per-point features of both clouds along the channels, which fails unless N == M;
 for N == M this script follows theirs literally). `width_divisor` divides every hidden width.

@@ -8,8 +8,9 @@
 
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/cost.hpp"
-#include "networks/family.hpp"
 #include "networks/families/regtr/net.hpp"
+#include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/training/recipes.hpp"
 
 namespace regbench::networks {
@@ -20,35 +21,31 @@ namespace {
 /// 1e-4, batch 4, halved every 100 of 400 epochs). "regtr-small": KPConv widths / 8,
 /// d_embed 64, 4 heads, 2 layers, trained with the campaign's CPU recipe like the other small
 /// learned models.
-nlohmann::json Named(const std::string& name) {
-    RegtrConfig c;
-    c.name = name;
-    nlohmann::json train;
-    if (name == "regtr") {
-        // Their step scheduler halves the LR every 127,800 steps (100 of the 400 epochs).
-        // Their AdamW and gradient clipping (0.1) are not regbench options: Adam with weight
-        // decay and no clipping here.
-        train = {{"lr", 1e-4},
-                 {"weight_decay", 1e-4},
-                 {"batch", 4},
-                 {"epochs", 400},
-                 {"pairs_per_epoch", 4096},
-                 {"schedule", "multistep"},
-                 {"milestones", {0.25, 0.5, 0.75}},
-                 {"lr_gamma", 0.5}};
-    } else if (name == "regtr-small") {
-        c.first_feats_dim = 64;
-        c.d_embed = 64;
-        c.nhead = 4;
-        c.d_feedforward = 128;
-        c.num_encoder_layers = 2;
-        train = CampaignTrainingRecipe();
-    } else {
-        throw std::invalid_argument("regtr: unknown model '" + name + "'");
-    }
-    nlohmann::json j = ToJson(c);
-    j["train"] = train;
-    return j;
+const std::vector<ZooModel<RegtrConfig>>& Models() {
+    // Their step scheduler halves the LR every 127,800 steps (100 of the 400 epochs). Their
+    // AdamW and gradient clipping (0.1) are not regbench options: Adam with weight decay and no
+    // clipping here.
+    static const std::vector<ZooModel<RegtrConfig>> kModels = {
+        {"regtr",
+         [](RegtrConfig&) {},
+         {{"lr", 1e-4},
+          {"weight_decay", 1e-4},
+          {"batch", 4},
+          {"epochs", 400},
+          {"pairs_per_epoch", 4096},
+          {"schedule", "multistep"},
+          {"milestones", {0.25, 0.5, 0.75}},
+          {"lr_gamma", 0.5}}},
+        {"regtr-small",
+         [](RegtrConfig& c) {
+             c.first_feats_dim = 64;
+             c.d_embed = 64;
+             c.nhead = 4;
+             c.d_feedforward = 128;
+             c.num_encoder_layers = 2;
+         },
+         CampaignTrainingRecipe()}};
+    return kModels;
 }
 
 /// The authors' REGTR: the KPConv width from the first block (first_feats_dim / 2 outputs), the
@@ -74,7 +71,7 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
             layers.insert(key.substr(prefix.size(), key.find('.', prefix.size()) - prefix.size()));
         }
     }
-    nlohmann::json c = Named("regtr");
+    nlohmann::json c = ZooModelConfig(Models(), "regtr", ToJson);
     c["first_feats_dim"] = 2 * first.size(2);
     c["d_embed"] = proj.size(0);
     c["d_feedforward"] = ff.size(0);
@@ -89,10 +86,6 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
     return c;
 }
 
-ForwardCost Cost(const nlohmann::json& c, std::int64_t n, std::int64_t m) {
-    return CostOfParts(RegtrForwardMacs(c, n, m));
-}
-
 }  // namespace
 
 NetworkFamily RegtrFamily() {
@@ -101,35 +94,9 @@ NetworkFamily RegtrFamily() {
     f.summary =
         "REGTR (Yew and Lee, CVPR 2022): KPConv superpoints, cross-attention transformer, "
         "regressed correspondences and weighted Kabsch";
-    f.models = {"regtr", "regtr-small"};
+    BindModels(f, Models(), ToJson);
     f.shipped_model = "regtr";
-    f.named_config = Named;
-    f.config_docs = {
-        {"d_embed", "transformer width (the authors' 256)"},
-        {"nhead", "attention heads (the authors' 8); divides d_embed"},
-        {"d_feedforward", "transformer feed-forward width (the authors' 1024)"},
-        {"num_encoder_layers",
-         "cross-encoder layers (the authors' 6); the last one's output is used"},
-        {"first_feats_dim",
-         "KPConv encoder width: the first block outputs half of it, the last twice it (512)"},
-        {"first_subsampling_dl",
-         "voxel of the input level [unit-sphere units]; superpoints on a grid twice as coarse"},
-        {"conv_radius", "KPConv neighbourhood radius in units of first_subsampling_dl (2.75)"},
-        {"kp_extent", "kernel point influence radius in units of first_subsampling_dl (2.0)"},
-        {"neighbor_limit", "most neighbours a KPConv neighbourhood keeps (the authors' 50)"},
-        {"overlap_radius",
-         "training labels: a point overlaps when nearer than this to the other cloud under the "
-         "true motion [unit-sphere units]"},
-        {"r_p", "InfoNCE: a superpoint's positive is its nearest within this [units]"},
-        {"r_n", "InfoNCE: other superpoints nearer than this are ignored [units]"},
-        {"wt_overlap", "weight of the overlap BCE loss"},
-        {"wt_feature", "weight of the InfoNCE feature loss"},
-        {"wt_corr", "weight of the overlap-weighted L1 correspondence loss"}};
-    f.check_config = [](const nlohmann::json& c) { RegtrConfigFromJson(c); };
-    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
-        return std::make_shared<RegtrNet>(RegtrConfigFromJson(c));
-    };
-    f.forward_cost = Cost;
+    BindConfig<RegtrConfig, RegtrNet>(f, RegtrForwardMacs);
     // Attention over all superpoints of both clouds: O(N M).
     f.cost_class = CostClass::kQuadratic;
     f.methods = {{"regtr", false,

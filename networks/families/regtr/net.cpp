@@ -8,16 +8,10 @@
 #include <tuple>
 
 #include "core/kd_tree.hpp"
-#include "core/params.hpp"
+#include "networks/family_config.hpp"
 #include "networks/layers/layers.hpp"
 
 namespace regbench::networks {
-
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RegtrConfig, name, d_embed, nhead, d_feedforward,
-                                                num_encoder_layers, first_feats_dim,
-                                                first_subsampling_dl, conv_radius, kp_extent,
-                                                neighbor_limit, overlap_radius, r_p, r_n,
-                                                wt_overlap, wt_feature, wt_corr)
 
 namespace {
 
@@ -102,42 +96,37 @@ torch::Tensor InfoNce(const torch::Tensor& W, const torch::Tensor& fa, const tor
 
 }  // namespace
 
-nlohmann::json ToJson(const RegtrConfig& c) {
-    nlohmann::json j = c;
-    j["arch"] = "regtr";
-    return j;
+// Ranges (issue 55: sizes read from a file's tensor shapes were unbounded; d_embed 4096 from
+// a 993-byte file allocated 1.9 GB): four times the authors' values (d_embed 256, nhead 8,
+// d_feedforward 1024, 6 layers, first_feats_dim 512, neighbour limit 50).
+void RegtrConfig::Validate(ParamCheck& c) const {
+    InRange(c, "d_embed", d_embed, 6, 1024);
+    InRange(c, "nhead", nhead, 1, 32);
+    c.Require(d_embed % nhead == 0, "d_embed", "must be a multiple of nhead");
+    InRange(c, "d_feedforward", d_feedforward, 1, 4096);
+    InRange(c, "num_encoder_layers", num_encoder_layers, 1, 24);
+    InRange(c, "first_feats_dim", first_feats_dim, 8, 2048);
+    c.Require(first_feats_dim % 8 == 0, "first_feats_dim", "must be a multiple of 8");
+    for (const auto& [key, length] :
+         {std::pair<const char*, double>{"first_subsampling_dl", first_subsampling_dl},
+          {"conv_radius", conv_radius},
+          {"kp_extent", kp_extent},
+          {"overlap_radius", overlap_radius},
+          {"r_p", r_p},
+          {"r_n", r_n}}) {
+        Positive(c, key, length);
+    }
+    InRange(c, "neighbor_limit", neighbor_limit, 1, 256);
+    c.Require(r_n >= r_p, "r_n", "must be >= r_p");
+    NonNegative(c, "wt_overlap", wt_overlap);
+    NonNegative(c, "wt_feature", wt_feature);
+    NonNegative(c, "wt_corr", wt_corr);
 }
 
+nlohmann::json ToJson(const RegtrConfig& c) { return NetConfigJson(c, "regtr"); }
+
 RegtrConfig RegtrConfigFromJson(const nlohmann::json& j) {
-    const auto c = ParseNetworkConfig<RegtrConfig>(j, "regtr");
-    const auto bad = [&](const std::string& what) {
-        throw std::invalid_argument("regtr config: " + what + ": " + ToJson(c).dump());
-    };
-    if (c.d_embed < 6 || c.nhead < 1 || c.d_embed % c.nhead != 0) {
-        bad("d_embed must be >= 6 and a multiple of nhead");
-    }
-    if (c.d_feedforward < 1 || c.num_encoder_layers < 1) {
-        bad("d_feedforward and num_encoder_layers must be positive");
-    }
-    if (c.first_feats_dim < 8 || c.first_feats_dim % 8 != 0) {
-        bad("first_feats_dim must be a positive multiple of 8");
-    }
-    if (!(c.first_subsampling_dl > 0) || !(c.conv_radius > 0) || !(c.kp_extent > 0) ||
-        c.neighbor_limit < 1 || !(c.overlap_radius > 0) || !(c.r_p > 0) || !(c.r_n >= c.r_p)) {
-        bad("first_subsampling_dl, conv_radius, kp_extent, neighbor_limit, overlap_radius and "
-            "r_p must be positive, r_n >= r_p");
-    }
-    if (!(c.wt_overlap >= 0) || !(c.wt_feature >= 0) || !(c.wt_corr >= 0)) {
-        bad("loss weights must be >= 0");
-    }
-    // Issue 55: sizes read from a file's tensor shapes were unbounded (d_embed 4096 from a
-    // 993-byte file allocated 1.9 GB). Four times the authors' values.
-    if (c.d_embed > 1024 || c.nhead > 32 || c.d_feedforward > 4096 ||
-        c.num_encoder_layers > 24 || c.first_feats_dim > 2048 || c.neighbor_limit > 256) {
-        bad("d_embed <= 1024, nhead <= 32, d_feedforward <= 4096, num_encoder_layers <= 24, "
-            "first_feats_dim <= 2048 and neighbor_limit <= 256 (four times the authors' values)");
-    }
-    return c;
+    return ParseNetConfig<RegtrConfig>(j, "regtr");
 }
 
 torch::Tensor GridSubsample(const torch::Tensor& points, double dl) {
@@ -508,16 +497,7 @@ LossTerms RegtrNet::Loss(const PairBatch& batch, const NetOutput& output) {
     return terms;
 }
 
-void LoadRegtrStateDict(RegtrNet& net, const StateDict& tensors, const std::string& file) {
-    LoadStrictStateDict(net, tensors, file, "REGTR");
-}
-
-std::map<std::string, int64_t> RegtrForwardMacs(const nlohmann::json& config, int64_t n,
-                                                int64_t m) {
-    if (n < 1 || m < 1) {
-        throw std::invalid_argument("regtr forward cost: point counts must be positive");
-    }
-    const RegtrConfig c = RegtrConfigFromJson(config);
+std::map<std::string, int64_t> RegtrForwardMacs(const RegtrConfig& c, int64_t n, int64_t m) {
     const int64_t F0 = c.first_feats_dim, H = c.neighbor_limit, K = 15, d = c.d_embed;
     const auto super = [](int64_t p) { return std::max<int64_t>(1, std::min(p, p * 700 / 717)); };
     std::map<std::string, int64_t> parts{

@@ -37,12 +37,14 @@
 #include <string>
 #include <vector>
 
-#include "networks/net.hpp"
+#include "core/params.hpp"
 #include "networks/checkpoint/torch_save_reader.hpp"
+#include "networks/net.hpp"
 
 namespace regbench::networks {
 
-/// The authors' ModelNet hyper-parameters (src/conf/modelnet.yaml), names in comments.
+/// The authors' ModelNet hyper-parameters (src/conf/modelnet.yaml), names in comments; the
+/// ranges (Validate) are in networks/families/regtr/net.cpp.
 struct RegtrConfig {
     std::string name = "regtr";
     int d_embed = 256;                   ///< d_embed
@@ -60,10 +62,41 @@ struct RegtrConfig {
     double wt_overlap = 1.0;             ///< wt_overlap
     double wt_feature = 0.1;             ///< wt_feature
     double wt_corr = 1.0;                ///< wt_corr
+
+    template <class F>
+    void Fields(F&& f) {
+        f("name", name, "zoo name it came from");
+        f("d_embed", d_embed, "transformer width (the authors' 256)");
+        f("nhead", nhead, "attention heads (the authors' 8); divides d_embed");
+        f("d_feedforward", d_feedforward, "transformer feed-forward width (the authors' 1024)");
+        f("num_encoder_layers", num_encoder_layers,
+          "cross-encoder layers (the authors' 6); the last one's output is used");
+        f("first_feats_dim", first_feats_dim,
+          "KPConv encoder width: the first block outputs half of it, the last twice it (512); a "
+          "multiple of 8");
+        f("first_subsampling_dl", first_subsampling_dl,
+          "voxel of the input level [unit-sphere units]; superpoints on a grid twice as coarse");
+        f("conv_radius", conv_radius,
+          "KPConv neighbourhood radius in units of first_subsampling_dl (2.75)");
+        f("kp_extent", kp_extent,
+          "kernel point influence radius in units of first_subsampling_dl (2.0)");
+        f("neighbor_limit", neighbor_limit,
+          "most neighbours a KPConv neighbourhood keeps (the authors' 50)");
+        f("overlap_radius", overlap_radius,
+          "training labels: a point overlaps when nearer than this to the other cloud under the "
+          "true motion [unit-sphere units]");
+        f("r_p", r_p, "InfoNCE: a superpoint's positive is its nearest within this [units]");
+        f("r_n", r_n, "InfoNCE: other superpoints nearer than this are ignored [units]; >= r_p");
+        f("wt_overlap", wt_overlap, "weight of the overlap BCE loss");
+        f("wt_feature", wt_feature, "weight of the InfoNCE feature loss");
+        f("wt_corr", wt_corr, "weight of the overlap-weighted L1 correspondence loss");
+    }
+    void Validate(ParamCheck& c) const;
 };
 
+/// {"arch": "regtr", "name", ...}; every field always present.
 nlohmann::json ToJson(const RegtrConfig& c);
-/// Reads the keys of `j` over the defaults; unknown keys or bad values throw
+/// Reads the keys of `j` over the defaults (ParseNetConfig); unknown keys or bad values throw
 /// std::invalid_argument naming them.
 RegtrConfig RegtrConfigFromJson(const nlohmann::json& j);
 
@@ -179,15 +212,12 @@ private:
     torch::Tensor feature_W_, feature_un_W_;
 };
 
-/// Copies the authors' state dict into `net` strictly (networks/layers/layers.hpp LoadStrictStateDict).
-void LoadRegtrStateDict(RegtrNet& net, const StateDict& tensors, const std::string& file);
-
 /// Multiply-accumulates of one batch-1 forward on n source and m target points by part:
 /// "kpconv" (the kernel point convolutions), "unary" (the encoder's linear layers and the
 /// bottleneck), "attention" (projections and the attention products), "feedforward",
 /// "heads". Data-dependent counts are taken at their bound: every neighbourhood holds
 /// neighbor_limit points and the superpoints are min(points, 700 x points / 717) (the ModelNet
 /// 717-point crops give about 700).
-std::map<std::string, int64_t> RegtrForwardMacs(const nlohmann::json& config, int64_t n, int64_t m);
+std::map<std::string, int64_t> RegtrForwardMacs(const RegtrConfig& c, int64_t n, int64_t m);
 
 }  // namespace regbench::networks

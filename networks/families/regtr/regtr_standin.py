@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """A PyTorch stand-in of REGTR's module layout (yewzijian/RegTR src/models/regtr.py with the
-ModelNet config), written for regbench's parity test from the authors' description of each
-block, not copied: its state dict has the authors' keys and shapes, and its forward is the
-authors' inference with two choices fixed the same way as regbench's C++ (networks/families/regtr/net.hpp):
+ModelNet config), written for regbench's parity test from the authors' description of each block,
+not copied: its state dict has the authors' keys and shapes, and its forward is the authors'
+inference with two choices fixed the same way as regbench's C++ (networks/families/regtr/net.hpp):
 grid subsampling returns the voxels in increasing integer (x, y, z) order (the authors'
-MinkowskiEngine order is a hash order), and a radius neighbourhood is the support points
-strictly within the radius in index order, the first `limit` (pytorch3d ball_query's rule),
-found here by brute force.
+MinkowskiEngine order is a hash order), and a radius neighbourhood is the support points strictly
+within the radius in index order, the first `limit` (pytorch3d ball_query's rule), found here by
+brute force.
 
 Usage:
   regtr_standin.py write OUT_DIR   writes, per case, OUT_DIR/<case>.pth (torch.save of
@@ -287,8 +287,8 @@ def cloud(seed, n):
 CASES = {
     # the authors' ModelNet widths, N == M
     'modelnet': dict(cfg=dict(), n=70, m=70, seed=1),
-    # regtr-small's widths with the authors' 8 heads (an import assumes 8: no tensor holds it), N != M
-    # 400 and 250 points: level-0 neighbourhoods often exceed the 50 cap
+    # regtr-small's widths with the authors' 8 heads (an import assumes 8: no tensor holds it),
+    # N != M: 400 and 250 points; level-0 neighbourhoods often exceed the 50 cap
     'small_n_ne_m': dict(cfg=dict(F0=64, d=64, heads=8, ff=128, layers=2), n=400, m=250, seed=2),
 }
 

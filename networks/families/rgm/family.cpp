@@ -8,8 +8,9 @@
 
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/cost.hpp"
-#include "networks/family.hpp"
 #include "networks/families/rgm/net.hpp"
+#include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/training/recipes.hpp"
 
 namespace regbench::networks {
@@ -20,26 +21,20 @@ namespace {
 /// epochs 120 and 140 of 200, batch 4): regbench trains with Adam only, so the recipe keeps
 /// their lr, batch, length and drops. "rgm-small": every width / 8 (about 0.4 M parameters),
 /// trained with the campaign's CPU recipe like the other learned rows.
-nlohmann::json Named(const std::string& name) {
-    RgmConfig c;
-    c.name = name;
-    nlohmann::json train;
-    if (name == "rgm") {
-        train = {{"lr", 1e-3},       {"weight_decay", 0.0},
-                 {"batch", 4},       {"epochs", 200},
-                 {"pairs_per_epoch", 9843},
-                 {"schedule", "multistep"},
-                 {"milestones", {120.0 / 200, 140.0 / 200}},
-                 {"lr_gamma", 0.2}};
-    } else if (name == "rgm-small") {
-        c.width_divisor = 8;
-        train = CampaignTrainingRecipe();
-    } else {
-        throw std::invalid_argument("rgm: unknown model '" + name + "'");
-    }
-    nlohmann::json j = ToJson(c);
-    j["train"] = train;
-    return j;
+const std::vector<ZooModel<RgmConfig>>& Models() {
+    static const std::vector<ZooModel<RgmConfig>> kModels = {
+        {"rgm",
+         [](RgmConfig&) {},
+         {{"lr", 1e-3},
+          {"weight_decay", 0.0},
+          {"batch", 4},
+          {"epochs", 200},
+          {"pairs_per_epoch", 9843},
+          {"schedule", "multistep"},
+          {"milestones", {120.0 / 200, 140.0 / 200}},
+          {"lr_gamma", 0.2}}},
+        {"rgm-small", [](RgmConfig& c) { c.width_divisor = 8; }, CampaignTrainingRecipe()}};
+    return kModels;
 }
 
 /// The authors' RGM: the width from the first DGCNN convolution (64 / divisor outputs, 6
@@ -57,13 +52,9 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
     }
     RequireAuthorsTensor(sd, "gmattend0.model.encoder.layers.0.self_attn.linears.0.weight", 2,
                          file, "an RGM (transformer attention)");
-    nlohmann::json c = Named("rgm");
+    nlohmann::json c = ZooModelConfig(Models(), "rgm", ToJson);
     c["width_divisor"] = 64 / w;
     return c;
-}
-
-ForwardCost Cost(const nlohmann::json& c, std::int64_t n, std::int64_t m) {
-    return CostOfParts(RgmForwardMacs(c, n, m));
 }
 
 }  // namespace
@@ -74,28 +65,9 @@ NetworkFamily RgmFamily() {
     f.summary =
         "RGM (Fu et al., CVPR 2021): deep graph matching (DGCNN, transformer soft graphs, "
         "Sinkhorn), linear assignment and SVD, two rounds both ways";
-    f.models = {"rgm", "rgm-small"};
+    BindModels(f, Models(), ToJson);
     f.shipped_model = "rgm";
-    f.named_config = Named;
-    f.config_docs = {
-        {"width_divisor",
-         "every hidden width / this (1: the authors' 25.0 M parameters; 8: 0.4 M); divides 64"},
-        {"k", "DGCNN neighbours, the point itself included (the authors' NEIGHBORSNUM)"},
-        {"heads", "transformer attention heads (the authors': 4)"},
-        {"sinkhorn_iterations", "log-domain Sinkhorn iterations with slack (the authors': 20)"},
-        {"estimate_iterations",
-         "test-time rounds of match, assignment and SVD per direction (EVAL.ITERATION_NUM: 2)"},
-        {"cycle", "keep only the pairs both directions find (EVAL.CYCLE)"},
-        {"inlier_threshold",
-         "rows and columns of the soft correspondence with more mass enter the assignment"},
-        {"label_dist",
-         "training labels: nearest neighbours under the true motion nearer than this match "
-         "[unit-sphere units] (the authors' padth)"}};
-    f.check_config = [](const nlohmann::json& c) { RgmConfigFromJson(c); };
-    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
-        return std::make_shared<RgmNet>(RgmConfigFromJson(c));
-    };
-    f.forward_cost = Cost;
+    BindConfig<RgmConfig, RgmNet>(f, RgmForwardMacs);
     // Transformer attention, soft adjacencies and the N x M correspondence: quadratic.
     f.cost_class = CostClass::kQuadratic;
     f.methods = {{"rgm", false,

@@ -13,10 +13,6 @@
 
 namespace regbench::networks {
 
-NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE_WITH_DEFAULT(RgmConfig, name, width_divisor, k, heads,
-                                                sinkhorn_iterations, estimate_iterations, cycle,
-                                                inlier_threshold, label_dist)
-
 namespace {
 
 namespace nn = torch::nn;
@@ -82,36 +78,29 @@ torch::Tensor ScaledSoftmaxInPlace(torch::Tensor x, double scale) {
 
 }  // namespace
 
-nlohmann::json ToJson(const RgmConfig& c) {
-    nlohmann::json j = c;
-    j["arch"] = "rgm";
-    return j;
+// Ranges: the authors run k 20, 4 heads, 20 Sinkhorn iterations and 2 estimate rounds at their
+// full widths (divisor 1); the bounds are 6 to 50 times those.
+void RgmConfig::Validate(ParamCheck& c) const {
+    InRange(c, "width_divisor", width_divisor, 1, 64);
+    c.Require(width_divisor >= 1 && 64 % width_divisor == 0, "width_divisor",
+              "must divide 64 (1, 2, ..., 64), got " + std::to_string(width_divisor));
+    InRange(c, "k", k, 1, 128);
+    InRange(c, "heads", heads, 1, 64);
+    if (width_divisor >= 1 && 64 % width_divisor == 0) {
+        const RgmWidths w(width_divisor);
+        c.Require(w.gnn % heads == 0 && (w.node + w.edge) % heads == 0, "heads",
+                  "must divide the widths " + std::to_string(w.node + w.edge) + " and " +
+                      std::to_string(w.gnn) + ", got " + std::to_string(heads));
+    }
+    InRange(c, "sinkhorn_iterations", sinkhorn_iterations, 1, 1000);
+    InRange(c, "estimate_iterations", estimate_iterations, 1, 32);
+    NonNegative(c, "inlier_threshold", inlier_threshold);
+    Positive(c, "label_dist", label_dist);
 }
 
-RgmConfig RgmConfigFromJson(const nlohmann::json& j) {
-    const auto c = ParseNetworkConfig<RgmConfig>(j, "rgm");
-    if (c.width_divisor < 1 || 64 % c.width_divisor != 0) {
-        throw std::invalid_argument("rgm config: width_divisor must divide 64 (1, 2, ..., 64), got " +
-                                    std::to_string(c.width_divisor));
-    }
-    const RgmWidths w(c.width_divisor);
-    if (c.heads < 1 || w.gnn % c.heads != 0 || (w.node + w.edge) % c.heads != 0) {
-        throw std::invalid_argument("rgm config: heads must divide the widths " +
-                                    std::to_string(w.node + w.edge) + " and " +
-                                    std::to_string(w.gnn) + ", got " + std::to_string(c.heads));
-    }
-    if (c.k < 1 || c.sinkhorn_iterations < 1 || c.estimate_iterations < 1) {
-        throw std::invalid_argument(
-            "rgm config: k, sinkhorn_iterations and estimate_iterations must be positive: " +
-            ToJson(c).dump());
-    }
-    if (!(c.inlier_threshold >= 0) || !(c.label_dist > 0)) {
-        throw std::invalid_argument(
-            "rgm config: inlier_threshold must be >= 0 and label_dist positive: " +
-            ToJson(c).dump());
-    }
-    return c;
-}
+nlohmann::json ToJson(const RgmConfig& c) { return NetConfigJson(c, "rgm"); }
+
+RgmConfig RgmConfigFromJson(const nlohmann::json& j) { return ParseNetConfig<RgmConfig>(j, "rgm"); }
 
 RgmWidths::RgmWidths(int d)
     : c1(64 / d),
@@ -507,15 +496,7 @@ LossTerms RgmNet::Loss(const PairBatch& batch, const NetOutput& output) {
     return {{"perm", bce}, {"total", bce}};
 }
 
-void LoadRgmStateDict(RgmNet& net, const StateDict& tensors, const std::string& file) {
-    LoadStrictStateDict(net, tensors, file, "RGM");
-}
-
-std::map<std::string, int64_t> RgmForwardMacs(const nlohmann::json& config, int64_t n, int64_t m) {
-    if (n < 1 || m < 1) {
-        throw std::invalid_argument("rgm forward cost: point counts must be positive");
-    }
-    const RgmConfig c = RgmConfigFromJson(config);
+std::map<std::string, int64_t> RgmForwardMacs(const RgmConfig& c, int64_t n, int64_t m) {
     const RgmWidths w(c.width_divisor);
     std::map<std::string, int64_t> macs;
     const auto pass = [&](int64_t a, int64_t b) {  // one match, source a, target b points

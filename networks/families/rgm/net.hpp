@@ -48,13 +48,14 @@
 #include <string>
 #include <vector>
 
-#include "networks/net.hpp"
 #include "networks/checkpoint/torch_save_reader.hpp"
+#include "networks/family_config.hpp"
+#include "networks/net.hpp"
 
 namespace regbench::networks {
 
 /// The authors' hyper-parameters (experiments/*_transformer.yaml, utils/config.py), names in
-/// comments.
+/// comments; the ranges (Validate) are in networks/families/rgm/net.cpp.
 struct RgmConfig {
     std::string name = "rgm";      ///< zoo name it came from
     int width_divisor = 1;         ///< every hidden width / this (1: the authors' widths)
@@ -64,12 +65,32 @@ struct RgmConfig {
     int estimate_iterations = 2;   ///< test-time match + SVD rounds (EVAL.ITERATION_NUM)
     bool cycle = true;             ///< keep the pairs both directions find (EVAL.CYCLE)
     double inlier_threshold = 0.5;  ///< rows / columns with more mass enter the assignment (th)
-    double label_dist = 0.05;       ///< training labels: nearest neighbours nearer than this (padth)
+    double label_dist = 0.05;  ///< training labels: nearest neighbours nearer than this (padth)
+
+    template <class F>
+    void Fields(F&& f) {
+        f("name", name, "zoo name it came from");
+        f("width_divisor", width_divisor,
+          "every hidden width / this (1: the authors' 25.0 M parameters; 8: 0.4 M); divides 64");
+        f("k", k, "DGCNN neighbours, the point itself included (the authors' NEIGHBORSNUM)");
+        f("heads", heads, "transformer attention heads (the authors': 4)");
+        f("sinkhorn_iterations", sinkhorn_iterations,
+          "log-domain Sinkhorn iterations with slack (the authors': 20)");
+        f("estimate_iterations", estimate_iterations,
+          "test-time rounds of match, assignment and SVD per direction (EVAL.ITERATION_NUM: 2)");
+        f("cycle", cycle, "keep only the pairs both directions find (EVAL.CYCLE)");
+        f("inlier_threshold", inlier_threshold,
+          "rows and columns of the soft correspondence with more mass enter the assignment");
+        f("label_dist", label_dist,
+          "training labels: nearest neighbours under the true motion nearer than this match "
+          "[unit-sphere units] (the authors' padth)");
+    }
+    void Validate(ParamCheck& c) const;
 };
 
 /// {"arch": "rgm", "name", ...}; every field always present.
 nlohmann::json ToJson(const RgmConfig& c);
-/// Reads the keys of `j` over the defaults; unknown keys or bad values throw
+/// Reads the keys of `j` over the defaults (ParseNetConfig); unknown keys or bad values throw
 /// std::invalid_argument naming them (width_divisor must divide 64, heads the widths).
 RgmConfig RgmConfigFromJson(const nlohmann::json& j);
 
@@ -134,8 +155,9 @@ public:
     /// One match: the soft correspondence S [B, N, M] of the last graph-matching layer.
     torch::Tensor Match(const torch::Tensor& source, const torch::Tensor& target);
     /// Eval mode: the test-time pipeline (header comment); aux "correspondence" [B, N, M] the
-    /// final 0/1 pairs and "s" the first match's soft correspondence (what Loss scores). Training mode: one match, aux "s" [B, N, M], T a soft weighted SVD.
-    /// Throws std::invalid_argument on clouds of other shapes.
+    /// final 0/1 pairs and "s" the first match's soft correspondence (what Loss scores). Training
+    /// mode: one match, aux "s" [B, N, M], T a soft weighted SVD. Throws std::invalid_argument on
+    /// clouds of other shapes.
     NetOutput Forward(const PairBatch& batch) override;
     /// "perm": the authors' PermLoss, binary cross-entropy of S against the ground-truth
     /// correspondence summed over the N x M entries and divided by the batch's source points;
@@ -190,15 +212,11 @@ torch::Tensor WeightedRigid(const torch::Tensor& P, const torch::Tensor& Q, cons
 /// (the authors' hungarian with inlier masses).
 torch::Tensor AssignInliers(const torch::Tensor& s, double threshold);
 
-/// Copies the authors' state dict (regbench's names, "module." already removed) into `net`;
-/// throws std::runtime_error naming `file` and the first offending key.
-void LoadRgmStateDict(RgmNet& net, const StateDict& tensors, const std::string& file);
-
 /// Multiply-accumulates of one batch-1 Forward (the whole test-time pipeline: 2 x
 /// estimate_iterations matches with the cycle, else estimate_iterations) on N source and M
 /// target points, by part: "dgcnn" (edge and node convolutions; kNN Gram), "transformer",
 /// "adjacency" (E^T E), "gconv", "affinity", "cross_graph" (S y and the linear), "svd" (the
 /// weighted covariances). Sinkhorn, softmax, norms and the assignment are not counted.
-std::map<std::string, int64_t> RgmForwardMacs(const nlohmann::json& config, int64_t n, int64_t m);
+std::map<std::string, int64_t> RgmForwardMacs(const RgmConfig& c, int64_t n, int64_t m);
 
 }  // namespace regbench::networks

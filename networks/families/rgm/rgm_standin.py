@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Stand-in for RGM (Fu et al., CVPR 2021; authors' code fukexue/RGM) in PyTorch, for the parity
-test networks/families/rgm/rgm_test.cpp. Written here from the paper and a reading of the authors'
-models/Net.py, dgcnn.py, transformer.py, gconv.py, affinity_layer.py and eval.py (their
+test networks/families/rgm/rgm_test.cpp. Written here from the paper and a reading of the
+authors' models/Net.py, dgcnn.py, transformer.py, gconv.py, affinity_layer.py and eval.py (their
 repository has no licence: nothing of it is copied): the same module tree and state-dict keys
 as their Net with the ModelNet40 transformer configs (features xyz + gxyz, k 20, two graph
 layers, 4 heads, Sinkhorn with slack, 20 iterations), and an independent forward and test-time
@@ -9,10 +9,10 @@ pipeline: per direction two rounds of match, scipy's linear_sum_assignment on th
 columns whose mass exceeds 0.5, weighted SVD and move; both directions, the pairs both find,
 a final weighted SVD.
 
-Where it departs from the authors' code, as regbench does (networks/families/rgm/net.hpp): the correspondence
-gather takes the matched pairs only (theirs pairs unmatched rows with unmatched columns, which
-fails unless N == M; the unmatched ones have weight 0 in the SVD either way); a round with
-fewer than 3 pairs moves nothing. `divisor` divides every hidden width.
+Where it departs from the authors' code, as regbench does (networks/families/rgm/net.hpp): the
+correspondence gather takes the matched pairs only (theirs pairs unmatched rows with unmatched
+columns, which fails unless N == M; the unmatched ones have weight 0 in the SVD either way); a round
+with fewer than 3 pairs moves nothing. `divisor` divides every hidden width.
 
 Weights: a seeded generator, rounded to float32 (the authors' files hold float32) and run in
 float64; BatchNorm in eval mode with non-trivial running statistics; the instance norms'

@@ -6,23 +6,21 @@
 
 #include "networks/checkpoint/authors_format.hpp"
 #include "networks/cost.hpp"
-#include "networks/family.hpp"
 #include "networks/families/rienet/net.hpp"
+#include "networks/family.hpp"
+#include "networks/family_config.hpp"
 #include "networks/training/recipes.hpp"
 
 namespace regbench::networks {
 namespace {
 
-/// The zoo config: the authors' ModelNet40 hyper-parameters (RienetConfig's defaults).
-nlohmann::json Named(const std::string& name) {
-    if (name != "rienet") throw std::invalid_argument("rienet: unknown model '" + name + "'");
-    RienetConfig c;
-    c.name = name;
-    nlohmann::json j = ToJson(c);
-    // The authors trained with Adam 1e-3 for 100 epochs of ModelNet40; regbench trains it
-    // with the CPU campaign recipe of ogmm-small so the learned rows compare like for like.
-    j["train"] = CampaignTrainingRecipe();
-    return j;
+/// The zoo model: the authors' ModelNet40 hyper-parameters (RienetConfig's defaults). The
+/// authors trained with Adam 1e-3 for 100 epochs of ModelNet40; regbench trains it with the CPU
+/// campaign recipe of ogmm-small so the learned rows compare like for like.
+const std::vector<ZooModel<RienetConfig>>& Models() {
+    static const std::vector<ZooModel<RienetConfig>> kModels = {
+        {"rienet", [](RienetConfig&) {}, CampaignTrainingRecipe()}};
+    return kModels;
 }
 
 /// The authors' RIENET: emb_dims from the DGCNN's last conv, dim from the discriminator's
@@ -30,7 +28,7 @@ nlohmann::json Named(const std::string& name) {
 /// the import settings (the authors' per-dataset configs are the presets).
 nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
                            const nlohmann::json& settings) {
-    nlohmann::json c = Named("rienet");
+    nlohmann::json c = ZooModelConfig(Models(), "rienet", ToJson);
     for (const auto& [key, value] : settings.items()) c[key] = value;
     c["emb_dims"] =
         RequireAuthorsTensor(sd, "emb_nn.model.conv5.weight", 4, file, "a RIENet").size(0);
@@ -38,15 +36,11 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
         RequireAuthorsTensor(sd, "forwards.weight_function.model1.0.weight", 4, file, "a RIENet")
             .size(0);
     // "rienet" is the zoo model: the ModelNet40 config at the authors' widths.
-    const nlohmann::json zoo = Named("rienet");
+    const nlohmann::json zoo = ZooModelConfig(Models(), "rienet", ToJson);
     bool zoo_config = c["emb_dims"] == 256 && c["dim"] == 8;
     for (const auto& [key, value] : settings.items()) zoo_config &= zoo.at(key) == value;
     if (!zoo_config) c["name"] = "rienet-authors";
     return c;
-}
-
-ForwardCost Cost(const nlohmann::json& c, std::int64_t n, std::int64_t m) {
-    return CostOfParts(RienetForwardMacs(c, n, m));
 }
 
 }  // namespace
@@ -57,23 +51,9 @@ NetworkFamily RienetFamily() {
     f.summary =
         "RIENet (Shen et al., AAAI 2022): unsupervised, inlier evaluation of pseudo "
         "correspondences, weighted SVD";
-    f.models = {"rienet"};
+    BindModels(f, Models(), ToJson);
     f.shipped_model = "rienet";
-    f.named_config = Named;
-    f.config_docs = {
-        {"emb_dims", "light DGCNN feature width (the authors' emb_dims)"},
-        {"dim", "inlier discriminator width (the authors' dim: 8 ModelNet40, 16 ICL-NUIM)"},
-        {"iterations", "registration iterations with shared weights (n_iters)"},
-        {"k", "DGCNN and inlier neighbourhood size, the point itself included (list_k1)"},
-        {"k_nc", "neighbourhood consensus size, the point itself included (list_k2)"},
-        {"nn_margin", "consensus margin: feature distances scaled by exp(margin - consensus)"},
-        {"loss_margin", "Huber threshold of the chamfer loss, in cloud units (loss_margin)"},
-        {"keypoints", "points with the highest inlier weight in the losses (at most N)"}};
-    f.check_config = [](const nlohmann::json& c) { RienetConfigFromJson(c); };
-    f.build = [](const nlohmann::json& c) -> std::shared_ptr<RegistrationNet> {
-        return std::make_shared<RienetNet>(RienetConfigFromJson(c));
-    };
-    f.forward_cost = Cost;
+    BindConfig<RienetConfig, RienetNet>(f, RienetForwardMacs);
     f.cost_class = CostClass::kQuadratic;  // feature distances of all N x M pairs
     f.methods = {
         {"rienet", false, "RIENet network alone (LibTorch, CPU batch 1), no ICP", "RIENet"}};

@@ -1,8 +1,8 @@
 #pragma once
 // RIENet's refined matching map at inference, fused into one pass over each row (no LibTorch:
 // plain loops the compiler vectorises, as gmm/'s kernels). The LibTorch composition in
-// networks/families/rienet/net.cpp (training, autograd) computes the same map in about ten passes over the
-// N x M map and five temporaries; this one reads the distances and the row-side consensus
+// networks/families/rienet/net.cpp (training, autograd) computes the same map in about ten passes
+// over the N x M map and five temporaries; this one reads the distances and the row-side consensus
 // sums once and writes the map over the distances.
 #include <cstdint>
 

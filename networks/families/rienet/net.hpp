@@ -28,12 +28,14 @@
 #include <string>
 #include <vector>
 
-#include "networks/net.hpp"
+#include "core/params.hpp"
 #include "networks/checkpoint/torch_save_reader.hpp"
+#include "networks/net.hpp"
 
 namespace regbench::networks {
 
-/// The authors' hyper-parameters (config/train.yaml, ModelNet40), their names in comments.
+/// The authors' hyper-parameters (config/train.yaml, ModelNet40), their names in comments; the
+/// ranges (Validate) are in networks/families/rienet/net.cpp.
 struct RienetConfig {
     std::string name = "rienet";  ///< zoo name it came from
     int emb_dims = 256;           ///< light DGCNN feature width (emb_dims)
@@ -44,12 +46,29 @@ struct RienetConfig {
     double nn_margin = 0.7;       ///< consensus margin: distances scaled by exp(margin - nc)
     double loss_margin = 0.01;    ///< Huber threshold of the chamfer loss (loss_margin)
     int keypoints = 256;          ///< points with the highest inlier weight in the losses
+
+    template <class F>
+    void Fields(F&& f) {
+        f("name", name, "zoo name it came from");
+        f("emb_dims", emb_dims, "light DGCNN feature width (the authors' emb_dims)");
+        f("dim", dim, "inlier discriminator width (the authors' dim: 8 ModelNet40, 16 ICL-NUIM)");
+        f("iterations", iterations, "registration iterations with shared weights (n_iters)");
+        f("k", k, "DGCNN and inlier neighbourhood size, the point itself included (list_k1)");
+        f("k_nc", k_nc, "neighbourhood consensus size, the point itself included (list_k2)");
+        f("nn_margin", nn_margin,
+          "consensus margin: feature distances scaled by exp(margin - consensus)");
+        f("loss_margin", loss_margin,
+          "Huber threshold of the chamfer loss, in cloud units (loss_margin)");
+        f("keypoints", keypoints,
+          "points with the highest inlier weight in the losses (at most N)");
+    }
+    void Validate(ParamCheck& c) const;
 };
 
 /// {"arch": "rienet", "name", "emb_dims", ...}; every field always present.
 nlohmann::json ToJson(const RienetConfig& c);
-/// Reads the keys of `j` over the defaults; unknown keys or bad values throw
-/// std::invalid_argument naming them (k, k_nc >= 2; the rest positive).
+/// Reads the keys of `j` over the defaults (ParseNetConfig); unknown keys or bad values throw
+/// std::invalid_argument naming them.
 RienetConfig RienetConfigFromJson(const nlohmann::json& j);
 
 /// The authors' DGCNN: bias-free Conv2d 3->32->32->64->128 on the neighbours' relative
@@ -103,18 +122,12 @@ private:
     InlierDiscriminator discriminator_{nullptr};  // forwards.weight_function
 };
 
-/// Copies the authors' state dict (their RIENET keys, which are regbench's names) into `net`:
-/// every parameter and buffer must be present with its shape and nothing else may be; throws
-/// std::runtime_error naming `file` and the first offending key otherwise.
-void LoadRienetStateDict(RienetNet& net, const StateDict& tensors, const std::string& file);
-
 /// Multiply-accumulates of one batch-1 forward on N source and M target points, by part
 /// (config: a RienetConfig in JSON). Counted like networks/cost.hpp: every convolution and matrix
 /// product; element-wise work, softmax, the consensus sums and kd-tree searches are not.
 /// "dgcnn" (the source every iteration, the target once: eval mode), "matching" (feature
 /// distances and the pseudo correspondences), "discriminator", "svd" (the weighted covariance).
 /// The loss terms are not part of a forward (RienetNet::Loss computes them).
-std::map<std::string, int64_t> RienetForwardMacs(const nlohmann::json& config, int64_t n,
-                                                 int64_t m);
+std::map<std::string, int64_t> RienetForwardMacs(const RienetConfig& c, int64_t n, int64_t m);
 
 }  // namespace regbench::networks

@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """Stand-in for RIENet (Shen et al., AAAI 2022; supersyq/RIENet) in PyTorch, for the parity test
-networks/families/rienet/rienet_test.cpp. Written here from a reading of the authors' model.py and utils.py:
-the same module tree and state-dict keys as their RIENET (emb_nn, single_point_embed, forwards.
-weight_function, forwards.fuse), and an independent forward pass of their inference (three
-iterations with shared weights: light DGCNN, matching map refined by neighbourhood consensus,
-inlier discriminator, weighted SVD) and of their three unsupervised losses.
+networks/families/rienet/rienet_test.cpp. Written here from a reading of the authors' model.py and
+utils.py: the same module tree and state-dict keys as their RIENET (emb_nn, single_point_embed,
+forwards.weight_function, forwards.fuse), and an independent forward pass of their inference (three
+iterations with shared weights: light DGCNN, matching map refined by neighbourhood consensus, inlier
+discriminator, weighted SVD) and of their three unsupervised losses.
 
-Where it departs from the authors' code, on purpose and as regbench does (networks/families/rienet/net.hpp):
+Where it departs from the authors' code, on purpose and as regbench does
+(networks/families/rienet/net.hpp):
   - kNN by exact float64 squared distances (stable sort: the point itself first, ties to the
     lower index); theirs takes topk of a float32 Gram-matrix distance. Equal neighbours except
     for near-ties below float32 resolution.
