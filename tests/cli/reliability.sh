@@ -102,7 +102,7 @@ sigint)
   [ -n "$cmd" ] || fail "no resume command: $(cat int.err)"
   eval "\"$bin\" $cmd -q" 2>resume.err || fail "resume command failed: $(cat resume.err)"
   # Same rows as the uninterrupted run, timing aside (CPD is deterministic).
-  strip() { sed -E 's/"(cpu_)?seconds":[^,]*,//g; s/"machine":\{[^}]*\},?//g' "$1"; }
+  strip() { sed -E 's/"(cpu_)?seconds":[^,]*,//g; s/"machine":\{([^{}]|\{[^{}]*\})*\},?//g' "$1"; }
   diff <(strip full.jsonl) <(strip r.jsonl) >/dev/null || fail "resumed result differs"
   ;;
 orphans)
