@@ -59,8 +59,9 @@ CLI::Validator ParsedBy(Parse parse, const std::string& name) {
 /// with (core/metrics.hpp MetricOptions; docs/metrics.md).
 inline void AddMetricOptions(CLI::App* cmd, MetricOptions* o) {
     cmd->add_option("--ccd-clip", o->ccd_clip,
-                    "CCD clip distance in cloud units (the paper code's 0.1 suits objects in the "
-                    "unit sphere; a warning says when the clouds' size makes it meaningless)")
+                    "CCD clip distance in cloud units (default: the paper code's 0.1, for objects "
+                    "in the unit sphere, times the pair file's scale from generate --scale; a "
+                    "warning says when the clouds' size makes it meaningless)")
         ->check(PositiveReal())
         ->capture_default_str();
     cmd->add_option("--inlier-threshold", o->inlier_threshold,

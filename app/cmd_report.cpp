@@ -31,11 +31,18 @@ std::vector<Table> ExtraTables(const std::vector<ReportTable>& tables, bool curv
         std::vector<ResultRow> rows;
         for (const ResultRow* r : rt.rows) rows.push_back(*r);
         std::vector<Table> extra;
+        // Lengths in the pair file's units: the unit-sphere ranges times its scale.
+        const double scale = rt.data.scale;
         if (curves) {
-            for (const auto& c : DefaultSuccessCurves()) extra.push_back(SuccessCurveTable(rows, c));
+            for (auto c : DefaultSuccessCurves()) {
+                if (c.metric != "rre") c.max *= scale;
+                extra.push_back(SuccessCurveTable(rows, c));
+            }
         }
         if (breakdown) {
-            for (auto& t : DifficultyTables(rows, BreakdownOptions{})) extra.push_back(t);
+            BreakdownOptions bo;
+            for (double& edge : bo.translation_edges) edge *= scale;
+            for (auto& t : DifficultyTables(rows, bo)) extra.push_back(t);
         }
         for (auto& t : extra) {
             t.id = rt.data.pairs_file + ":" + t.id;
@@ -69,13 +76,15 @@ void SetupReportCommand(CLI::App* cmd) {
     cmd->add_option("--recall-r", o->recall_r_deg, "recall@(r,t): mae_r < r [deg]")
         ->capture_default_str()
         ->check(PositiveReal());
-    cmd->add_option("--recall-t", o->recall_t, "recall@(r,t): mae_t < t")
+    cmd->add_option("--recall-t", o->recall_t,
+                    "recall@(r,t): mae_t < t (default 0.1 times the pair file's scale)")
         ->capture_default_str()
         ->check(PositiveReal());
     cmd->add_option("--success-rre", o->success_rre_deg, "success: rre < this [deg] (and rte)")
         ->capture_default_str()
         ->check(PositiveReal());
-    cmd->add_option("--success-rte", o->success_rte, "success: rte < this (and rre)")
+    cmd->add_option("--success-rte", o->success_rte,
+                    "success: rte < this (and rre); default 0.1 times the pair file's scale")
         ->capture_default_str()
         ->check(PositiveReal());
     cmd->add_option("--success-rule", o->success_rule,
@@ -170,6 +179,8 @@ void SetupReportCommand(CLI::App* cmd) {
         }
         if (rows.empty()) throw std::runtime_error("no result rows in " + files->front());
         ReportOptions opts = *o;
+        opts.recall_t_given = cmd->count("--recall-t") > 0;
+        opts.success_rte_given = cmd->count("--success-rte") > 0;
         if (!euler->empty()) opts.euler = ParseEulerConvention(*euler);
         opts.rre_rte_over = ParseErrorPairs(*rre_rte_over);
         opts.rates_per = ParseRatePer(*rates_per);

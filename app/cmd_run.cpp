@@ -74,6 +74,7 @@ void SetupRunCommand(CLI::App* cmd) {
     cmd->add_flag("--quiet,-q", *quiet, "No progress line");
     cmd->callback([=] {
         RunOptions o = *opts;
+        o.ccd_clip_given = cmd->count("--ccd-clip") > 0;
         if (o.resume && *force) {
             throw CLI::ValidationError("--resume and --force exclude each other");
         }

@@ -66,6 +66,7 @@ void SetupScoreCommand(CLI::App* cmd) {
         CheckOutputRule(o->out_path, {o->pairs_path, o->transforms_path}, OutputRule{*force});
         ScoreOptions opts = *o;
         opts.params = ParseParamsOption(*params);
+        opts.ccd_clip_given = cmd->count("--ccd-clip") > 0;
         opts.euler = ParseEulerConvention(*euler);
         const ScoreSummary s = ScoreTransforms(opts);
         std::cerr << fmt::format("[score] wrote {} rows ({} missing) to {}\n", s.rows, s.missing,

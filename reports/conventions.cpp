@@ -2,8 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 
 #include "core/enum_names.hpp"
@@ -85,7 +87,8 @@ std::vector<std::string> SuccessRuleNames() {
     return names;
 }
 
-SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte) {
+SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte,
+                            double distance_scale) {
     if (name == "rre-rte") {
         SuccessRule r;
         r.name = name;
@@ -94,8 +97,16 @@ SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte)
         r.rte = rte;
         return r;
     }
-    for (const auto& p : SuccessRulePresets()) {
-        if (p.name == name) return p;
+    for (SuccessRule p : SuccessRulePresets()) {
+        if (p.name != name) continue;
+        if (distance_scale != 1.0) {
+            p.mae_t *= distance_scale;  // infinity stays infinity
+            p.rte *= distance_scale;
+            p.overlap_rmse *= distance_scale;
+            p.origin += fmt::format("; its distances times the pair file's scale {:g}",
+                                    distance_scale);
+        }
+        return p;
     }
     std::string names;
     for (const auto& n : SuccessRuleNames()) names += (names.empty() ? "" : ", ") + n;
@@ -128,8 +139,9 @@ BootstrapCi Rate(const std::vector<bool>& hits, const std::vector<std::string>& 
     return BootstrapMean(rates, samples, kDefaultBootstrapSeed, stream);
 }
 
-std::string DescribeConventions(const ReportTable& t, const ReportOptions& o) {
-    const SuccessRule rule = FindSuccessRule(o.success_rule, o.success_rre_deg, o.success_rte);
+std::string DescribeConventions(const ReportTable& t, const ReportOptions& given) {
+    const ReportOptions o = ForData(given, t.data);  // idempotent
+    const SuccessRule rule = SuccessRuleOf(o);
     std::string out = "Conventions: rre/rte averaged over ";
     out += o.rre_rte_over == ErrorPairs::kAll
                ? "all pairs with finite metrics (--rre-rte-over all)"
@@ -152,12 +164,49 @@ std::string DescribeConventions(const ReportTable& t, const ReportOptions& o) {
     return out;
 }
 
-std::string PaperTableConventions() {
-    return "Conventions: every mean over all pairs with finite metrics (a failed call scored as "
-           "the identity it returns); MAE(R) the mean absolute Euler-angle error without "
-           "wrapping in the rows' convention (the paper's: scipy as_euler('zyx')), MAE(t) the "
-           "mean absolute per-axis translation error, CCD clipped at the rows' clip "
-           "(docs/metrics.md).";
+std::string PaperTableConventions(const std::vector<const ResultRow*>& rows) {
+    std::string out =
+        "Conventions: every mean over all pairs with finite metrics (a failed call scored as "
+        "the identity it returns); MAE(R) the mean absolute Euler-angle error without "
+        "wrapping in the rows' convention (the paper's: scipy as_euler('zyx')), MAE(t) the "
+        "mean absolute per-axis translation error, CCD clipped at the rows' clip "
+        "(docs/metrics.md).";
+    if (rows.empty()) return out;
+    std::set<double> clips, scales;
+    std::map<std::string, std::pair<double, std::size_t>> ccd;  // method: (sum over clip, n)
+    for (const ResultRow* r : rows) {
+        clips.insert(r->metrics.ccd_clip);
+        scales.insert(r->data.scale);
+        if (!std::isfinite(r->metrics.ccd)) continue;
+        auto& c = ccd[r->method];
+        c.first += r->metrics.ccd / r->metrics.ccd_clip;
+        ++c.second;
+    }
+    const auto list = [](const std::set<double>& values) {
+        std::string text;
+        for (double v : values) text += fmt::format("{}{:g}", text.empty() ? "" : ", ", v);
+        return text;
+    };
+    out += fmt::format(" Thresholds in the data's length unit: CCD clip {}", list(clips));
+    out += *clips.begin() == kCcdClip && clips.size() == 1
+               ? " (the paper's, for unit-sphere objects)"
+               : "";
+    if (scales.size() > 1 || *scales.begin() != 1.0) {
+        out += fmt::format("; pair file scale {} (`generate --scale`): a clip not given to `run "
+                           "--ccd-clip` is 0.1 times it",
+                           list(scales));
+    }
+    out += ".";
+    const bool saturated =
+        !ccd.empty() && std::all_of(ccd.begin(), ccd.end(), [](const auto& c) {
+            return c.second.first / static_cast<double>(c.second.second) >= 0.999 * 2.0;
+        });
+    if (saturated) {
+        out += " Saturated: CCD is at its ceiling 2 x clip for every method, so it ranks nothing "
+               "here; give `run --ccd-clip` in the data's units (about 10% of the clouds' "
+               "radius).";
+    }
+    return out;
 }
 
 }  // namespace regbench

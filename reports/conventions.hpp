@@ -62,8 +62,11 @@ const std::vector<SuccessRule>& SuccessRulePresets();
 std::vector<std::string> SuccessRuleNames();
 
 /// The rule named `name`: "rre-rte" is rre < rre_deg and rte < rte (`report --success-rre`,
-/// `--success-rte`); otherwise a preset. Throws std::invalid_argument listing the names.
-SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte);
+/// `--success-rte`); otherwise a preset, its distance bounds (mae_t, rte, overlap_rmse) times
+/// `distance_scale` (the pair file's scale: presets are in unit-sphere units for objects and
+/// in metres for scans). Throws std::invalid_argument listing the names.
+SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte,
+                            double distance_scale = 1.0);
 
 /// A rate over one table row's pairs. hits[k]: pair k passed; groups[k]: its scene (or
 /// category) id, read only when `per` is not kPair. kPair: WilsonInterval(sum, n), exactly as
@@ -73,8 +76,13 @@ SuccessRule FindSuccessRule(const std::string& name, double rre_deg, double rte)
 BootstrapCi Rate(const std::vector<bool>& hits, const std::vector<std::string>& groups,
                  RatePer per, int samples, std::uint64_t stream, std::size_t* groups_out);
 
-/// The caption line of the paper tables (reproduce's tables.md): what their means average
-/// over and which convention their metrics follow.
-std::string PaperTableConventions();
+struct ResultRow;
+
+/// The caption line of the paper tables (reproduce's tables.md, `report --paper`): what their
+/// means average over and which convention their metrics follow, then the thresholds `rows`
+/// were measured with in the data's length unit (the CCD clip; the pair files' scale when it is
+/// not 1) and a "Saturated:" sentence when every method's mean CCD is at its ceiling 2 x clip
+/// (issue 54 item 1).
+std::string PaperTableConventions(const std::vector<const ResultRow*>& rows);
 
 }  // namespace regbench

@@ -144,7 +144,11 @@ void DescribeSides(const PaperTableSpec& spec, const nlohmann::json& pt, bool pu
         spec.caption.empty() ? pt.value("caption", std::string()) : spec.caption,
         ours.empty() ? "no result rows" : ours, paper_side,
         published ? " or not in the paper" : "");
-    t->caption += "\n" + PaperTableConventions();
+    std::vector<const ResultRow*> rows;
+    for (const auto& s : sets) {
+        for (const ResultRow& r : s.rows) rows.push_back(&r);
+    }
+    t->caption += "\n" + PaperTableConventions(rows);
 }
 
 }  // namespace

@@ -153,7 +153,7 @@ Table PaperComparisonTable(const ReportTable& ours, const nlohmann::json& paper,
     t.id = "paper:" + table + (group.empty() ? "" : ":" + group);
     t.caption = fmt::format("Paper: {} ({}){}", table, pt.value("caption", ""),
                             group.empty() ? "" : ", columns " + group);
-    t.caption += "\n" + PaperTableConventions();
+    t.caption += "\n" + PaperTableConventions(ours.rows);
     const auto measured = [](const std::string& key, int decimals) {
         return Column{key, key, CellSource::kMeasured, Better::kNone, decimals};
     };

@@ -131,7 +131,7 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
     // Per row (in pair order): hit or miss of each rate, and the scene the rate groups by.
     std::vector<bool> recalled, succeeded, recalled_3dm;
     std::vector<std::string> groups;
-    const SuccessRule rule = FindSuccessRule(o.success_rule, o.success_rre_deg, o.success_rte);
+    const SuccessRule rule = SuccessRuleOf(o);
     for (const ResultRow* r : group) {
         groups.push_back(RateGroup(*r, o.rates_per));
         recalled.push_back(false);
@@ -174,8 +174,9 @@ MethodSummary SummarizeOne(std::vector<const ResultRow*> group, const ReportOpti
                     ": row has no metrics.overlap_rmse (written before it existed); "
                     "rescore it with `regbench score` for the 3DMatch-style recall");
             }
-            recalled_3dm.back() = m.overlap_rmse < kRecall3dmatchRmse &&
-                                  m.rre < kRecall3dmatchRreDeg && m.rte < kRecall3dmatchRte;
+            recalled_3dm.back() = m.overlap_rmse < kRecall3dmatchRmse * o.distance_scale &&
+                                  m.rre < kRecall3dmatchRreDeg &&
+                                  m.rte < kRecall3dmatchRte * o.distance_scale;
         }
     }
     // The stream names the pair file and the metric, not the method: every method on the same
@@ -320,7 +321,21 @@ static std::string RestrictToCommonPairs(std::vector<const ResultRow*>* group, b
                        shared.size(), counts);
 }
 
-std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const ReportOptions& o) {
+ReportOptions ForData(const ReportOptions& o, const DataTag& data) {
+    ReportOptions out = o;
+    const double factor = data.scale / o.distance_scale;  // from o's scale to the data's
+    if (!o.recall_t_given) out.recall_t *= factor;
+    if (!o.success_rte_given) out.success_rte *= factor;
+    out.distance_scale = data.scale;
+    return out;
+}
+
+SuccessRule SuccessRuleOf(const ReportOptions& o) {
+    return FindSuccessRule(o.success_rule, o.success_rre_deg, o.success_rte, o.distance_scale);
+}
+
+std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows,
+                                     const ReportOptions& o) {
     std::vector<std::string> order;
     std::map<std::string, std::vector<const ResultRow*>> groups;
     for (const auto& r : rows) {
@@ -341,7 +356,7 @@ std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const R
             const std::string file = r->origin.substr(0, r->origin.rfind(':'));
             if (!file.empty() && files.insert(file).second) t.files.push_back(file);
         }
-        t.methods = SummarizeGroup(group, o, DataKey(t.data), &t.notes);
+        t.methods = SummarizeGroup(group, ForData(o, t.data), DataKey(t.data), &t.notes);
         t.rows = group;
         t.environment = DescribeEnvironment(group);
         tables.push_back(std::move(t));
@@ -352,7 +367,9 @@ std::vector<ReportTable> BuildTables(const std::vector<ResultRow>& rows, const R
 std::vector<MethodSummary> Summarize(const std::vector<ResultRow>& rows, const ReportOptions& o) {
     std::vector<const ResultRow*> ptrs;
     for (const auto& r : rows) ptrs.push_back(&r);
-    return SummarizeGroup(ptrs, o, rows.empty() ? "" : DataKey(rows.front().data), nullptr);
+    if (rows.empty()) return SummarizeGroup(ptrs, o, "", nullptr);
+    return SummarizeGroup(ptrs, ForData(o, rows.front().data), DataKey(rows.front().data),
+                          nullptr);
 }
 
 std::string DescribeTable(const ReportTable& t) {
@@ -420,7 +437,7 @@ std::vector<Column> SummaryColumns(const ReportTable& rt, const ReportOptions& o
         MetricCol("rmse_t", "mse_t", "rmse_t", false),
         RateCol("recall", fmt::format("recall@({:g},{:g})", o.recall_r_deg, o.recall_t)),
         RateCol("success",
-                FindSuccessRule(o.success_rule, o.success_rre_deg, o.success_rte).Header())};
+                SuccessRuleOf(o).Header())};
     if (o.recall_3dmatch) columns.push_back(RateCol("recall_3dmatch", "3DMatch recall"));
     // A clip other than the paper's is in the header; Open3D's pair only when measured.
     const double clip = rt.methods.empty() ? kCcdClip : rt.methods.front().ccd_clip;
@@ -484,6 +501,20 @@ std::string ThresholdsCaption(const ReportTable& rt, const ReportOptions& o) {
         "success rre < {:g} deg and rte < {:g}; CCD clip {:g} (the paper's translation "
         "thresholds and clip are 0.1, for unit-sphere objects).",
         o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte, clip);
+    if (o.distance_scale != 1.0) {
+        caption += fmt::format(
+            " The pair file's scale is {0:g} (`generate --scale`): every distance threshold not "
+            "given on the command line is its unit-sphere default times {0:g}{1}.",
+            o.distance_scale,
+            o.recall_t_given || o.success_rte_given
+                ? " (given as is: " +
+                      std::string(o.recall_t_given && o.success_rte_given ? "--recall-t, "
+                                                                           "--success-rte"
+                                  : o.recall_t_given ? "--recall-t"
+                                                     : "--success-rte") +
+                      ")"
+                : "");
+    }
     if (rt.methods.empty()) return caption;
     const auto every = [&rt](auto&& pred) {
         return std::all_of(rt.methods.begin(), rt.methods.end(), pred);
@@ -511,7 +542,8 @@ std::string ThresholdsCaption(const ReportTable& rt, const ReportOptions& o) {
 
 }  // namespace
 
-Table SummaryTable(const ReportTable& rt, const ReportOptions& o) {
+Table SummaryTable(const ReportTable& rt, const ReportOptions& given) {
+    const ReportOptions o = ForData(given, rt.data);  // thresholds in the data's units
     Table t;
     t.id = rt.data.pairs_file + ":" + ToString(rt.euler);
     t.caption = "Data: " + DescribeTable(rt) + ThresholdsCaption(rt, o);

@@ -27,6 +27,13 @@ struct ReportOptions {
     double recall_t = 0.1;         ///< recall@(r, t): mae_t threshold
     double success_rre_deg = 5.0;  ///< success: rre < this [deg] and rte < success_rte
     double success_rte = 0.1;      ///< success: rte threshold
+    /// `--recall-t` / `--success-rte` given: used as is. A threshold not given is in unit-sphere
+    /// units, and ForData multiplies it by the table's pair-file scale (DataTag::scale), as it
+    /// does the distance bounds of the success presets and of the 3DMatch-style recall.
+    bool recall_t_given = false;
+    bool success_rte_given = false;
+    /// The factor ForData multiplied the distance defaults by (1: none; the caption says so).
+    double distance_scale = 1.0;
     int bootstrap_samples = 1000;  ///< BootstrapMean resamples of the means' 95% CIs
     bool recall_3dmatch = false;   ///< add the 3DMatch-style recall column
     /// Convention of mae_r / rmse_r to report. Unset: each row's own (tables never mix two).
@@ -45,6 +52,15 @@ struct ReportOptions {
     /// Rates (recall, success, 3DMatch recall) per pair, or the mean of per-scene rates.
     RatePer rates_per = RatePer::kPair;
 };
+
+/// `o` for a table of the pair file `data`: the distance thresholds not given (recall_t,
+/// success_rte, the presets' and the 3DMatch recall's distances) in the pair file's units, i.e.
+/// their unit-sphere values times data.scale (`generate --scale`; issue 54 item 1). Applying it
+/// again, for this or another table, starts from the unit-sphere values.
+ReportOptions ForData(const ReportOptions& o, const DataTag& data);
+
+/// The success rule `o` names, at `o`'s distance scale (FindSuccessRule).
+SuccessRule SuccessRuleOf(const ReportOptions& o);
 
 /// Mean with its 95% bootstrap confidence interval (BootstrapMean, reports/statistics.hpp).
 using Estimate = BootstrapCi;

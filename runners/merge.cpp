@@ -63,7 +63,9 @@ std::size_t MergeResults(const MergeOptions& options) {
     const PairSet set = ReadPairFile(options.pairs_path);
     expect.num_pairs = set.pairs.size();
     expect.content_hash = DataTagOf(options.pairs_path, set).content_hash;
-    expect.methods = options.methods;
+    // The methods' length parameters and the CCD clip as `run` set them for this pair file.
+    expect.methods = PairScaledSpecs(options.methods, PairFileScale(options.pairs_path, set));
+    expect.metric_options = PairMetricOptions(options.pairs_path, set, {}, false);
     std::map<std::string, std::size_t> method_index;
     for (std::size_t m = 0; m < options.methods.size(); ++m) {
         method_index[options.methods[m].name] = m;

@@ -204,6 +204,7 @@ void to_json(nlohmann::json& j, const DataTag& d) {
          {"seed", d.seed}};
     if (!d.content_hash.empty()) j["content_hash"] = d.content_hash;
     if (!d.dataset_sha256.empty()) j["dataset_sha256"] = d.dataset_sha256;
+    if (d.scale != 1.0) j["scale"] = d.scale;  // unit-sphere rows stay as they were
 }
 
 void from_json(const nlohmann::json& j, DataTag& d) {
@@ -214,6 +215,11 @@ void from_json(const nlohmann::json& j, DataTag& d) {
     d.seed = j.value("seed", nlohmann::json());
     d.content_hash = j.value("content_hash", "");
     d.dataset_sha256 = j.value("dataset_sha256", "");
+    d.scale = j.value("scale", 1.0);
+    if (!std::isfinite(d.scale) || d.scale <= 0.0) {
+        throw std::invalid_argument("data.scale must be a finite number > 0, got " +
+                                    j.at("scale").dump());
+    }
 }
 
 nlohmann::json TransformToJson(const Transform& T) {

@@ -38,6 +38,10 @@ struct DataTag {
     nlohmann::json seed;         ///< generation seed (null when unknown)
     std::string content_hash;    ///< hash of the pair file's arrays; empty in old rows
     std::string dataset_sha256;  ///< sha256 of the dataset file it came from (a single .h5 etc.)
+    /// The pair file's `scale` (the factor `generate --scale` multiplied its lengths by; 1 for
+    /// unit-sphere pairs, and in rows written before it was recorded): the default distance
+    /// thresholds of `run` and `report` are their unit-sphere values times this.
+    double scale = 1.0;
 };
 void to_json(nlohmann::json& j, const DataTag& d);
 void from_json(const nlohmann::json& j, DataTag& d);

@@ -19,6 +19,8 @@ namespace regbench {
 struct MethodSpec {
     std::string name;
     nlohmann::json params = nlohmann::json::object();
+    /// The keys the user gave (ParseMethodSpecs): they are never rescaled (PairScaledSpecs).
+    nlohmann::json given = nlohmann::json::object();
 };
 
 /// A method the registry does not know, given by the program that calls RunBenchmark (the
@@ -51,6 +53,9 @@ struct RunOptions {
     bool downsample = false;  ///< guard: run on stride-downsampled clouds instead of refusing
     EulerConvention euler = EulerConvention::kZyx;  ///< Euler angles of mae_r / rmse_r
     MetricOptions metric_options;  ///< CCD clip, Open3D fitness / inlier RMSE threshold
+    /// `--ccd-clip` was given: the clip is used as is. Otherwise the default clip is scaled by
+    /// the pair file's `scale` (PairMetricOptions, runners/runner.hpp).
+    bool ccd_clip_given = false;
     /// Methods of `methods` that are not registered, by name (which must not be a registered
     /// method's). The scale guard asks their `cost`, and skips those without one.
     std::map<std::string, ExternalMethod> external_methods;

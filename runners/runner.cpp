@@ -161,6 +161,7 @@ std::vector<MethodSpec> ParseMethodSpecs(const std::string& comma_list,
             spec.params = params_by_method.at(name);
         }
         const nlohmann::json given = spec.params;
+        spec.given = given;
         spec.params = CreateMethod(name, spec.params)->Params();  // validates, fills defaults
         RequireExactNumbers(name, given, spec.params);
         specs.push_back(spec);
@@ -213,6 +214,7 @@ DataTag DataTagOf(const std::string& pairs_path, const PairSet& set) {
         p.value("pairing", p.value("params", nlohmann::json::object()).value("pairing", "unknown"));
     d.seed = p.value("seed", nlohmann::json());
     d.dataset_sha256 = p.value("dataset_sha256", "");
+    d.scale = PairFileScale(pairs_path, set);
     // Hashed on every read, so files written before hashes existed get one too; a stored hash
     // that disagrees means the arrays changed after generation.
     d.content_hash = PairSetContentHash(set);
@@ -224,6 +226,68 @@ DataTag DataTagOf(const std::string& pairs_path, const PairSet& set) {
                                  stored + " vs " + d.content_hash + "): the file was modified");
     }
     return d;
+}
+
+double PairFileScale(const std::string& pairs_path, const PairSet& set) {
+    const nlohmann::json scale = set.provenance.value("scale", nlohmann::json(1.0));
+    if (!scale.is_number() || !std::isfinite(scale.get<double>()) || scale.get<double>() <= 0.0) {
+        throw std::runtime_error(pairs_path + ": provenance scale must be a finite number > 0, got " +
+                                 scale.dump());
+    }
+    return scale.get<double>();
+}
+
+MetricOptions PairMetricOptions(const std::string& pairs_path, const PairSet& set,
+                                MetricOptions options, bool ccd_clip_given) {
+    if (!ccd_clip_given && options.ccd_clip == kCcdClip) {
+        options.ccd_clip = kCcdClip * PairFileScale(pairs_path, set);
+    }
+    return options;
+}
+
+namespace {
+
+/// The power of length a parameter's documentation declares for its value: 1 for
+/// "[unit-sphere units]", 2 for "[unit-sphere units^2]", 0 otherwise (the unit a method's
+/// Fields binding states for `regbench methods`).
+int LengthPower(const std::string& doc) {
+    if (doc.find("[unit-sphere units^2]") != std::string::npos) return 2;
+    if (doc.find("[unit-sphere units]") != std::string::npos) return 1;
+    return 0;
+}
+
+}  // namespace
+
+std::vector<MethodSpec> PairScaledSpecs(std::vector<MethodSpec> specs, double scale) {
+    if (scale == 1.0) return specs;
+    const std::set<std::string> registered = [] {
+        std::set<std::string> names;
+        for (const MethodInfo& m : AllMethods()) names.insert(m.name);
+        return names;
+    }();
+    for (MethodSpec& spec : specs) {
+        if (!registered.count(spec.name)) continue;  // an external method: its own business
+        const MethodInfo& info = FindMethod(spec.name);
+        const bool given_rule = spec.given.is_object() && spec.given.contains("scale_rule");
+        if (given_rule) continue;  // the user chose how its lengths follow the data
+        nlohmann::json params = spec.params;
+        bool scaled = false;
+        for (const auto& [key, doc] : info.param_docs) {
+            const int power = LengthPower(doc);
+            if (power == 0 || (spec.given.is_object() && spec.given.contains(key))) continue;
+            if (!params.contains(key) || !params[key].is_number() ||
+                params[key] != info.defaults.value(key, nlohmann::json())) {
+                continue;  // not at its default (e.g. a preset's value): as it is
+            }
+            params[key] = params[key].get<double>() * std::pow(scale, power);
+            scaled = true;
+        }
+        if (!scaled) continue;
+        // The lengths now are the data's: the per-pair size rule must not scale them again.
+        if (params.contains("scale_rule")) params["scale_rule"] = "preset";
+        spec.params = CreateMethod(spec.name, params)->Params();  // validates
+    }
+    return specs;
 }
 
 std::uint64_t BenchmarkSeed(const PairSet& set) {
@@ -516,10 +580,16 @@ std::string PairScaleWarning(const PairSet& set, const MetricOptions& options) {
     return ScaleWarning(MedianCloudRadius(targets), options);
 }
 
-RunSummary RunBenchmark(const RunOptions& options) {
-    ValidateRunOptions(options);
+RunSummary RunBenchmark(const RunOptions& given) {
+    ValidateRunOptions(given);
     const auto start = std::chrono::steady_clock::now();
-    const PairSet set = ReadPairFile(options.pairs_path);  // throws naming the file
+    const PairSet set = ReadPairFile(given.pairs_path);  // throws naming the file
+    // The default CCD clip in the pair file's units (its `scale`); rows record the clip used.
+    RunOptions options = given;
+    options.metric_options = PairMetricOptions(given.pairs_path, set, given.metric_options,
+                                               given.ccd_clip_given);
+    // Length parameters left at their unit-sphere defaults, in the pair file's units too.
+    options.methods = PairScaledSpecs(given.methods, PairFileScale(given.pairs_path, set));
     // Select pairs. The scale guard refuses before any output exists (or says what it will
     // downsample).
     RunPlan plan(options, set);

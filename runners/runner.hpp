@@ -49,6 +49,24 @@ ResultRow MakeResultRow(std::size_t pair_index, const Pair& pair, const MethodSp
 /// The `data` tag of rows computed on `set` read from `pairs_path`.
 DataTag DataTagOf(const std::string& pairs_path, const PairSet& set);
 
+/// The pair file's recorded `scale` (`generate --scale`; 1 when it has none). Throws naming
+/// the file unless it is a finite number > 0.
+double PairFileScale(const std::string& pairs_path, const PairSet& set);
+
+/// The metric options a run or score of `set` measures with: `options`, except that the
+/// default CCD clip (kCcdClip, for unit-sphere objects) becomes kCcdClip times the pair file's
+/// scale unless `ccd_clip_given` (`--ccd-clip` on the command line always wins).
+MetricOptions PairMetricOptions(const std::string& pairs_path, const PairSet& set,
+                                MetricOptions options, bool ccd_clip_given);
+
+/// `specs` for a pair file of scale `scale` (PairFileScale; issue 54 item 1): every length
+/// parameter of a registered method, i.e. one whose documentation declares it in
+/// "[unit-sphere units]" (times scale) or "[unit-sphere units^2]" (times scale^2), that the user
+/// did not give (MethodSpec::given) and that is at its default is multiplied, and a method with
+/// a `scale_rule` then runs it as "preset" (its lengths are the data's already). A method whose
+/// `scale_rule` the user gave is left as it is. Scale 1: `specs` unchanged.
+std::vector<MethodSpec> PairScaledSpecs(std::vector<MethodSpec> specs, double scale);
+
 /// ScaleWarning (core/metrics.hpp) for the median target radius of `set`'s pairs.
 std::string PairScaleWarning(const PairSet& set, const MetricOptions& options);
 

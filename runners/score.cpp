@@ -482,7 +482,8 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
     RowContext context;
     context.threads = o.threads;
     context.euler = o.euler;
-    context.metric_options = o.metric_options;
+    context.metric_options =
+        PairMetricOptions(o.pairs_path, set, o.metric_options, o.ccd_clip_given);
     context.data = DataTagOf(o.pairs_path, set);
     // Transforms computed on other pairs would be scored against the wrong ground truth.
     for (const auto& t : given) {
@@ -505,7 +506,7 @@ ScoreSummary ScoreTransforms(const ScoreOptions& o) {
                 "anyway (a .npy cannot record one)");
         }
     }
-    const std::string scale = PairScaleWarning(set, o.metric_options);
+    const std::string scale = PairScaleWarning(set, context.metric_options);
     if (!scale.empty()) std::fprintf(stderr, "[score] warning: %s\n", scale.c_str());
     const MethodSpec spec{o.method, o.params};
     ScoreSummary summary;

@@ -35,6 +35,8 @@ struct ScoreOptions {
     /// whether they were computed on this one); refused by default.
     bool allow_unhashed = false;
     MetricOptions metric_options;  ///< CCD clip, Open3D fitness / inlier RMSE threshold
+    /// `--ccd-clip` was given (else the default clip is scaled by the pair file's `scale`).
+    bool ccd_clip_given = false;
 };
 
 /// One transform of a transforms file.

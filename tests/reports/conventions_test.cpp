@@ -260,5 +260,37 @@ TEST(Difficulty, BinsByRotationTranslationAndOverlapByHand) {
     EXPECT_NEAR(old.rows[0].Get(old.columns[0].key).value, 0.5, 1e-12);  // (0.8 + 0.2) / 2
 }
 
+// Issue 54 item 1: the paper tables' caption states the CCD clip the rows used in the data's
+// units, the pair file's scale when it is not 1, and that CCD saturated when every method's mean
+// is at 2 x clip (CCD's ceiling by its definition: two one-sided means, each clipped).
+TEST(Conventions, PaperTableCaptionStatesTheClipAndTheScale) {
+    std::vector<ResultRow> rows(2);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        rows[k].method = k == 0 ? "icp" : "ogmm";
+        rows[k].metrics.ccd_clip = 15.0;
+        rows[k].metrics.ccd = 30.0;
+        rows[k].data.scale = 150.0;
+    }
+    const std::vector<const ResultRow*> ptrs = {&rows[0], &rows[1]};
+    const std::string mm = PaperTableConventions(ptrs);
+    EXPECT_NE(mm.find("Thresholds in the data's length unit: CCD clip 15; pair file scale 150 "
+                      "(`generate --scale`)"),
+              std::string::npos)
+        << mm;
+    EXPECT_NE(mm.find("Saturated: CCD is at its ceiling 2 x clip"), std::string::npos) << mm;
+    for (auto& r : rows) {
+        r.metrics.ccd_clip = kCcdClip;
+        r.metrics.ccd = 0.2;
+        r.data.scale = 1.0;
+    }
+    rows[0].metrics.ccd = 0.05;  // one method below the ceiling 0.2: nothing saturated
+    const std::string unit = PaperTableConventions(ptrs);
+    EXPECT_NE(unit.find("CCD clip 0.1 (the paper's, for unit-sphere objects)."),
+              std::string::npos)
+        << unit;
+    EXPECT_EQ(unit.find("scale"), std::string::npos) << unit;
+    EXPECT_EQ(unit.find("Saturated"), std::string::npos) << unit;
+}
+
 }  // namespace
 }  // namespace regbench

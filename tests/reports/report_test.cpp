@@ -205,6 +205,58 @@ TEST(Report, CaptionStatesThresholdsAndSaturatedMetrics) {
     EXPECT_EQ(mixed.find("Saturated"), std::string::npos) << mixed;
 }
 
+// Issue 54 item 1: the distance thresholds not given follow the pair file's scale (rows'
+// data.scale, `generate --scale`). Expected by hand: rows in millimetres (scale 150) with mae_t
+// 5 and 20 (rte = 2 mae_t = 10 and 40), mae_r 0.5 (rre 1): recall@(1, 0.1 x 150 = 15) accepts
+// the first (5 < 15), success rre < 5 and rte < 15 the first (10 < 15); KITTI's rte < 2 m
+// becomes rte < 300, which both pass. The same rows at scale 1 pass nothing (mae_t >= 5 > 0.1,
+// rte >= 10 > 2); a threshold given on the command line is used as is.
+TEST(Report, DistanceThresholdsNotGivenScaleWithThePairFile) {
+    std::vector<ResultRow> rows = Numbered({Row("a", 0.5, 5.0, 1.0), Row("a", 0.5, 20.0, 1.0)});
+    for (auto& r : rows) r.data.scale = 150.0;
+    ReportOptions o;
+    const MethodSummary mm = BuildTables(rows, o)[0].methods[0];
+    EXPECT_DOUBLE_EQ(mm.recall.mean, 0.5);
+    EXPECT_DOUBLE_EQ(mm.success.mean, 0.5);
+    const std::string caption = SummaryTable(BuildTables(rows, o)[0], o).caption;
+    EXPECT_NE(caption.find("recall mae_r < 1 deg and mae_t < 15; success rre < 5 deg and rte "
+                           "< 15"),
+              std::string::npos)
+        << caption;
+    EXPECT_NE(caption.find("The pair file's scale is 150 (`generate --scale`): every distance "
+                           "threshold not given on the command line is its unit-sphere default "
+                           "times 150."),
+              std::string::npos)
+        << caption;
+    // Applying the scale twice must not scale twice (DescribeConventions and SummaryTable
+    // both call ForData).
+    EXPECT_NE(caption.find("recall@(1,15)"), std::string::npos) << caption;
+    ReportOptions kitti = o;
+    kitti.success_rule = "kitti";
+    EXPECT_DOUBLE_EQ(BuildTables(rows, kitti)[0].methods[0].success.mean, 1.0);
+    const Table k = SummaryTable(BuildTables(rows, kitti)[0], kitti);
+    EXPECT_EQ(k.columns[k.ColumnIndex("success")].header, "success kitti(rre<5,rte<300)");
+    ReportOptions given = o;
+    given.recall_t = 0.1;
+    given.recall_t_given = true;
+    EXPECT_DOUBLE_EQ(BuildTables(rows, given)[0].methods[0].recall.mean, 0.0);
+    EXPECT_DOUBLE_EQ(BuildTables(rows, given)[0].methods[0].success.mean, 0.5);
+    const std::string as_given = SummaryTable(BuildTables(rows, given)[0], given).caption;
+    EXPECT_NE(as_given.find("mae_t < 0.1; success rre < 5 deg and rte < 15"), std::string::npos)
+        << as_given;
+    EXPECT_NE(as_given.find("(given as is: --recall-t)"), std::string::npos) << as_given;
+    // Unit-sphere rows: the thresholds and the caption as they always were.
+    for (auto& r : rows) r.data.scale = 1.0;
+    const MethodSummary unit = BuildTables(rows, o)[0].methods[0];
+    EXPECT_DOUBLE_EQ(unit.recall.mean, 0.0);
+    EXPECT_DOUBLE_EQ(unit.success.mean, 0.0);
+    const std::string unit_caption = SummaryTable(BuildTables(rows, o)[0], o).caption;
+    EXPECT_EQ(unit_caption.find("scale is"), std::string::npos) << unit_caption;
+    EXPECT_NE(unit_caption.find("mae_t < 0.1; success rre < 5 deg and rte < 0.1; CCD clip 0.1"),
+              std::string::npos)
+        << unit_caption;
+}
+
 TEST(Report, CommonPairsRestrictsEveryMethodAndSaysSoInTheCaption) {
     std::vector<ResultRow> rows = OnPairs("icp", 0, 29);
     for (auto& r : OnPairs("ogmm", 0, 9)) rows.push_back(r);
