@@ -58,7 +58,8 @@ struct FilterRegOptions : GmmEmOptions {
         f("tol", tol,
           "stop when |q - q_prev| < tol (absolute), checked from the 2nd iteration; 1e-3");
         f("min_sigma2", min_sigma2,
-          "floor on sigma2 after each iteration and on the auto init; 1e-4");
+          "floor on sigma2 after each iteration and on the auto init [unit-sphere units^2]; "
+          "1e-4");
         f("objective", objective,
           "\"pt2pt\" (Kabsch to the filtered target mean) or \"pt2pl\" (twist Gauss-Newton on "
           "filtered target normals, normals by PCA of normals_k neighbours; give a small sigma2, "

@@ -12,6 +12,7 @@
 
 #include "baselines/pcl_adapter.hpp"
 #include "core/params.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -29,6 +30,7 @@ struct GicpOptions {
     int max_optimizer_iterations = 20;             ///< BFGS iterations per outer step
     double translation_gradient_tolerance = 0.01;  ///< BFGS translation gradient stop
     double rotation_gradient_tolerance = 0.01;     ///< BFGS rotation gradient stop
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
 
     template <class F>
     void Fields(F&& f) {
@@ -37,8 +39,8 @@ struct GicpOptions {
           "protocols' motions from the identity)");
         f("max_iterations", max_iterations, "outer iteration cap; 200 = PCL default");
         f("transformation_epsilon", transformation_epsilon,
-          "stop when every translation entry changes less than this; 5e-4 = PCL default "
-          "(0.05% of the object radius)");
+          "stop when every translation entry changes less than this [unit-sphere units]; "
+          "5e-4 = PCL default (0.05% of the object radius)");
         f("rotation_epsilon", rotation_epsilon,
           "stop when every rotation-matrix entry changes less than this; 2e-3 = PCL default");
         f("correspondence_randomness", correspondence_randomness,
@@ -47,9 +49,17 @@ struct GicpOptions {
         f("max_optimizer_iterations", max_optimizer_iterations,
           "BFGS iterations per outer step; 20 = PCL default");
         f("translation_gradient_tolerance", translation_gradient_tolerance,
-          "BFGS translation gradient stop; 1e-2 = PCL");
+          "BFGS translation gradient stop [unit-sphere units] (the cost is a squared "
+          "length); 1e-2 = PCL");
         f("rotation_gradient_tolerance", rotation_gradient_tolerance,
-          "BFGS rotation gradient stop; 1e-2 = PCL");
+          "BFGS rotation gradient stop [unit-sphere units^2] (the cost is a squared length); "
+          "1e-2 = PCL");
+        f("scale_rule", scale_rule,
+          "\"auto\": as `icp`, the lengths scaled by the pair's unit u (RMS radius / 0.6 when "
+          "outside [0.5, 2], else 1; docs/performance.md): max_correspondence_distance and "
+          "transformation_epsilon times u, the gradient stops times u (translation) and u^2 "
+          "(rotation: the cost is a squared length), used values in extra.resolved; "
+          "\"preset\": as given");
     }
     void Validate(ParamCheck& c) const {
         c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
@@ -84,17 +94,20 @@ AlignResult AlignGicp(const GicpOptions& o, const PointCloud& source, const Poin
                                     std::to_string(source.rows()) + ", target " +
                                     std::to_string(target.rows()));
     }
+    const ScaleRule rule = ResolveScaleRule(source, target);
+    const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
+    const double distance = o.max_correspondence_distance * unit;
     CountingGicp gicp;
     gicp.setInputSource(ToPcl(source));
     gicp.setInputTarget(ToPcl(target));
-    gicp.setMaxCorrespondenceDistance(o.max_correspondence_distance);
+    gicp.setMaxCorrespondenceDistance(distance);
     gicp.setMaximumIterations(o.max_iterations);
-    gicp.setTransformationEpsilon(o.transformation_epsilon);
+    gicp.setTransformationEpsilon(o.transformation_epsilon * unit);
     gicp.setRotationEpsilon(o.rotation_epsilon);
     gicp.setCorrespondenceRandomness(o.correspondence_randomness);
     gicp.setMaximumOptimizerIterations(o.max_optimizer_iterations);
-    gicp.setTranslationGradientTolerance(o.translation_gradient_tolerance);
-    gicp.setRotationGradientTolerance(o.rotation_gradient_tolerance);
+    gicp.setTranslationGradientTolerance(o.translation_gradient_tolerance * unit);
+    gicp.setRotationGradientTolerance(o.rotation_gradient_tolerance * unit * unit);
 
     pcl::PointCloud<pcl::PointXYZ> aligned;
     gicp.align(aligned);
@@ -119,8 +132,9 @@ AlignResult AlignGicp(const GicpOptions& o, const PointCloud& source, const Poin
     }
     // PCL's fitness: mean squared NN distance over points whose *squared* distance is
     // within the bound, hence the square.
-    const double d = o.max_correspondence_distance;
-    result.extra = {{"fitness_score", gicp.getFitnessScore(d * d)}};
+    result.extra = {{"fitness_score", gicp.getFitnessScore(distance * distance)},
+                    {"resolved",
+                     {{"max_correspondence_distance", distance}, {"scale_rule", rule.ToJson()}}}};
     return result;
 }
 

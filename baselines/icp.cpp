@@ -30,8 +30,8 @@ struct IcpOptions : Open3dIcpOptions {
           "stop when the fitness change is below this (and the RMSE change too); 1e-6 = "
           "Open3D default");
         f("relative_rmse", relative_rmse,
-          "stop when the inlier-RMSE change is below this (and the fitness change too); "
-          "1e-6 = Open3D default");
+          "stop when the inlier-RMSE change is below this (and the fitness change too) "
+          "[unit-sphere units]: Open3D compares the absolute change; 1e-6 = Open3D default");
     }
 };
 

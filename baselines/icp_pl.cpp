@@ -6,6 +6,7 @@
 
 #include "baselines/open3d_adapter.hpp"
 #include "core/params.hpp"
+#include "core/scale_rule.hpp"
 
 namespace regbench {
 namespace {
@@ -15,6 +16,7 @@ namespace {
 struct IcpPlOptions : Open3dIcpOptions {
     double normal_radius = 0.1;  ///< target-normal neighbourhood radius
     int normal_max_nn = 30;      ///< neighbour cap per normal
+    ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
 
     template <class F>
     void Fields(F&& f) {
@@ -25,11 +27,17 @@ struct IcpPlOptions : Open3dIcpOptions {
         f("relative_fitness", relative_fitness,
           "stop threshold on the fitness change; 1e-6 = Open3D default");
         f("relative_rmse", relative_rmse,
-          "stop threshold on the inlier-RMSE change; 1e-6 = Open3D default");
+          "stop threshold on the inlier-RMSE change [unit-sphere units]: Open3D compares the "
+          "absolute change; 1e-6 = Open3D default");
         f("normal_radius", normal_radius,
-          "target-normal neighbourhood radius; 0.1 = 2 * voxel (0.05), Open3D tutorial "
+          "target-normal neighbourhood radius [unit-sphere units]; 0.1 = 2 * voxel (0.05), "
+          "Open3D tutorial "
           "recipe, ~2x the sample spacing of a unit-sphere object");
         f("normal_max_nn", normal_max_nn, "neighbour cap per normal; 30 = Open3D tutorial recipe");
+        f("scale_rule", scale_rule,
+          "\"auto\": as `icp`, max_correspondence_distance and normal_radius scaled by the "
+          "pair's unit (RMS radius / 0.6 when outside [0.5, 2], else 1; docs/performance.md), "
+          "the values used in extra.resolved; \"preset\": as given");
     }
     void Validate(ParamCheck& c) const {
         Open3dIcpOptions::Validate(c);
@@ -43,11 +51,18 @@ AlignResult AlignIcpPl(const IcpPlOptions& o, const PointCloud& source, const Po
     namespace o3r = open3d::pipelines::registration;
     // Point-to-plane (Chen & Medioni 1992) minimises distances along the target's normals,
     // so only the target needs them.
+    const ScaleRule rule = ResolveScaleRule(source, target);
+    const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
+    const double distance = o.max_correspondence_distance * unit;
     open3d::geometry::PointCloud target_o3d = ToOpen3d(target);
     target_o3d.EstimateNormals(
-        open3d::geometry::KDTreeSearchParamHybrid(o.normal_radius, o.normal_max_nn));
-    return RunOpen3dIcp(ToOpen3d(source), target_o3d, o.max_correspondence_distance,
-                        o3r::TransformationEstimationPointToPlane(), o.Criteria());
+        open3d::geometry::KDTreeSearchParamHybrid(o.normal_radius * unit, o.normal_max_nn));
+    AlignResult result = RunOpen3dIcp(ToOpen3d(source), target_o3d, distance,
+                                      o3r::TransformationEstimationPointToPlane(), o.Criteria());
+    result.extra["resolved"] = {{"max_correspondence_distance", distance},
+                                {"normal_radius", o.normal_radius * unit},
+                                {"scale_rule", rule.ToJson()}};
+    return result;
 }
 
 }  // namespace

@@ -34,15 +34,17 @@ struct NdtOptions {
         f("min_points_per_voxel", min_points_per_voxel,
           "cells with fewer points are dropped; 6 = PCL default");
         f("scale_rule", scale_rule,
-          "\"auto\": resolution and step_size scaled by the pair's unit (RMS radius / 0.6 when "
-          "outside [0.5, 2], else 1; docs/performance.md), used values in extra.resolved; "
-          "\"preset\": as given");
-        f("step_size", step_size, "More-Thuente maximum step length; 0.1 = PCL default");
+          "\"auto\": resolution and step_size scaled by the pair's unit u (RMS radius / 0.6 "
+          "when outside [0.5, 2], else 1; docs/performance.md), transformation_epsilon (a "
+          "squared length) by u^2, used values in extra.resolved; \"preset\": as given");
+        f("step_size", step_size,
+          "More-Thuente maximum step length [unit-sphere units]; 0.1 = PCL default");
         f("outlier_ratio", outlier_ratio,
           "uniform outlier weight of the NDT mixture; 0.55 = PCL default");
         f("max_iterations", max_iterations, "Newton iteration cap; 35 = PCL default");
         f("transformation_epsilon", transformation_epsilon,
-          "stop when the last step's squared translation is <= this; 1e-6 (a 1e-3 step; "
+          "stop when the last step's squared translation is <= this [unit-sphere units^2]; "
+          "1e-6 (a 1e-3 step; "
           "PCL's 0.1 is metre-scale)");
         f("transformation_rotation_epsilon", transformation_rotation_epsilon,
           "and when cos(last step's rotation angle) >= this; 0 disables; 0.9999995 = "
@@ -84,7 +86,7 @@ AlignResult AlignNdt(const NdtOptions& o, const PointCloud& source, const PointC
     ndt.setStepSize(o.step_size * unit);
     ndt.setOulierRatio(o.outlier_ratio);
     ndt.setMaximumIterations(o.max_iterations);
-    ndt.setTransformationEpsilon(o.transformation_epsilon);
+    ndt.setTransformationEpsilon(o.transformation_epsilon * unit * unit);  // a squared length
     ndt.setTransformationRotationEpsilon(o.transformation_rotation_epsilon);
     ndt.setInputTarget(ToPcl(target));
     if (ndt.TargetCells() == 0) {
