@@ -282,9 +282,13 @@ std::vector<MethodSpec> PairScaledSpecs(std::vector<MethodSpec> specs, double sc
             params[key] = params[key].get<double>() * std::pow(scale, power);
             scaled = true;
         }
+        // The lengths now are the data's (scaled here or given in its units): the per-pair size
+        // rule must not scale them again.
+        if (params.contains("scale_rule") && params["scale_rule"] != "preset") {
+            params["scale_rule"] = "preset";
+            scaled = true;
+        }
         if (!scaled) continue;
-        // The lengths now are the data's: the per-pair size rule must not scale them again.
-        if (params.contains("scale_rule")) params["scale_rule"] = "preset";
         spec.params = CreateMethod(spec.name, params)->Params();  // validates
     }
     return specs;
