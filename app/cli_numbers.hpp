@@ -32,6 +32,18 @@ CLI::Validator Expecting(const std::string& name, const std::string& what, Ok ok
         name);
 }
 
+/// A finite number between `lo` and `hi`, both excluded (`open`) or both included.
+inline CLI::Validator Interval(double lo, double hi, bool open) {
+    char range[64];
+    std::snprintf(range, sizeof(range), open ? "(%g, %g)" : "[%g, %g]", lo, hi);
+    return Expecting("REAL", std::string("a number in ") + range,
+                     [lo, hi, open](const std::string& s) {
+                         const auto v = PlainReal(s);
+                         if (!v || !std::isfinite(*v)) return false;
+                         return open ? *v > lo && *v < hi : *v >= lo && *v <= hi;
+                     });
+}
+
 }  // namespace detail
 
 /// Digits only, fitting in 64 bits: refuses "2.5", "-1", "1e23", "+3", "0x10", "".
@@ -77,25 +89,11 @@ inline CLI::Validator PositiveReal() {
 }
 
 /// A finite number strictly between `lo` and `hi` (a significance level, a fraction).
-inline CLI::Validator OpenInterval(double lo, double hi) {
-    char range[64];
-    std::snprintf(range, sizeof(range), "(%g, %g)", lo, hi);
-    return detail::Expecting("REAL", std::string("a number in ") + range,
-                             [lo, hi](const std::string& s) {
-                                 const auto v = detail::PlainReal(s);
-                                 return v && std::isfinite(*v) && *v > lo && *v < hi;
-                             });
-}
+inline CLI::Validator OpenInterval(double lo, double hi) { return detail::Interval(lo, hi, true); }
 
 /// A finite number in the closed interval [lo, hi] (a tolerance with a sensible ceiling).
 inline CLI::Validator ClosedInterval(double lo, double hi) {
-    char range[64];
-    std::snprintf(range, sizeof(range), "[%g, %g]", lo, hi);
-    return detail::Expecting("REAL", std::string("a number in ") + range,
-                             [lo, hi](const std::string& s) {
-                                 const auto v = detail::PlainReal(s);
-                                 return v && std::isfinite(*v) && *v >= lo && *v <= hi;
-                             });
+    return detail::Interval(lo, hi, false);
 }
 
 /// Parses "i/n" with 0 <= i < n, digits only ("1/2x", "-1/2", "1/0" refused).

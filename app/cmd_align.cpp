@@ -91,9 +91,9 @@ void SetupAlignCommand(CLI::App* cmd) {
         ->check(CLI::IsMember({"drop", "refuse"}))
         ->capture_default_str();
     cmd->add_option("--max-points", *max_points,
-                    "Scale guard, as run's: an O(N*M) method (rienet, rgm, regtr; cpd, gmmreg, "
-                    "svr in their dense modes) on a cloud above this many points is refused "
-                    "before it runs; 0 = no guard")
+                    "Scale guard, as run's: an O(N*M) method (a network its family declares "
+                    "quadratic; cpd, gmmreg, svr in their dense modes) on a cloud above this "
+                    "many points is refused before it runs; 0 = no guard")
         ->check(WholeNumber())
         ->capture_default_str();
     cmd->callback([=] {

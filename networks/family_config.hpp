@@ -11,7 +11,7 @@
 // 32]"). Every value has a range, so a config read from a checkpoint.json or inferred from an
 // authors' file's tensor shapes is refused before a network is built from it. BindConfig fills
 // a family's config_docs, check_config, build and forward_cost from the struct, its network
-// and its MACs count.
+// and its MACs count; NetFamily starts a family from its zoo table, config and network.
 // Free of LibTorch types; included by the families only.
 #include <cstdint>
 #include <functional>
@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "core/params.hpp"
@@ -165,6 +166,25 @@ void BindConfig(NetworkFamily& f, ForwardMacsOf<Config> macs = nullptr) {
         }
         return CostOfParts(macs(ParseNetConfig<Config>(c, arch), n, m));
     };
+}
+
+/// A family whose zoo is the table `models` and whose network is Net built from a Config: arch,
+/// summary, models and named_config (BindModels: configs as `to_json` writes them),
+/// shipped_model (the table's first model), config_docs, check_config, build and, with `macs`,
+/// forward_cost (BindConfig). What is left is particular to the family: cost_class, methods,
+/// inference_params, authors.
+template <class Config, class Net>
+NetworkFamily NetFamily(std::string arch, std::string summary,
+                        const std::vector<ZooModel<Config>>& models,
+                        nlohmann::json (*to_json)(const Config&),
+                        ForwardMacsOf<Config> macs = nullptr) {
+    NetworkFamily f;
+    f.arch = std::move(arch);
+    f.summary = std::move(summary);
+    BindModels(f, models, to_json);
+    f.shipped_model = models.at(0).name;
+    BindConfig<Config, Net>(f, macs);
+    return f;
 }
 
 }  // namespace regbench::networks

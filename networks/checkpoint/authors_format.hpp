@@ -12,7 +12,8 @@
 
 namespace regbench::networks {
 
-/// How a family's authors lay out their state dict (NetworkFamily::authors).
+/// How a family's authors lay out their state dict (NetworkFamily::authors). An aggregate: a
+/// family gives module and infer_config, then what it needs of the rest, in order.
 struct AuthorsFormat {
     /// The authors' module and file, recorded in an imported checkpoint.json.
     std::string module;
@@ -25,17 +26,18 @@ struct AuthorsFormat {
         infer_config;
     /// What no tensor of the authors' file fixes (their defaults: the ModelNet40 config), the
     /// keys of `import-checkpoint --setting KEY=VALUE`; empty when the tensors fix everything.
-    std::vector<ImportSetting> settings;
+    std::vector<ImportSetting> settings = {};
     /// The authors' named configs (`import-checkpoint --preset NAME`), e.g. per dataset.
-    std::vector<ImportPreset> presets;
+    std::vector<ImportPreset> presets = {};
     /// The authors' key of regbench tensor `name`; unset: the same name.
-    std::function<std::string(const std::string& name)> authors_name;
+    std::function<std::string(const std::string& name)> authors_name = {};
     /// Rank of an authors' key in their state_dict order (keys sort by it, stably); unset:
     /// regbench's order is theirs.
-    std::function<int(const std::string& authors_key)> module_rank;
+    std::function<int(const std::string& authors_key)> module_rank = {};
     /// Refuses (std::runtime_error naming `where`) a config the authors' module cannot hold;
     /// unset: every config of the family exports.
-    std::function<void(const nlohmann::json& config, const std::string& where)> check_export;
+    std::function<void(const nlohmann::json& config, const std::string& where)> check_export =
+        {};
 };
 
 /// The regbench model config (zoo form, with "arch", "name" and "train") the state dict

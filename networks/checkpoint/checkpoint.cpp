@@ -405,6 +405,21 @@ void CheckInferenceKeys(const nlohmann::json& inference, const NetworkFamily& fa
     }
 }
 
+/// `build`'s result; its error (LibTorch's without the stack dump) rethrown as
+/// std::runtime_error "checkpoint file <dir>/checkpoint.json: cannot build its model: ...".
+template <class Build>
+auto BuildingCheckpointModel(const std::string& dir, Build build) -> decltype(build()) {
+    try {
+        return build();
+    } catch (const c10::Error& e) {
+        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
+                                 ": cannot build its model: " + e.what_without_backtrace());
+    } catch (const std::exception& e) {
+        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
+                                 ": cannot build its model: " + e.what());
+    }
+}
+
 }  // namespace
 
 nlohmann::json LoadCheckpoint(const std::string& dir, RegistrationNet& net,
@@ -423,34 +438,20 @@ nlohmann::json CheckpointNetConfig(const std::string& dir, const nlohmann::json&
 
 std::string CheckCheckpointModel(const std::string& dir, const nlohmann::json& inference) {
     const nlohmann::json config = CheckpointNetConfig(dir, inference);
-    try {
+    return BuildingCheckpointModel(dir, [&] {
         const NetworkFamily& family = FamilyOfConfig(config);
         nlohmann::json net = config;
         net.erase("train");
         family.check_config(net);
         return family.arch;
-    } catch (const c10::Error& e) {  // the message without LibTorch's stack dump
-        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
-                                 ": cannot build its model: " + e.what_without_backtrace());
-    } catch (const std::exception& e) {
-        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
-                                 ": cannot build its model: " + e.what());
-    }
+    });
 }
 
 std::shared_ptr<RegistrationNet> LoadNetFromCheckpoint(const std::string& dir,
                                                        const nlohmann::json& inference) {
     const nlohmann::json config = CheckpointNetConfig(dir, inference);
-    std::shared_ptr<RegistrationNet> net;
-    try {
-        net = MakeNetFromConfig(config);
-    } catch (const c10::Error& e) {  // the message without LibTorch's stack dump
-        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
-                                 ": cannot build its model: " + e.what_without_backtrace());
-    } catch (const std::exception& e) {
-        throw std::runtime_error("checkpoint file " + (fs::path(dir) / kCheckpointJson).string() +
-                                 ": cannot build its model: " + e.what());
-    }
+    const std::shared_ptr<RegistrationNet> net =
+        BuildingCheckpointModel(dir, [&] { return MakeNetFromConfig(config); });
     LoadCheckpointAs(dir, *net, nullptr, inference);
     net->eval();
     return net;

@@ -21,6 +21,7 @@
 #include <iomanip>
 #include <iostream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -279,21 +280,27 @@ void WriteMetricsFile(const fs::path& path, const std::string& text, bool trunca
     }
 }
 
+/// The text of metrics file `path`; nullopt when there is none, and a path that is not a
+/// regular file throws (RequireRegularOrAbsent).
+std::optional<std::string> ReadMetricsFile(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(path, ec))) return std::nullopt;
+    RequireRegularOrAbsent(path.string(), "metrics file");
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 /// A null (an infinite best) or a key absent from an older checkpoint keeps the default.
 /// A kill during an append leaves the metrics file's last line without its newline; the
 /// resumed run's first line would be glued onto it. Cut the file after its last newline
 /// (the lost line's epoch is validated again) and say so.
 void DropTornLastLine(const fs::path& path, std::ostream& log) {
-    std::error_code ec;
-    if (!fs::exists(fs::symlink_status(path, ec))) return;
-    RequireRegularOrAbsent(path.string(), "metrics file");
-    std::string text;
-    {
-        std::ifstream in(path, std::ios::binary);
-        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
+    const std::optional<std::string> read = ReadMetricsFile(path);
+    if (!read) return;
+    const std::string& text = *read;
     if (text.empty() || text.back() == '\n') return;
     const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+    std::error_code ec;
     fs::resize_file(path, keep, ec);
     if (ec)
         throw std::runtime_error(path.string() + ": cannot drop a torn last line: " + ec.message());
@@ -313,15 +320,9 @@ void KeepMetricsOfCheckpoint(const fs::path& dir, const nlohmann::json& checkpoi
     const bool has_row = row.is_object() && row.value("step", std::int64_t{-1}) == step;
     for (const bool csv : {true, false}) {
         const fs::path path = dir / (csv ? "metrics.csv" : "metrics.jsonl");
-        std::error_code ec;
-        if (!fs::exists(fs::symlink_status(path, ec))) continue;
-        RequireRegularOrAbsent(path.string(), "metrics file");
-        std::string text;
-        {
-            std::ifstream in(path, std::ios::binary);
-            text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        }
-        std::istringstream lines(text);
+        const std::optional<std::string> text = ReadMetricsFile(path);
+        if (!text) continue;
+        std::istringstream lines(*text);
         std::string kept, line;
         std::int64_t last_step = -1;
         int dropped = 0;

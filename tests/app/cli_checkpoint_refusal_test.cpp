@@ -32,11 +32,9 @@ using testing::ExpectRefused;
 using testing::Put;
 
 TEST(CliCheckpointRefusal, DamagedCheckpointsAreRefusedBeforeTheRun) {
-    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
-    ASSERT_NE(src, nullptr);
     const fs::path dir = testing::FreshTempDir("checkpoint_refusal");
     const fs::path ck = dir / "ck";
-    fs::copy(fs::path(src) / "data" / "models" / "deepgmr", ck);
+    fs::copy(testing::ShippedModel("deepgmr"), ck);
     const fs::path json = ck / "checkpoint.json";
     const fs::path weights = ck / "weights.pt";
     const std::string good_json = testing::ReadBytes(json);
@@ -126,6 +124,14 @@ TEST(CliCheckpointRefusal, ImportCheckpointNeverReplacesItsInputOrARunFolder) {
     fs::remove_all(dir_);
 }
 
+/// The shipped rgm checkpoint in its authors' layout (export-checkpoint): `dir`/m.pth.
+std::string AuthorsRgmFile(const fs::path& dir) {
+    const std::string pth = (dir / "m.pth").string();
+    testing::RunCliOk("export-checkpoint " + testing::ShippedModel("rgm").string() +
+                      " --to rgm --out " + pth);
+    return pth;
+}
+
 // Issue 55, item 1: `import-checkpoint rgm.pth --from rgm --out . --force` deleted everything in
 // the current folder (the save removed DIR whole and wrote DIR + ".tmp"), `--out v1/ --force`
 // deleted v1 through "v1/.tmp", and `--out fresh/` failed. Expected: ".", "..", "./", the
@@ -133,12 +139,8 @@ TEST(CliCheckpointRefusal, ImportCheckpointNeverReplacesItsInputOrARunFolder) {
 // folder writer, with every file kept; "v1/" is the folder v1, written or replaced; a folder
 // that is not a checkpoint is never replaced (exit 1, named, kept).
 TEST(CliCheckpointRefusal, FolderWritersRefuseDotsAndTheCurrentFolderAndKeepOtherFolders) {
-    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
-    ASSERT_NE(src, nullptr);
     const fs::path dir = testing::FreshTempDir("import_dots");
-    const std::string pth = (dir / "m.pth").string();
-    testing::RunCliOk("export-checkpoint " + (fs::path(src) / "data" / "models" / "rgm").string() +
-                      " --to rgm --out " + pth);
+    const std::string pth = AuthorsRgmFile(dir);
     const fs::path work = dir / "work";
     const fs::path sub = work / "sub";
     fs::create_directories(sub);
@@ -192,7 +194,7 @@ TEST(CliCheckpointRefusal, FolderWritersRefuseDotsAndTheCurrentFolderAndKeepOthe
     // training run folder, a shipped model folder with its curve.
     fs::create_directories(dir / "run" / "last");
     Put(dir / "run" / "metrics.csv", "epoch\n");
-    fs::copy(fs::path(src) / "data" / "models" / "rgm", dir / "shipped");
+    fs::copy(testing::ShippedModel("rgm"), dir / "shipped");
     for (const auto& [folder, kept] : std::vector<std::pair<std::string, fs::path>>{
              {"work", work / "keep"}, {"run", dir / "run" / "metrics.csv"},
              {"shipped", dir / "shipped" / "metrics.csv"}}) {
@@ -211,12 +213,8 @@ TEST(CliCheckpointRefusal, FolderWritersRefuseDotsAndTheCurrentFolderAndKeepOthe
 // the one moment it is not at its path, the refusal names the leftover; the next import
 // --force recovers and replaces it, leaving nothing beside it.
 TEST(CliCheckpointRefusal, ImportCheckpointKilledAtEveryStepOfItsSaveLeavesACheckpoint) {
-    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
-    ASSERT_NE(src, nullptr);
     const fs::path dir = testing::FreshTempDir("import_kill");
-    const std::string pth = (dir / "m.pth").string();
-    testing::RunCliOk("export-checkpoint " + (fs::path(src) / "data" / "models" / "rgm").string() +
-                      " --to rgm --out " + pth);
+    const std::string pth = AuthorsRgmFile(dir);
     const fs::path ck = dir / "ck";
     const std::string import = "import-checkpoint " + pth + " --from rgm --force --out " +
                                ck.string();

@@ -6,8 +6,6 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -25,16 +23,7 @@ namespace fs = std::filesystem;
 using testing::CliResult;
 using testing::RunCli;
 
-fs::path Dir() {
-    const fs::path dir = regbench::testing::TempPath("cli_contract");
-    fs::create_directories(dir);
-    return dir;
-}
-
-std::string Slurp(const fs::path& p) {
-    std::ifstream f(p);
-    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
+fs::path Dir() { return testing::TempFolder("cli_contract"); }
 
 /// A tolerance as the docs write it (shortest form: 0.1, 0.001).
 std::string Num(double v) {
@@ -194,11 +183,7 @@ TEST(CliContract, GenerateSaysWhenPairsReuseItems) {
     const fs::path two = Dir() / "two.h5", files = Dir() / "two_xyz";
     fs::remove(two);
     fs::remove_all(files);
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 2 "
-                     "--points 64 --seed 1 --out " +
-                     two.string())
-                  .exit_code,
-              0);
+    testing::SmallPairFile(two.string(), 2);
     ASSERT_EQ(RunCli("export " + two.string() + " --out " + files.string()).exit_code, 0);
     const std::string generate = "generate --protocol partial --dataset " + files.string() +
                                  " --split all --points 32 --seed 1 --out " + out.string();
@@ -248,24 +233,20 @@ TEST(CliContract, RunRefusesAnExistingOutUnlessResumeOrForce) {
     const fs::path pairs = Dir() / "pairs.h5", out = Dir() / "run.jsonl";
     fs::remove(pairs);
     fs::remove(out);
-    ASSERT_EQ(RunCli("generate --protocol partial --dataset procedural --split test --pairs 2 "
-                     "--seed 1 --out " +
-                     pairs.string())
-                  .exit_code,
-              0);
+    testing::SmallPairFile(pairs.string(), 2);
     const std::string run = "run --pairs " + pairs.string() + " -q --out " + out.string();
     ASSERT_EQ(RunCli(run + " --methods identity").exit_code, 0);
-    const std::string first = Slurp(out);
+    const std::string first = testing::ReadBytes(out);
     const CliResult again = RunCli(run + " --methods icp");
     EXPECT_EQ(again.exit_code, 1) << again.output;
     EXPECT_NE(again.output.find(out.string() + ": already exists"), std::string::npos)
         << again.output;
-    EXPECT_EQ(Slurp(out), first);  // untouched
+    EXPECT_EQ(testing::ReadBytes(out), first);  // untouched
     EXPECT_EQ(RunCli(run + " --methods identity --resume").exit_code, 0);
-    EXPECT_EQ(Slurp(out), first);  // every row resumed
+    EXPECT_EQ(testing::ReadBytes(out), first);  // every row resumed
     ExpectUsageError(RunCli(run + " --methods identity --resume --force"), "--force");
     ASSERT_EQ(RunCli(run + " --methods icp --force").exit_code, 0);
-    EXPECT_NE(Slurp(out).find("\"method\":\"icp\""), std::string::npos);
+    EXPECT_NE(testing::ReadBytes(out).find("\"method\":\"icp\""), std::string::npos);
 }
 
 TEST(CliContract, CompareDefaultTolerancesAgreeInCodeHelpAndDocs) {
@@ -280,7 +261,7 @@ TEST(CliContract, CompareDefaultTolerancesAgreeInCodeHelpAndDocs) {
     EXPECT_NE(help.output.find("3 INCONCLUSIVE"), std::string::npos) << help.output;
     const char* src = std::getenv("REGBENCH_SOURCE_DIR");
     ASSERT_NE(src, nullptr);
-    const std::string docs = Slurp(fs::path(src) / "docs" / "reports.md");
+    const std::string docs = testing::ReadBytes(fs::path(src) / "docs" / "reports.md");
     const std::string row = "| default tolerance | " + Num(d.at("mae_r")) + " | " +
                             Num(d.at("mae_t")) + " | " + Num(d.at("ccd")) + " | " +
                             Num(d.at("rre")) + " | " + Num(d.at("rte")) + " |";

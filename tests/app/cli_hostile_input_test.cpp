@@ -34,11 +34,7 @@ void ExpectCleanRefusal(const CliResult& r, const std::string& name) {
     }
 }
 
-fs::path Dir() {
-    const fs::path dir = regbench::testing::TempPath("cli_hostile");
-    fs::create_directories(dir);
-    return dir;
-}
+fs::path Dir() { return testing::TempFolder("cli_hostile"); }
 
 TEST(CliHostileInput, PairFilesAreRefusedByInspectAndRun) {
     for (const auto& c : testing::HostileCases()) {

@@ -22,7 +22,6 @@ namespace regbench {
 namespace {
 
 namespace fs = std::filesystem;
-using testing::CliResult;
 using testing::RunCli;
 using testing::ExpectRefused;
 using testing::Put;

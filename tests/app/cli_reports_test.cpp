@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -22,16 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::RunCli;
 
-fs::path Dir() {
-    const fs::path dir = regbench::testing::TempPath("cli_reports");
-    fs::create_directories(dir);
-    return dir;
-}
-
-std::string Slurp(const fs::path& p) {
-    std::ifstream f(p);
-    return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
+fs::path Dir() { return testing::TempFolder("cli_reports"); }
 
 /// 30 rows of each of two methods (one with a long name) on pairs 0..29, metrics varying by
 /// pair so every mean has a CI of non-zero width; a third of the pairs recalled.
@@ -139,7 +129,7 @@ TEST(CliReports, AlignSavesTheMovedSourceAndTheTargetAsOnePly) {
     const auto r = RunCli("align " + (dir / "a.xyz").string() + " " + (dir / "b.xyz").string() +
                           " --method identity --save-aligned " + ply.string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const std::string text = Slurp(ply);
+    const std::string text = testing::ReadBytes(ply);
     EXPECT_NE(text.find("element vertex 9\n"), std::string::npos) << text;  // 4 + 5 points
     EXPECT_NE(text.find("property uchar red"), std::string::npos) << text;
     EXPECT_NE(text.find("\n1 0 0 255 128 0\n"), std::string::npos) << text;  // source, orange
@@ -153,7 +143,7 @@ TEST(CliReports, AlignSavesTheMovedSourceAndTheTargetAsOnePly) {
         RunCli("align " + (dir / "a.xyz").string() + " " + (dir / "b.xyz").string() +
                " --method identity --save-aligned " + (dir / "a.xyz").string());
     EXPECT_NE(clobber.exit_code, 0) << clobber.output;
-    EXPECT_EQ(Slurp(dir / "a.xyz"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+    EXPECT_EQ(testing::ReadBytes(dir / "a.xyz"), "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
 }
 
 // Issue 54: the conventions line, the time per pair table (no CPU time in these rows: "-"),

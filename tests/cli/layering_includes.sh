@@ -20,7 +20,7 @@ allowed=(
   "experiments:reports runners datasets protocols baselines networks core"
   "app:experiments reports runners datasets protocols baselines networks gmm core"
   "portable:experiments/training_bundle.hpp protocols networks core"
-  "python:reports runners datasets protocols core"
+  "python:reports runners protocols core"
   "fuzz:experiments runners networks datasets protocols core"
 )
 status=0

@@ -28,6 +28,8 @@
 #include "runners/registry.hpp"
 #include "runners/result_row.hpp"
 #include "runners/runner.hpp"
+#include "tests/baselines/method_contract.hpp"
+#include "tests/testing/files.hpp"
 #include "tests/testing/synthetic_pair_file.hpp"
 #include "tests/testing/temp_dir_test.hpp"
 
@@ -49,6 +51,9 @@ struct CentroidNetConfig {
     }
     void Validate(ParamCheck& /*c*/) const {}  // no numbers, so no ranges
 };
+
+/// The config as JSON (what Config() returns and a checkpoint stores).
+nlohmann::json ToJson(const CentroidNetConfig& c) { return NetConfigJson(c, "centroid-net"); }
 
 /// A toy network: the offset between the clouds' centroids through a learned 3x3 map (and
 /// bias); the rotation is the identity.
@@ -76,24 +81,24 @@ public:
         terms["total"] = terms["translation"];
         return terms;
     }
-    nlohmann::json Config() const override { return NetConfigJson(config_, "centroid-net"); }
+    nlohmann::json Config() const override { return ToJson(config_); }
 
 private:
     CentroidNetConfig config_;
     torch::nn::Linear offset_{nullptr};
 };
 
-/// The zoo model: the config and its training recipe.
-nlohmann::json CentroidNetModel(const std::string& model) {
-    CentroidNetConfig c;
-    c.name = model;
-    nlohmann::json j = NetConfigJson(c, "centroid-net");
-    j["train"] = {{"lr", 0.05},
-                  {"batch", 4},
-                  {"epochs", 2},
-                  {"pairs_per_epoch", 16},
-                  {"schedule", "constant"}};
-    return j;
+/// The zoo: one model, the config's defaults (no change), and its training recipe.
+const std::vector<ZooModel<CentroidNetConfig>>& CentroidNetModels() {
+    static const std::vector<ZooModel<CentroidNetConfig>> kModels = {
+        {"centroid-net",
+         [](CentroidNetConfig&) {},
+         {{"lr", 0.05},
+          {"batch", 4},
+          {"epochs", 2},
+          {"pairs_per_epoch", 16},
+          {"schedule", "constant"}}}};
+    return kModels;
 }
 
 /// Multiply-accumulates by part: the 3x3 map; the two means are additions.
@@ -106,29 +111,24 @@ std::map<std::string, int64_t> CentroidNetMacs(const CentroidNetConfig& /*c*/, i
 nlohmann::json InferCentroidNetConfig(const StateDict& sd, const std::string& file,
                                       const nlohmann::json& /*settings*/) {
     RequireAuthorsTensor(sd, "fc.weight", 2, file, "a CentroidNet");
-    nlohmann::json c = CentroidNetModel("centroid-net");
+    nlohmann::json c = ZooModelConfig(CentroidNetModels(), "centroid-net", ToJson);
     c["bias"] = false;
     for (const auto& [key, tensor] : sd) c["bias"] = c["bias"] || key == "fc.bias";
     return c;
 }
 
 NetworkFamily CentroidNetFamily() {
-    NetworkFamily f;
-    f.arch = "centroid-net";
-    f.summary = "worked example: a learned map of the centroid offset";
-    f.models = {"centroid-net"};
-    f.shipped_model = "centroid-net";
-    f.named_config = CentroidNetModel;
-    BindConfig<CentroidNetConfig, CentroidNet>(f, CentroidNetMacs);  // docs, checks, build, cost
-    f.cost_class = CostClass::kNearLinear;                             // two means: O(N + M)
+    // Models, shipped model, config docs and checks, build and cost, from the three above.
+    NetworkFamily f = NetFamily<CentroidNetConfig, CentroidNet>(
+        "centroid-net", "worked example: a learned map of the centroid offset",
+        CentroidNetModels(), ToJson, CentroidNetMacs);
+    f.cost_class = CostClass::kNearLinear;  // two means: O(N + M)
     f.methods = {{"centroid-net", false, "worked example: centroid offset, learned 3x3 map"}};
-    auto authors = std::make_shared<AuthorsFormat>();
-    authors->module = "CentroidNet (fc = nn.Linear(3, 3))";
-    authors->infer_config = InferCentroidNetConfig;
-    authors->authors_name = [](const std::string& name) {  // offset.weight -> fc.weight
+    AuthorsFormat authors{"CentroidNet (fc = nn.Linear(3, 3))", InferCentroidNetConfig};
+    authors.authors_name = [](const std::string& name) {  // offset.weight -> fc.weight
         return "fc." + name.substr(name.find('.') + 1);
     };
-    f.authors = std::move(authors);
+    f.authors = std::make_shared<AuthorsFormat>(std::move(authors));
     return f;
 }
 // EXAMPLE END
@@ -153,6 +153,41 @@ TrainSample TranslatedCloud(std::uint64_t index) {
     s.target = s.source.rowwise() + t.transpose();
     return s;
 }
+
+/// The "authors'" file of the example: fc = the identity map without bias, so the method's
+/// translation is exactly the centroid offset.
+std::string WriteIdentityAuthorsFile(const fs::path& path) {
+    const StateDict sd = {{"fc.weight", torch::eye(3)}};
+    std::ofstream(path, std::ios::binary) << WriteTorchSaveZip(sd);
+    return path.string();
+}
+
+/// What the tree would ship for the example: $REGBENCH_MODELS/centroid-net, imported from the
+/// identity file, beside links to the tree's shipped models, so that the method runs with its
+/// defaults as every method of the contract tests does.
+class ShippedExampleModel : public ::testing::Environment {
+public:
+    void SetUp() override {
+        const fs::path models = testing::FreshTempDir("learned_example_models");
+        const fs::path tree = fs::absolute(testing::ShippedModel("ogmm").parent_path());
+        for (const auto& entry : fs::directory_iterator(tree)) {
+            fs::create_directory_symlink(entry.path(), models / entry.path().filename());
+        }
+        ImportOptions import;
+        import.from = "centroid-net";
+        ImportAuthorsCheckpoint(WriteIdentityAuthorsFile(models / "centroid.pth"),
+                                (models / "centroid-net").string(), import);
+        setenv("REGBENCH_MODELS", models.c_str(), 1);
+    }
+};
+::testing::Environment* const kShipped =
+    ::testing::AddGlobalTestEnvironment(new ShippedExampleModel);
+
+// The contract every registered method keeps (tests/baselines/method_contract.hpp), on the
+// example and nothing else: no tolerance row, no other file.
+using testing::MethodContract;
+INSTANTIATE_TEST_SUITE_P(Example, MethodContract, ::testing::Values("centroid-net"),
+                         testing::MethodContractName);
 
 class LearnedExample : public testing::TempDirTest {};
 
@@ -183,14 +218,10 @@ TEST_F(LearnedExample, TrainsImportsAndRunsOnA40000PointPairFile) {
     EXPECT_EQ(summary.steps, 2);
     ASSERT_TRUE(fs::exists(fs::path(Path("run")) / "last" / kCheckpointJson)) << log.str();
 
-    // The "authors'" file: fc = the identity map without bias, so the method's translation is
-    // exactly the centroid offset.
-    const StateDict sd = {{"fc.weight", torch::eye(3)}};
-    const std::string pth = Path("centroid.pth");
-    std::ofstream(pth, std::ios::binary) << WriteTorchSaveZip(sd);
     ImportOptions import;
     import.from = "centroid-net";
-    const nlohmann::json imported = ImportAuthorsCheckpoint(pth, Path("imported"), import);
+    const nlohmann::json imported = ImportAuthorsCheckpoint(
+        WriteIdentityAuthorsFile(Path("centroid.pth")), Path("imported"), import);
     EXPECT_EQ(imported.at("config").at("bias"), false);
 
     // 40,000 points: the scale guard asks the method (near-linear), so the run goes ahead, while

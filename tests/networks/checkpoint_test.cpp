@@ -2,10 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include <signal.h>
 #include <stdlib.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -16,6 +14,7 @@
 #include "networks/zoo.hpp"
 #include "tests/testing/file_size_limit.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/kill_save.hpp"
 
 namespace regbench::networks {
 namespace {
@@ -178,20 +177,9 @@ TEST(Checkpoint, AKillAtEveryStepOfASaveLeavesALoadableCheckpoint) {
         const fs::path dir = TempDir("kill_" + std::to_string(k));
         const fs::path ck = dir / "ck";
         SaveCheckpoint(ck.string(), *a, {{"steps", 1}}, &opt);
-        const pid_t pid = fork();
-        if (pid == 0) {
-            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
-            try {
-                SaveCheckpoint(ck.string(), *b, {{"steps", 2}}, &opt);
-            } catch (...) {
-                _exit(3);
-            }
-            _exit(0);
-        }
-        int status = 0;
-        ASSERT_EQ(waitpid(pid, &status, 0), pid);
-        ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
-        EXPECT_EQ(WTERMSIG(status), SIGKILL);
+        const int status = testing::RunSaveKilledAtStep(
+            k, [&] { SaveCheckpoint(ck.string(), *b, {{"steps", 2}}, &opt); });
+        ASSERT_EQ(testing::NotKilledBySigkill(status), "");
         const int expected = k <= 4 ? 1 : 2;
         if (fs::exists(ck)) {
             EXPECT_EQ(LoadedSteps(ck, *a, *b), expected);
@@ -221,15 +209,9 @@ TEST(Checkpoint, RecoveryOfAFirstSaveKeepsOnlyAWholeFolder) {
         SCOPED_TRACE("killed after step " + std::to_string(k));
         const fs::path dir = TempDir("first_" + std::to_string(k));
         const fs::path ck = dir / "ck";
-        const pid_t pid = fork();
-        if (pid == 0) {
-            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
-            SaveCheckpoint(ck.string(), *net, {{"steps", 1}});
-            _exit(0);
-        }
-        int status = 0;
-        ASSERT_EQ(waitpid(pid, &status, 0), pid);
-        ASSERT_TRUE(WIFSIGNALED(status));
+        const int status = testing::RunSaveKilledAtStep(
+            k, [&] { SaveCheckpoint(ck.string(), *net, {{"steps", 1}}); });
+        ASSERT_EQ(testing::NotKilledBySigkill(status), "");
         EXPECT_FALSE(fs::exists(ck));
         EXPECT_TRUE(fs::exists(dir / "ck.tmp"));
         const std::string done = RecoverCheckpointFolder(ck.string());

@@ -62,11 +62,9 @@ TEST(ConfigBounds, SizesBeyondTheFamilysRangeAreRefusedNamingTheKey) {
 }
 
 TEST(ConfigBounds, ACheckpointWithASizeBeyondItsRangeIsRefusedNamingTheFile) {
-    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
-    ASSERT_NE(src, nullptr);
     const fs::path dir = testing::FreshTempDir("config_bounds");
     const fs::path ck = dir / "regtr";
-    fs::copy(fs::path(src) / "data" / "models" / "regtr", ck);
+    fs::copy(testing::ShippedModel("regtr"), ck);
     const fs::path json = ck / "checkpoint.json";
     nlohmann::json j = nlohmann::json::parse(testing::ReadBytes(json));
     j["config"]["d_embed"] = 4096;

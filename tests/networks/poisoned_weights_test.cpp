@@ -33,11 +33,6 @@ namespace fs = std::filesystem;
 
 using testing::ErrorOf;
 
-fs::path Shipped(const std::string& family) {
-    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
-    return fs::path(src != nullptr ? src : ".") / "data" / "models" / family;
-}
-
 /// The poisons and the words the refusal must use for each.
 const std::vector<std::pair<double, std::string>>& Poisons() {
     static const std::vector<std::pair<double, std::string>> p = {
@@ -60,7 +55,8 @@ TEST(PoisonedWeights, ImportRefusesThemNamingTheFileAndTheTensor) {
     torch::set_num_threads(1);
     const fs::path dir = testing::FreshTempDir("poisoned_import");
     for (const std::string family : {"rgm", "rienet", "regtr"}) {
-        const StateDict clean = ExportAuthorsStateDict(Shipped(family).string(), family);
+        const StateDict clean =
+            ExportAuthorsStateDict(testing::ShippedModel(family).string(), family);
         ImportOptions o;
         o.from = family;
         // The last floating tensor: deep in the network, after every shape check.
@@ -140,7 +136,7 @@ TEST(PoisonedWeights, ANonFiniteOutputIsAFailedCallForEveryFamily) {
     const auto [source, target] = SmallPair();
     for (const std::string family : {"deepgmr", "ogmm", "omnet", "rienet", "rgm", "regtr"}) {
         SCOPED_TRACE(family);
-        const auto net = LoadNetFromCheckpoint(Shipped(family).string());
+        const auto net = LoadNetFromCheckpoint(testing::ShippedModel(family).string());
         EXPECT_EQ(ErrorOf([&] { EstimatePair(*net, source, target, 1, 1); }), "");
         {
             torch::NoGradGuard no_grad;

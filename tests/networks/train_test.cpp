@@ -1,9 +1,7 @@
 #include "networks/training/train.hpp"
 
 #include <gtest/gtest.h>
-#include <signal.h>
 #include <stdlib.h>
-#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -22,6 +20,7 @@
 #include "networks/zoo.hpp"
 #include "synthetic_pairs.hpp"
 #include "tests/testing/files.hpp"
+#include "tests/testing/kill_save.hpp"
 
 namespace regbench::networks {
 namespace {
@@ -340,20 +339,11 @@ TEST_F(SmallTrain, AKillDuringACheckpointSaveResumesToTheUninterruptedRun) {
         SCOPED_TRACE("killed after step " + std::to_string(k) + " of the save of step 20");
         const fs::path dir = TempDir("kill_" + std::to_string(k));
         Train(config, data, Options(dir, log, 10));
-        const pid_t pid = fork();
-        if (pid == 0) {
-            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+        const int status = regbench::testing::RunSaveKilledAtStep(k, [&] {
             std::ostringstream quiet;
-            try {
-                Train(config, data, Options(dir, quiet, 0, kResume));
-            } catch (...) {
-                _exit(3);
-            }
-            _exit(0);
-        }
-        int status = 0;
-        ASSERT_EQ(waitpid(pid, &status, 0), pid);
-        ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
+            Train(config, data, Options(dir, quiet, 0, kResume));
+        });
+        ASSERT_EQ(regbench::testing::NotKilledBySigkill(status), "");
         // A row only ever describes a saved state: none for step 20 before last/ holds it.
         EXPECT_EQ(MetricSteps(dir), (std::vector<std::int64_t>{10}));
         const std::string plain =
@@ -379,16 +369,11 @@ TEST_F(SmallTrain, AFreshRunRecoversAFirstSaveAKillInterrupted) {
     for (const int k : {2, 4}) {
         SCOPED_TRACE("first save killed after step " + std::to_string(k));
         const fs::path dir = TempDir("first_save_" + std::to_string(k));
-        const pid_t pid = fork();
-        if (pid == 0) {
-            setenv("REGBENCH_TEST_KILL_SAVE_AT", std::to_string(k).c_str(), 1);
+        const int status = regbench::testing::RunSaveKilledAtStep(k, [&] {
             std::ostringstream quiet;
             Train(config, data, Options(dir, quiet, 10));
-            _exit(0);
-        }
-        int status = 0;
-        ASSERT_EQ(waitpid(pid, &status, 0), pid);
-        ASSERT_TRUE(WIFSIGNALED(status));
+        });
+        ASSERT_EQ(regbench::testing::NotKilledBySigkill(status), "");
         ASSERT_TRUE(fs::exists(dir / "last.tmp"));
         ASSERT_FALSE(fs::exists(dir / "last"));
         std::ostringstream rerun;

@@ -1,8 +1,10 @@
 #pragma once
-// File helpers the tests share: a fresh temporary folder, whole-file read and write, and the
-// message of an expected exception. Standard library only, so every test folder can use it.
+// File helpers the tests share: temporary folders, the shipped checkpoints, whole-file read and
+// write, and the message of an expected exception. Standard library only, so every test folder
+// can use it.
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -30,6 +32,21 @@ inline std::filesystem::path FreshTempDir(const std::string& name) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
+}
+
+/// TempPath(name) as a folder, created when missing and otherwise kept as it is: the scratch
+/// folder the tests of one file share in one process.
+inline std::filesystem::path TempFolder(const std::string& name) {
+    const std::filesystem::path dir = TempPath(name);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+/// The shipped checkpoint folder data/models/<model> of the source tree: under
+/// $REGBENCH_SOURCE_DIR (ctest sets it), else under the working folder.
+inline std::filesystem::path ShippedModel(const std::string& model) {
+    const char* src = std::getenv("REGBENCH_SOURCE_DIR");
+    return std::filesystem::path(src != nullptr ? src : ".") / "data" / "models" / model;
 }
 
 /// The whole file as bytes; empty if it cannot be opened.

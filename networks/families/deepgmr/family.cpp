@@ -116,12 +116,10 @@ ForwardCost Cost(const nlohmann::json& c, Int n, Int m) {
 }  // namespace
 
 NetworkFamily DeepGmrFamily() {
-    NetworkFamily f;
-    f.arch = "deepgmr";
-    f.summary = "DeepGMR (Yuan et al., ECCV 2020): learned GMM correspondences, closed-form pose";
-    BindModels(f, Models(), ToJson);
-    f.shipped_model = "deepgmr";
-    BindConfig<DeepGmrConfig, DeepGmrNet>(f);
+    NetworkFamily f = NetFamily<DeepGmrConfig, DeepGmrNet>(
+        "deepgmr",
+        "DeepGMR (Yuan et al., ECCV 2020): learned GMM correspondences, closed-form pose",
+        Models(), ToJson);
     f.forward_cost = Cost;
     f.methods = {
         {"deepgmr", true, "DeepGMR, OGMM paper's variant (DGCNN encoder) + Open3D ICP refinement",

@@ -61,23 +61,18 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
 }  // namespace
 
 NetworkFamily OmnetFamily() {
-    NetworkFamily f;
-    f.arch = "omnet";
-    f.summary =
+    NetworkFamily f = NetFamily<OmnetConfig, OmnetNet>(
+        "omnet",
         "OMNet (Xu et al., ICCV 2021): learned overlap masks, iterative global-feature pose "
-        "regression";
-    BindModels(f, Models(), ToJson);
-    f.shipped_model = "omnet";
-    BindConfig<OmnetConfig, OmnetNet>(f, OmnetForwardMacs);
+        "regression",
+        Models(), ToJson, OmnetForwardMacs);
     // Per-point convolutions and max-pooling: linear in N + M (no kNN, no N x M term).
     f.cost_class = CostClass::kNearLinear;
     f.methods = {
         {"omnet", false, "OMNet network alone (LibTorch, CPU batch 1), as the paper ran it",
          "OMNET"}};
-    auto authors = std::make_shared<AuthorsFormat>();
-    authors->module = "OMNet (hxwork/OMNet_Pytorch model/net.py)";
-    authors->infer_config = InferConfig;
-    f.authors = std::move(authors);
+    f.authors = std::make_shared<AuthorsFormat>(
+        AuthorsFormat{"OMNet (hxwork/OMNet_Pytorch model/net.py)", InferConfig});
     return f;
 }
 

@@ -89,25 +89,21 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
 }  // namespace
 
 NetworkFamily RegtrFamily() {
-    NetworkFamily f;
-    f.arch = "regtr";
-    f.summary =
+    NetworkFamily f = NetFamily<RegtrConfig, RegtrNet>(
+        "regtr",
         "REGTR (Yew and Lee, CVPR 2022): KPConv superpoints, cross-attention transformer, "
-        "regressed correspondences and weighted Kabsch";
-    BindModels(f, Models(), ToJson);
-    f.shipped_model = "regtr";
-    BindConfig<RegtrConfig, RegtrNet>(f, RegtrForwardMacs);
+        "regressed correspondences and weighted Kabsch",
+        Models(), ToJson, RegtrForwardMacs);
     // Attention over all superpoints of both clouds: O(N M).
     f.cost_class = CostClass::kQuadratic;
     f.methods = {{"regtr", false,
                   "REGTR network alone (LibTorch, CPU batch 1): regressed correspondences, "
                   "weighted Kabsch",
                   "REGTR"}};
-    auto authors = std::make_shared<AuthorsFormat>();
-    authors->module = "RegTR (yewzijian/RegTR src/models/regtr.py)";
-    authors->infer_config = InferConfig;
-    authors->settings = {{"nhead", 8, "attention heads (their nhead; no tensor stores it)"}};
-    f.authors = std::move(authors);
+    f.authors = std::make_shared<AuthorsFormat>(
+        AuthorsFormat{"RegTR (yewzijian/RegTR src/models/regtr.py)",
+                      InferConfig,
+                      {{"nhead", 8, "attention heads (their nhead; no tensor stores it)"}}});
     return f;
 }
 

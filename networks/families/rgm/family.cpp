@@ -60,24 +60,19 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
 }  // namespace
 
 NetworkFamily RgmFamily() {
-    NetworkFamily f;
-    f.arch = "rgm";
-    f.summary =
+    NetworkFamily f = NetFamily<RgmConfig, RgmNet>(
+        "rgm",
         "RGM (Fu et al., CVPR 2021): deep graph matching (DGCNN, transformer soft graphs, "
-        "Sinkhorn), linear assignment and SVD, two rounds both ways";
-    BindModels(f, Models(), ToJson);
-    f.shipped_model = "rgm";
-    BindConfig<RgmConfig, RgmNet>(f, RgmForwardMacs);
+        "Sinkhorn), linear assignment and SVD, two rounds both ways",
+        Models(), ToJson, RgmForwardMacs);
     // Transformer attention, soft adjacencies and the N x M correspondence: quadratic.
     f.cost_class = CostClass::kQuadratic;
     f.methods = {{"rgm", false,
                   "RGM network and its test-time assignment + SVD (LibTorch, CPU batch 1), as "
                   "the paper ran it",
                   "RGM"}};
-    auto authors = std::make_shared<AuthorsFormat>();
-    authors->module = "RGM (fukexue/RGM models/Net.py)";
-    authors->infer_config = InferConfig;
-    f.authors = std::move(authors);
+    f.authors = std::make_shared<AuthorsFormat>(
+        AuthorsFormat{"RGM (fukexue/RGM models/Net.py)", InferConfig});
     return f;
 }
 

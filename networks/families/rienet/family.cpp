@@ -46,61 +46,57 @@ nlohmann::json InferConfig(const StateDict& sd, const std::string& file,
 }  // namespace
 
 NetworkFamily RienetFamily() {
-    NetworkFamily f;
-    f.arch = "rienet";
-    f.summary =
+    NetworkFamily f = NetFamily<RienetConfig, RienetNet>(
+        "rienet",
         "RIENet (Shen et al., AAAI 2022): unsupervised, inlier evaluation of pseudo "
-        "correspondences, weighted SVD";
-    BindModels(f, Models(), ToJson);
-    f.shipped_model = "rienet";
-    BindConfig<RienetConfig, RienetNet>(f, RienetForwardMacs);
+        "correspondences, weighted SVD",
+        Models(), ToJson, RienetForwardMacs);
     f.cost_class = CostClass::kQuadratic;  // feature distances of all N x M pairs
     f.methods = {
         {"rienet", false, "RIENet network alone (LibTorch, CPU batch 1), no ICP", "RIENet"}};
-    auto authors = std::make_shared<AuthorsFormat>();
-    authors->module = "RIENET (supersyq/RIENet model.py)";
-    authors->infer_config = InferConfig;
     // Their config/*.yaml (supersyq/RIENet): list_k1 / list_k2 hold one value per iteration,
     // the same in every file, so one k and one k_nc here.
-    authors->settings = {{"k", 5, "DGCNN and inlier neighbourhood size (list_k1)"},
-                         {"k_nc", 5, "neighbourhood consensus size (list_k2)"},
-                         {"nn_margin", 0.7, "consensus margin (nn_margin)"},
-                         {"loss_margin", 0.01, "Huber threshold of the chamfer loss (loss_margin)"},
-                         {"keypoints", 256, "keypoints of the losses (n_keypoints)"},
-                         {"iterations", 3, "registration iterations (n_iters)"}};
-    authors->presets = {{"modelnet40",
-                         "config/train.yaml: ModelNet40, same and unseen categories (the defaults)",
-                         {{"k", 5},
-                          {"k_nc", 5},
-                          {"nn_margin", 0.7},
-                          {"loss_margin", 0.01},
-                          {"keypoints", 256},
-                          {"iterations", 3}}},
-                        {"7scenes",
-                         "config/train7.yaml: 7Scenes",
-                         {{"k", 8},
-                          {"k_nc", 8},
-                          {"nn_margin", 0.5},
-                          {"loss_margin", 0.01},
-                          {"keypoints", 768},
-                          {"iterations", 3}}},
-                        {"icl_nuim",
-                         "config/train-icl.yaml: ICL-NUIM",
-                         {{"k", 32},
-                          {"k_nc", 10},
-                          {"nn_margin", 0.5},
-                          {"loss_margin", 0.01},
-                          {"keypoints", 768},
-                          {"iterations", 3}}},
-                        {"kitti",
-                         "config/train-k.yaml: KITTI",
-                         {{"k", 32},
-                          {"k_nc", 8},
-                          {"nn_margin", 0.5},
-                          {"loss_margin", 0.0009},
-                          {"keypoints", 1024},
-                          {"iterations", 3}}}};
-    f.authors = std::move(authors);
+    f.authors = std::make_shared<AuthorsFormat>(AuthorsFormat{
+        "RIENET (supersyq/RIENet model.py)",
+        InferConfig,
+        {{"k", 5, "DGCNN and inlier neighbourhood size (list_k1)"},
+         {"k_nc", 5, "neighbourhood consensus size (list_k2)"},
+         {"nn_margin", 0.7, "consensus margin (nn_margin)"},
+         {"loss_margin", 0.01, "Huber threshold of the chamfer loss (loss_margin)"},
+         {"keypoints", 256, "keypoints of the losses (n_keypoints)"},
+         {"iterations", 3, "registration iterations (n_iters)"}},
+        {{"modelnet40",
+          "config/train.yaml: ModelNet40, same and unseen categories (the defaults)",
+          {{"k", 5},
+           {"k_nc", 5},
+           {"nn_margin", 0.7},
+           {"loss_margin", 0.01},
+           {"keypoints", 256},
+           {"iterations", 3}}},
+         {"7scenes",
+          "config/train7.yaml: 7Scenes",
+          {{"k", 8},
+           {"k_nc", 8},
+           {"nn_margin", 0.5},
+           {"loss_margin", 0.01},
+           {"keypoints", 768},
+           {"iterations", 3}}},
+         {"icl_nuim",
+          "config/train-icl.yaml: ICL-NUIM",
+          {{"k", 32},
+           {"k_nc", 10},
+           {"nn_margin", 0.5},
+           {"loss_margin", 0.01},
+           {"keypoints", 768},
+           {"iterations", 3}}},
+         {"kitti",
+          "config/train-k.yaml: KITTI",
+          {{"k", 32},
+           {"k_nc", 8},
+           {"nn_margin", 0.5},
+           {"loss_margin", 0.0009},
+           {"keypoints", 1024},
+           {"iterations", 3}}}}});
     return f;
 }
 
