@@ -10,6 +10,7 @@
 #include "core/kd_tree.hpp"
 #include "networks/families/regtr/kernels.hpp"
 #include "networks/family_config.hpp"
+#include "networks/layers/attention_rows.hpp"
 #include "networks/layers/layers.hpp"
 
 namespace regbench::networks {
@@ -290,6 +291,17 @@ torch::Tensor RegtrAttentionImpl::forward(const torch::Tensor& query, const torc
     const auto proj = [&](const torch::Tensor& x, int64_t i) {
         return F::linear(x, in_proj_weight.narrow(0, i * d, d), in_proj_bias.narrow(0, i * d, d));
     };
+    if (!torch::GradMode::is_enabled() && query.device().is_cpu()) {
+        // One pass a query row (networks/layers/attention_rows.hpp), the same products.
+        const torch::Tensor q = proj(query, 0).div_(std::sqrt(static_cast<double>(hd)));
+        const torch::Tensor k = proj(key, 1).contiguous(), v = proj(value, 2).contiguous();
+        torch::Tensor o = torch::empty({L, d}, q.options());
+        AT_DISPATCH_FLOATING_TYPES(q.scalar_type(), "regtr_attention", [&] {
+            AttentionRows(q.data_ptr<scalar_t>(), k.data_ptr<scalar_t>(), v.data_ptr<scalar_t>(), L,
+                          S, heads, d, o.data_ptr<scalar_t>());
+        });
+        return out_proj->forward(o);
+    }
     const torch::Tensor q =
         (proj(query, 0) / std::sqrt(static_cast<double>(hd))).view({L, heads, hd}).transpose(0, 1);
     const torch::Tensor k = proj(key, 1).view({S, heads, hd}).transpose(0, 1);
