@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "core/params.hpp"
-#include "networks/layers/attention_rows.hpp"
 #include "networks/layers/layers.hpp"
 #include "networks/families/rgm/assignment.hpp"
 #include "networks/families/rgm/kernels.hpp"
@@ -123,23 +122,6 @@ RgmAttentionImpl::RgmAttentionImpl(int64_t d, int64_t heads) : heads_(heads) {
 torch::Tensor RgmAttentionImpl::forward(const torch::Tensor& x, const torch::Tensor& memory) {
     const int64_t B = x.size(0), P = x.size(1), Q = memory.size(1), d = x.size(2);
     const int64_t dk = d / heads_;
-    if (!torch::GradMode::is_enabled() && x.device().is_cpu()) {
-        // One pass a query row (networks/layers/attention_rows.hpp), the same products.
-        const auto linear = [&](int i, const torch::Tensor& in) {
-            return linears_->ptr<nn::LinearImpl>(i)->forward(in).contiguous();
-        };
-        const torch::Tensor q = linear(0, x).div_(std::sqrt(static_cast<double>(dk)));
-        const torch::Tensor k = linear(1, memory), v = linear(2, memory);
-        torch::Tensor o = torch::empty({B, P, d}, q.options());
-        AT_DISPATCH_FLOATING_TYPES(q.scalar_type(), "rgm_attention", [&] {
-            for (int64_t b = 0; b < B; ++b) {
-                AttentionRows(q[b].data_ptr<scalar_t>(), k[b].data_ptr<scalar_t>(),
-                              v[b].data_ptr<scalar_t>(), P, Q, heads_, d,
-                              o[b].data_ptr<scalar_t>());
-            }
-        });
-        return linears_->ptr<nn::LinearImpl>(3)->forward(o);
-    }
     const auto project = [&](int i, const torch::Tensor& in, int64_t n) {
         return linears_->ptr<nn::LinearImpl>(i)->forward(in).view({B, n, heads_, dk}).transpose(1, 2);
     };
