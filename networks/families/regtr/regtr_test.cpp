@@ -200,6 +200,18 @@ TEST_F(RegtrTest, ForwardMatchesTheStandInAndTheImportReadsTheirFile) {
 
 // ---- training and odd inputs ----------------------------------------------------------------
 
+/// regtr-small's widths (networks/families/regtr/family.cpp): F = 64, d = 64, 4 heads, ff = 128,
+/// 2 layers.
+RegtrConfig SmallWidths() {
+    RegtrConfig c;
+    c.first_feats_dim = 64;
+    c.d_embed = 64;
+    c.nhead = 4;
+    c.d_feedforward = 128;
+    c.num_encoder_layers = 2;
+    return c;
+}
+
 RegtrConfig Tiny() {
     RegtrConfig c;
     c.first_feats_dim = 16;
@@ -310,13 +322,7 @@ TEST_F(RegtrTest, ForwardWithoutAutogradEqualsTheLibTorchComposition) {
     // double: every output of the inference path (fused kernels) against the same forward with
     // autograd on (the LibTorch composition throughout).
     torch::manual_seed(5);
-    RegtrConfig c;
-    c.first_feats_dim = 64;
-    c.d_embed = 64;
-    c.nhead = 4;
-    c.d_feedforward = 128;
-    c.num_encoder_layers = 2;
-    RegtrNet net(c);
+    RegtrNet net(SmallWidths());
     net.to(torch::kDouble);
     net.eval();
     PairBatch pair;
@@ -346,12 +352,7 @@ TEST_F(RegtrTest, MacsAreTheLayersProductsCountedByHand) {
     //  kpconv per cloud: 717 (15*50*1 + 15*1*32) + 2 * 717 (15*50*16 + 15*16*16)
     //                    + 700 (15*50*16 + 15*16*16) + 2 * 700 (15*50*32 + 15*32*32)
     //  feedforward: 2 layers * 2 * 64 * 128 * 1400.
-    RegtrConfig c;
-    c.first_feats_dim = 64;
-    c.d_embed = 64;
-    c.nhead = 4;
-    c.d_feedforward = 128;
-    c.num_encoder_layers = 2;
+    const RegtrConfig c = SmallWidths();
     const auto macs = RegtrForwardMacs(c, 717, 717);
     const int64_t kp = 717LL * (750 + 480) + 2 * 717LL * (12000 + 3840) + 700LL * (12000 + 3840) +
                        2 * 700LL * (24000 + 15360);
