@@ -200,27 +200,21 @@ TEST_F(RegtrTest, ForwardMatchesTheStandInAndTheImportReadsTheirFile) {
 
 // ---- training and odd inputs ----------------------------------------------------------------
 
-/// regtr-small's widths (networks/families/regtr/family.cpp): F = 64, d = 64, 4 heads, ff = 128,
-/// 2 layers.
-RegtrConfig SmallWidths() {
+/// A config of reduced widths, 2 layers: first_feats_dim F, d_embed d, heads, d_feedforward ff.
+RegtrConfig Widths(int F, int d, int heads, int ff) {
     RegtrConfig c;
-    c.first_feats_dim = 64;
-    c.d_embed = 64;
-    c.nhead = 4;
-    c.d_feedforward = 128;
+    c.first_feats_dim = F;
+    c.d_embed = d;
+    c.nhead = heads;
+    c.d_feedforward = ff;
     c.num_encoder_layers = 2;
     return c;
 }
 
-RegtrConfig Tiny() {
-    RegtrConfig c;
-    c.first_feats_dim = 16;
-    c.d_embed = 12;
-    c.nhead = 2;
-    c.d_feedforward = 16;
-    c.num_encoder_layers = 2;
-    return c;
-}
+/// regtr-small's widths (networks/families/regtr/family.cpp).
+RegtrConfig SmallWidths() { return Widths(64, 64, 4, 128); }
+
+RegtrConfig Tiny() { return Widths(16, 12, 2, 16); }
 
 torch::Tensor Patch(int64_t n, double phase) {
     const torch::Tensor u = torch::linspace(-0.2, 0.2, n, torch::kFloat);
