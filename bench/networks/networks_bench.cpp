@@ -1,17 +1,21 @@
 // Learned networks against their multiply-accumulate floor (docs/performance.md, section 4).
 // BM_OgmmForward / BM_DeepGmrForward: one batch-1 forward (no gradient, eval mode) per
 // iteration, for the named configs and OGMM's full-attention variant (paper Tab. 6 "c" vs "f").
-// BM_RienetForward: RIENet (networks/families/rienet/net.hpp, the authors' ModelNet40 config), the same way; its
-// MACs from RienetForwardMacs. BM_OmnetForward: OMNet
-// (networks/families/omnet/net.hpp) at the authors' widths and omnet-small's. BM_RgmForward: RGM (networks/families/rgm/net.hpp)
-// at the authors' widths and rgm-small's, the whole test-time pipeline (four matches, their
-// assignments and SVDs); BM_RgmAssignment: the assignment alone on a points x points matrix
-// (not in the MACs: the part of the pipeline the GEMM floor does not bound).
-// BM_RegtrForward: REGTR (networks/families/regtr/net.hpp) with the authors' ModelNet config and regtr-small's.
-// BM_OgmmTrainStep / BM_DeepGmrTrainStep: one training step (train mode: forward, loss,
-// backward, Adam) on a batch of 8 pairs, the shipped recipes' batch.
-// Network only: no ICP (the methods' time, ICP included, is BM_Align/ogmm, BM_Align/deepgmr).
-// Counters, all in CPU time of the calling thread (one torch thread):
+// BM_RienetForward: RIENet (networks/families/rienet/net.hpp, the authors' ModelNet40 config), the
+// same way; its MACs from RienetForwardMacs. BM_OmnetForward: OMNet
+// (networks/families/omnet/net.hpp) at the authors' widths and omnet-small's. BM_RgmForward: RGM
+// (networks/families/rgm/net.hpp) at the authors' widths and rgm-small's, the whole test-time
+// pipeline (four matches, their assignments and SVDs); BM_RgmAssignment: the assignment alone on a
+// points x points matrix (not in the MACs: the part of the pipeline the GEMM floor does not bound).
+// BM_RegtrForward: REGTR (networks/families/regtr/net.hpp) with the authors' ModelNet config and
+// regtr-small's. BM_ShippedForward/rgm_small, /regtr_small: the shipped checkpoints
+// (data/models/rgm, data/models/regtr, what `reproduce` runs) on the same pair; with untrained
+// weights RGM's correspondences are near uniform and its assignment (no MACs) slow, with the
+// shipped ones as in a run (docs/performance.md, "RGM against its floor"). BM_OgmmTrainStep /
+// BM_DeepGmrTrainStep: one training step (train mode: forward, loss, backward, Adam) on a batch of
+// 8 pairs, the shipped recipes' batch. Network only: no ICP (the methods' time, ICP included, is
+// BM_Align/ogmm, BM_Align/deepgmr). Counters, all in CPU time of the calling thread (one torch
+// thread):
 //   MACs       analytic multiply-accumulates of the timed work (networks/cost.hpp; a training step
 //              counts forward + backward as 3 x the forward, the usual convention)
 //   GMAC_per_s rate of a 717x512 by 512x512 fp32 torch::mm, timed interleaved with the network
@@ -25,6 +29,7 @@
 #include <utility>
 
 #include "core/cpu_time.hpp"
+#include "networks/checkpoint/checkpoint.hpp"
 #include "networks/cost.hpp"
 #include "networks/families/ogmm/net.hpp"
 #include "networks/families/rgm/assignment.hpp"
@@ -93,7 +98,8 @@ void TimeForward(benchmark::State& state, networks::RegistrationNet& net,
     const int64_t points = state.range(0);
     const networks::PairBatch pair = RandomBatch(1, points);
     torch::NoGradGuard no_grad;
-    const auto macs = static_cast<double>(networks::ComputeForwardCost(config, points, points).total);
+    const auto macs =
+        static_cast<double>(networks::ComputeForwardCost(config, points, points).total);
     TimeAgainstGemm(state, macs, [&] {
         torch::manual_seed(1);  // same FPS starts every iteration
         const networks::NetOutput out = net.Forward(pair);
@@ -139,6 +145,16 @@ void BM_ZooForward(benchmark::State& state, const std::string& name) {
     torch::set_num_threads(static_cast<int>(state.range(1)));
     const nlohmann::json config = networks::NamedConfig(name);
     TimeForward(state, *networks::MakeNetFromConfig(config), config);
+}
+
+/// A shipped checkpoint's forward (data/models/<dir>, the weights `reproduce` runs), on the same
+/// uniform pair: the trained weights make the data-dependent work (RGM's assignment) what it is
+/// in a run, where the untrained ones make it near uniform and slow.
+void BM_ShippedForward(benchmark::State& state, const std::string& dir) {
+    torch::set_num_threads(static_cast<int>(state.range(1)));
+    const std::string path = std::string(REGBENCH_SOURCE_DIR) + "/data/models/" + dir;
+    const nlohmann::json config = networks::CheckpointNetConfig(path);
+    TimeForward(state, *networks::LoadNetFromCheckpoint(path), config);
 }
 
 void BM_RienetForward(benchmark::State& state) {
@@ -227,6 +243,11 @@ const bool kRegistered = [] {
                                                BM_ZooForward, std::string(config)));
     }
     Configure(benchmark::RegisterBenchmark("BM_RgmAssignment", BM_RgmAssignment));
+    // The shipped rgm-small and regtr-small checkpoints (data/models/rgm, data/models/regtr).
+    for (const auto& [label, dir] : {std::pair{"BM_ShippedForward/rgm_small", "rgm"},
+                                     {"BM_ShippedForward/regtr_small", "regtr"}}) {
+        Configure(benchmark::RegisterBenchmark(label, BM_ShippedForward, std::string(dir)));
+    }
     // REGTR: the authors' ModelNet model (11.5 M parameters) and the shipped regtr-small.
     for (const auto& [label, config] :
          {std::pair{"regtr", "regtr"}, {"regtr_small", "regtr-small"}}) {

@@ -8,7 +8,9 @@
 #include <tuple>
 
 #include "core/kd_tree.hpp"
+#include "networks/families/regtr/kernels.hpp"
 #include "networks/family_config.hpp"
+#include "networks/layers/attention_rows.hpp"
 #include "networks/layers/layers.hpp"
 
 namespace regbench::networks {
@@ -204,6 +206,25 @@ RegtrKpconvImpl::RegtrKpconvImpl(int64_t in, int64_t out, double radius, double 
 torch::Tensor RegtrKpconvImpl::forward(const torch::Tensor& q, const torch::Tensor& s,
                                        const torch::Tensor& nb, const torch::Tensor& x) {
     const int64_t Q = q.size(0), H = nb.size(1), K = weights.size(0), C = x.size(1);
+    if (!torch::GradMode::is_enabled() && q.device().is_cpu()) {
+        // The fused loop (kernels.hpp): the same sums, no [Q, H, K, 3] or [Q, H, C] temporaries
+        // and one pass instead of Q small batched products.
+        const torch::Tensor qc = q.contiguous(), sc = s.contiguous(), xc = x.contiguous();
+        const torch::Tensor nbc = nb.to(torch::kLong).contiguous();
+        const torch::Tensor kp = kernel_points.to(q.dtype()).contiguous();
+        // The authors count the neighbours whose features sum to more than 0.
+        const torch::Tensor positive = (xc.sum(1) > 0).contiguous();
+        torch::Tensor sums = torch::empty({Q, K, C}, x.options());
+        torch::Tensor count = torch::empty({Q}, x.options());
+        AT_DISPATCH_FLOATING_TYPES(x.scalar_type(), "regtr_kpconv", [&] {
+            KpconvNeighbourSums(qc.data_ptr<scalar_t>(), Q, sc.data_ptr<scalar_t>(), s.size(0),
+                                nbc.data_ptr<int64_t>(), H, kp.data_ptr<scalar_t>(), K, extent,
+                                xc.data_ptr<scalar_t>(), C, positive.data_ptr<bool>(),
+                                sums.data_ptr<scalar_t>(), count.data_ptr<scalar_t>());
+        });
+        return torch::matmul(sums.view({Q, K * C}), weights.reshape({K * C, weights.size(2)}))
+            .div_(count.unsqueeze(1));
+    }
     // Neighbour offsets [Q, H, 3]; the shadow point sits at 1e6 (weight 0).
     const torch::Tensor nbr = GatherShadow(s, nb, 1e6) - q.unsqueeze(1);
     const torch::Tensor diff = nbr.unsqueeze(2) - kernel_points.to(q.dtype());  // [Q, H, K, 3]
@@ -270,6 +291,17 @@ torch::Tensor RegtrAttentionImpl::forward(const torch::Tensor& query, const torc
     const auto proj = [&](const torch::Tensor& x, int64_t i) {
         return F::linear(x, in_proj_weight.narrow(0, i * d, d), in_proj_bias.narrow(0, i * d, d));
     };
+    if (!torch::GradMode::is_enabled() && query.device().is_cpu()) {
+        // One pass a query row (networks/layers/attention_rows.hpp), the same products.
+        const torch::Tensor q = proj(query, 0).div_(std::sqrt(static_cast<double>(hd)));
+        const torch::Tensor k = proj(key, 1).contiguous(), v = proj(value, 2).contiguous();
+        torch::Tensor o = torch::empty({L, d}, q.options());
+        AT_DISPATCH_FLOATING_TYPES(q.scalar_type(), "regtr_attention", [&] {
+            AttentionRows(q.data_ptr<scalar_t>(), k.data_ptr<scalar_t>(), v.data_ptr<scalar_t>(), L,
+                          S, heads, d, o.data_ptr<scalar_t>());
+        });
+        return out_proj->forward(o);
+    }
     const torch::Tensor q =
         (proj(query, 0) / std::sqrt(static_cast<double>(hd))).view({L, heads, hd}).transpose(0, 1);
     const torch::Tensor k = proj(key, 1).view({S, heads, hd}).transpose(0, 1);

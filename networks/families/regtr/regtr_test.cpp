@@ -200,15 +200,21 @@ TEST_F(RegtrTest, ForwardMatchesTheStandInAndTheImportReadsTheirFile) {
 
 // ---- training and odd inputs ----------------------------------------------------------------
 
-RegtrConfig Tiny() {
+/// A config of reduced widths, 2 layers: first_feats_dim F, d_embed d, heads, d_feedforward ff.
+RegtrConfig Widths(int F, int d, int heads, int ff) {
     RegtrConfig c;
-    c.first_feats_dim = 16;
-    c.d_embed = 12;
-    c.nhead = 2;
-    c.d_feedforward = 16;
+    c.first_feats_dim = F;
+    c.d_embed = d;
+    c.nhead = heads;
+    c.d_feedforward = ff;
     c.num_encoder_layers = 2;
     return c;
 }
+
+/// regtr-small's widths (networks/families/regtr/family.cpp).
+RegtrConfig SmallWidths() { return Widths(64, 64, 4, 128); }
+
+RegtrConfig Tiny() { return Widths(16, 12, 2, 16); }
 
 torch::Tensor Patch(int64_t n, double phase) {
     const torch::Tensor u = torch::linspace(-0.2, 0.2, n, torch::kFloat);
@@ -259,18 +265,88 @@ TEST_F(RegtrTest, TinyAndUnequalCloudsGiveATransform) {
     EXPECT_THROW(net.Forward(bad), std::invalid_argument);
 }
 
+// ---- the fused inference kernels (kernels.hpp) against the LibTorch composition ---------------
+
+/// One KPConv both ways: with autograd (the LibTorch composition) and without (the fused loop).
+std::pair<torch::Tensor, torch::Tensor> KpconvBothWays(RegtrKpconv& conv, const torch::Tensor& q,
+                                                       const torch::Tensor& s,
+                                                       const torch::Tensor& nb,
+                                                       const torch::Tensor& x) {
+    torch::Tensor composed;
+    {
+        torch::AutoGradMode grad(true);
+        composed = conv->forward(q, s, nb, x).detach();
+    }
+    torch::NoGradGuard no_grad;
+    return {composed, conv->forward(q, s, nb, x)};
+}
+
+TEST_F(RegtrTest, FusedKpconvEqualsTheLibTorchComposition) {
+    // Random clouds, radius neighbours with shadow columns (rows not full), features of mixed
+    // sign (some rows sum to <= 0 and are not counted), a strided case (queries != supports) and
+    // the first block's single channel. Reference: the LibTorch composition of the same module
+    // (gathers, [Q, H, K, 3] influences, bmm, kernel GEMM), run with autograd on.
+    torch::manual_seed(11);
+    for (const auto dtype : {torch::kDouble, torch::kFloat}) {
+        SCOPED_TRACE(dtype == torch::kDouble ? "double" : "float");
+        const double tol = dtype == torch::kDouble ? 1e-12 : 2e-5;
+        const torch::Tensor s = (torch::rand({300, 3}, torch::kDouble) - 0.5).to(dtype);
+        const torch::Tensor q = s.index({Slice(0, 120)}).clone();
+        for (const auto& [in, nb] :
+             {std::pair<int64_t, torch::Tensor>{1, RadiusNeighbors(s, s, 0.15, 50)},
+              {16, RadiusNeighbors(q, s, 0.15, 12)},
+              {16, RadiusNeighbors(s, s, 0.2, 50)}}) {
+            RegtrKpconv conv(in, 8, 0.15, 0.1);
+            conv->to(dtype);
+            const torch::Tensor x =
+                in == 1 ? torch::ones({300, 1}, dtype) : torch::randn({300, in}, dtype);
+            const torch::Tensor qq = nb.size(0) == q.size(0) ? q : s;
+            ASSERT_TRUE((nb == s.size(0)).any().item<bool>());  // some shadow entries
+            const auto [want, got] = KpconvBothWays(conv, qq, s, nb, x);
+            ASSERT_EQ(got.sizes(), want.sizes());
+            const double scale = want.abs().max().item<double>();
+            EXPECT_GT(scale, 0.0);
+            EXPECT_LT((got - want).abs().max().item<double>(), tol * scale);
+        }
+    }
+}
+
+TEST_F(RegtrTest, ForwardWithoutAutogradEqualsTheLibTorchComposition) {
+    // A regtr-small-like network (widths / 8, d 64, 4 heads, 2 layers) on 400 + 350 points, in
+    // double: every output of the inference path (fused kernels) against the same forward with
+    // autograd on (the LibTorch composition throughout).
+    torch::manual_seed(5);
+    RegtrNet net(SmallWidths());
+    net.to(torch::kDouble);
+    net.eval();
+    PairBatch pair;
+    pair.source = (torch::rand({1, 400, 3}, torch::kDouble) - 0.5);
+    pair.target = (torch::rand({1, 350, 3}, torch::kDouble) - 0.5);
+    NetOutput composed;
+    {
+        torch::AutoGradMode grad(true);
+        composed = net.Forward(pair);
+    }
+    torch::NoGradGuard no_grad;
+    const NetOutput fused = net.Forward(pair);
+    EXPECT_LT((fused.T - composed.T).abs().max().item<double>(), 1e-9);
+    for (const auto& [key, want] : composed.aux) {
+        SCOPED_TRACE(key);
+        const torch::Tensor got = fused.aux.at(key);
+        ASSERT_EQ(got.sizes(), want.sizes());
+        EXPECT_LT(
+            (got.to(torch::kDouble) - want.detach().to(torch::kDouble)).abs().max().item<double>(),
+            1e-9);
+    }
+}
+
 TEST_F(RegtrTest, MacsAreTheLayersProductsCountedByHand) {
     // regtr-small-like widths F = 64, d = 64, ff = 128, 2 layers on 717 + 717 points (700
     // superpoints each), neighbours 50, 15 kernel points, by hand:
     //  kpconv per cloud: 717 (15*50*1 + 15*1*32) + 2 * 717 (15*50*16 + 15*16*16)
     //                    + 700 (15*50*16 + 15*16*16) + 2 * 700 (15*50*32 + 15*32*32)
     //  feedforward: 2 layers * 2 * 64 * 128 * 1400.
-    RegtrConfig c;
-    c.first_feats_dim = 64;
-    c.d_embed = 64;
-    c.nhead = 4;
-    c.d_feedforward = 128;
-    c.num_encoder_layers = 2;
+    const RegtrConfig c = SmallWidths();
     const auto macs = RegtrForwardMacs(c, 717, 717);
     const int64_t kp = 717LL * (750 + 480) + 2 * 717LL * (12000 + 3840) + 700LL * (12000 + 3840) +
                        2 * 700LL * (24000 + 15360);
