@@ -60,6 +60,7 @@ struct LearnedOptions {
     double icp_max_correspondence_distance = 0.07;  ///< ICP refinement radius
     int icp_max_iterations = 30;                    ///< ICP iterations
     bool normalize = true;  ///< PairNormalization: pairs outside the training frame mapped in
+    double data_unit = 1.0;  ///< data length of one training-frame unit [unit-sphere units]
 
     template <class F>
     void Fields(F&& f) {
@@ -71,6 +72,10 @@ struct LearnedOptions {
           "millimetres, a scan in its camera frame) into the unit sphere (both clouds minus the "
           "source's centroid, over its radius) and the estimate back (docs/learned-methods.md); "
           "false: the data as given");
+        f("data_unit", data_unit,
+          "the data's length of one unit of the training frame [unit-sphere units]; `run` sets "
+          "it from the pair file's scale (150 for `generate --scale 150`), so a scaled copy of a "
+          "pair is divided by it and runs as the unit pair; used when normalize is true");
         if constexpr (kIcp) {
             f("icp_max_correspondence_distance", icp_max_correspondence_distance,
               "ICP refinement radius; 0.07 = 2 * overlap_radius of the OGMM code");
@@ -78,6 +83,7 @@ struct LearnedOptions {
         }
     }
     void Validate(ParamCheck& c) const {
+        c.Above("data_unit", data_unit, 0.0);
         if constexpr (kIcp) {
             c.Above("icp_max_correspondence_distance", icp_max_correspondence_distance, 0.0);
             c.AtLeast("icp_max_iterations", icp_max_iterations, 1);
@@ -126,7 +132,7 @@ public:
           icp_(kIcp),
           params_(ParamsToJson(options)),  // "" = shipped; the path used is in each row's extra
           options_{options.checkpoint, options.icp_max_correspondence_distance,
-                   options.icp_max_iterations, options.normalize},
+                   options.icp_max_iterations, options.normalize, options.data_unit},
           inference_(inference.overrides) {
         params_.update(inference.all);
         checkpoint_ =
@@ -159,7 +165,8 @@ protected:
         // The whole method (network and ICP) runs on the normalised pair; the estimate is
         // mapped back at the end.
         const PairNormalization frame =
-            options_.normalize ? NormalizationOf(data_source, data_target) : PairNormalization{};
+            options_.normalize ? NormalizationOf(data_source, data_target, options_.data_unit)
+                               : PairNormalization{};
         const PointCloud source = NormalizeCloud(data_source, frame);
         const PointCloud target = NormalizeCloud(data_target, frame);
         if (frame.applied) {
@@ -246,6 +253,7 @@ private:
         double icp_max_correspondence_distance;
         int icp_max_iterations;
         bool normalize;
+        double data_unit;
     };
 
     std::string name_;

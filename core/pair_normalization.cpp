@@ -4,13 +4,20 @@
 
 namespace regbench {
 
-PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& target) {
+PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& target,
+                                  double data_unit) {
     PairNormalization n;
-    const double limit2 = kTrainingFrameRadius * kTrainingFrameRadius;
-    const auto inside = [limit2](const PointCloud& c) {
-        return c.rows() == 0 || c.rowwise().squaredNorm().maxCoeff() <= limit2;
+    const double limit = kTrainingFrameRadius * data_unit;
+    const auto inside = [limit](const PointCloud& c) {
+        return c.rows() == 0 || c.rowwise().squaredNorm().maxCoeff() <= limit * limit;
     };
-    if (source.rows() == 0 || (inside(source) && inside(target))) return n;
+    if (source.rows() == 0) return n;
+    if (inside(source) && inside(target)) {
+        // (x - 0) / data_unit: the unit pair this scaled copy is
+        n.applied = data_unit != 1.0;
+        n.scale = data_unit;
+        return n;
+    }
     n.applied = true;
     n.centre = source.colwise().mean().transpose();
     const double radius =

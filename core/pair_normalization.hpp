@@ -29,10 +29,14 @@ struct PairNormalization {
 /// Radius of the ball about the origin that the training pairs' clouds lie in (1 + 0.5 * sqrt 3
 /// + the noise clip, rounded up).
 inline constexpr double kTrainingFrameRadius = 2.0;
-/// The normalisation of (source, target): unchanged when every point of both lies within
-/// kTrainingFrameRadius of the origin (or the source is empty), else the source's centroid and
-/// radius (1 for a source of coincident points).
-PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& target);
+/// The normalisation of (source, target) whose length unit is `data_unit` data units (the pair
+/// file's scale: 150 for `generate --scale 150`, 1 for the paper's unit-sphere pairs): when every
+/// point of both lies within kTrainingFrameRadius * data_unit of the origin (or the source is
+/// empty), the pair is divided by data_unit (unchanged when it is 1), so a scaled copy of a pair
+/// runs as the unit pair does; else the source's centroid and radius (1 for a source of
+/// coincident points).
+PairNormalization NormalizationOf(const PointCloud& source, const PointCloud& target,
+                                  double data_unit = 1.0);
 /// (x - centre) / scale for every point; `cloud` itself when !n.applied.
 PointCloud NormalizeCloud(const PointCloud& cloud, const PairNormalization& n);
 /// The data-frame transform of an estimate `T_normalized` = (R', t') made on normalised clouds:

@@ -133,6 +133,25 @@ TEST(Learned, NormalisationMapsOnlyPairsOutsideTheTrainingFrame) {
     EXPECT_TRUE(mm.applied);
 }
 
+// With the pair file's scale as data_unit (150: `generate --scale 150`), the millimetre copy of
+// a unit pair is divided by 150 and nothing else (hand derivation: (150 x - 0) / 150 = x), so the
+// network sees the unit pair up to rounding; a scan outside 2 * 150 still gets the source's
+// centroid and radius, the same similarity as without data_unit.
+TEST(Learned, DataUnitDividesAScaledCopyBackToTheUnitPair) {
+    const auto pair = testing::CleanCompletePair(20.0);
+    const PairNormalization n = NormalizationOf(150.0 * pair.source, 150.0 * pair.target, 150.0);
+    ASSERT_TRUE(n.applied);
+    EXPECT_EQ(n.scale, 150.0);
+    EXPECT_EQ(n.centre, Eigen::Vector3d::Zero());
+    EXPECT_LT((NormalizeCloud(150.0 * pair.source, n) - pair.source).cwiseAbs().maxCoeff(), 1e-15);
+    const PointCloud far = (150.0 * pair.source).rowwise() + Eigen::RowVector3d(0.0, 0.0, 390.0);
+    const PairNormalization f = NormalizationOf(far, 150.0 * pair.target, 150.0);
+    const PairNormalization f1 = NormalizationOf(far, 150.0 * pair.target);
+    EXPECT_TRUE(f.applied);
+    EXPECT_EQ(f.scale, f1.scale);
+    EXPECT_EQ(f.centre, f1.centre);
+}
+
 // A scaled and shifted copy of a pair (x -> a x + d on both clouds) normalises to the same
 // clouds, so each learned method returns the same R and t' = a t + (I - R) d (from
 // y = R x + t: a y + d = R (a x + d) + a t + d - R d); a pair inside the training frame runs
