@@ -52,6 +52,7 @@ struct FgrOptions {
     bool tuple_test = true;          ///< run the tuple (geometric consistency) test
     int seed = 0;  ///< seed for Open3D's global RNG, set right before each call (tuple sampling)
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    double scale_rule_radius = kScaleRuleReferenceRadius;  ///< [unit-sphere units]
 
     template <class F>
     void Fields(F&& f) {
@@ -91,9 +92,13 @@ struct FgrOptions {
           "\"auto\": voxel_size scaled by the pair's unit (RMS radius / 0.6 when outside [0.5, "
           "2], else 1) and voxel downsampling when a cloud has > 2048 points "
           "(docs/performance.md); used values in extra.resolved; \"preset\": as given");
+        f("scale_rule_radius", scale_rule_radius,
+          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
+          "unit-sphere object (docs/performance.md, section 4)");
     }
     void Validate(ParamCheck& c) const {
         c.Above("voxel_size", voxel_size, 0.0);
+        c.Above("scale_rule_radius", scale_rule_radius, 0.0);
         c.Above("normal_radius_voxels", normal_radius_voxels, 0.0);
         c.AtLeast("normal_max_nn", normal_max_nn, 3);
         c.Above("fpfh_radius_voxels", fpfh_radius_voxels, 0.0);
@@ -129,7 +134,7 @@ std::shared_ptr<open3d::pipelines::registration::Feature> Fpfh(
 AlignResult AlignFgr(const FgrOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& context) {
     namespace o3r = open3d::pipelines::registration;
-    const ScaleRule rule = ResolveScaleRule(source, target);
+    const ScaleRule rule = ResolveScaleRule(source, target, o.scale_rule_radius);
     const bool automatic = o.scale_rule == ScaleRuleMode::kAuto;
     const double voxel = o.voxel_size * (automatic ? rule.unit : 1.0);
     const bool downsample = o.voxel_downsample || (automatic && rule.dense);

@@ -31,6 +31,7 @@ struct GicpOptions {
     double translation_gradient_tolerance = 0.01;  ///< BFGS translation gradient stop
     double rotation_gradient_tolerance = 0.01;     ///< BFGS rotation gradient stop
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    double scale_rule_radius = kScaleRuleReferenceRadius;  ///< [unit-sphere units]
 
     template <class F>
     void Fields(F&& f) {
@@ -60,9 +61,13 @@ struct GicpOptions {
           "transformation_epsilon times u, the gradient stops times u (translation) and u^2 "
           "(rotation: the cost is a squared length), used values in extra.resolved; "
           "\"preset\": as given");
+        f("scale_rule_radius", scale_rule_radius,
+          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
+          "unit-sphere object (docs/performance.md, section 4)");
     }
     void Validate(ParamCheck& c) const {
         c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);
+        c.Above("scale_rule_radius", scale_rule_radius, 0.0);
         c.AtLeast("max_iterations", max_iterations, 1);
         c.Above("transformation_epsilon", transformation_epsilon, 0.0);
         c.Above("rotation_epsilon", rotation_epsilon, 0.0);
@@ -94,7 +99,7 @@ AlignResult AlignGicp(const GicpOptions& o, const PointCloud& source, const Poin
                                     std::to_string(source.rows()) + ", target " +
                                     std::to_string(target.rows()));
     }
-    const ScaleRule rule = ResolveScaleRule(source, target);
+    const ScaleRule rule = ResolveScaleRule(source, target, o.scale_rule_radius);
     const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
     const double distance = o.max_correspondence_distance * unit;
     CountingGicp gicp;

@@ -14,6 +14,7 @@ namespace {
 /// Open3dIcpOptions base (baselines/open3d_adapter.hpp).
 struct IcpOptions : Open3dIcpOptions {
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    double scale_rule_radius = kScaleRuleReferenceRadius;  ///< [unit-sphere units]
 
     template <class F>
     void Fields(F&& f) {
@@ -26,6 +27,9 @@ struct IcpOptions : Open3dIcpOptions {
           "\"auto\": max_correspondence_distance is scaled by the pair's unit (RMS radius / 0.6 "
           "when outside [0.5, 2], else 1: unit-sphere objects keep the preset; "
           "docs/performance.md), the value used is in extra.resolved; \"preset\": as given");
+        f("scale_rule_radius", scale_rule_radius,
+          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
+          "unit-sphere object (docs/performance.md, section 4)");
         f("relative_fitness", relative_fitness,
           "stop when the fitness change is below this (and the RMSE change too); 1e-6 = "
           "Open3D default");
@@ -33,12 +37,16 @@ struct IcpOptions : Open3dIcpOptions {
           "stop when the inlier-RMSE change is below this (and the fitness change too) "
           "[unit-sphere units]: Open3D compares the absolute change; 1e-6 = Open3D default");
     }
+    void Validate(ParamCheck& c) const {
+        Open3dIcpOptions::Validate(c);
+        c.Above("scale_rule_radius", scale_rule_radius, 0.0);
+    }
 };
 
 AlignResult AlignIcp(const IcpOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& /*context*/) {
     namespace o3r = open3d::pipelines::registration;
-    const ScaleRule rule = ResolveScaleRule(source, target);
+    const ScaleRule rule = ResolveScaleRule(source, target, o.scale_rule_radius);
     const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
     const double distance = o.max_correspondence_distance * unit;
     AlignResult result = RunOpen3dIcp(

@@ -17,6 +17,7 @@ struct IcpPlOptions : Open3dIcpOptions {
     double normal_radius = 0.1;  ///< target-normal neighbourhood radius
     int normal_max_nn = 30;      ///< neighbour cap per normal
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    double scale_rule_radius = kScaleRuleReferenceRadius;  ///< [unit-sphere units]
 
     template <class F>
     void Fields(F&& f) {
@@ -38,9 +39,13 @@ struct IcpPlOptions : Open3dIcpOptions {
           "\"auto\": as `icp`, max_correspondence_distance and normal_radius scaled by the "
           "pair's unit (RMS radius / 0.6 when outside [0.5, 2], else 1; docs/performance.md), "
           "the values used in extra.resolved; \"preset\": as given");
+        f("scale_rule_radius", scale_rule_radius,
+          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
+          "unit-sphere object (docs/performance.md, section 4)");
     }
     void Validate(ParamCheck& c) const {
         Open3dIcpOptions::Validate(c);
+        c.Above("scale_rule_radius", scale_rule_radius, 0.0);
         c.Above("normal_radius", normal_radius, 0.0);
         c.AtLeast("normal_max_nn", normal_max_nn, 3);
     }
@@ -51,7 +56,7 @@ AlignResult AlignIcpPl(const IcpPlOptions& o, const PointCloud& source, const Po
     namespace o3r = open3d::pipelines::registration;
     // Point-to-plane (Chen & Medioni 1992) minimises distances along the target's normals,
     // so only the target needs them.
-    const ScaleRule rule = ResolveScaleRule(source, target);
+    const ScaleRule rule = ResolveScaleRule(source, target, o.scale_rule_radius);
     const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
     const double distance = o.max_correspondence_distance * unit;
     open3d::geometry::PointCloud target_o3d = ToOpen3d(target);

@@ -18,6 +18,7 @@ struct NdtOptions {
     double resolution = 0.25;                         ///< target voxel side [unit-sphere units]
     int min_points_per_voxel = 6;                     ///< cells with fewer points are dropped
     ScaleRuleMode scale_rule = ScaleRuleMode::kAuto;  ///< "auto" or "preset"
+    double scale_rule_radius = kScaleRuleReferenceRadius;  ///< [unit-sphere units]
     double step_size = 0.1;                           ///< More-Thuente maximum step length
     double outlier_ratio = 0.55;                      ///< uniform outlier weight of the NDT mixture
     int max_iterations = 35;                          ///< Newton iteration cap
@@ -37,6 +38,9 @@ struct NdtOptions {
           "\"auto\": resolution and step_size scaled by the pair's unit u (RMS radius / 0.6 "
           "when outside [0.5, 2], else 1; docs/performance.md), transformation_epsilon (a "
           "squared length) by u^2, used values in extra.resolved; \"preset\": as given");
+        f("scale_rule_radius", scale_rule_radius,
+          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
+          "unit-sphere object (docs/performance.md, section 4)");
         f("step_size", step_size,
           "More-Thuente maximum step length [unit-sphere units]; 0.1 = PCL default");
         f("outlier_ratio", outlier_ratio,
@@ -52,6 +56,7 @@ struct NdtOptions {
     }
     void Validate(ParamCheck& c) const {
         c.Above("resolution", resolution, 0.0);
+        c.Above("scale_rule_radius", scale_rule_radius, 0.0);
         c.AtLeast("min_points_per_voxel", min_points_per_voxel, 3);
         c.Above("step_size", step_size, 0.0);
         c.AtLeast("outlier_ratio", outlier_ratio, 0.0);
@@ -76,7 +81,7 @@ public:
 
 AlignResult AlignNdt(const NdtOptions& o, const PointCloud& source, const PointCloud& target,
                      const AlignContext& /*context*/) {
-    const ScaleRule rule = ResolveScaleRule(source, target);
+    const ScaleRule rule = ResolveScaleRule(source, target, o.scale_rule_radius);
     const double unit = o.scale_rule == ScaleRuleMode::kAuto ? rule.unit : 1.0;
     const double resolution = o.resolution * unit;
     CheckedNdt ndt;

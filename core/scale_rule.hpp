@@ -38,12 +38,15 @@ struct ScaleRule {
     }
 };
 
-/// The rule above for one pair; O(N).
-inline ScaleRule ResolveScaleRule(const PointCloud& source, const PointCloud& target) {
+/// The rule above for one pair; O(N). `reference_radius` is the methods' `scale_rule_radius`, a
+/// length like the presets it guards: `run` multiplies it by a scaled pair file's scale with
+/// them, so a copy of a pair x150 gets the same unit (u) as the unit pair.
+inline ScaleRule ResolveScaleRule(const PointCloud& source, const PointCloud& target,
+                                  double reference_radius = kScaleRuleReferenceRadius) {
     ScaleRule r;
     const Eigen::RowVector3d c = target.colwise().mean();
     r.rms_radius = std::sqrt((target.rowwise() - c).rowwise().squaredNorm().mean());
-    const double ratio = r.rms_radius / kScaleRuleReferenceRadius;
+    const double ratio = r.rms_radius / reference_radius;
     r.unit =
         (ratio > 0.0 && (ratio < 1.0 / kScaleRuleBand || ratio > kScaleRuleBand)) ? ratio : 1.0;
     r.dense = std::max(source.rows(), target.rows()) > kScaleRulePresetPoints;

@@ -268,8 +268,6 @@ std::vector<MethodSpec> PairScaledSpecs(std::vector<MethodSpec> specs, double sc
     for (MethodSpec& spec : specs) {
         if (!registered.count(spec.name)) continue;  // an external method: its own business
         const MethodInfo& info = FindMethod(spec.name);
-        const bool given_rule = spec.given.is_object() && spec.given.contains("scale_rule");
-        if (given_rule) continue;  // the user chose how its lengths follow the data
         nlohmann::json params = spec.params;
         bool scaled = false;
         for (const auto& [key, doc] : info.param_docs) {
@@ -282,12 +280,9 @@ std::vector<MethodSpec> PairScaledSpecs(std::vector<MethodSpec> specs, double sc
             params[key] = params[key].get<double>() * std::pow(scale, power);
             scaled = true;
         }
-        // The lengths now are the data's (scaled here or given in its units): the per-pair size
-        // rule must not scale them again.
-        if (params.contains("scale_rule") && params["scale_rule"] != "preset") {
-            params["scale_rule"] = "preset";
-            scaled = true;
-        }
+        // The per-pair size rule (`scale_rule` auto) compares the pair's size with
+        // `scale_rule_radius`, a length scaled above with the others, so it picks on the scaled
+        // copy of a pair the unit pair's factor.
         if (!scaled) continue;
         spec.params = CreateMethod(spec.name, params)->Params();  // validates
     }

@@ -44,10 +44,10 @@ TEST(CliScale, MillimetreCopyGivesTheUnitScaleNumbersWithDefaultThresholds) {
     auto mm = RowsByMethod((dir / "mm.jsonl").string());
     ASSERT_EQ(unit.size(), 7u);
     // The lengths the millimetre rows ran with: the unit-sphere defaults times 150 (squared
-    // lengths times 150^2), the per-pair size rule off.
+    // lengths times 150^2), the per-pair size rule's reference radius with them.
     EXPECT_EQ(mm["icp"][0].params["max_correspondence_distance"], 150.0);
-    EXPECT_EQ(mm["icp"][0].params["scale_rule"], "preset");
-    EXPECT_EQ(unit["icp"][0].params["scale_rule"], "auto");
+    EXPECT_EQ(mm["icp"][0].params["scale_rule_radius"], 0.6 * 150.0);
+    EXPECT_EQ(mm["icp"][0].params["scale_rule"], "auto");
     EXPECT_EQ(mm["icp-pl"][0].params["normal_radius"], 15.0);
     EXPECT_EQ(mm["gicp"][0].params["max_correspondence_distance"], 150.0);
     EXPECT_EQ(mm["ndt"][0].params["resolution"], 0.25 * 150.0);

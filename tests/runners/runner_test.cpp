@@ -184,30 +184,32 @@ TEST(MethodSpecs, UnknownMethodOrParameterIsAClearError) {
 }
 
 // Issue 54 item 1: on a pair file of scale 150 the length parameters left at their defaults are
-// multiplied (icp: correspondence distance 1 -> 150, Open3D's absolute RMSE stop 1e-6 -> 1.5e-4;
-// ndt: transformation_epsilon, a squared length, 1e-6 -> 0.0225) and the per-pair size rule is
-// off; a given value is used as is (and the rule still off: it would multiply it again); a given
-// scale_rule leaves the method alone; scale 1 changes nothing.
+// multiplied (icp: correspondence distance 1 -> 150, Open3D's absolute RMSE stop 1e-6 -> 1.5e-4,
+// the size rule's reference radius 0.6 -> 90, so `scale_rule` auto picks the unit pair's factor;
+// ndt: transformation_epsilon, a squared length, 1e-6 -> 0.0225); a given value is used as is;
+// scale 1 changes nothing. Expected values: the defaults times 150 (or 150^2), by hand.
 TEST(MethodSpecs, LengthDefaultsFollowThePairFilesScaleAndGivenValuesWin) {
     const auto specs = ParseMethodSpecs("icp,ndt,identity", {});
     const auto mm = PairScaledSpecs(specs, 150.0);
     EXPECT_DOUBLE_EQ(mm[0].params["max_correspondence_distance"].get<double>(), 150.0);
     EXPECT_DOUBLE_EQ(mm[0].params["relative_rmse"].get<double>(), 1.5e-4);
     EXPECT_DOUBLE_EQ(mm[0].params["relative_fitness"].get<double>(), 1e-6);  // a ratio
-    EXPECT_EQ(mm[0].params["scale_rule"], "preset");
+    EXPECT_DOUBLE_EQ(mm[0].params["scale_rule_radius"].get<double>(), 0.6 * 150.0);
+    EXPECT_EQ(mm[0].params["scale_rule"], "auto");
     EXPECT_DOUBLE_EQ(mm[1].params["transformation_epsilon"].get<double>(), 1e-6 * 150.0 * 150.0);
     EXPECT_DOUBLE_EQ(mm[1].params["resolution"].get<double>(), 0.25 * 150.0);
+    EXPECT_DOUBLE_EQ(mm[1].params["scale_rule_radius"].get<double>(), 0.6 * 150.0);
     EXPECT_EQ(mm[2].params, specs[2].params);
     EXPECT_EQ(PairScaledSpecs(specs, 1.0)[0].params, specs[0].params);
     const auto given = PairScaledSpecs(
         ParseMethodSpecs("icp", {{"icp", {{"max_correspondence_distance", 1.0},
-                                          {"relative_rmse", 1e-3}}}}),
+                                          {"relative_rmse", 1e-3},
+                                          {"scale_rule", "preset"}}}}),
         150.0);
     EXPECT_DOUBLE_EQ(given[0].params["max_correspondence_distance"].get<double>(), 1.0);
     EXPECT_DOUBLE_EQ(given[0].params["relative_rmse"].get<double>(), 1e-3);
     EXPECT_EQ(given[0].params["scale_rule"], "preset");
-    const auto rule = ParseMethodSpecs("icp", {{"icp", {{"scale_rule", "auto"}}}});
-    EXPECT_EQ(PairScaledSpecs(rule, 150.0)[0].params, rule[0].params);
+    EXPECT_DOUBLE_EQ(given[0].params["scale_rule_radius"].get<double>(), 0.6 * 150.0);
 }
 
 TEST(ResultsFile, CorruptLineIsReportedWithFileAndLine) {
