@@ -1,6 +1,6 @@
 // The weights manifest (experiments/weights_manifest.hpp): its form, the order in which entries
-// apply, and the shipped default (data/models/weights.json): Tab. 3's OGMM and DeepGMR rows run
-// the indoor-trained checkpoints, every other cell the method's own shipped folder.
+// apply, and the shipped default (data/models/weights.json): Tab. 3's OGMM, DeepGMR, OMNet and
+// REGTR rows run the indoor-trained checkpoints, every other cell the method's own shipped folder.
 #include "experiments/weights_manifest.hpp"
 
 #include <gtest/gtest.h>
@@ -10,6 +10,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "baselines/learned.hpp"
@@ -41,12 +42,19 @@ TEST(WeightsManifest, ShippedDefaultRunsEachTablesOwnCheckpoints) {
     std::ostringstream log;
     const WeightsPlan plan =
         ResolveWeights(ReadWeightsManifest(path), PaperTargets(), testing::TempPath("w"), log);
-    // data/models/weights.json: Tab. 3's columns run the indoor fine-tunes, Tab. 1's
-    // cross-category column the models trained on the other categories.
-    const std::map<std::string, std::string> folder_of = {
-        {"tab3_7scenes", "indoor"}, {"tab3_icl_nuim", "indoor"}, {"tab1_cross", "cross"}};
-    for (const auto& [id, folder] : folder_of) {
-        for (const char* method : {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp"}) {
+    // data/models/weights.json: Tab. 3's columns run the indoor fine-tunes (OGMM, DeepGMR,
+    // OMNet and REGTR; RGM's object checkpoint, docs/learned-methods.md), Tab. 1's
+    // cross-category column the OGMM and DeepGMR models trained on the other categories.
+    const std::vector<std::string> tab3 = {"ogmm",          "ogmm-noicp", "deepgmr",
+                                           "deepgmr-noicp", "omnet",      "regtr"};
+    const std::vector<std::string> cross = {"ogmm", "ogmm-noicp", "deepgmr", "deepgmr-noicp"};
+    const std::map<std::string, std::pair<std::string, std::vector<std::string>>> folder_of = {
+        {"tab3_7scenes", {"indoor", tab3}},
+        {"tab3_icl_nuim", {"indoor", tab3}},
+        {"tab1_cross", {"cross", cross}}};
+    for (const auto& [id, entry] : folder_of) {
+        const auto& [folder, methods] = entry;
+        for (const std::string& method : methods) {
             SCOPED_TRACE(id + " " + method);
             const WeightsChoice& c = plan.at(id).at(method);
             EXPECT_FALSE(c.is_default);
@@ -54,7 +62,7 @@ TEST(WeightsManifest, ShippedDefaultRunsEachTablesOwnCheckpoints) {
             EXPECT_EQ(fs::path(c.checkpoint).parent_path().filename(), folder);
             EXPECT_EQ(c.sha256.size(), 64u);
         }
-        EXPECT_TRUE(plan.at(id).at("regtr").is_default);  // object-trained, as before
+        EXPECT_TRUE(plan.at(id).at("rgm").is_default);  // object-trained, as before
     }
     // Every other experiment runs each learned method's own shipped folder: rows unchanged.
     for (const auto& [id, methods] : plan) {
