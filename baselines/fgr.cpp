@@ -92,9 +92,7 @@ struct FgrOptions {
           "\"auto\": voxel_size scaled by the pair's unit (RMS radius / 0.6 when outside [0.5, "
           "2], else 1) and voxel downsampling when a cloud has > 2048 points "
           "(docs/performance.md); used values in extra.resolved; \"preset\": as given");
-        f("scale_rule_radius", scale_rule_radius,
-          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
-          "unit-sphere object (docs/performance.md, section 4)");
+        f("scale_rule_radius", scale_rule_radius, kScaleRuleRadiusDoc);
     }
     void Validate(ParamCheck& c) const {
         c.Above("voxel_size", voxel_size, 0.0);

@@ -61,9 +61,7 @@ struct GicpOptions {
           "transformation_epsilon times u, the gradient stops times u (translation) and u^2 "
           "(rotation: the cost is a squared length), used values in extra.resolved; "
           "\"preset\": as given");
-        f("scale_rule_radius", scale_rule_radius,
-          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
-          "unit-sphere object (docs/performance.md, section 4)");
+        f("scale_rule_radius", scale_rule_radius, kScaleRuleRadiusDoc);
     }
     void Validate(ParamCheck& c) const {
         c.Above("max_correspondence_distance", max_correspondence_distance, 0.0);

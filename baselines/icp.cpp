@@ -27,9 +27,7 @@ struct IcpOptions : Open3dIcpOptions {
           "\"auto\": max_correspondence_distance is scaled by the pair's unit (RMS radius / 0.6 "
           "when outside [0.5, 2], else 1: unit-sphere objects keep the preset; "
           "docs/performance.md), the value used is in extra.resolved; \"preset\": as given");
-        f("scale_rule_radius", scale_rule_radius,
-          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
-          "unit-sphere object (docs/performance.md, section 4)");
+        f("scale_rule_radius", scale_rule_radius, kScaleRuleRadiusDoc);
         f("relative_fitness", relative_fitness,
           "stop when the fitness change is below this (and the RMSE change too); 1e-6 = "
           "Open3D default");

@@ -39,9 +39,7 @@ struct IcpPlOptions : Open3dIcpOptions {
           "\"auto\": as `icp`, max_correspondence_distance and normal_radius scaled by the "
           "pair's unit (RMS radius / 0.6 when outside [0.5, 2], else 1; docs/performance.md), "
           "the values used in extra.resolved; \"preset\": as given");
-        f("scale_rule_radius", scale_rule_radius,
-          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
-          "unit-sphere object (docs/performance.md, section 4)");
+        f("scale_rule_radius", scale_rule_radius, kScaleRuleRadiusDoc);
     }
     void Validate(ParamCheck& c) const {
         Open3dIcpOptions::Validate(c);

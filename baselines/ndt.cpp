@@ -38,9 +38,7 @@ struct NdtOptions {
           "\"auto\": resolution and step_size scaled by the pair's unit u (RMS radius / 0.6 "
           "when outside [0.5, 2], else 1; docs/performance.md), transformation_epsilon (a "
           "squared length) by u^2, used values in extra.resolved; \"preset\": as given");
-        f("scale_rule_radius", scale_rule_radius,
-          "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
-          "unit-sphere object (docs/performance.md, section 4)");
+        f("scale_rule_radius", scale_rule_radius, kScaleRuleRadiusDoc);
         f("step_size", step_size,
           "More-Thuente maximum step length [unit-sphere units]; 0.1 = PCL default");
         f("outlier_ratio", outlier_ratio,

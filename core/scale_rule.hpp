@@ -20,6 +20,10 @@ namespace regbench {
 constexpr double kScaleRuleReferenceRadius = 0.6;      ///< L of a typical unit-sphere object
 constexpr double kScaleRuleBand = 2.0;                 ///< u = 1 while L / reference in [1/2, 2]
 constexpr Eigen::Index kScaleRulePresetPoints = 2048;  ///< above: downsample where supported
+/// The doc of the `scale_rule_radius` parameter every method with a `scale_rule` binds.
+inline constexpr const char* kScaleRuleRadiusDoc =
+    "target RMS radius the presets were tuned at [unit-sphere units]; 0.6 = a typical "
+    "unit-sphere object (docs/performance.md, section 4)";
 
 /// The `scale_rule` option of FGR, NDT and ICP.
 enum class ScaleRuleMode {

@@ -502,18 +502,14 @@ std::string ThresholdsCaption(const ReportTable& rt, const ReportOptions& o) {
         "thresholds and clip are 0.1, for unit-sphere objects).",
         o.recall_r_deg, o.recall_t, o.success_rre_deg, o.success_rte, clip);
     if (o.distance_scale != 1.0) {
+        std::vector<std::string> given;
+        if (o.recall_t_given) given.push_back("--recall-t");
+        if (o.success_rte_given) given.push_back("--success-rte");
         caption += fmt::format(
             " The pair file's scale is {0:g} (`generate --scale`): every distance threshold not "
             "given on the command line is its unit-sphere default times {0:g}{1}.",
             o.distance_scale,
-            o.recall_t_given || o.success_rte_given
-                ? " (given as is: " +
-                      std::string(o.recall_t_given && o.success_rte_given ? "--recall-t, "
-                                                                           "--success-rte"
-                                  : o.recall_t_given ? "--recall-t"
-                                                     : "--success-rte") +
-                      ")"
-                : "");
+            given.empty() ? "" : fmt::format(" (given as is: {})", fmt::join(given, ", ")));
     }
     if (rt.methods.empty()) return caption;
     const auto every = [&rt](auto&& pred) {
